@@ -1,0 +1,119 @@
+//! Building scenes from Rust code: the low-level API under SceneLang.
+
+use crate::color::Color;
+
+use super::*;
+
+/// Assembles a [`Scene`] step by step, with SceneLang's defaults for everything left out.
+///
+/// ```
+/// use lumen::scene::*;
+/// use lumen::color::Color;
+/// use glam::DVec3;
+///
+/// let mut b = SceneBuilder::new(64, 48);
+/// let red = b.material(Material::new(
+///     Brdf::Diffuse { pigment: Pigment::Uniform(Color::new(0.8, 0.1, 0.1)) },
+///     Pigment::Uniform(Color::BLACK),
+/// ));
+/// b.sphere(Transform::translation(DVec3::new(3.0, 0.0, 0.0)), red)
+///     .point_light(PointLight { position: DVec3::new(0.0, 0.0, 5.0), ..Default::default() })
+///     .renderer(Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(1e-3) });
+/// let scene = b.build().unwrap();
+/// assert_eq!(scene.shapes.len(), 1);
+/// assert_eq!(scene.width, 64);
+/// ```
+#[derive(Debug, Clone)]
+pub struct SceneBuilder {
+    scene: Scene,
+}
+
+impl SceneBuilder {
+    /// An empty scene of `width × height` pixels with a default perspective camera (aspect
+    /// ratio width/height), the path tracer with default settings and no environment.
+    pub fn new(width: u32, height: u32) -> Self {
+        let aspect = if height > 0 {
+            f64::from(width) / f64::from(height)
+        } else {
+            1.0
+        };
+        Self {
+            scene: Scene {
+                shapes: Vec::new(),
+                materials: Vec::new(),
+                point_lights: Vec::new(),
+                camera: Camera {
+                    aspect_ratio: aspect,
+                    ..Camera::default()
+                },
+                width,
+                height,
+                renderer: Renderer::PathTracer(PathTracerSettings::default()),
+                tracer: Tracer::default(),
+                environment: None,
+            },
+        }
+    }
+
+    /// Adds a material (or finds an equal one already added) and returns its id.
+    pub fn material(&mut self, m: Material) -> MaterialId {
+        if let Some(i) = self.scene.materials.iter().position(|x| *x == m) {
+            return MaterialId(i as u32);
+        }
+        self.scene.materials.push(m);
+        MaterialId((self.scene.materials.len() - 1) as u32)
+    }
+
+    /// Shorthand for a diffuse material of the given colour.
+    pub fn diffuse(&mut self, c: Color) -> MaterialId {
+        self.material(Material::new(
+            Brdf::Diffuse {
+                pigment: Pigment::Uniform(c),
+            },
+            Pigment::Uniform(Color::BLACK),
+        ))
+    }
+
+    pub fn shape(&mut self, s: Shape) -> &mut Self {
+        self.scene.shapes.push(s);
+        self
+    }
+    pub fn sphere(&mut self, t: Transform, m: MaterialId) -> &mut Self {
+        self.shape(Shape::primitive(ShapeKind::Sphere, t, m))
+    }
+    pub fn plane(&mut self, t: Transform, m: MaterialId) -> &mut Self {
+        self.shape(Shape::primitive(ShapeKind::Plane, t, m))
+    }
+    pub fn cube(&mut self, t: Transform, m: MaterialId) -> &mut Self {
+        self.shape(Shape::primitive(ShapeKind::Cube, t, m))
+    }
+    pub fn cylinder(&mut self, t: Transform, m: MaterialId) -> &mut Self {
+        self.shape(Shape::primitive(ShapeKind::Cylinder, t, m))
+    }
+    pub fn point_light(&mut self, l: PointLight) -> &mut Self {
+        self.scene.point_lights.push(l);
+        self
+    }
+    pub fn camera(&mut self, c: Camera) -> &mut Self {
+        self.scene.camera = c;
+        self
+    }
+    pub fn renderer(&mut self, r: Renderer) -> &mut Self {
+        self.scene.renderer = r;
+        self
+    }
+    pub fn tracer(&mut self, t: Tracer) -> &mut Self {
+        self.scene.tracer = t;
+        self
+    }
+    pub fn environment(&mut self, e: Environment) -> &mut Self {
+        self.scene.environment = Some(e);
+        self
+    }
+
+    /// Validates and returns the scene.
+    pub fn build(&self) -> Result<Scene, SceneError> {
+        self.scene.validate()?;
+        Ok(self.scene.clone())
+    }
+}

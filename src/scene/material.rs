@@ -1,0 +1,35 @@
+//! Materials: a BRDF plus emitted radiance.
+
+use super::{Brdf, Pigment};
+
+/// What a surface is made of. Any material may emit; an emitting top-level sphere or cube
+/// becomes an area light that the path tracer samples directly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub brdf: Brdf,
+    /// Radiance leaving the surface on its own, the same in every direction.
+    pub emitted: Pigment,
+}
+
+impl Default for Material {
+    /// SceneLang's `Material()`: white diffuse, no emission.
+    fn default() -> Self {
+        Self {
+            brdf: Brdf::default(),
+            emitted: Pigment::Uniform(crate::color::Color::BLACK),
+        }
+    }
+}
+
+impl Material {
+    pub fn new(brdf: Brdf, emitted: Pigment) -> Self {
+        Self { brdf, emitted }
+    }
+    pub fn is_emissive(&self) -> bool {
+        !self.emitted.is_black()
+    }
+}
+
+/// Index of a material in [`super::Scene::materials`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct MaterialId(pub u32);

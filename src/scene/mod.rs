@@ -1,0 +1,157 @@
+//! The scene model: the one description of a scene that every renderer consumes.
+//!
+//! SceneLang scripts evaluate to a [`Scene`]; the CPU reference reads it directly and the
+//! GPU renderer packs it into buffers. Code can build the same scenes with
+//! [`SceneBuilder`].
+
+mod bounds;
+mod brdf;
+mod builder;
+mod camera;
+mod environment;
+mod light;
+mod material;
+mod pigment;
+mod settings;
+mod shape;
+mod transform;
+
+pub use bounds::Aabb;
+pub use brdf::{Brdf, DEFAULT_THRESHOLD_ANGLE_RAD};
+pub use builder::SceneBuilder;
+pub use camera::{Camera, CameraRay, Projection, CAMERA_RAY_TMIN};
+pub use environment::{equirect_uv, Environment};
+pub use light::PointLight;
+pub use material::{Material, MaterialId};
+pub use pigment::{ImageFilter, Pigment};
+pub use settings::{PathTracerSettings, PcgSeed, Renderer, Tracer};
+pub use shape::{Csg, CsgOp, Primitive, Shape, ShapeKind};
+pub use transform::Transform;
+
+/// Largest image side lumen accepts; larger sizes are input errors, not allocations.
+pub const MAX_IMAGE_SIDE: u32 = 32_768;
+
+/// Problems that make a scene invalid (raised while building or loading it).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    #[error("transformation is singular (zero scale or degenerate matrix)")]
+    SingularTransform,
+    #[error("transformation has a non-finite entry (NaN or infinity)")]
+    NonFiniteTransform,
+    #[error("transformation is not affine (last row must be 0 0 0 1)")]
+    NotAffine,
+    #[error("image size {0}×{1} is invalid (each side must be 1..={MAX_IMAGE_SIDE})")]
+    BadImageSize(u32, u32),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// A complete scene: geometry, appearance, lights, camera and render settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// Top-level shapes (a CSG tree is one shape).
+    pub shapes: Vec<Shape>,
+    /// Materials referenced by [`MaterialId`].
+    pub materials: Vec<Material>,
+    pub point_lights: Vec<PointLight>,
+    pub camera: Camera,
+    pub width: u32,
+    pub height: u32,
+    pub renderer: Renderer,
+    pub tracer: Tracer,
+    /// Radiance of escaping rays; `None` means the renderer's background colour.
+    pub environment: Option<Environment>,
+}
+
+/// A top-level primitive whose material emits, with a shape that can be sampled
+/// (sphere or cube): the path tracer's area lights.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AreaLight {
+    /// Index into [`Scene::shapes`].
+    pub shape: usize,
+}
+
+impl Scene {
+    pub fn material(&self, id: MaterialId) -> &Material {
+        &self.materials[id.0 as usize]
+    }
+
+    /// Radiance for an escaping ray direction: the environment if any, else the
+    /// renderer's background colour.
+    pub fn escape_radiance(&self, dir: glam::DVec3) -> crate::color::Color {
+        match &self.environment {
+            Some(env) => env.radiance(dir),
+            None => self.renderer.background(),
+        }
+    }
+
+    /// Emissive top-level spheres and cubes, in shape order. Emitters inside CSG trees,
+    /// planes and cylinders are not sampled directly; their emission still counts when a
+    /// path hits them (with full weight, so the estimate stays unbiased).
+    pub fn area_lights(&self) -> Vec<AreaLight> {
+        self.shapes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| match s {
+                Shape::Primitive(p)
+                    if matches!(p.kind, ShapeKind::Sphere | ShapeKind::Cube)
+                        && self.material(p.material).is_emissive() =>
+                {
+                    Some(AreaLight { shape: i })
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// World bounds of all finite shapes (infinite planes excluded), or `None` if there are
+    /// none.
+    pub fn finite_bounds(&self) -> Option<Aabb> {
+        let b = self
+            .shapes
+            .iter()
+            .map(Shape::bounds)
+            .filter(Aabb::is_finite)
+            .fold(Aabb::EMPTY, |a, b| a.union(&b));
+        (!b.is_empty()).then_some(b)
+    }
+
+    /// Checks invariants a renderer relies on: image size, material ids, finite settings.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        if self.width == 0
+            || self.height == 0
+            || self.width > MAX_IMAGE_SIDE
+            || self.height > MAX_IMAGE_SIDE
+        {
+            return Err(SceneError::BadImageSize(self.width, self.height));
+        }
+        let n = self.materials.len();
+        let mut bad = None;
+        for s in &self.shapes {
+            s.for_each_primitive(&mut |p, _| {
+                if p.material.0 as usize >= n {
+                    bad = Some(p.material.0);
+                }
+            });
+        }
+        if let Some(id) = bad {
+            return Err(SceneError::Invalid(format!(
+                "shape refers to material #{id}, but the scene has {n} materials"
+            )));
+        }
+        if !(self.camera.aspect_ratio.is_finite() && self.camera.aspect_ratio > 0.0) {
+            return Err(SceneError::Invalid(format!(
+                "camera aspect ratio must be positive, got {}",
+                self.camera.aspect_ratio
+            )));
+        }
+        if let Projection::Perspective { screen_distance } = self.camera.projection {
+            if !(screen_distance.is_finite() && screen_distance > 0.0) {
+                return Err(SceneError::Invalid(format!(
+                    "screen distance must be positive, got {screen_distance}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}

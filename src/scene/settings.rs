@@ -1,0 +1,101 @@
+//! Renderer (integrator), tracer (sampling) and random-number settings.
+
+use crate::color::Color;
+
+/// Seed of a PCG32 generator, as SceneLang's `Pcg(.state, .inc)` gives it. See
+/// [`crate::sampling`] for how each (pixel, sample, bounce) derives its own stream.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PcgSeed {
+    pub state: u64,
+    pub inc: u64,
+}
+
+impl Default for PcgSeed {
+    fn default() -> Self {
+        Self { state: 42, inc: 54 }
+    }
+}
+
+/// Which integrator computes a camera ray's radiance.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Renderer {
+    /// `on` where a ray hits anything, `off` elsewhere.
+    OnOff {
+        on: Color,
+        off: Color,
+    },
+    /// Emitted + pigment colour at the first hit.
+    Flat {
+        background: Color,
+    },
+    /// Direct light from point lights plus a constant ambient term.
+    PointLight {
+        background: Color,
+        ambient: Color,
+    },
+    PathTracer(PathTracerSettings),
+}
+
+impl Renderer {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Renderer::OnOff { .. } => "OnOff",
+            Renderer::Flat { .. } => "Flat",
+            Renderer::PointLight { .. } => "PointLight",
+            Renderer::PathTracer(_) => "PathTracer",
+        }
+    }
+    /// Colour of rays that escape when the scene has no environment.
+    pub fn background(&self) -> Color {
+        match self {
+            Renderer::OnOff { off, .. } => *off,
+            Renderer::Flat { background } | Renderer::PointLight { background, .. } => *background,
+            Renderer::PathTracer(p) => p.background,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathTracerSettings {
+    pub background: Color,
+    /// Raytracer.jl's `.rng`: kept for DUMP; streams derive from the tracer's seed.
+    pub rng: PcgSeed,
+    /// Independent paths per camera sample.
+    pub n: u32,
+    /// Bounces: a path has at most `max_depth + 1` surface hits (camera hit = depth 0).
+    pub max_depth: u32,
+    /// Russian roulette applies at hits of depth ≥ this.
+    pub roulette_depth: u32,
+    /// Next-event estimation with MIS; `false` reproduces plain BSDF-only path tracing.
+    pub nee: bool,
+}
+
+impl Default for PathTracerSettings {
+    fn default() -> Self {
+        Self {
+            background: Color::BLACK,
+            rng: PcgSeed::default(),
+            n: 10,
+            max_depth: 2,
+            roulette_depth: 3,
+            nee: true,
+        }
+    }
+}
+
+/// How camera samples are placed in each pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tracer {
+    /// s > 0: s×s jittered (stratified) samples; 0: one ray through the pixel centre.
+    pub samples_per_side: u32,
+    pub rng: PcgSeed,
+}
+
+impl Default for Tracer {
+    fn default() -> Self {
+        Self {
+            samples_per_side: 0,
+            rng: PcgSeed::default(),
+        }
+    }
+}

@@ -1,0 +1,236 @@
+//! Shapes: unit primitives placed by a transformation, and CSG trees of them.
+
+use glam::DVec3;
+
+use super::{Aabb, MaterialId, Transform};
+
+/// The four unit primitives of SceneLang (see SCENELANG.md for their extents and uv).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ShapeKind {
+    /// Radius 1 at the origin.
+    Sphere,
+    /// z = 0 with normal +z; the half-space z ≤ 0 inside CSG.
+    Plane,
+    /// [−0.5, 0.5]³.
+    Cube,
+    /// Axis z, radius 0.5, z ∈ [−0.5, 0.5], capped.
+    Cylinder,
+}
+
+impl ShapeKind {
+    pub const ALL: [ShapeKind; 4] = [
+        ShapeKind::Sphere,
+        ShapeKind::Plane,
+        ShapeKind::Cube,
+        ShapeKind::Cylinder,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ShapeKind::Sphere => "sphere",
+            ShapeKind::Plane => "plane",
+            ShapeKind::Cube => "cube",
+            ShapeKind::Cylinder => "cylinder",
+        }
+    }
+
+    /// Object-space bounds. The plane's is the infinite slab z = 0 (its CSG half-space
+    /// is unbounded below; see [`Shape::bounds`]).
+    pub fn object_bounds(self) -> Aabb {
+        match self {
+            ShapeKind::Sphere => Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+            ShapeKind::Plane => Aabb::new(
+                DVec3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, 0.0),
+                DVec3::new(f64::INFINITY, f64::INFINITY, 0.0),
+            ),
+            ShapeKind::Cube | ShapeKind::Cylinder => {
+                Aabb::new(DVec3::splat(-0.5), DVec3::splat(0.5))
+            }
+        }
+    }
+
+    /// Bounds of the solid (the region "inside" for CSG).
+    pub fn solid_bounds(self) -> Aabb {
+        match self {
+            ShapeKind::Plane => Aabb::new(
+                DVec3::splat(f64::NEG_INFINITY),
+                DVec3::new(f64::INFINITY, f64::INFINITY, 0.0),
+            ),
+            k => k.object_bounds(),
+        }
+    }
+}
+
+/// One placed unit primitive.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Primitive {
+    pub kind: ShapeKind,
+    /// Object to world.
+    pub transform: Transform,
+    pub material: MaterialId,
+}
+
+/// CSG operations, with POV-Ray's semantics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CsgOp {
+    /// Union keeping every surface (POV-Ray `union`): inner surfaces stay visible through
+    /// transparent materials.
+    Unite,
+    /// Points inside every child (POV-Ray `intersection`).
+    Intersect,
+    /// Points inside the first child and outside all the others (POV-Ray `difference`).
+    Diff,
+    /// Union without the inner surfaces (POV-Ray `merge`).
+    Fuse,
+}
+
+impl CsgOp {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            CsgOp::Unite => "UNITE",
+            CsgOp::Intersect => "INTERSECT",
+            CsgOp::Diff => "DIFF",
+            CsgOp::Fuse => "FUSE",
+        }
+    }
+}
+
+/// A CSG node: an operation over two or more children, placed by its own transformation
+/// (applied after the children's own).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Csg {
+    pub op: CsgOp,
+    pub children: Vec<Shape>,
+    pub transform: Transform,
+}
+
+/// Anything that can be spawned into the world.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    Primitive(Primitive),
+    Csg(Box<Csg>),
+}
+
+impl Shape {
+    pub fn primitive(kind: ShapeKind, transform: Transform, material: MaterialId) -> Self {
+        Shape::Primitive(Primitive {
+            kind,
+            transform,
+            material,
+        })
+    }
+
+    pub fn csg(op: CsgOp, children: Vec<Shape>, transform: Transform) -> Self {
+        Shape::Csg(Box::new(Csg {
+            op,
+            children,
+            transform,
+        }))
+    }
+
+    /// World-space bounds of the visible surface. A lone plane is infinite. CSG: union of
+    /// the children for UNITE/FUSE, their intersection for INTERSECT (planes' half-spaces
+    /// make this finite where a bounded child cuts them), the first child's for DIFF.
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Shape::Primitive(p) => p.kind.object_bounds().transformed(&p.transform),
+            Shape::Csg(c) => c.solid_bounds_local().transformed(&c.transform),
+        }
+    }
+
+    /// Bounds of the solid this shape encloses, for use inside a CSG parent.
+    fn solid_bounds(&self) -> Aabb {
+        match self {
+            Shape::Primitive(p) => p.kind.solid_bounds().transformed(&p.transform),
+            Shape::Csg(c) => c.solid_bounds_local().transformed(&c.transform),
+        }
+    }
+
+    /// Depth of the CSG tree (0 for a primitive).
+    pub fn csg_depth(&self) -> usize {
+        match self {
+            Shape::Primitive(_) => 0,
+            Shape::Csg(c) => 1 + c.children.iter().map(Shape::csg_depth).max().unwrap_or(0),
+        }
+    }
+
+    /// Visits every primitive with its full object-to-world transformation.
+    pub fn for_each_primitive(&self, f: &mut impl FnMut(&Primitive, &Transform)) {
+        fn walk(s: &Shape, parent: &Transform, f: &mut impl FnMut(&Primitive, &Transform)) {
+            match s {
+                Shape::Primitive(p) => f(p, &(*parent * p.transform)),
+                Shape::Csg(c) => {
+                    let t = *parent * c.transform;
+                    for ch in &c.children {
+                        walk(ch, &t, f);
+                    }
+                }
+            }
+        }
+        walk(self, &Transform::IDENTITY, f);
+    }
+
+    /// Number of CSG nodes in this tree.
+    pub fn csg_node_count(&self) -> usize {
+        match self {
+            Shape::Primitive(_) => 0,
+            Shape::Csg(c) => 1 + c.children.iter().map(Shape::csg_node_count).sum::<usize>(),
+        }
+    }
+}
+
+impl Csg {
+    fn solid_bounds_local(&self) -> Aabb {
+        let mut it = self.children.iter().map(Shape::solid_bounds);
+        let first = it.next().unwrap_or(Aabb::EMPTY);
+        match self.op {
+            CsgOp::Unite | CsgOp::Fuse => it.fold(first, |a, b| a.union(&b)),
+            CsgOp::Intersect => it.fold(first, |a, b| a.intersection(&b)),
+            CsgOp::Diff => first,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn m() -> MaterialId {
+        MaterialId(0)
+    }
+
+    #[test]
+    fn plane_is_infinite_but_intersected_with_a_sphere_is_bounded() {
+        let plane = Shape::primitive(ShapeKind::Plane, Transform::IDENTITY, m());
+        assert!(!plane.bounds().is_finite());
+        let sphere = Shape::primitive(
+            ShapeKind::Sphere,
+            Transform::translation(DVec3::new(0.0, 0.0, 0.5)),
+            m(),
+        );
+        let cut = Shape::csg(CsgOp::Intersect, vec![sphere, plane], Transform::IDENTITY);
+        let b = cut.bounds();
+        assert!(b.is_finite());
+        assert_eq!(b.max.z, 0.0);
+        assert_eq!(b.min.z, -0.5);
+    }
+
+    #[test]
+    fn csg_depth_and_counts() {
+        let s = || Shape::primitive(ShapeKind::Sphere, Transform::IDENTITY, m());
+        let inner = Shape::csg(CsgOp::Diff, vec![s(), s()], Transform::IDENTITY);
+        let outer = Shape::csg(
+            CsgOp::Unite,
+            vec![inner, s()],
+            Transform::translation(DVec3::X),
+        );
+        assert_eq!(outer.csg_depth(), 2);
+        assert_eq!(outer.csg_node_count(), 2);
+        let mut n = 0;
+        outer.for_each_primitive(&mut |_, t| {
+            n += 1;
+            assert_eq!(t.point(DVec3::ZERO), DVec3::X);
+        });
+        assert_eq!(n, 3);
+    }
+}
