@@ -76,9 +76,7 @@ macro_rules! float_rgb {
             }
             /// True when every channel differs by at most `eps`.
             pub fn approx_eq(self, o: Self, eps: $t) -> bool {
-                (self.r - o.r).abs() <= eps
-                    && (self.g - o.g).abs() <= eps
-                    && (self.b - o.b).abs() <= eps
+                (self.r - o.r).abs() <= eps && (self.g - o.g).abs() <= eps && (self.b - o.b).abs() <= eps
             }
         }
         impl Add for Rgb<$t> {

@@ -14,12 +14,7 @@ pub struct Ray {
 
 impl Ray {
     pub fn new(origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Self {
-        Self {
-            origin,
-            dir,
-            tmin,
-            tmax,
-        }
+        Self { origin, dir, tmin, tmax }
     }
     pub fn at(&self, t: f64) -> DVec3 {
         self.origin + self.dir * t

@@ -23,23 +23,13 @@ impl HdrImage {
     /// A black image. Panics only if `width * height` overflows `usize`; callers that take
     /// sizes from users validate them first (see [`crate::image::check_size`]).
     pub fn new(width: usize, height: usize) -> Self {
-        let n = width
-            .checked_mul(height)
-            .expect("image size overflows usize");
-        Self {
-            width,
-            height,
-            pixels: vec![Rgb32::BLACK; n],
-        }
+        let n = width.checked_mul(height).expect("image size overflows usize");
+        Self { width, height, pixels: vec![Rgb32::BLACK; n] }
     }
 
     /// Wraps existing pixels (row-major, top row first). `None` if the count is wrong.
     pub fn from_pixels(width: usize, height: usize, pixels: Vec<Rgb32>) -> Option<Self> {
-        (width.checked_mul(height) == Some(pixels.len())).then_some(Self {
-            width,
-            height,
-            pixels,
-        })
+        (width.checked_mul(height) == Some(pixels.len())).then_some(Self { width, height, pixels })
     }
 
     pub fn width(&self) -> usize {
@@ -59,12 +49,7 @@ impl HdrImage {
     }
 
     fn offset(&self, col: usize, row: usize) -> usize {
-        assert!(
-            col < self.width && row < self.height,
-            "pixel ({col}, {row}) outside {}×{}",
-            self.width,
-            self.height
-        );
+        assert!(col < self.width && row < self.height, "pixel ({col}, {row}) outside {}×{}", self.width, self.height);
         row * self.width + col
     }
     /// The pixel at column `col`, row `row` (0 = top).

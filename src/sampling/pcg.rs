@@ -12,10 +12,7 @@ pub struct Pcg32 {
 impl Pcg32 {
     /// Seeds like the reference `pcg32_srandom_r(initstate, initseq)`.
     pub fn new(init_state: u64, init_seq: u64) -> Self {
-        let mut p = Self {
-            state: 0,
-            inc: (init_seq << 1) | 1,
-        };
+        let mut p = Self { state: 0, inc: (init_seq << 1) | 1 };
         p.next_u32();
         p.state = p.state.wrapping_add(init_state);
         p.next_u32();
@@ -49,14 +46,7 @@ mod tests {
     fn matches_reference_sequence() {
         // pcg32_srandom_r(42, 54) from the PCG reference implementation's demo output.
         let mut p = Pcg32::new(42, 54);
-        let expected = [
-            0xa15c02b7u32,
-            0x7b47f409,
-            0xba1d3330,
-            0x83d2f293,
-            0xbfa4784b,
-            0xcbed606e,
-        ];
+        let expected = [0xa15c02b7u32, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e];
         for e in expected {
             assert_eq!(p.next_u32(), e);
         }

@@ -13,14 +13,8 @@ pub struct Aabb {
 }
 
 impl Aabb {
-    pub const EMPTY: Self = Self {
-        min: DVec3::splat(f64::INFINITY),
-        max: DVec3::splat(f64::NEG_INFINITY),
-    };
-    pub const INFINITE: Self = Self {
-        min: DVec3::splat(f64::NEG_INFINITY),
-        max: DVec3::splat(f64::INFINITY),
-    };
+    pub const EMPTY: Self = Self { min: DVec3::splat(f64::INFINITY), max: DVec3::splat(f64::NEG_INFINITY) };
+    pub const INFINITE: Self = Self { min: DVec3::splat(f64::NEG_INFINITY), max: DVec3::splat(f64::INFINITY) };
 
     pub fn new(min: DVec3, max: DVec3) -> Self {
         Self { min, max }
@@ -32,22 +26,13 @@ impl Aabb {
         self.min.is_finite() && self.max.is_finite()
     }
     pub fn union(&self, o: &Aabb) -> Aabb {
-        Aabb {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
     pub fn intersection(&self, o: &Aabb) -> Aabb {
-        Aabb {
-            min: self.min.max(o.min),
-            max: self.max.min(o.max),
-        }
+        Aabb { min: self.min.max(o.min), max: self.max.min(o.max) }
     }
     pub fn grow(&self, p: DVec3) -> Aabb {
-        Aabb {
-            min: self.min.min(p),
-            max: self.max.max(p),
-        }
+        Aabb { min: self.min.min(p), max: self.max.max(p) }
     }
     pub fn center(&self) -> DVec3 {
         (self.min + self.max) * 0.5
@@ -115,8 +100,7 @@ mod tests {
             DVec3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, 0.0),
             DVec3::new(f64::INFINITY, f64::INFINITY, 0.0),
         );
-        let t = Transform::translation(DVec3::new(0.0, 0.0, 2.0))
-            * Transform::scaling(DVec3::splat(3.0));
+        let t = Transform::translation(DVec3::new(0.0, 0.0, 2.0)) * Transform::scaling(DVec3::splat(3.0));
         let r = b.transformed(&t);
         assert_eq!(r.min.z, 2.0);
         assert_eq!(r.max.z, 2.0);

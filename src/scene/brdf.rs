@@ -10,10 +10,7 @@ pub enum Brdf {
     /// Perfect mirror tinted by the pigment. `threshold_angle_rad` is kept from
     /// Raytracer.jl for DUMP and round-trips; like Raytracer.jl's own sampler, lumen reflects
     /// exactly.
-    Specular {
-        pigment: Pigment,
-        threshold_angle_rad: f64,
-    },
+    Specular { pigment: Pigment, threshold_angle_rad: f64 },
     /// Smooth dielectric interface (ext): exact Fresnel reflection and refraction with
     /// total internal reflection; `ior` is the inside index relative to the outside.
     Dielectric { pigment: Pigment, ior: f64 },
@@ -21,9 +18,7 @@ pub enum Brdf {
 
 impl Default for Brdf {
     fn default() -> Self {
-        Brdf::Diffuse {
-            pigment: Pigment::default(),
-        }
+        Brdf::Diffuse { pigment: Pigment::default() }
     }
 }
 
@@ -33,9 +28,7 @@ pub const DEFAULT_THRESHOLD_ANGLE_RAD: f64 = 0.0017453294;
 impl Brdf {
     pub fn pigment(&self) -> &Pigment {
         match self {
-            Brdf::Diffuse { pigment }
-            | Brdf::Specular { pigment, .. }
-            | Brdf::Dielectric { pigment, .. } => pigment,
+            Brdf::Diffuse { pigment } | Brdf::Specular { pigment, .. } | Brdf::Dielectric { pigment, .. } => pigment,
         }
     }
     /// True for BRDFs whose scattering is a Dirac delta (no light sampling through them).

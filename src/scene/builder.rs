@@ -32,20 +32,13 @@ impl SceneBuilder {
     /// An empty scene of `width × height` pixels with a default perspective camera (aspect
     /// ratio width/height), the path tracer with default settings and no environment.
     pub fn new(width: u32, height: u32) -> Self {
-        let aspect = if height > 0 {
-            f64::from(width) / f64::from(height)
-        } else {
-            1.0
-        };
+        let aspect = if height > 0 { f64::from(width) / f64::from(height) } else { 1.0 };
         Self {
             scene: Scene {
                 shapes: Vec::new(),
                 materials: Vec::new(),
                 point_lights: Vec::new(),
-                camera: Camera {
-                    aspect_ratio: aspect,
-                    ..Camera::default()
-                },
+                camera: Camera { aspect_ratio: aspect, ..Camera::default() },
                 width,
                 height,
                 renderer: Renderer::PathTracer(PathTracerSettings::default()),
@@ -66,12 +59,7 @@ impl SceneBuilder {
 
     /// Shorthand for a diffuse material of the given colour.
     pub fn diffuse(&mut self, c: Color) -> MaterialId {
-        self.material(Material::new(
-            Brdf::Diffuse {
-                pigment: Pigment::Uniform(c),
-            },
-            Pigment::Uniform(Color::BLACK),
-        ))
+        self.material(Material::new(Brdf::Diffuse { pigment: Pigment::Uniform(c) }, Pigment::Uniform(Color::BLACK)))
     }
 
     pub fn shape(&mut self, s: Shape) -> &mut Self {

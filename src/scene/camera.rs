@@ -23,9 +23,7 @@ pub struct Camera {
 impl Default for Camera {
     fn default() -> Self {
         Self {
-            projection: Projection::Perspective {
-                screen_distance: 1.0,
-            },
+            projection: Projection::Perspective { screen_distance: 1.0 },
             aspect_ratio: 1.0,
             transform: Transform::IDENTITY,
         }
@@ -56,19 +54,12 @@ impl Camera {
     /// ```
     pub fn ray(&self, u: f64, v: f64) -> CameraRay {
         let (o, d) = match self.projection {
-            Projection::Perspective { screen_distance: d } => (
-                DVec3::new(-d, 0.0, 0.0),
-                DVec3::new(d, (1.0 - 2.0 * u) * self.aspect_ratio, 2.0 * v - 1.0),
-            ),
-            Projection::Orthogonal => (
-                DVec3::new(-1.0, (1.0 - 2.0 * u) * self.aspect_ratio, 2.0 * v - 1.0),
-                DVec3::X,
-            ),
+            Projection::Perspective { screen_distance: d } => {
+                (DVec3::new(-d, 0.0, 0.0), DVec3::new(d, (1.0 - 2.0 * u) * self.aspect_ratio, 2.0 * v - 1.0))
+            }
+            Projection::Orthogonal => (DVec3::new(-1.0, (1.0 - 2.0 * u) * self.aspect_ratio, 2.0 * v - 1.0), DVec3::X),
         };
-        CameraRay {
-            origin: self.transform.point(o),
-            dir: self.transform.vector(d),
-        }
+        CameraRay { origin: self.transform.point(o), dir: self.transform.vector(d) }
     }
 
     /// Raytracer.jl's `aperture_deg`: 2·atan2(d, a) in degrees (perspective only).
@@ -88,18 +79,11 @@ mod tests {
 
     #[test]
     fn corners_follow_the_spec() {
-        let c = Camera {
-            aspect_ratio: 2.0,
-            ..Camera::default()
-        };
+        let c = Camera { aspect_ratio: 2.0, ..Camera::default() };
         // u = 0 → +y side, v = 0 → −z.
         assert_eq!(c.ray(0.0, 0.0).dir, DVec3::new(1.0, 2.0, -1.0));
         assert_eq!(c.ray(1.0, 1.0).dir, DVec3::new(1.0, -2.0, 1.0));
-        let o = Camera {
-            projection: Projection::Orthogonal,
-            aspect_ratio: 2.0,
-            transform: Transform::IDENTITY,
-        };
+        let o = Camera { projection: Projection::Orthogonal, aspect_ratio: 2.0, transform: Transform::IDENTITY };
         assert_eq!(o.ray(0.0, 1.0).origin, DVec3::new(-1.0, 2.0, 1.0));
         assert_eq!(Camera::default().aperture_deg(), Some(90.0));
     }

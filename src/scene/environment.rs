@@ -33,22 +33,14 @@ impl Environment {
         let d = dir.normalize();
         match self {
             Environment::Uniform(c) => *c,
-            Environment::Gradient {
-                zenith,
-                horizon,
-                nadir,
-            } => {
+            Environment::Gradient { zenith, horizon, nadir } => {
                 if d.z >= 0.0 {
                     *horizon * (1.0 - d.z) + *zenith * d.z
                 } else {
                     *horizon * (1.0 + d.z) + *nadir * (-d.z)
                 }
             }
-            Environment::Image {
-                image,
-                intensity,
-                rotation_deg,
-            } => {
+            Environment::Image { image, intensity, rotation_deg } => {
                 let (u, v) = equirect_uv(d, *rotation_deg);
                 let (w, h) = (image.width(), image.height());
                 let col = ((u * w as f64) as usize).min(w - 1);

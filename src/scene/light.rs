@@ -19,11 +19,7 @@ pub struct PointLight {
 
 impl Default for PointLight {
     fn default() -> Self {
-        Self {
-            position: DVec3::ZERO,
-            color: Color::WHITE,
-            linear_radius: 0.0,
-        }
+        Self { position: DVec3::ZERO, color: Color::WHITE, linear_radius: 0.0 }
     }
 }
 

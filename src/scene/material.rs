@@ -14,10 +14,7 @@ pub struct Material {
 impl Default for Material {
     /// SceneLang's `Material()`: white diffuse, no emission.
     fn default() -> Self {
-        Self {
-            brdf: Brdf::default(),
-            emitted: Pigment::Uniform(crate::color::Color::BLACK),
-        }
+        Self { brdf: Brdf::default(), emitted: Pigment::Uniform(crate::color::Color::BLACK) }
     }
 }
 

@@ -107,22 +107,13 @@ impl Scene {
     /// World bounds of all finite shapes (infinite planes excluded), or `None` if there are
     /// none.
     pub fn finite_bounds(&self) -> Option<Aabb> {
-        let b = self
-            .shapes
-            .iter()
-            .map(Shape::bounds)
-            .filter(Aabb::is_finite)
-            .fold(Aabb::EMPTY, |a, b| a.union(&b));
+        let b = self.shapes.iter().map(Shape::bounds).filter(Aabb::is_finite).fold(Aabb::EMPTY, |a, b| a.union(&b));
         (!b.is_empty()).then_some(b)
     }
 
     /// Checks invariants a renderer relies on: image size, material ids, finite settings.
     pub fn validate(&self) -> Result<(), SceneError> {
-        if self.width == 0
-            || self.height == 0
-            || self.width > MAX_IMAGE_SIDE
-            || self.height > MAX_IMAGE_SIDE
-        {
+        if self.width == 0 || self.height == 0 || self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
             return Err(SceneError::BadImageSize(self.width, self.height));
         }
         let n = self.materials.len();
@@ -147,9 +138,7 @@ impl Scene {
         }
         if let Projection::Perspective { screen_distance } = self.camera.projection {
             if !(screen_distance.is_finite() && screen_distance > 0.0) {
-                return Err(SceneError::Invalid(format!(
-                    "screen distance must be positive, got {screen_distance}"
-                )));
+                return Err(SceneError::Invalid(format!("screen distance must be positive, got {screen_distance}")));
             }
         }
         Ok(())

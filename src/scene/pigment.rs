@@ -79,11 +79,9 @@ impl Pigment {
         match self {
             Pigment::Uniform(c) => c.max_component(),
             Pigment::Checkered { on, off, .. } => on.max_component().max(off.max_component()),
-            Pigment::Image { image, .. } => image
-                .pixels()
-                .iter()
-                .map(|p| f64::from(p.max_component()))
-                .fold(0.0, f64::max),
+            Pigment::Image { image, .. } => {
+                image.pixels().iter().map(|p| f64::from(p.max_component())).fold(0.0, f64::max)
+            }
         }
     }
 }
@@ -112,8 +110,7 @@ fn image_lookup(img: &HdrImage, u: f64, v: f64, filter: ImageFilter) -> Color {
             let r0 = y0 as usize;
             let r1 = (r0 + 1).min(h - 1);
             let p = |c: usize, r: usize| -> Color { img.get(c, r).into() };
-            (p(c0, r0) * (1.0 - fx) + p(c1, r0) * fx) * (1.0 - fy)
-                + (p(c0, r1) * (1.0 - fx) + p(c1, r1) * fx) * fy
+            (p(c0, r0) * (1.0 - fx) + p(c1, r0) * fx) * (1.0 - fy) + (p(c0, r1) * (1.0 - fx) + p(c1, r1) * fx) * fy
         }
     }
 }

@@ -72,14 +72,7 @@ pub struct PathTracerSettings {
 
 impl Default for PathTracerSettings {
     fn default() -> Self {
-        Self {
-            background: Color::BLACK,
-            rng: PcgSeed::default(),
-            n: 10,
-            max_depth: 2,
-            roulette_depth: 3,
-            nee: true,
-        }
+        Self { background: Color::BLACK, rng: PcgSeed::default(), n: 10, max_depth: 2, roulette_depth: 3, nee: true }
     }
 }
 
@@ -93,9 +86,6 @@ pub struct Tracer {
 
 impl Default for Tracer {
     fn default() -> Self {
-        Self {
-            samples_per_side: 0,
-            rng: PcgSeed::default(),
-        }
+        Self { samples_per_side: 0, rng: PcgSeed::default() }
     }
 }

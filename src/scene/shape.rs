@@ -18,12 +18,7 @@ pub enum ShapeKind {
 }
 
 impl ShapeKind {
-    pub const ALL: [ShapeKind; 4] = [
-        ShapeKind::Sphere,
-        ShapeKind::Plane,
-        ShapeKind::Cube,
-        ShapeKind::Cylinder,
-    ];
+    pub const ALL: [ShapeKind; 4] = [ShapeKind::Sphere, ShapeKind::Plane, ShapeKind::Cube, ShapeKind::Cylinder];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -43,19 +38,16 @@ impl ShapeKind {
                 DVec3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, 0.0),
                 DVec3::new(f64::INFINITY, f64::INFINITY, 0.0),
             ),
-            ShapeKind::Cube | ShapeKind::Cylinder => {
-                Aabb::new(DVec3::splat(-0.5), DVec3::splat(0.5))
-            }
+            ShapeKind::Cube | ShapeKind::Cylinder => Aabb::new(DVec3::splat(-0.5), DVec3::splat(0.5)),
         }
     }
 
     /// Bounds of the solid (the region "inside" for CSG).
     pub fn solid_bounds(self) -> Aabb {
         match self {
-            ShapeKind::Plane => Aabb::new(
-                DVec3::splat(f64::NEG_INFINITY),
-                DVec3::new(f64::INFINITY, f64::INFINITY, 0.0),
-            ),
+            ShapeKind::Plane => {
+                Aabb::new(DVec3::splat(f64::NEG_INFINITY), DVec3::new(f64::INFINITY, f64::INFINITY, 0.0))
+            }
             k => k.object_bounds(),
         }
     }
@@ -113,19 +105,11 @@ pub enum Shape {
 
 impl Shape {
     pub fn primitive(kind: ShapeKind, transform: Transform, material: MaterialId) -> Self {
-        Shape::Primitive(Primitive {
-            kind,
-            transform,
-            material,
-        })
+        Shape::Primitive(Primitive { kind, transform, material })
     }
 
     pub fn csg(op: CsgOp, children: Vec<Shape>, transform: Transform) -> Self {
-        Shape::Csg(Box::new(Csg {
-            op,
-            children,
-            transform,
-        }))
+        Shape::Csg(Box::new(Csg { op, children, transform }))
     }
 
     /// World-space bounds of the visible surface. A lone plane is infinite. CSG: union of
@@ -203,11 +187,7 @@ mod tests {
     fn plane_is_infinite_but_intersected_with_a_sphere_is_bounded() {
         let plane = Shape::primitive(ShapeKind::Plane, Transform::IDENTITY, m());
         assert!(!plane.bounds().is_finite());
-        let sphere = Shape::primitive(
-            ShapeKind::Sphere,
-            Transform::translation(DVec3::new(0.0, 0.0, 0.5)),
-            m(),
-        );
+        let sphere = Shape::primitive(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, 0.0, 0.5)), m());
         let cut = Shape::csg(CsgOp::Intersect, vec![sphere, plane], Transform::IDENTITY);
         let b = cut.bounds();
         assert!(b.is_finite());
@@ -219,11 +199,7 @@ mod tests {
     fn csg_depth_and_counts() {
         let s = || Shape::primitive(ShapeKind::Sphere, Transform::IDENTITY, m());
         let inner = Shape::csg(CsgOp::Diff, vec![s(), s()], Transform::IDENTITY);
-        let outer = Shape::csg(
-            CsgOp::Unite,
-            vec![inner, s()],
-            Transform::translation(DVec3::X),
-        );
+        let outer = Shape::csg(CsgOp::Unite, vec![inner, s()], Transform::translation(DVec3::X));
         assert_eq!(outer.csg_depth(), 2);
         assert_eq!(outer.csg_node_count(), 2);
         let mut n = 0;

@@ -27,10 +27,7 @@ impl Default for Transform {
 }
 
 impl Transform {
-    pub const IDENTITY: Self = Self {
-        m: DMat4::IDENTITY,
-        inv: DMat4::IDENTITY,
-    };
+    pub const IDENTITY: Self = Self { m: DMat4::IDENTITY, inv: DMat4::IDENTITY };
 
     /// Builds a transformation from a matrix, computing the inverse. Fails on non-finite
     /// entries, a singular matrix, or a non-affine last row.
@@ -44,9 +41,7 @@ impl Transform {
         let det = m.determinant();
         // Relative test: compare with the scale of the linear part so tiny but regular
         // scalings (1e-4 scenes) stay valid.
-        let scale = m.x_axis.truncate().length()
-            * m.y_axis.truncate().length()
-            * m.z_axis.truncate().length();
+        let scale = m.x_axis.truncate().length() * m.y_axis.truncate().length() * m.z_axis.truncate().length();
         if det == 0.0 || !det.is_finite() || scale == 0.0 || (det.abs() / scale) < 1e-12 {
             return Err(SceneError::SingularTransform);
         }
@@ -63,10 +58,7 @@ impl Transform {
     }
 
     pub fn translation(v: DVec3) -> Self {
-        Self {
-            m: DMat4::from_translation(v),
-            inv: DMat4::from_translation(-v),
-        }
+        Self { m: DMat4::from_translation(v), inv: DMat4::from_translation(-v) }
     }
 
     /// Non-uniform scaling; fails if any factor is zero or non-finite.
@@ -77,10 +69,7 @@ impl Transform {
         if s.x == 0.0 || s.y == 0.0 || s.z == 0.0 {
             return Err(SceneError::SingularTransform);
         }
-        Ok(Self {
-            m: DMat4::from_scale(s),
-            inv: DMat4::from_scale(s.recip()),
-        })
+        Ok(Self { m: DMat4::from_scale(s), inv: DMat4::from_scale(s.recip()) })
     }
 
     /// Scaling by finite, non-zero factors (panics otherwise; use [`Self::try_scaling`] for
@@ -100,10 +89,7 @@ impl Transform {
         Self::rotation(DMat4::from_rotation_z(deg.to_radians()))
     }
     fn rotation(m: DMat4) -> Self {
-        Self {
-            m,
-            inv: m.transpose(),
-        }
+        Self { m, inv: m.transpose() }
     }
 
     pub fn matrix(&self) -> DMat4 {
@@ -113,10 +99,7 @@ impl Transform {
         self.inv
     }
     pub fn inverse(&self) -> Self {
-        Self {
-            m: self.inv,
-            inv: self.m,
-        }
+        Self { m: self.inv, inv: self.m }
     }
     pub fn is_identity(&self) -> bool {
         self.m == DMat4::IDENTITY
@@ -142,10 +125,7 @@ impl std::ops::Mul for Transform {
     type Output = Transform;
     /// `a * b` applies `b` first, then `a` (matrix product).
     fn mul(self, o: Transform) -> Transform {
-        Transform {
-            m: self.m * o.m,
-            inv: o.inv * self.inv,
-        }
+        Transform { m: self.m * o.m, inv: o.inv * self.inv }
     }
 }
 
@@ -177,27 +157,13 @@ mod tests {
 
     #[test]
     fn singular_and_non_finite_are_errors() {
-        assert_eq!(
-            Transform::try_scaling(DVec3::new(1.0, 0.0, 1.0)),
-            Err(SceneError::SingularTransform)
-        );
-        assert_eq!(
-            Transform::try_scaling(DVec3::new(f64::NAN, 1.0, 1.0)),
-            Err(SceneError::NonFiniteTransform)
-        );
+        assert_eq!(Transform::try_scaling(DVec3::new(1.0, 0.0, 1.0)), Err(SceneError::SingularTransform));
+        assert_eq!(Transform::try_scaling(DVec3::new(f64::NAN, 1.0, 1.0)), Err(SceneError::NonFiniteTransform));
         let mut rows = [0.0; 16];
         rows[15] = 1.0;
-        assert_eq!(
-            Transform::from_rows(rows),
-            Err(SceneError::SingularTransform)
-        );
-        let rows = [
-            1., 0., 0., 5., 0., 1., 0., 6., 0., 0., 1., 7., 0., 0., 0., 1.,
-        ];
-        assert_eq!(
-            Transform::from_rows(rows).unwrap().point(DVec3::ZERO),
-            DVec3::new(5.0, 6.0, 7.0)
-        );
+        assert_eq!(Transform::from_rows(rows), Err(SceneError::SingularTransform));
+        let rows = [1., 0., 0., 5., 0., 1., 0., 6., 0., 0., 1., 7., 0., 0., 0., 1.];
+        assert_eq!(Transform::from_rows(rows).unwrap().point(DVec3::ZERO), DVec3::new(5.0, 6.0, 7.0));
         assert!(Transform::try_scaling(DVec3::splat(1e-4)).is_ok());
     }
 }
