@@ -237,6 +237,23 @@ fn csg_operations_on_two_spheres() {
 }
 
 #[test]
+fn fuse_hides_touching_faces_unite_shows_them() {
+    let pair = |op| {
+        World::from_shapes(&[Shape::csg(
+            op,
+            vec![cube(Transform::IDENTITY, 0), cube(tr(1.0, 0.0, 0.0), 1)],
+            Transform::IDENTITY,
+        )])
+    };
+    let o = DVec3::new(-5.0, 0.1, 0.2);
+    let w = pair(CsgOp::Fuse);
+    check_hit(&hit(&w, ray_from(o, DVec3::X, 4.6)), 6.5, -DVec3::X, 1, false);
+    // UNITE keeps the shared face x = 0.5 (both cubes have a surface there).
+    let w = pair(CsgOp::Unite);
+    assert_eq!(hit(&w, ray_from(o, DVec3::X, 4.6)).t, 5.5);
+}
+
+#[test]
 fn csg_diff_order_and_carved_normals() {
     // Sphere 1 minus sphere 0: solid x ∈ [1, 2]; its entry is sphere 0's exit, flipped.
     let w = World::from_shapes(&[Shape::csg(
