@@ -347,6 +347,21 @@ fn coincident_face_diff_does_not_leak() {
     }
     // From +x the first surface is the carved face x = 0 (material 1, facing the ray).
     check_hit(&hit(&w, ray(DVec3::new(5.0, 0.3, 0.2), -DVec3::X)), 5.0, DVec3::X, 1, true);
+    // The same pair placed by a rotating, translating parent node, rays from random
+    // points above the shared top face in random downward directions.
+    let place = tr(3.0, -2.0, 1.0) * Transform::rotation_z(37.0) * Transform::rotation_x(21.0);
+    let w = World::from_shapes(&[Shape::csg(
+        CsgOp::Diff,
+        vec![cube(sc(2.0, 2.0, 2.0), 0), cube(tr(0.5, 0.0, 0.0) * sc(1.0, 2.0, 2.0), 1)],
+        place,
+    )]);
+    let mut rng = lumen::sampling::Pcg32::new(2, 3);
+    for _ in 0..5000 {
+        let p = DVec3::new(0.1 + 0.8 * rng.next_f64(), -0.98 + 1.96 * rng.next_f64(), 1.0);
+        let d = DVec3::new(0.02 * (rng.next_f64() - 0.5), 0.5 * (rng.next_f64() - 0.5), -1.0);
+        let r = ray(place.point(p - 3.0 * d), place.vector(d));
+        assert!(w.intersect(&r).is_none(), "leak at {p}");
+    }
     // A solid minus itself is empty.
     let w = World::from_shapes(&[Shape::csg(
         CsgOp::Diff,
