@@ -224,7 +224,8 @@ fn subtract(a: &[Interval], cut: &[Interval]) -> Vec<Interval> {
         let mut start = Some(x.enter);
         for y in cut {
             let Some(s) = start else { break };
-            if y.exit.t <= s.t {
+            // A cut of zero length (a grazed sphere) removes nothing of positive measure.
+            if y.exit.t <= s.t || y.exit.t <= y.enter.t {
                 continue;
             }
             if y.enter.t >= x.exit.t {
@@ -312,6 +313,8 @@ mod tests {
         assert_eq!(ts(&d), vec![(1.0, 3.0), (4.0, 6.0), (7.0, 9.0)]);
         assert!(d.iter().all(|i| i.enter.flip && i.exit.flip));
         assert_eq!((d[0].enter.leaf, d[0].exit.leaf), (1, 2));
+        // A grazing (zero-length) cut leaves no crack.
+        assert_eq!(ts(&subtract(&[iv(0.0, 2.0, 0)], &[iv(1.0, 1.0, 1)])), vec![(0.0, 2.0)]);
         // Coincident ends leave nothing of zero length.
         assert!(subtract(&[iv(0.0, 1.0, 0)], &[iv(0.0, 1.0, 1)]).is_empty());
         assert_eq!(ts(&subtract(&[iv(0.0, 2.0, 0)], &[iv(0.0, 1.0, 1)])), vec![(1.0, 2.0)]);
