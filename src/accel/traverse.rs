@@ -151,6 +151,11 @@ mod tests {
         assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), Some(1.0));
         let rb = RayBox::new(DVec3::new(-1.0, 1.0 + 1e-12, 0.0), DVec3::X);
         assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), None);
+        // Oblique ray (no zero component): enters through x = 0, misses when aimed past.
+        let rb = RayBox::new(DVec3::new(-3.0, 0.5, 0.5), DVec3::new(1.0, 0.1, -0.1));
+        assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), Some(3.0));
+        let rb = RayBox::new(DVec3::new(-3.0, 0.5, 0.5), DVec3::new(1.0, 0.3, -0.1));
+        assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), None);
         // Infinite boxes work.
         let rb = RayBox::new(DVec3::new(5.0, 5.0, 5.0), DVec3::new(1.0, -2.0, 0.5));
         assert_eq!(rb.hit(DVec3::NEG_INFINITY, DVec3::INFINITY, 0.0, 10.0), Some(0.0));
