@@ -184,6 +184,28 @@ fn uv_of_every_shape_per_spec() {
 }
 
 #[test]
+fn unnormalised_directions_scale_t_only() {
+    let shapes = [
+        sphere(tr(3.0, 0.2, -0.1), 0),
+        cube(tr(-4.0, 0.0, 0.0) * Transform::rotation_z(20.0), 1),
+        cylinder(tr(0.0, 5.0, 0.0) * Transform::rotation_x(70.0), 2),
+    ];
+    let w = World::from_shapes(&shapes);
+    for d in [DVec3::X, -DVec3::X, DVec3::Y] {
+        let base = hit(&w, ray(DVec3::new(0.0, 0.1, 0.05), d));
+        for scale in [1e-6, 3.0, 1e7] {
+            let h = hit(&w, ray(DVec3::new(0.0, 0.1, 0.05), d * scale));
+            assert!((h.t * scale - base.t).abs() < 1e-12 * base.t, "{d} × {scale}");
+            assert!(close(h.point, base.point) && close(h.normal, base.normal) && h.material == base.material);
+        }
+    }
+    // On the cylinder's side surface, parallel to its axis: enters through the cap rim.
+    let w = World::from_shapes(&[cylinder(Transform::IDENTITY, 0)]);
+    let h = hit(&w, ray(DVec3::new(0.5, 0.0, -5.0), DVec3::Z));
+    check_hit(&h, 4.5, -DVec3::Z, 0, true);
+}
+
+#[test]
 fn normals_use_the_inverse_transpose() {
     // Sphere squashed to an ellipsoid x²/4 + y² + z² = 1; at (√2, √0.5, 0) the normal is
     // ∝ (x/4, y, 0).
