@@ -420,14 +420,27 @@ fn csg_with_a_plane_half_space() {
 #[test]
 fn max_intervals_bounds_random_trees() {
     let mut rng = lumen::sampling::Pcg32::new(9, 1);
+    fn subtrees<'a>(s: &'a Shape, out: &mut Vec<&'a Shape>) {
+        out.push(s);
+        if let Shape::Csg(c) = s {
+            c.children.iter().for_each(|ch| subtrees(ch, out));
+        }
+    }
     for _ in 0..200 {
-        let shape = random_shape(&mut rng, 3);
-        let bound = max_intervals(&shape);
-        let tree = CsgTree::new(&shape);
-        for _ in 0..50 {
-            let r = random_ray(&mut rng, 3.0);
-            let n = tree.intervals(&r).len();
-            assert!(n <= bound, "{n} intervals > bound {bound} for {shape:?}");
+        let root = random_shape(&mut rng, 3);
+        let root_bound = max_intervals(&root);
+        let mut all = Vec::new();
+        subtrees(&root, &mut all);
+        // Every node's own lists fit its bound, and the root's bound covers them all.
+        for shape in all {
+            let bound = max_intervals(shape);
+            assert!(bound <= root_bound);
+            let tree = CsgTree::new(shape);
+            for _ in 0..30 {
+                let r = random_ray(&mut rng, 3.0);
+                let n = tree.intervals(&r).len();
+                assert!(n <= bound, "{n} intervals > bound {bound} for {shape:?}");
+            }
         }
     }
     // Known values.
