@@ -112,6 +112,21 @@ impl ComputeKernel {
 
 impl Gpu {
     /// Compiles `entry` of a WGSL compute shader. `label` names it in errors (use the file).
+    ///
+    /// ```
+    /// use lumen::gpu::gpu_for_tests;
+    /// let Some(gpu) = gpu_for_tests("compute_kernel_doc") else { return };
+    /// let src = "@group(0) @binding(0) var<storage, read_write> v: array<u32>;
+    /// @compute @workgroup_size(64)
+    /// fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    ///     if (id.x < arrayLength(&v)) { v[id.x] = v[id.x] * 3u; }
+    /// }";
+    /// let kernel = gpu.compute_kernel("triple.wgsl", src, "main").unwrap();
+    /// let buf = gpu.storage_buffer("v", &[1u32, 2, 3, 4]).unwrap();
+    /// let group = kernel.bind_group(&gpu, 0, &[&buf]).unwrap();
+    /// gpu.dispatch(&kernel, &[&group], kernel.workgroups_for([4, 1, 1])).unwrap();
+    /// assert_eq!(gpu.read_buffer::<u32>(&buf, 4).unwrap(), [3, 6, 9, 12]);
+    /// ```
     pub fn compute_kernel(&self, label: &str, source: &str, entry: &str) -> Result<ComputeKernel, GpuError> {
         let validated = validate_wgsl(label, source)?;
         let module = &validated.module;

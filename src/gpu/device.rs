@@ -237,6 +237,15 @@ pub struct Gpu {
 
 impl Gpu {
     /// Opens the chosen adapter (see [`AdapterChoice`]) with its full limits.
+    ///
+    /// ```
+    /// use lumen::gpu::{AdapterChoice, Gpu, GpuError};
+    /// match Gpu::new(&AdapterChoice::from_env()) {
+    ///     Ok(gpu) => println!("rendering on {}", gpu.description()),
+    ///     Err(GpuError::NoAdapter) => println!("no GPU adapter: use the CPU renderer"),
+    ///     Err(e) => panic!("{e}"),
+    /// }
+    /// ```
     pub fn new(choice: &AdapterChoice) -> Result<Gpu, GpuError> {
         let adapters = enumerate();
         if adapters.is_empty() {
