@@ -273,3 +273,20 @@ fn assembled_kernels_run_and_are_cached_by_feature_set() {
     }
     assert_eq!(cache.len(), 2);
 }
+
+#[test]
+fn tiles_shrink_for_slow_passes_without_changing_the_result() {
+    let Some(gpu) = gpu_for_tests("tiles_shrink_for_slow_passes_without_changing_the_result") else { return };
+    let kernel = pass_kernel(&gpu, "integer.wgsl", "", INTEGER_SAMPLE);
+    // A zero target makes every pass "too slow": one sample per pass, tiles 256 → 128 → 64 → 32.
+    let opts = PassOptions { target_pass_seconds: 0.0, ..PassOptions::default() };
+    let (w, h, spp) = (100u32, 70u32, 6u32);
+    let out = run_progressive(&gpu, &kernel, &[], w, h, spp, &opts).unwrap();
+    assert_eq!(out.passes, 1 + 1 + 4 + 12 + 12 + 12);
+    for (p, s) in out.sums.iter().enumerate() {
+        let want = (0..spp)
+            .map(|j| integer_sample(p as u32, j))
+            .fold([0.0; 3], |a, s| [a[0] + s[0], a[1] + s[1], a[2] + s[2]]);
+        assert_eq!(*s, want, "pixel {p}");
+    }
+}
