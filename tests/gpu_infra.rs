@@ -290,3 +290,21 @@ fn tiles_shrink_for_slow_passes_without_changing_the_result() {
         assert_eq!(*s, want, "pixel {p}");
     }
 }
+
+#[test]
+fn a_lost_device_is_an_error_not_a_panic() {
+    let Some(gpu) = gpu_for_tests("a_lost_device_is_an_error_not_a_panic") else { return };
+    let kernel = gpu.compute_kernel("smoke.wgsl", SMOKE, "main").unwrap();
+    let data = gpu.storage_buffer("data", &[1u32; 8]).unwrap();
+    // Destroying the device is the one portable way to lose it on purpose.
+    gpu.device.destroy();
+    let err = gpu.storage_buffer("after", &[1u32; 4]).unwrap_err();
+    assert!(matches!(err, GpuError::DeviceLost(_)), "{err}");
+    assert!(gpu.read_buffer::<u32>(&data, 8).is_err());
+    let params = gpu.uniform_buffer("params", &SmokeParams { count: 1, scale: 1.0 });
+    let run = params.and_then(|p| {
+        let g = kernel.bind_group(&gpu, 0, &[&p, &data, &data, &data])?;
+        gpu.dispatch(&kernel, &[&g], [1, 1, 1])
+    });
+    assert!(run.is_err());
+}

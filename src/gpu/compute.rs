@@ -9,7 +9,6 @@
 use std::collections::BTreeMap;
 
 use bytemuck::Pod;
-use wgpu::util::DeviceExt;
 
 use super::device::{Gpu, GpuError};
 
@@ -246,15 +245,9 @@ impl Gpu {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let padded = padded_len(bytes.len() as u64);
         self.check_storage_size(label, padded)?;
-        let mut contents = bytes.to_vec();
-        contents.resize(padded as usize, 0);
-        self.scoped(|| {
-            self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &contents,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            })
-        })
+        let buffer = self.storage_buffer_zeroed(label, padded)?;
+        self.upload(&buffer, bytes)?;
+        Ok(buffer)
     }
 
     /// A zero-filled storage buffer of `bytes` bytes (padded like [`Self::storage_buffer`]).
@@ -286,13 +279,33 @@ impl Gpu {
                 limit_name: "uniform buffer binding",
             });
         }
-        self.scoped(|| {
-            self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let buffer = self.scoped(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                contents: &contents,
+                size: size as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
             })
-        })
+        })?;
+        self.upload(&buffer, &contents)?;
+        Ok(buffer)
+    }
+
+    /// Writes `bytes` at the start of `buffer` (through the queue, not a mapping: a buffer
+    /// that failed to allocate then yields an error instead of wgpu's panic on mapping).
+    fn upload(&self, buffer: &wgpu::Buffer, bytes: &[u8]) -> Result<(), GpuError> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        // Queue writes must be whole 4-byte words.
+        let padded: Vec<u8>;
+        let data = if bytes.len() % 4 == 0 {
+            bytes
+        } else {
+            padded = bytes.iter().copied().chain(std::iter::repeat(0)).take(bytes.len().next_multiple_of(4)).collect();
+            &padded
+        };
+        self.scoped(|| self.queue.write_buffer(buffer, 0, data))
     }
 
     /// Records and submits one dispatch, then waits for it; errors surface here.
