@@ -26,12 +26,12 @@ pub const LUMINOSITY_DELTA: f32 = f32::EPSILON;
 /// The compression curve of a [`ToneMap`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Curve {
-    /// Raytracer.jl: normalise to key α by the image luminosity, `x/(1+x)`, `x^(1/γ)`.
+    /// Raytracer.jl: normalise to key α by the image luminosity, x/(1+x), x^(1/γ).
     Reinhard,
-    /// Narkowicz's fit of the ACES filmic curve after `2^exposure`, then sRGB.
+    /// Narkowicz's fit of the ACES filmic curve after 2^exposure, then sRGB.
     #[default]
     Aces,
-    /// `2^exposure`, clip to [0, 1], then sRGB.
+    /// 2^exposure, clip to [0, 1], then sRGB.
     Exposure,
 }
 
