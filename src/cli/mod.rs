@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod devices;
 mod tonemap;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
@@ -18,13 +19,17 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Tone-map or convert an image file (PFM, OpenEXR, Radiance HDR, PNG, JPEG).
     Tonemap(tonemap::TonemapArgs),
+    /// List the GPU adapters lumen can render on.
+    Devices(devices::DevicesArgs),
 }
 
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Tonemap(args) => tonemap::run(args),
+        Command::Devices(args) => devices::run(args),
     }
 }
 
