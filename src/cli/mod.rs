@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 
 pub mod devices;
 pub mod gpu_args;
+mod tonemap;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.
@@ -19,6 +20,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Tone-map or convert an image file (PFM, OpenEXR, Radiance HDR, PNG, JPEG).
+    Tonemap(tonemap::TonemapArgs),
     /// List the GPU adapters lumen can render on.
     Devices(devices::DevicesArgs),
 }
@@ -26,6 +29,7 @@ pub enum Command {
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Tonemap(args) => tonemap::run(args),
         Command::Devices(args) => devices::run(args),
     }
 }

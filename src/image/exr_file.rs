@@ -95,4 +95,23 @@ mod tests {
             assert!(decode_exr(&valid[..cut]).is_err(), "cut at {cut}");
         }
     }
+
+    proptest::proptest! {
+        /// Corrupted and truncated files give Ok or Err, never a panic (the `exr` crate's
+        /// robustness is part of our contract, so we check it).
+        #[test]
+        fn corrupted_files_never_panic(
+            edits in proptest::collection::vec((0usize..4096, proptest::prelude::any::<u8>()), 1..6),
+            cut in 0usize..400,
+        ) {
+            let img = HdrImage::from_fn(40, 33, |c, r| Rgb32::new(c as f32, (r * c % 7) as f32, 1.0));
+            let mut bytes = encode_exr(&img).unwrap();
+            for (pos, value) in edits {
+                let n = bytes.len();
+                bytes[pos % n] = value;
+            }
+            bytes.truncate(bytes.len().saturating_sub(cut));
+            let _ = decode_exr(&bytes);
+        }
+    }
 }

@@ -26,12 +26,12 @@ pub const LUMINOSITY_DELTA: f32 = f32::EPSILON;
 /// The compression curve of a [`ToneMap`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Curve {
-    /// Raytracer.jl: normalise to key α by the image luminosity, `x/(1+x)`, `x^(1/γ)`.
+    /// Raytracer.jl: normalise to key α by the image luminosity, x/(1+x), x^(1/γ).
     Reinhard,
-    /// Narkowicz's fit of the ACES filmic curve after `2^exposure`, then sRGB.
+    /// Narkowicz's fit of the ACES filmic curve after 2^exposure, then sRGB.
     #[default]
     Aces,
-    /// `2^exposure`, clip to [0, 1], then sRGB.
+    /// 2^exposure, clip to [0, 1], then sRGB.
     Exposure,
 }
 
@@ -92,6 +92,9 @@ pub struct ToneMapped {
     pub image: HdrImage,
     /// How many input pixels were NaN or infinite (they come out black).
     pub non_finite: usize,
+    /// Reinhard only: the luminosity L the image was normalised by (given or measured);
+    /// pass it back as [`ToneMap::luminosity`] to map other frames identically.
+    pub luminosity: Option<f32>,
 }
 
 impl ToneMapped {
@@ -133,9 +136,11 @@ impl ToneMap {
     pub fn apply(&self, img: &HdrImage) -> Result<ToneMapped, ToneMapError> {
         self.validate()?;
         let non_finite = img.non_finite_count();
+        let mut luminosity = None;
         let image = match self.curve {
             Curve::Reinhard => {
                 let lum = self.luminosity.map_or_else(|| average_luminosity_f64(img), f64::from);
+                luminosity = Some(lum as f32);
                 let scale = f64::from(self.alpha) / lum;
                 let inv_gamma = 1.0 / f64::from(self.gamma);
                 map_finite(img, |v| reinhard(v * scale).powf(inv_gamma))
@@ -149,7 +154,7 @@ impl ToneMap {
                 map_finite(img, |v| f64::from(linear_to_srgb((v * scale).min(1.0) as f32)))
             }
         };
-        Ok(ToneMapped { image, non_finite })
+        Ok(ToneMapped { image, non_finite, luminosity })
     }
 }
 
@@ -238,7 +243,12 @@ mod tests {
         let tm = ToneMap { alpha: 1.0, luminosity: Some(2.0), ..ToneMap::raytracer_jl() };
         // Pixel (4,5,6) / 2 = (2, 2.5, 3) → x/(1+x).
         let want = Rgb32::new(2.0 / 3.0, 2.5 / 3.5, 3.0 / 4.0);
-        assert!(close(tm.apply(&img).unwrap().image[(1, 0)], want));
+        let out = tm.apply(&img).unwrap();
+        assert!(close(out.image[(1, 0)], want));
+        assert_eq!(out.luminosity, Some(2.0));
+        let measured = ToneMap::raytracer_jl().apply(&img).unwrap().luminosity.unwrap();
+        assert!((measured - 7.706255).abs() < 1e-5);
+        assert_eq!(ToneMap::default().apply(&img).unwrap().luminosity, None);
     }
 
     #[test]

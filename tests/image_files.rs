@@ -1,0 +1,228 @@
+//! Image files end to end: the public `lumen::image` API and the `lumen tonemap` binary.
+//! Expected values are hand-built bytes and hand-computed numbers, never files written by
+//! the code under test and read back as the reference.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use lumen::color::Rgb32;
+use lumen::image::{is_hdr_path, read_image, write_image, HdrImage, ImageError, ToneMap};
+
+/// Hand-built little-endian PFM: `width × height` pixels given top row first; the file
+/// stores rows bottom to top.
+fn pfm_bytes(width: usize, height: usize, top_first: &[[f32; 3]]) -> Vec<u8> {
+    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
+    for row in top_first.chunks(width).rev() {
+        for px in row {
+            for v in px {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// Raytracer.jl's 3×2 test image: (1,2,3), (4,5,6), …, (16,17,18), top row first.
+fn raytracer_pixels() -> Vec<[f32; 3]> {
+    (0..6).map(|i| [3.0 * i as f32 + 1.0, 3.0 * i as f32 + 2.0, 3.0 * i as f32 + 3.0]).collect()
+}
+
+fn lumen_with(input: &Path, output: &Path, opts: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lumen"))
+        .arg("tonemap")
+        .arg(input)
+        .arg(output)
+        .args(opts)
+        .output()
+        .expect("run lumen")
+}
+
+fn lumen(input: &Path, output: &Path) -> Output {
+    lumen_with(input, output, &[])
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn png_rgb8(path: &Path) -> Vec<u8> {
+    image::open(path).expect("decode png").into_rgb8().into_raw()
+}
+
+fn files_in(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn api_reads_hand_built_pfm_top_row_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("in.pfm");
+    std::fs::write(&path, pfm_bytes(3, 2, &raytracer_pixels())).unwrap();
+    let img = read_image(&path).unwrap();
+    assert_eq!((img.width(), img.height()), (3, 2));
+    assert_eq!(img[(0, 0)], Rgb32::new(1.0, 2.0, 3.0));
+    assert_eq!(img[(2, 1)], Rgb32::new(16.0, 17.0, 18.0));
+}
+
+#[test]
+fn api_round_trips_pfm_and_exr_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = HdrImage::from_fn(7, 5, |c, r| Rgb32::new(c as f32 * 1e-3, (r * r) as f32 * 1e4, -0.5 + c as f32));
+    for name in ["x.pfm", "x.EXR"] {
+        let path = dir.path().join(name);
+        assert!(is_hdr_path(&path));
+        let report = write_image(&path, &img, &ToneMap::default()).unwrap();
+        assert_eq!(report.non_finite, 0);
+        assert_eq!(read_image(&path).unwrap(), img, "{name}");
+    }
+    assert_eq!(files_in(dir.path()).len(), 2, "no temporary files left");
+}
+
+#[test]
+fn api_errors_carry_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("short.pfm");
+    let mut bytes = pfm_bytes(3, 2, &raytracer_pixels());
+    bytes.truncate(bytes.len() - 5);
+    std::fs::write(&path, bytes).unwrap();
+    match read_image(&path) {
+        Err(e @ ImageError::Pfm { .. }) => {
+            assert_eq!(e.path(), path);
+            let msg = e.to_string();
+            assert!(msg.contains("short.pfm") && msg.contains("67 bytes") && msg.contains("72"), "{msg}");
+        }
+        other => panic!("expected a PFM error, got {other:?}"),
+    }
+}
+
+#[test]
+fn tonemap_pfm_to_png_reproduces_raytracer_jl() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in.pfm"), dir.path().join("out.png"));
+    std::fs::write(&input, pfm_bytes(3, 2, &raytracer_pixels())).unwrap();
+    let o = lumen_with(&input, &output, &["--curve", "reinhard", "--alpha", "1", "--gamma", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    let rgb = png_rgb8(&output);
+    assert_eq!(rgb.len(), 18);
+    // Raytracer.jl's first pixel after clamp, (0.11485995, 0.20605269, 0.28021002), × 255.
+    assert_eq!(&rgb[..3], &[29, 53, 71]);
+}
+
+#[test]
+fn tonemap_default_is_aces_srgb() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in.pfm"), dir.path().join("OUT.PNG"));
+    std::fs::write(&input, pfm_bytes(2, 1, &[[1.0, 0.25, 4.0], [0.5, 0.0, 1e9]])).unwrap();
+    let o = lumen(&input, &output);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Narkowicz(x) then sRGB, by hand: 1 → 0.80380 → 0.90823 → 232; 0.25 → 165; 4 → 252;
+    // 0.5 → 206; 0 → 0; 1e9 → 1 → 255.
+    assert_eq!(png_rgb8(&output), vec![232, 165, 252, 206, 0, 255]);
+}
+
+#[test]
+fn tonemap_exposure_curve_and_jpeg_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.pfm");
+    std::fs::write(&input, pfm_bytes(1, 1, &[[0.25, 1.0, 0.25]])).unwrap();
+    let png = dir.path().join("e.png");
+    let o = lumen_with(&input, &png, &["--curve", "exposure", "--exposure", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // 2 × 0.25 = 0.5 → sRGB 0.73536 → 188; 2 × 1 clips to 1 → 255.
+    assert_eq!(png_rgb8(&png), vec![188, 255, 188]);
+    let jpg = dir.path().join("e.jpeg");
+    let o = lumen_with(&input, &jpg, &["--curve", "exposure", "--exposure", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let back = read_image(&jpg).unwrap();
+    assert_eq!((back.width(), back.height()), (1, 1));
+}
+
+#[test]
+fn tonemap_converts_between_hdr_formats() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.pfm");
+    std::fs::write(&input, pfm_bytes(3, 2, &raytracer_pixels())).unwrap();
+    let exr = dir.path().join("mid.exr");
+    let o = lumen(&input, &exr);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = read_image(&exr).unwrap();
+    assert_eq!(img[(1, 0)], Rgb32::new(4.0, 5.0, 6.0));
+    let hdr = dir.path().join("mid.hdr");
+    let o = lumen(&exr, &hdr);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // 16, 17, 18 share one RGBE exponent (2^5): 8-bit mantissas are exact for integers < 32.
+    assert_eq!(read_image(&hdr).unwrap()[(2, 1)], Rgb32::new(16.0, 17.0, 18.0));
+    // Tone-mapping options make no sense for a linear output.
+    let o = lumen_with(&input, &dir.path().join("x.pfm"), &["--curve", "aces"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("x.pfm"), "{}", stderr(&o));
+}
+
+#[test]
+fn unknown_output_extension_fails_without_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.pfm");
+    std::fs::write(&input, pfm_bytes(3, 2, &raytracer_pixels())).unwrap();
+    let output = dir.path().join("out.tiff");
+    let o = lumen(&input, &output);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("out.tiff") && err.contains(".tiff") && err.contains(".png"), "{err}");
+    assert_eq!(files_in(dir.path()), vec![input], "no output and no temporary file");
+}
+
+#[test]
+fn corrupt_input_fails_naming_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("out.png");
+    for (name, bytes) in [
+        ("bad.pfm", b"PF\n3 2\n-1.0\n\x00\x00".to_vec()),
+        ("bad.exr", b"v/1\x01garbage".to_vec()),
+        ("bad.png", b"\x89PNG\r\n\x1a\n\x00".to_vec()),
+        ("bad.hdr", b"#?RADIANCE\n".to_vec()),
+    ] {
+        let input = dir.path().join(name);
+        std::fs::write(&input, bytes).unwrap();
+        let o = lumen(&input, &output);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        let err = stderr(&o);
+        assert!(err.contains(&*input.to_string_lossy()), "{name}: {err}");
+        assert_eq!(err.lines().count(), 1, "one line: {err}");
+        assert!(!output.exists());
+    }
+    let o = lumen(&dir.path().join("missing.pfm"), &output);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("missing.pfm"));
+}
+
+#[test]
+fn non_finite_pixels_warn_once_and_come_out_black() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in.pfm"), dir.path().join("out.png"));
+    let px = [[f32::NAN, 1.0, 1.0], [f32::INFINITY; 3], [1.0, 1.0, 1.0]];
+    std::fs::write(&input, pfm_bytes(3, 1, &px)).unwrap();
+    let o = lumen(&input, &output);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(err.matches("warning").count(), 1, "{err}");
+    assert!(err.contains("2 of 3 pixels"), "{err}");
+    assert_eq!(png_rgb8(&output), vec![0, 0, 0, 0, 0, 0, 232, 232, 232]);
+}
+
+#[test]
+fn invalid_options_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.pfm");
+    std::fs::write(&input, pfm_bytes(1, 1, &[[1.0; 3]])).unwrap();
+    let output = dir.path().join("o.png");
+    // A bad value is a usage error (clap, exit 2); a misplaced option is a run error (exit 1).
+    let o = lumen_with(&input, &output, &["--curve", "reinhard", "--alpha", "-1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let o = lumen_with(&input, &output, &["--alpha", "0.5"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("reinhard"));
+    assert!(!output.exists());
+}
