@@ -10,6 +10,7 @@ pub mod accel;
 pub mod cli;
 pub mod color;
 pub mod cpu;
+pub mod gpu;
 pub mod image;
 pub mod sampling;
 pub mod scene;
