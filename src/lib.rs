@@ -12,3 +12,4 @@ pub mod cpu;
 pub mod image;
 pub mod sampling;
 pub mod scene;
+pub mod scenelang;

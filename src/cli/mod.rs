@@ -5,6 +5,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod check;
+
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.
 #[derive(Debug, Parser)]
@@ -15,11 +17,16 @@ pub struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
-pub enum Command {}
+pub enum Command {
+    /// Load a SceneLang script and summarise it (or print its first error).
+    Check(check::CheckArgs),
+}
 
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Check(args) => check::run(args),
+    }
 }
 
 /// Entry point of the binary: parse, run, report.
