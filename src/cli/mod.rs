@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 
 pub mod devices;
 mod check;
+pub mod render;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.
@@ -23,6 +24,8 @@ pub enum Command {
     Devices(devices::DevicesArgs),
     /// Load a SceneLang script and summarise it (or print its first error).
     Check(check::CheckArgs),
+    /// Render a SceneLang script to image files.
+    Render(render::RenderArgs),
 }
 
 /// Runs one parsed command.
@@ -30,6 +33,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Devices(args) => devices::run(args),
         Command::Check(args) => check::run(args),
+        Command::Render(args) => render::run(args),
     }
 }
 
