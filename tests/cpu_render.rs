@@ -360,3 +360,58 @@ fn non_finite_samples_are_counted_and_dropped() {
     assert_eq!(px(&out.image, 1, 1), Color::BLACK);
     assert_eq!(px(&out.image, 0, 0), Color::gray(0.5));
 }
+
+/// `lumen render` end to end on a tiny script.
+mod cli {
+    use std::path::Path;
+    use std::process::Command;
+
+    const SCRIPT: &str = r#"
+        SET lamp Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)), .emitted_radiance Pigment.Uniform(<0.25, 0.5, 2>))
+        SPAWN Shape.Sphere(.material lamp, .transformation TRANSLATE(.X 3) * SCALE 1.5)
+        USING Camera.Perspective() Image(4, 4) Renderer.Flat(.background_color <1, 0, 0>) Tracer()
+    "#;
+
+    fn lumen(dir: &Path, args: &[&str]) -> std::process::Output {
+        std::fs::write(dir.join("tiny.sl"), SCRIPT).unwrap();
+        Command::new(env!("CARGO_BIN_EXE_lumen")).current_dir(dir).arg("render").arg("tiny.sl").args(args).output().unwrap()
+    }
+
+    #[test]
+    fn writes_pfm_and_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = lumen(dir.path(), &["-o", "out.pfm", "-o", "out.png", "--device", "cpu", "--width", "8"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        // --width 8 alone: the height follows from the camera's aspect ratio 1.
+        let img = lumen::image::read_image(&dir.path().join("out.pfm")).unwrap();
+        assert_eq!((img.width(), img.height()), (8, 8));
+        // Flat: the sphere's emission (its pigment is black) in the middle, background at
+        // the corners, exactly (linear radiance in the PFM).
+        assert_eq!(img.get(4, 4), lumen::color::Rgb32::new(0.25, 0.5, 2.0));
+        assert_eq!(img.get(0, 0), lumen::color::Rgb32::new(1.0, 0.0, 0.0));
+        let png = lumen::image::read_image(&dir.path().join("out.png")).unwrap();
+        assert_eq!((png.width(), png.height()), (8, 8));
+    }
+
+    #[test]
+    fn bad_arguments_fail_without_output() {
+        let dir = tempfile::tempdir().unwrap();
+        for args in [
+            &["-o", "out.png", "--spp", "0"][..],
+            &["-o", "out.png", "--width", "0"],
+            &["-o", "out.png", "--height", "100000"],
+            &["-o", "out.png", "--device", "gpu"],
+            &["-o", "out.png", "--alpha", "-1"],
+            &["-o", "out.png", "--frames", "0:1:0"],
+            &["-o", "out.png", "-o", "out.txt"],
+            &["-o", "out.png", "--vars", "x <1, 2>"],
+        ] {
+            let out = lumen(dir.path(), args);
+            assert!(!out.status.success(), "{args:?} succeeded");
+            assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
+            assert!(!dir.path().join("out.png").exists(), "{args:?} left an output");
+        }
+        let out = Command::new(env!("CARGO_BIN_EXE_lumen")).args(["render", "missing.sl"]).current_dir(dir.path()).output().unwrap();
+        assert!(!out.status.success());
+    }
+}
