@@ -196,7 +196,8 @@ fn point_light_renderer_adds_ambient_and_respects_shadows() {
     // puts that point in shadow (ambient only) without hiding it from the camera above.
     let light = DVec3::new(1.5, -0.2, 2.0);
     let ambient = Color::gray(0.01);
-    let mut scene = lit_floor(Color::gray(0.5), light, Color::WHITE, Renderer::PointLight { background: Color::BLACK, ambient });
+    let mut scene =
+        lit_floor(Color::gray(0.5), light, Color::WHITE, Renderer::PointLight { background: Color::BLACK, ambient });
     let floor_point = |col: usize, row: usize| {
         let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
         r.origin - r.dir * (r.origin.z / r.dir.z)
@@ -230,7 +231,10 @@ fn nee_on_and_off_converge_to_the_same_image() {
         b.plane(Transform::IDENTITY, floor)
             .sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.6)) * Transform::scaling(DVec3::splat(0.6)), ball)
             .sphere(Transform::translation(DVec3::new(3.0, -1.0, 2.2)) * Transform::scaling(DVec3::splat(0.4)), lamp)
-            .cube(Transform::translation(DVec3::new(5.5, 1.5, 1.0)) * Transform::scaling(DVec3::new(0.3, 1.0, 2.0)), panel)
+            .cube(
+                Transform::translation(DVec3::new(5.5, 1.5, 1.0)) * Transform::scaling(DVec3::new(0.3, 1.0, 2.0)),
+                panel,
+            )
             .environment(Environment::Gradient {
                 zenith: Color::new(0.2, 0.3, 0.5),
                 horizon: Color::gray(0.3),
@@ -245,8 +249,10 @@ fn nee_on_and_off_converge_to_the_same_image() {
             .renderer(pt(512, 3, 2, nee));
         b.build().unwrap()
     };
-    let imgs: Vec<HdrImage> =
-        [(true, 1), (true, 2), (false, 1), (false, 2)].iter().map(|&(nee, s)| run(&scene(nee, s), None).image).collect();
+    let imgs: Vec<HdrImage> = [(true, 1), (true, 2), (false, 1), (false, 2)]
+        .iter()
+        .map(|&(nee, s)| run(&scene(nee, s), None).image)
+        .collect();
     // Per-pixel variance of each estimator from its two independent renders.
     let n = imgs[0].pixels().len() as f64;
     let var = |a: &HdrImage, b: &HdrImage| {
@@ -316,8 +322,11 @@ fn on_off_and_flat_are_pixel_exact() {
     // Flat: emitted + pigment on the sphere; the gradient sky elsewhere, at z of the unit
     // direction (1, 1−2u, 2v−1)/|·|.
     let (zen, hor, nad) = (Color::new(0.0, 0.0, 1.0), Color::new(1.0, 1.0, 1.0), Color::new(1.0, 0.0, 0.0));
-    b.renderer(Renderer::Flat { background: Color::gray(9.0) })
-        .environment(Environment::Gradient { zenith: zen, horizon: hor, nadir: nad });
+    b.renderer(Renderer::Flat { background: Color::gray(9.0) }).environment(Environment::Gradient {
+        zenith: zen,
+        horizon: hor,
+        nadir: nad,
+    });
     let img = run(&b.build().unwrap(), None).image;
     for r in 0..4 {
         for c in 0..4 {
@@ -374,7 +383,13 @@ mod cli {
 
     fn lumen(dir: &Path, args: &[&str]) -> std::process::Output {
         std::fs::write(dir.join("tiny.sl"), SCRIPT).unwrap();
-        Command::new(env!("CARGO_BIN_EXE_lumen")).current_dir(dir).arg("render").arg("tiny.sl").args(args).output().unwrap()
+        Command::new(env!("CARGO_BIN_EXE_lumen"))
+            .current_dir(dir)
+            .arg("render")
+            .arg("tiny.sl")
+            .args(args)
+            .output()
+            .unwrap()
     }
 
     #[test]
@@ -411,7 +426,11 @@ mod cli {
             assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
             assert!(!dir.path().join("out.png").exists(), "{args:?} left an output");
         }
-        let out = Command::new(env!("CARGO_BIN_EXE_lumen")).args(["render", "missing.sl"]).current_dir(dir.path()).output().unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_lumen"))
+            .args(["render", "missing.sl"])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
         assert!(!out.status.success());
     }
 }

@@ -193,8 +193,8 @@ fn sample_cone(c: DVec3, r: f64, d: f64, x: DVec3, xi0: f64, xi1: f64) -> (DVec3
     let sin2_theta = local.x * local.x + local.y * local.y;
     let sin_theta_max = r / d;
     // Law of sines in the triangle (x, c, y): cos α = sin²θ/sinθmax + cosθ·√(1 − sin²θ/sin²θmax).
-    let cos_alpha = sin2_theta / sin_theta_max
-        + cos_theta * (1.0 - sin2_theta / (sin_theta_max * sin_theta_max)).max(0.0).sqrt();
+    let cos_alpha =
+        sin2_theta / sin_theta_max + cos_theta * (1.0 - sin2_theta / (sin_theta_max * sin_theta_max)).max(0.0).sqrt();
     let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
     let w = (c - x) / d;
     let (t, b) = super::onb(w);

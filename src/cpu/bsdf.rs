@@ -28,7 +28,7 @@ pub struct BsdfSample {
 }
 
 /// Samples the BRDF with the vertex's lobe draw `xi_lobe` (ξ3) and direction draws
-/// `xi0, xi1` (ξ4, ξ5). `front_face` tells a dielectric whether the ray enters (relative
+/// `xi_dir` (ξ4, ξ5). `front_face` tells a dielectric whether the ray enters (relative
 /// index `ior`) or leaves (1/ior). Returns `None` when nothing is scattered.
 pub fn sample_bsdf(
     brdf: &Brdf,
@@ -37,11 +37,10 @@ pub fn sample_bsdf(
     n: DVec3,
     front_face: bool,
     xi_lobe: f64,
-    xi0: f64,
-    xi1: f64,
+    xi_dir: [f64; 2],
 ) -> Option<BsdfSample> {
     match brdf {
-        Brdf::Diffuse { .. } => sample_diffuse(color, n, xi0, xi1),
+        Brdf::Diffuse { .. } => sample_diffuse(color, n, xi_dir[0], xi_dir[1]),
         Brdf::Specular { .. } => Some(BsdfSample { dir: reflect(d, n), weight: color, pdf: 0.0, delta: true }),
         Brdf::Dielectric { ior, .. } => Some(sample_dielectric(color, d, n, relative_ior(*ior, front_face), xi_lobe)),
     }
@@ -105,8 +104,8 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
-    use crate::scene::Pigment;
     use crate::sampling::Pcg32;
+    use crate::scene::Pigment;
 
     fn diffuse() -> Brdf {
         Brdf::Diffuse { pigment: Pigment::default() }
@@ -124,7 +123,7 @@ mod tests {
         let mut rng = Pcg32::new(1, 2);
         let samples = 400_000;
         for _ in 0..samples {
-            let s = sample_bsdf(&diffuse(), Color::WHITE, d, n, true, rng.next_f64(), rng.next_f64(), rng.next_f64())
+            let s = sample_bsdf(&diffuse(), Color::WHITE, d, n, true, rng.next_f64(), [rng.next_f64(), rng.next_f64()])
                 .unwrap();
             assert!((s.pdf - pdf_bsdf(&diffuse(), n, s.dir)).abs() < 1e-12);
             assert_eq!(s.weight, Color::WHITE);
@@ -178,7 +177,7 @@ mod tests {
         let n = DVec3::Z;
         let d = DVec3::new(0.6, 0.0, -0.8);
         let c = Color::new(0.9, 0.5, 0.1);
-        let s = sample_bsdf(&m, c, d, n, true, 0.3, 0.1, 0.2).unwrap();
+        let s = sample_bsdf(&m, c, d, n, true, 0.3, [0.1, 0.2]).unwrap();
         assert_eq!(s.dir, DVec3::new(0.6, 0.0, 0.8));
         assert_eq!(s.weight, c);
         assert!(s.delta);
@@ -192,21 +191,21 @@ mod tests {
         let d = DVec3::new(th.sin(), 0.0, -th.cos());
         let n = DVec3::Z;
         let f = fresnel_dielectric(th.cos(), 1.5);
-        let r = sample_bsdf(&g, Color::WHITE, d, n, true, f * 0.999, 0.0, 0.0).unwrap();
+        let r = sample_bsdf(&g, Color::WHITE, d, n, true, f * 0.999, [0.0, 0.0]).unwrap();
         assert!((r.dir - DVec3::new(th.sin(), 0.0, th.cos())).length() < 1e-15);
         assert_eq!(r.weight, Color::WHITE);
-        let t = sample_bsdf(&g, Color::WHITE, d, n, true, f * 1.001, 0.0, 0.0).unwrap();
+        let t = sample_bsdf(&g, Color::WHITE, d, n, true, f * 1.001, [0.0, 0.0]).unwrap();
         assert!((t.dir.x - th.sin() / 1.5).abs() < 1e-15 && t.dir.z < 0.0);
         assert!((t.weight.r - 1.0 / 2.25).abs() < 1e-15);
         // Leaving the glass (back face): η = 1/1.5; past the critical angle, always reflect.
         let th = 50f64.to_radians();
         let d = DVec3::new(th.sin(), 0.0, -th.cos());
-        let s = sample_bsdf(&g, Color::WHITE, d, n, false, 0.999_999, 0.0, 0.0).unwrap();
+        let s = sample_bsdf(&g, Color::WHITE, d, n, false, 0.999_999, [0.0, 0.0]).unwrap();
         assert!((s.dir - DVec3::new(th.sin(), 0.0, th.cos())).length() < 1e-15);
         // Below it, refraction out multiplies radiance by 1.5².
         let th = 20f64.to_radians();
         let d = DVec3::new(th.sin(), 0.0, -th.cos());
-        let s = sample_bsdf(&g, Color::WHITE, d, n, false, 0.999_999, 0.0, 0.0).unwrap();
+        let s = sample_bsdf(&g, Color::WHITE, d, n, false, 0.999_999, [0.0, 0.0]).unwrap();
         assert!((s.dir.x - 1.5 * th.sin()).abs() < 1e-14);
         assert!((s.weight.g - 2.25).abs() < 1e-13);
     }

@@ -75,9 +75,7 @@ fn is_black(e: &Environment) -> bool {
     match e {
         Environment::Uniform(c) => c.is_black(),
         Environment::Gradient { zenith, horizon, nadir } => zenith.is_black() && horizon.is_black() && nadir.is_black(),
-        Environment::Image { image, intensity, .. } => {
-            *intensity == 0.0 || image.pixels().iter().all(|p| p.is_black())
-        }
+        Environment::Image { image, intensity, .. } => *intensity == 0.0 || image.pixels().iter().all(|p| p.is_black()),
     }
 }
 

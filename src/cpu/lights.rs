@@ -26,8 +26,7 @@ pub enum LightChoice {
 
 impl Lights {
     pub fn new(scene: &Scene) -> Self {
-        let area: Vec<AreaLight> =
-            scene.area_lights().iter().filter_map(|l| AreaLight::new(scene, l.shape)).collect();
+        let area: Vec<AreaLight> = scene.area_lights().iter().filter_map(|l| AreaLight::new(scene, l.shape)).collect();
         let mut area_of_shape = vec![None; scene.shapes.len()];
         for (i, l) in area.iter().enumerate() {
             area_of_shape[l.shape as usize] = Some(i as u32);

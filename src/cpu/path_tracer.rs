@@ -61,8 +61,7 @@ pub fn path_radiance(
             }
         }
         let d = ray.dir.normalize();
-        let Some(s) = sample_bsdf(&material.brdf, color, d, hit.normal, hit.front_face, xi.lobe, xi.direction[0], xi.direction[1])
-        else {
+        let Some(s) = sample_bsdf(&material.brdf, color, d, hit.normal, hit.front_face, xi.lobe, xi.direction) else {
             break;
         };
         beta *= s.weight;
@@ -149,7 +148,14 @@ struct LightSample {
 
 /// Next-event estimation at a non-delta vertex: one light (area or environment) chosen
 /// uniformly by ξ0, a point on it by ξ1 ξ2, weighted against BSDF sampling.
-fn sample_light(ctx: &Context, hit: &Hit, brdf: &Brdf, color: Color, xi: &VertexDraws, counters: &mut Counters) -> Color {
+fn sample_light(
+    ctx: &Context,
+    hit: &Hit,
+    brdf: &Brdf,
+    color: Color,
+    xi: &VertexDraws,
+    counters: &mut Counters,
+) -> Color {
     let Some(ls) = choose_and_sample_light(ctx, hit, xi) else {
         return Color::BLACK;
     };

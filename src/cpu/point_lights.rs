@@ -10,7 +10,12 @@ use super::Hit;
 /// For a point light visible from the hit: the unit direction toward it and the factor
 /// `cos θ · f(d)` (θ between the normal and that direction, f the light's falloff).
 /// `None` when the light is behind the surface or occluded.
-pub fn point_light_factor(ctx: &Context, hit: &Hit, light: &PointLight, counters: &mut Counters) -> Option<(DVec3, f64)> {
+pub fn point_light_factor(
+    ctx: &Context,
+    hit: &Hit,
+    light: &PointLight,
+    counters: &mut Counters,
+) -> Option<(DVec3, f64)> {
     let to_light = light.position - hit.point;
     let dist = to_light.length();
     if dist <= 0.0 {

@@ -111,7 +111,9 @@ fn progress_bar(progress: Progress, total: u64) -> ProgressBar {
         Progress::Hidden => ProgressBar::hidden(),
         Progress::Bar => {
             let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-            if let Ok(style) = ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} ETA {eta_precise}") {
+            if let Ok(style) =
+                ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} ETA {eta_precise}")
+            {
                 bar.set_style(style);
             }
             bar
