@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-pub mod devices;
 mod check;
+pub mod devices;
 pub mod render;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
