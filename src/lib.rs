@@ -9,6 +9,7 @@
 pub mod cli;
 pub mod color;
 pub mod cpu;
+pub mod gpu;
 pub mod image;
 pub mod sampling;
 pub mod scene;

@@ -5,6 +5,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod devices;
+
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.
 #[derive(Debug, Parser)]
@@ -15,11 +17,16 @@ pub struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
-pub enum Command {}
+pub enum Command {
+    /// List the GPU adapters lumen can render on.
+    Devices(devices::DevicesArgs),
+}
 
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Devices(args) => devices::run(args),
+    }
 }
 
 /// Entry point of the binary: parse, run, report.

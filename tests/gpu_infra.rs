@@ -1,0 +1,92 @@
+//! GPU infrastructure tests: device, compute runner, error capture. Every test skips
+//! without an adapter unless LUMEN_REQUIRE_GPU=1 (see `lumen::gpu::gpu_for_tests`).
+
+use bytemuck::{Pod, Zeroable};
+use lumen::gpu::{gpu_for_tests, GpuError};
+
+const SMOKE: &str = include_str!("../shaders/smoke.wgsl");
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SmokeParams {
+    count: u32,
+    scale: f32,
+}
+
+#[test]
+fn smoke_shader_matches_rust() {
+    let Some(gpu) = gpu_for_tests("smoke_shader_matches_rust") else { return };
+    // Not a multiple of the workgroup size, so the bounds check is exercised too.
+    let n = 1000usize;
+    let kernel = gpu.compute_kernel("smoke.wgsl", SMOKE, "main").unwrap();
+    assert_eq!(kernel.workgroup_size, [64, 1, 1]);
+    let params = gpu.uniform_buffer("params", &SmokeParams { count: n as u32, scale: 0.25 }).unwrap();
+    let input: Vec<f32> = (0..n).map(|i| (i % 7) as f32 - 3.0).collect();
+    let input_buf = gpu.storage_buffer("input", &input).unwrap();
+    // One sentinel element past `count` must stay untouched.
+    let out_u = gpu.storage_buffer("out_u", &vec![0xdead_beef_u32; n + 1]).unwrap();
+    let out_f = gpu.storage_buffer("out_f", &vec![-7.0f32; n + 1]).unwrap();
+    let group = kernel.bind_group(&gpu, 0, &[&params, &input_buf, &out_u, &out_f]).unwrap();
+    gpu.dispatch(&kernel, &[&group], kernel.workgroups_for([n as u32, 1, 1])).unwrap();
+
+    let got_u: Vec<u32> = gpu.read_buffer(&out_u, n + 1).unwrap();
+    let got_f: Vec<f32> = gpu.read_buffer(&out_f, n + 1).unwrap();
+    for i in 0..n {
+        let iu = i as u32;
+        assert_eq!(got_u[i], iu.wrapping_mul(iu) ^ 0x5bd1_e995, "u32 at {i}");
+        assert_eq!(got_f[i], i as f32 * 0.25 + input[i], "f32 at {i}");
+    }
+    assert_eq!(got_u[n], 0xdead_beef);
+    assert_eq!(got_f[n], -7.0);
+    // Wrapping really happened for large i (65536² overflows u32).
+    assert!(n * n > u16::MAX as usize);
+}
+
+#[test]
+fn adapter_is_reported_and_opened_with_its_own_limits() {
+    let Some(gpu) = gpu_for_tests("adapter_is_reported_and_opened_with_its_own_limits") else { return };
+    assert!(!gpu.adapter_info.name.is_empty());
+    assert!(lumen::gpu::list_adapters().iter().any(|a| a.name == gpu.adapter_info.name));
+    // The device got the adapter's limits, which are never below WebGPU's defaults.
+    assert_eq!(gpu.device.limits().max_storage_buffer_binding_size, gpu.limits.max_storage_buffer_binding_size);
+    assert!(gpu.limits.max_storage_buffer_binding_size >= wgpu::Limits::default().max_storage_buffer_binding_size);
+}
+
+#[test]
+fn shader_errors_are_values_with_locations() {
+    let Some(gpu) = gpu_for_tests("shader_errors_are_values_with_locations") else { return };
+    let src = "@compute @workgroup_size(1)\nfn main() {\n    let x: u32 = 1.5;\n}\n";
+    let err = gpu.compute_kernel("bad.wgsl", src, "main").unwrap_err();
+    assert!(matches!(err, GpuError::Shader { .. }), "{err}");
+    assert!(err.to_string().contains("bad.wgsl:3"), "{err}");
+    let err = gpu.compute_kernel("smoke.wgsl", SMOKE, "nope").unwrap_err();
+    assert!(matches!(err, GpuError::NoEntryPoint { .. }), "{err}");
+}
+
+#[test]
+fn wgpu_validation_errors_become_gpu_errors_not_panics() {
+    let Some(gpu) = gpu_for_tests("wgpu_validation_errors_become_gpu_errors_not_panics") else { return };
+    let kernel = gpu.compute_kernel("smoke.wgsl", SMOKE, "main").unwrap();
+    let a = gpu.storage_buffer("a", &[0u32; 4]).unwrap();
+    // Wrong count of buffers: caught by the runner itself.
+    assert!(matches!(kernel.bind_group(&gpu, 0, &[&a]), Err(GpuError::Validation(_))));
+    // A storage buffer where the layout wants a uniform: caught by wgpu, returned as a value.
+    let err = kernel.bind_group(&gpu, 0, &[&a, &a, &a, &a]).unwrap_err();
+    assert!(matches!(err, GpuError::Validation(_)), "{err}");
+    // The device still works afterwards.
+    gpu.check().unwrap();
+    let params = gpu.uniform_buffer("params", &SmokeParams { count: 1, scale: 1.0 }).unwrap();
+    let group = kernel.bind_group(&gpu, 0, &[&params, &a, &a, &a]);
+    // Same buffer bound as read-only and read-write in one dispatch is a usage conflict.
+    let dispatched = group.and_then(|g| gpu.dispatch(&kernel, &[&g], [1, 1, 1]));
+    assert!(matches!(dispatched, Err(GpuError::Validation(_))), "{dispatched:?}");
+}
+
+#[test]
+fn oversized_buffers_are_refused_with_the_limit() {
+    let Some(gpu) = gpu_for_tests("oversized_buffers_are_refused_with_the_limit") else { return };
+    let too_big = gpu.limits.max_storage_buffer_binding_size + 4;
+    let err = gpu.storage_buffer_zeroed("huge", too_big).unwrap_err();
+    assert!(matches!(err, GpuError::TooLarge { .. }), "{err}");
+    assert!(err.to_string().contains("huge"));
+}
