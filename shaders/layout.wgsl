@@ -59,8 +59,9 @@ struct PointLight {
     color: vec4<f32>,
 }
 
-// Uniform: a. Gradient: a = zenith, b = horizon, c = nadir. Image: texels at tex_offset,
-// importance-sampling arrays at dist_offset in env_dist.
+// What escaping rays see; without a scene environment, Uniform with the background colour.
+// Uniform: a. Gradient: a = zenith, b = horizon, c = nadir. Image: texels at tex_offset
+// (in floats), importance-sampling arrays at dist_offset in floats.
 struct Environment {
     a: vec4<f32>,
     b: vec4<f32>,
@@ -72,7 +73,8 @@ struct Environment {
     intensity: f32,
     rotation_rad: f32,
     dist_offset: u32,
-    _pad: u32,
+    // 1 when next-event estimation samples the environment (it is not black).
+    is_light: u32,
 }
 
 struct Camera {
@@ -106,10 +108,6 @@ struct Settings {
     area_light_count: u32,
     point_light_count: u32,
     bvh_node_count: u32,
-    // The camera samples this pass computes.
-    sample_start: u32,
-    sample_count: u32,
-    _pad0: u32,
 }
 
 // accel's flattened node: count = 0 means interior (left child follows, left_or_first is

@@ -72,7 +72,7 @@ impl FeatureSet {
                 Shape::Csg(_) => {
                     f.csg = true;
                     f.bvh = true;
-                    f.csg_max_intervals = f.csg_max_intervals.max(csg_interval_bound(shape));
+                    f.csg_max_intervals = f.csg_max_intervals.max(crate::cpu::csg::max_intervals(shape) as u32);
                     f.csg_max_depth = f.csg_max_depth.max(shape.csg_depth() as u32);
                 }
             }

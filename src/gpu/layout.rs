@@ -153,7 +153,7 @@ pub struct Environment {
     pub intensity: f32,
     pub rotation_rad: f32,
     pub dist_offset: u32,
-    pub _pad: u32,
+    pub is_light: u32,
 }
 
 #[repr(C)]
@@ -172,8 +172,8 @@ pub mod projection_kind {
     pub const ORTHOGONAL: u32 = 1;
 }
 
-/// Per-pass parameters (a uniform). `sample_start`/`sample_count` select the camera
-/// samples a pass computes.
+/// Render parameters (a uniform); the pass's tile and sample range come from
+/// `gpu::PassUniform`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Settings {
@@ -198,10 +198,6 @@ pub struct Settings {
     pub area_light_count: u32,
     pub point_light_count: u32,
     pub bvh_node_count: u32,
-    /// The camera samples this pass computes.
-    pub sample_start: u32,
-    pub sample_count: u32,
-    pub _pad0: u32,
 }
 
 #[cfg(test)]
@@ -237,7 +233,7 @@ mod tests {
             expect!(
                 Environment,
                 "Environment",
-                [a, b, c, kind, tex_width, tex_height, tex_offset, intensity, rotation_rad, dist_offset, _pad]
+                [a, b, c, kind, tex_width, tex_height, tex_offset, intensity, rotation_rad, dist_offset, is_light]
             ),
             expect!(Camera, "Camera", [to_world, projection, aspect_ratio, screen_distance, _pad]),
             expect!(
@@ -263,9 +259,6 @@ mod tests {
                     area_light_count,
                     point_light_count,
                     bvh_node_count,
-                    sample_start,
-                    sample_count,
-                    _pad0,
                 ]
             ),
             expect!(crate::accel::BvhNode, "BvhNode", [min, left_or_first, max, count]),

@@ -6,6 +6,9 @@
 
 mod compute;
 mod device;
+pub mod features;
+pub mod layout;
+pub mod pack;
 mod test_support;
 
 pub use compute::{validate_wgsl, BindingKind, ComputeKernel, ValidatedModule, MIN_BUFFER_BYTES};
