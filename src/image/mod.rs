@@ -1,5 +1,31 @@
-//! HDR images, tone mapping and image files.
+//! HDR images, tone mapping and image files: everything after rendering.
+//!
+//! - [`HdrImage`]: linear `f32` RGB pixels, with per-pixel arithmetic;
+//! - [`ToneMap`]: linear radiance → display values (Raytracer.jl's Reinhard pipeline,
+//!   an ACES filmic fit, or plain exposure);
+//! - [`read_image`] / [`write_image`]: PFM, OpenEXR, Radiance HDR (linear) and PNG, JPEG
+//!   (8-bit sRGB), chosen by extension; writes are atomic.
 
+mod atomic_file;
+mod error;
+mod exr_file;
 mod hdr_image;
+mod image_file;
+mod ldr_file;
+mod pfm;
+mod radiance_file;
+mod size;
+mod srgb;
+mod tone_map;
 
+pub use atomic_file::write_atomically;
+pub use error::{ImageError, SUPPORTED_EXTENSIONS};
 pub use hdr_image::HdrImage;
+pub use image_file::{is_hdr_path, read_image, write_image, ImageFormat, WriteReport};
+pub use ldr_file::JPEG_QUALITY;
+pub use pfm::{decode_pfm, encode_pfm, PfmError};
+pub use size::{check_size, SizeError, MAX_PIXELS, MAX_SIDE};
+pub use srgb::{linear_to_srgb, quantize_u8, srgb_to_linear};
+pub use tone_map::{
+    aces_narkowicz, average_luminosity, reinhard, Curve, ToneMap, ToneMapError, ToneMapped, LUMINOSITY_DELTA,
+};

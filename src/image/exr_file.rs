@@ -1,0 +1,98 @@
+//! OpenEXR files through the `exr` crate.
+//!
+//! Reading takes the first layer with R, G and B channels at its largest resolution; any
+//! sample type (f16, f32, u32) is converted to f32 and other channels (alpha included)
+//! are ignored. Writing stores R, G, B as f32 with the crate's default lossless compression.
+
+use std::io::Cursor;
+
+use exr::prelude::{read, Image, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
+
+use super::size::{check_size, SizeError};
+use super::HdrImage;
+use crate::color::Rgb32;
+
+/// Why an EXR could not be decoded: the size check, or the crate's own message.
+pub(crate) enum ExrDecodeError {
+    Size(SizeError),
+    Other(String),
+}
+
+pub(crate) fn decode_exr(bytes: &[u8]) -> Result<HdrImage, ExrDecodeError> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size: Vec2<usize>, _| check_size(size.width(), size.height()).map(|_| HdrImage::new(size.0, size.1)),
+            |img: &mut Result<HdrImage, SizeError>, pos: Vec2<usize>, (r, g, b): (f32, f32, f32)| {
+                if let Ok(img) = img {
+                    img.set(pos.x(), pos.y(), Rgb32::new(r, g, b));
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| ExrDecodeError::Other(e.to_string()))?;
+    image.layer_data.channel_data.pixels.map_err(ExrDecodeError::Size)
+}
+
+pub(crate) fn encode_exr(img: &HdrImage) -> Result<Vec<u8>, String> {
+    let channels = SpecificChannels::rgb(|Vec2(x, y)| {
+        let c = img.get(x, y);
+        (c.r, c.g, c.b)
+    });
+    let image = Image::from_channels((img.width(), img.height()), channels);
+    let mut out = Cursor::new(Vec::new());
+    image.write().non_parallel().to_buffered(&mut out).map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use exr::prelude::f16;
+
+    #[test]
+    fn round_trip_is_exact() {
+        let img = HdrImage::from_fn(5, 3, |c, r| Rgb32::new(c as f32 * 0.1, r as f32 * 1e5, -(c as f32) - 1e-7));
+        let back = decode_exr(&encode_exr(&img).unwrap()).ok().unwrap();
+        assert_eq!(back, img);
+    }
+
+    /// A half-float RGBA file written directly with the `exr` crate (not through our
+    /// encoder): alpha is dropped, halves widen exactly.
+    #[test]
+    fn reads_half_rgba() {
+        let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+            (f16::from_f32(x as f32 + 0.5), f16::from_f32(y as f32), f16::from_f32(0.25), f16::from_f32(0.0))
+        });
+        let mut out = Cursor::new(Vec::new());
+        Image::from_channels((2, 2), channels).write().non_parallel().to_buffered(&mut out).unwrap();
+        let img = decode_exr(&out.into_inner()).ok().unwrap();
+        assert_eq!(img.get(1, 0), Rgb32::new(1.5, 0.0, 0.25));
+        assert_eq!(img.get(0, 1), Rgb32::new(0.5, 1.0, 0.25));
+    }
+
+    #[test]
+    fn reads_u32_channels() {
+        let channels = SpecificChannels::rgb(|Vec2(x, _y): Vec2<usize>| (x as u32, 7u32, 1000u32));
+        let mut out = Cursor::new(Vec::new());
+        Image::from_channels((3, 1), channels).write().non_parallel().to_buffered(&mut out).unwrap();
+        let img = decode_exr(&out.into_inner()).ok().unwrap();
+        assert_eq!(
+            img.pixels(),
+            &[Rgb32::new(0.0, 7.0, 1000.0), Rgb32::new(1.0, 7.0, 1000.0), Rgb32::new(2.0, 7.0, 1000.0)]
+        );
+    }
+
+    #[test]
+    fn garbage_is_an_error() {
+        assert!(matches!(decode_exr(b"not an exr file at all"), Err(ExrDecodeError::Other(_))));
+        let valid = encode_exr(&HdrImage::new(4, 4)).unwrap();
+        for cut in [0, 4, 20, valid.len() / 2, valid.len() - 1] {
+            assert!(decode_exr(&valid[..cut]).is_err(), "cut at {cut}");
+        }
+    }
+}

@@ -1,0 +1,243 @@
+//! Reading and writing image files, the format chosen by the file extension.
+
+use std::borrow::Cow;
+use std::path::Path;
+
+use super::atomic_file::write_atomically;
+use super::error::ImageError;
+use super::exr_file::{decode_exr, encode_exr, ExrDecodeError};
+use super::ldr_file::{decode_ldr, encode_ldr, LdrFormat};
+use super::pfm::{decode_pfm, encode_pfm};
+use super::radiance_file::{decode_radiance, encode_radiance};
+use super::size::check_size;
+use super::tone_map::ToneMap;
+use super::HdrImage;
+use crate::color::Rgb32;
+
+/// The image file formats lumen reads and writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// `.pfm`: Portable Float Map, linear f32.
+    Pfm,
+    /// `.exr`: OpenEXR, linear f32 (f16 and u32 also read).
+    Exr,
+    /// `.hdr`: Radiance RGBE, linear, 8-bit shared-exponent.
+    RadianceHdr,
+    /// `.png`: 8-bit sRGB (tone-mapped on writing).
+    Png,
+    /// `.jpg`, `.jpeg`: 8-bit sRGB (tone-mapped on writing).
+    Jpeg,
+}
+
+impl ImageFormat {
+    /// The format named by `path`'s extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<Self, ImageError> {
+        let ext = path.extension().map(|e| e.to_string_lossy().into_owned());
+        match ext.as_deref().map(str::to_ascii_lowercase).as_deref() {
+            Some("pfm") => Ok(Self::Pfm),
+            Some("exr") => Ok(Self::Exr),
+            Some("hdr") => Ok(Self::RadianceHdr),
+            Some("png") => Ok(Self::Png),
+            Some("jpg" | "jpeg") => Ok(Self::Jpeg),
+            _ => Err(ImageError::UnsupportedExtension { path: path.to_owned(), ext }),
+        }
+    }
+
+    /// True for the formats that store linear radiance (no tone mapping).
+    pub fn is_hdr(self) -> bool {
+        matches!(self, Self::Pfm | Self::Exr | Self::RadianceHdr)
+    }
+
+    /// A short name for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pfm => "PFM",
+            Self::Exr => "OpenEXR",
+            Self::RadianceHdr => "Radiance HDR",
+            Self::Png => "PNG",
+            Self::Jpeg => "JPEG",
+        }
+    }
+}
+
+/// True when `path` names a linear HDR format (`.pfm`, `.exr`, `.hdr`, any case).
+///
+/// ```
+/// use lumen::image::is_hdr_path;
+/// use std::path::Path;
+/// assert!(is_hdr_path(Path::new("out.EXR")));
+/// assert!(!is_hdr_path(Path::new("out.png")));
+/// assert!(!is_hdr_path(Path::new("out")));
+/// ```
+pub fn is_hdr_path(path: &Path) -> bool {
+    ImageFormat::from_path(path).is_ok_and(ImageFormat::is_hdr)
+}
+
+/// What [`write_image`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WriteReport {
+    pub format: ImageFormat,
+    /// Pixels with a NaN or infinite channel; they were written as black.
+    pub non_finite: usize,
+}
+
+/// Reads an image file; the format comes from the extension (see [`ImageFormat`]).
+/// 8-bit files are decoded from sRGB to linear values.
+///
+/// ```
+/// use lumen::image::{read_image, write_image, HdrImage, ToneMap};
+/// use lumen::color::Rgb32;
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("two.pfm");
+/// let img = HdrImage::from_fn(2, 1, |c, _| Rgb32::gray(c as f32 + 0.5));
+/// let report = write_image(&path, &img, &ToneMap::default()).unwrap();
+/// assert_eq!(report.non_finite, 0);
+/// assert_eq!(read_image(&path).unwrap(), img);
+/// let err = read_image(&dir.path().join("x.tga")).unwrap_err().to_string();
+/// assert!(err.contains("x.tga") && err.contains(".tga") && err.contains(".exr"), "{err}");
+/// ```
+pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
+    let format = ImageFormat::from_path(path)?;
+    let bytes = std::fs::read(path).map_err(|cause| ImageError::Read { path: path.to_owned(), cause })?;
+    let decode_err = |message: String| ImageError::Decode { path: path.to_owned(), format: format.name(), message };
+    let img = match format {
+        ImageFormat::Pfm => decode_pfm(&bytes).map_err(|cause| ImageError::Pfm { path: path.to_owned(), cause })?,
+        ImageFormat::Exr => decode_exr(&bytes).map_err(|e| match e {
+            ExrDecodeError::Size(cause) => ImageError::Size { path: path.to_owned(), cause },
+            ExrDecodeError::Other(message) => decode_err(message),
+        })?,
+        ImageFormat::RadianceHdr => decode_radiance(&bytes).map_err(decode_err)?,
+        ImageFormat::Png => decode_ldr(&bytes, LdrFormat::Png).map_err(decode_err)?,
+        ImageFormat::Jpeg => decode_ldr(&bytes, LdrFormat::Jpeg).map_err(decode_err)?,
+    };
+    check_size(img.width(), img.height()).map_err(|cause| ImageError::Size { path: path.to_owned(), cause })?;
+    Ok(img)
+}
+
+/// Writes an image atomically (temporary file in the same directory, then rename: on any
+/// error neither the output nor a temporary file remains). HDR formats get the linear
+/// values; PNG and JPEG get the image tone-mapped by `tm`. NaN/Inf pixels are written as
+/// black and counted in the report.
+pub fn write_image(path: &Path, img: &HdrImage, tm: &ToneMap) -> Result<WriteReport, ImageError> {
+    let format = ImageFormat::from_path(path)?;
+    let owned = || path.to_owned();
+    check_size(img.width(), img.height()).map_err(|cause| ImageError::Size { path: owned(), cause })?;
+    let encode_err = |message: String| ImageError::Encode { path: owned(), format: format.name(), message };
+    let non_finite = img.non_finite_count();
+    let bytes = if format.is_hdr() {
+        let clean: Cow<HdrImage> = if non_finite == 0 {
+            Cow::Borrowed(img)
+        } else {
+            Cow::Owned(img.map(|c| if c.is_finite() { c } else { Rgb32::BLACK }))
+        };
+        match format {
+            ImageFormat::Pfm => encode_pfm(&clean),
+            ImageFormat::Exr => encode_exr(&clean).map_err(encode_err)?,
+            _ => encode_radiance(&clean).map_err(encode_err)?,
+        }
+    } else {
+        let mapped = tm.apply(img).map_err(|cause| ImageError::ToneMap { path: owned(), cause })?;
+        let ldr = if format == ImageFormat::Png { LdrFormat::Png } else { LdrFormat::Jpeg };
+        encode_ldr(&mapped.to_rgb8(), img.width(), img.height(), ldr).map_err(encode_err)?
+    };
+    write_atomically(path, &bytes).map_err(|cause| ImageError::Write { path: owned(), cause })?;
+    Ok(WriteReport { format, non_finite })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nan_image() -> HdrImage {
+        HdrImage::from_pixels(2, 1, vec![Rgb32::new(f32::NAN, 1.0, 2.0), Rgb32::new(0.25, 0.5, 4.0)]).unwrap()
+    }
+
+    #[test]
+    fn extensions_are_case_insensitive() {
+        for (name, f) in [
+            ("a.PFM", ImageFormat::Pfm),
+            ("a.Exr", ImageFormat::Exr),
+            ("a.hdr", ImageFormat::RadianceHdr),
+            ("a.PNG", ImageFormat::Png),
+            ("a.jpg", ImageFormat::Jpeg),
+            ("dir.d/a.JPEG", ImageFormat::Jpeg),
+        ] {
+            assert_eq!(ImageFormat::from_path(Path::new(name)).unwrap(), f, "{name}");
+        }
+        let e = ImageFormat::from_path(Path::new("dir/a.bmp")).unwrap_err().to_string();
+        assert!(e.contains("dir/a.bmp") && e.contains("\".bmp\"") && e.contains(".pfm"), "{e}");
+        let e = ImageFormat::from_path(Path::new("noext")).unwrap_err().to_string();
+        assert!(e.contains("noext") && e.contains("no file extension"), "{e}");
+    }
+
+    #[test]
+    fn hdr_round_trips_and_non_finite_pixels_are_black() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["a.pfm", "a.exr"] {
+            let path = dir.path().join(name);
+            let report = write_image(&path, &nan_image(), &ToneMap::default()).unwrap();
+            assert_eq!(report.non_finite, 1);
+            let back = read_image(&path).unwrap();
+            assert_eq!(back.pixels(), &[Rgb32::BLACK, Rgb32::new(0.25, 0.5, 4.0)], "{name}");
+        }
+        let path = dir.path().join("a.hdr");
+        write_image(&path, &nan_image(), &ToneMap::default()).unwrap();
+        // 0.25, 0.5 and 4 share RGBE's exponent range exactly (powers of two).
+        assert_eq!(read_image(&path).unwrap().pixels(), &[Rgb32::BLACK, Rgb32::new(0.25, 0.5, 4.0)]);
+    }
+
+    #[test]
+    fn ldr_output_is_tone_mapped() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.png");
+        let tm = ToneMap { luminosity: Some(1.0), alpha: 1.0, ..ToneMap::raytracer_jl() };
+        let report = write_image(&path, &nan_image(), &tm).unwrap();
+        assert_eq!((report.non_finite, report.format), (1, ImageFormat::Png));
+        let raw = ::image::open(&path).unwrap().into_rgb8().into_raw();
+        // x/(1+x): 0.25 → 0.2 → 51; 0.5 → 1/3 → 85; 4 → 0.8 → 204.
+        assert_eq!(raw, vec![0, 0, 0, 51, 85, 204]);
+    }
+
+    #[test]
+    fn failed_writes_leave_nothing_behind() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = nan_image();
+        // Unsupported extension, bad tone map, empty image, target is a directory.
+        assert!(write_image(&dir.path().join("a.bmp"), &img, &ToneMap::default()).is_err());
+        let bad = ToneMap { alpha: -1.0, ..ToneMap::raytracer_jl() };
+        let e = write_image(&dir.path().join("b.png"), &img, &bad).unwrap_err().to_string();
+        assert!(e.contains("b.png") && e.contains("alpha"), "{e}");
+        assert!(write_image(&dir.path().join("c.pfm"), &HdrImage::new(0, 3), &ToneMap::default()).is_err());
+        std::fs::create_dir(dir.path().join("d.pfm")).unwrap();
+        let e = write_image(&dir.path().join("d.pfm"), &img, &ToneMap::default()).unwrap_err();
+        assert!(matches!(e, ImageError::Write { .. }), "{e}");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("d.pfm")]);
+        // Missing directory.
+        assert!(write_image(&dir.path().join("nope/e.pfm"), &img, &ToneMap::default()).is_err());
+    }
+
+    #[test]
+    fn overwrites_an_existing_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.pfm");
+        std::fs::write(&path, b"old").unwrap();
+        write_image(&path, &nan_image(), &ToneMap::default()).unwrap();
+        assert_eq!(read_image(&path).unwrap().width(), 2);
+    }
+
+    #[test]
+    fn read_errors_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("missing.exr");
+        let e = read_image(&missing).unwrap_err().to_string();
+        assert!(e.contains("missing.exr") && e.starts_with("cannot read"), "{e}");
+        for name in ["bad.pfm", "bad.exr", "bad.hdr", "bad.png", "bad.jpg"] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, b"garbage").unwrap();
+            let e = read_image(&path).unwrap_err();
+            assert_eq!(e.path(), path);
+            assert!(e.to_string().contains(name), "{e}");
+        }
+    }
+}
