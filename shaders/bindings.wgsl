@@ -1,3 +1,4 @@
+// #requires layout
 // The render kernel's scene buffers: bind group 1 (group 0 is the pass contract of
 // shaders/pass.wgsl). src/gpu/render.rs binds them in binding order. Only those a scene's
 // features need are declared; the packer uploads the same subset.

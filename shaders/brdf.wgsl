@@ -1,5 +1,13 @@
+// #requires ray
+// #if PATHTRACER
+// #if DIFFUSE
+// #requires onb
+// #endif
+// #endif
 // BRDF sampling, evaluation and densities: mirrors cpu::{bsdf, fresnel, warp}.
 // `d` is the unit direction the incoming ray travels along, `n` the unit normal facing it.
+
+// #if PATHTRACER
 
 struct BsdfSample {
     dir: vec3<f32>,
@@ -9,17 +17,6 @@ struct BsdfSample {
     delta: bool,
     // False when nothing is scattered.
     valid: bool,
-}
-
-// Cosine-weighted hemisphere about +z: warp::cosine_hemisphere.
-fn cosine_hemisphere(xi0: f32, xi1: f32) -> vec3<f32> {
-    let r = sqrt(xi0);
-    let phi = TAU * xi1;
-    return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - xi0, 0.0)));
-}
-
-fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
-    return max(cos_theta, 0.0) * INV_PI;
 }
 
 // #if SPECULAR
@@ -72,6 +69,17 @@ fn sample_dielectric(color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, eta: f32, xi_
 // #endif
 
 // #if DIFFUSE
+// Cosine-weighted hemisphere about +z: warp::cosine_hemisphere.
+fn cosine_hemisphere(xi0: f32, xi1: f32) -> vec3<f32> {
+    let r = sqrt(xi0);
+    let phi = TAU * xi1;
+    return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - xi0, 0.0)));
+}
+
+fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    return max(cos_theta, 0.0) * INV_PI;
+}
+
 fn sample_diffuse(color: vec3<f32>, n: vec3<f32>, xi0: f32, xi1: f32) -> BsdfSample {
     let local = cosine_hemisphere(xi0, xi1);
     let frame = onb(n);
@@ -102,6 +110,8 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
     return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true, false);
 }
 
+// #endif
+
 // bsdf::eval_bsdf: f for light from `l` (0 for delta BRDFs).
 fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     if (m.brdf == 0u && dot(n, l) > 0.0) {
@@ -110,6 +120,7 @@ fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<
     return vec3<f32>(0.0);
 }
 
+// #if NEE
 // bsdf::pdf_bsdf.
 fn pdf_bsdf(m: Material, n: vec3<f32>, l: vec3<f32>) -> f32 {
     if (m.brdf == 0u) {
@@ -117,3 +128,4 @@ fn pdf_bsdf(m: Material, n: vec3<f32>, l: vec3<f32>) -> f32 {
     }
     return 0.0;
 }
+// #endif

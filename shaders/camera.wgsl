@@ -1,3 +1,4 @@
+// #requires bindings random ray
 // Camera rays: mirrors scene::Camera::ray and cpu::pixel_samples (DESIGN.md "Random
 // numbers"). camera.to_world places the camera relative to its own position.
 

@@ -1,3 +1,4 @@
+// #requires ray
 // Unit cube [−0.5, 0.5]³: mirrors src/cpu/shapes/cube.rs. Face = 2·axis + (1 on the + side).
 
 // CUBE_FACE_LAYOUT: (col, row, axis_u, sign_u, axis_v, sign_v) per face.

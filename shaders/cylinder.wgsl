@@ -1,3 +1,4 @@
+// #requires ray quadratic
 // Unit cylinder (axis z, radius 0.5, z ∈ [−0.5, 0.5], capped): mirrors
 // src/cpu/shapes/cylinder.rs. Faces: 0 side, 1 bottom cap, 2 top cap.
 

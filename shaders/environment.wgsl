@@ -1,3 +1,7 @@
+// #requires bindings ray
+// #if ENV_IMAGE
+// #requires textures
+// #endif
 // What escaping rays see: mirrors scene::Environment::radiance and cpu::env_light. Without
 // a scene environment the packer stores a uniform one of the background colour.
 

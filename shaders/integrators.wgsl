@@ -1,3 +1,10 @@
+// #requires world
+// #if FLAT
+// #requires pigment environment
+// #endif
+// #if POINTLIGHT
+// #requires pigment environment brdf offset
+// #endif
 // The first-hit integrators (DESIGN.md "Integrators"): OnOff, Flat, PointLight. The path
 // tracer is in path_tracer.wgsl.
 

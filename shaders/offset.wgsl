@@ -1,3 +1,4 @@
+// #requires ray
 // Robust spawned-ray origins (Wächter & Binder, Ray Tracing Gems ch. 6): mirrors
 // cpu::offset_origin with the original f32 constants (256 ulps, 1/32, 2⁻¹⁶).
 

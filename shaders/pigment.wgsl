@@ -1,12 +1,8 @@
-// Pigments: mirrors scene::Pigment::color_at (uniform, checkered, image nearest/bilinear).
-
-// #if TEXTURES
-// Texel (col, row) of the image whose rgb triples start at floats[offset].
-fn texel(offset: u32, width: u32, col: u32, row: u32) -> vec3<f32> {
-    let i = offset + 3u * (row * width + col);
-    return vec3<f32>(floats[i], floats[i + 1u], floats[i + 2u]);
-}
+// #requires bindings
+// #if PIGMENT_IMAGE
+// #requires textures
 // #endif
+// Pigments: mirrors scene::Pigment::color_at (uniform, checkered, image nearest/bilinear).
 
 // #if PIGMENT_IMAGE
 fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {

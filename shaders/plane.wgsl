@@ -1,3 +1,4 @@
+// #requires ray
 // Unit plane z = 0 (the half-space z ≤ 0 in CSG): mirrors src/cpu/shapes/plane.rs.
 
 fn plane_span(o: vec3<f32>, d: vec3<f32>) -> Span {

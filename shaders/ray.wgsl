@@ -1,3 +1,4 @@
+// #requires layout
 // Rays, crossings and hits in f32: mirrors src/cpu/{ray,hit}.rs and the Span/Crossing
 // types of src/cpu/shapes. Coordinates are relative to the camera (DESIGN.md "GPU renderer").
 
@@ -12,10 +13,6 @@ struct Ray {
     dir: vec3<f32>,
     tmin: f32,
     tmax: f32,
-}
-
-fn ray_at(r: Ray, t: f32) -> vec3<f32> {
-    return r.origin + t * r.dir;
 }
 
 // Where a line crosses a primitive's surface (face as in src/cpu/shapes).
@@ -74,16 +71,4 @@ fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
         return v * inverseSqrt(l2);
     }
     return fallback;
-}
-
-// atan2(y, x)/2π wrapped to [0, 1).
-fn turns(y: f32, x: f32) -> f32 {
-    var u = atan2(y, x) / TAU;
-    if (u < 0.0) {
-        u += 1.0;
-    }
-    if (u >= 1.0) {
-        u = 0.0;
-    }
-    return u;
 }

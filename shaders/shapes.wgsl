@@ -1,3 +1,16 @@
+// #requires bindings ray
+// #if SPHERE
+// #requires sphere
+// #endif
+// #if PLANE
+// #requires plane
+// #endif
+// #if CUBE
+// #requires cube
+// #endif
+// #if CYLINDER
+// #requires cylinder
+// #endif
 // Placed primitives: mirrors src/cpu/shapes/{mod,instance}.rs. The ray moves into object
 // space without normalising its direction, so t means the same point in both spaces.
 

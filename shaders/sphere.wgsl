@@ -1,27 +1,16 @@
-// Unit sphere and the robust quadratic: mirrors src/cpu/shapes/{quadratic,sphere}.rs.
+// #requires ray quadratic
+// Unit sphere (radius 1 at the origin): mirrors src/cpu/shapes/sphere.rs.
 
-// Roots t0 ≤ t1 of |f + t·d|² = r2 (x, y), or none (z = 0 flags a miss). Δ computed from
-// the closest approach (Ray Tracing Gems ch. 7), roots as q/a and c/q.
-fn sphere_roots(f: vec3<f32>, d: vec3<f32>, r2: f32) -> vec3<f32> {
-    let a = dot(d, d);
-    if (a == 0.0) {
-        return vec3<f32>(0.0, 0.0, 0.0);
+// atan2(y, x)/2π wrapped to [0, 1).
+fn turns(y: f32, x: f32) -> f32 {
+    var u = atan2(y, x) / TAU;
+    if (u < 0.0) {
+        u += 1.0;
     }
-    let b = dot(f, d);
-    let closest = f - (b / a) * d;
-    let disc = a * (r2 - dot(closest, closest));
-    if (!(disc >= 0.0)) {
-        return vec3<f32>(0.0, 0.0, 0.0);
+    if (u >= 1.0) {
+        u = 0.0;
     }
-    let c = dot(f, f) - r2;
-    let q = -(b + select(-1.0, 1.0, b >= 0.0) * sqrt(disc));
-    var t0 = 0.0;
-    var t1 = 0.0;
-    if (q != 0.0) {
-        t0 = q / a;
-        t1 = c / q;
-    }
-    return vec3<f32>(min(t0, t1), max(t0, t1), 1.0);
+    return u;
 }
 
 fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {

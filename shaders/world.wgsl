@@ -1,3 +1,7 @@
+// #requires shapes constants
+// #if CSG
+// #requires csg
+// #endif
 // Closest hit and occlusion over the scene: the flattened BVH of finite objects (the
 // same 32-byte nodes the CPU traverses) plus the list of infinite planes tested by every
 // ray. Mirrors cpu::World.

@@ -53,7 +53,8 @@ pub struct FeatureSet {
     pub renderer: RendererKind,
     /// Finite objects exist, traversed through the BVH (planes are tested separately).
     pub bvh: bool,
-    /// Next-event estimation with MIS (path tracer only).
+    /// Next-event estimation with MIS (path tracer with some diffuse material only: light
+    /// sampling happens at diffuse vertices).
     pub nee: bool,
 }
 
@@ -116,8 +117,9 @@ impl FeatureSet {
         f.point_lights = !scene.point_lights.is_empty()
             && matches!(f.renderer, RendererKind::PointLight | RendererKind::PathTracer);
         if let Renderer::PathTracer(p) = &scene.renderer {
-            f.nee = p.nee;
-            f.area_lights = p.nee && !scene.area_lights().is_empty();
+            // Light sampling happens only at diffuse vertices.
+            f.nee = p.nee && f.diffuse;
+            f.area_lights = f.nee && !scene.area_lights().is_empty();
         }
         if f.renderer != RendererKind::OnOff {
             f.environment = match &scene.environment {
