@@ -233,3 +233,43 @@ fn kernels_breaking_the_pass_contract_are_refused() {
     let err = run_progressive(&gpu, &kernel, &[], 4, 4, 1, &PassOptions::default()).unwrap_err();
     assert!(err.to_string().contains("pass contract"), "{err}");
 }
+
+// ---- shader assembly ----------------------------------------------------------------
+
+use lumen::gpu::{FeatureSet, KernelCache, ShaderLibrary};
+
+#[test]
+fn assembled_kernels_run_and_are_cached_by_feature_set() {
+    let Some(gpu) = gpu_for_tests("assembled_kernels_run_and_are_cached_by_feature_set") else { return };
+    let mut lib = ShaderLibrary::new(&["bright", "unused"]);
+    lib.add("shaders/pass.wgsl", PASS_WGSL).unwrap();
+    lib.add(
+        "value.wgsl",
+        "fn sample_value(j: u32) -> f32 {\n// #if bright\n    return 2.0 + f32(j & 1u);\n// #else\n    return 1.0;\n// #endif\n}",
+    )
+    .unwrap();
+    lib.add(
+        "main.wgsl",
+        "// #requires pass value\n\
+         @compute @workgroup_size(8, 8)\n\
+         fn main(@builtin(global_invocation_id) gid: vec3<u32>) {\n\
+             if (!pass_in_tile(gid)) { return; }\n\
+             var s = 0.0;\n\
+             for (var j = pass_params.sample_begin; j < pass_params.sample_end; j++) { s += sample_value(j); }\n\
+             pass_write(gid, vec3<f32>(s));\n\
+         }",
+    )
+    .unwrap();
+    let mut cache = KernelCache::new();
+    let plain = FeatureSet::new();
+    let bright = FeatureSet::new().with("bright");
+    // Samples alternate 2, 3 with `bright`: the mean over 10 samples is 2.5.
+    for (features, want) in [(&plain, 1.0f32), (&bright, 2.5), (&plain, 1.0), (&bright, 2.5)] {
+        let kernel = cache
+            .get_or_build(features, "main", || lib.assemble(&["main"], features)?.kernel(&gpu, "main.wgsl", "main"))
+            .unwrap();
+        let out = run_progressive(&gpu, &kernel, &[], 9, 9, 10, &PassOptions::default()).unwrap();
+        assert!(out.image.pixels().iter().all(|p| p.g == want), "{features}");
+    }
+    assert_eq!(cache.len(), 2);
+}

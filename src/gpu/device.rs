@@ -39,6 +39,8 @@ pub enum GpuError {
     DeviceLost(String),
     #[error("reading a GPU buffer back failed: {0}")]
     Readback(String),
+    #[error(transparent)]
+    Assemble(#[from] super::assemble::AssembleError),
     #[error("{what} needs {needed} bytes but this adapter allows at most {limit} bytes per {limit_name}")]
     TooLarge { what: String, needed: u64, limit: u64, limit_name: &'static str },
 }
