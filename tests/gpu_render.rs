@@ -77,3 +77,93 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
         }
     }
 }
+
+use glam::DVec3;
+use lumen::color::Color;
+use lumen::cpu::{Progress, RenderOptions};
+use lumen::gpu::render::{render, GpuRenderOptions};
+use lumen::gpu::Gpu;
+use lumen::image::HdrImage;
+use lumen::scene::*;
+
+/// Compares two images: the fraction of channels within 1e-3 relative or 1e-4 absolute,
+/// and a description of the worst offenders.
+fn agreement(gpu: &HdrImage, cpu: &HdrImage) -> (f64, String) {
+    assert_eq!((gpu.width(), gpu.height()), (cpu.width(), cpu.height()));
+    let mut bad = Vec::new();
+    let n = gpu.pixels().len();
+    let mut good = 0;
+    for (i, (g, c)) in gpu.pixels().iter().zip(cpu.pixels()).enumerate() {
+        let ok = [(g.r, c.r), (g.g, c.g), (g.b, c.b)].iter().all(|&(a, b)| {
+            let d = (a - b).abs();
+            d <= 1e-4 || d <= 1e-3 * b.abs().max(a.abs())
+        });
+        if ok {
+            good += 1;
+        } else {
+            bad.push(format!("({}, {}): gpu {:?} cpu {:?}", i % gpu.width(), i / gpu.width(), g, c));
+        }
+    }
+    bad.truncate(8);
+    (good as f64 / n as f64, bad.join("; "))
+}
+
+fn assert_matches_cpu(gpu: &Gpu, scene: &Scene, spp: Option<u32>, min_fraction: f64) -> HdrImage {
+    let g = render(gpu, scene, &GpuRenderOptions::fixed_passes(spp, 4)).unwrap();
+    let c = lumen::cpu::render(scene, &RenderOptions { spp }, Progress::Hidden);
+    let (frac, worst) = agreement(&g.image, &c.image);
+    println!("{:.2}% of pixels agree; outliers: {worst}", frac * 100.0);
+    assert!(frac >= min_fraction, "only {:.2}% of pixels agree: {worst}", frac * 100.0);
+    assert_eq!(g.non_finite_samples, 0);
+    assert_eq!(g.spp_done, g.spp_requested);
+    g.image
+}
+
+/// Spheres, a cube, a cylinder, a checkered plane and a far-away translated sphere: every
+/// primitive kind, BVH and plane list, two pigments.
+fn shapes_scene(renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(24, 18);
+    let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
+    let check = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Checkered { n: 4, on: Color::gray(0.9), off: Color::new(0.1, 0.3, 0.1) } },
+        Pigment::Uniform(Color::BLACK),
+    ));
+    let glow = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.2)) },
+        Pigment::Uniform(Color::new(1.0, 0.8, 0.3)),
+    ));
+    let mirror = b.material(Material::new(
+        Brdf::Specular { pigment: Pigment::Uniform(Color::gray(0.9)), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD },
+        Pigment::Uniform(Color::BLACK),
+    ));
+    b.sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.0)), red)
+        .sphere(Transform::translation(DVec3::new(6.0, -2.0, 0.5)) * Transform::scaling(DVec3::splat(0.7)), glow)
+        .cube(Transform::translation(DVec3::new(5.0, 2.0, -0.4)) * Transform::rotation_z(30.0), mirror)
+        .cylinder(
+            Transform::translation(DVec3::new(3.5, -1.2, -0.5)) * Transform::rotation_x(70.0) * Transform::scaling(DVec3::new(0.6, 0.6, 1.2)),
+            red,
+        )
+        .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), check)
+        .point_light(PointLight { position: DVec3::new(1.0, 3.0, 4.0), color: Color::gray(1.5), linear_radius: 0.0 })
+        .point_light(PointLight { position: DVec3::new(2.0, -3.0, 2.0), color: Color::new(0.5, 0.6, 1.0), linear_radius: 2.0 })
+        .camera(Camera { aspect_ratio: 24.0 / 18.0, transform: Transform::rotation_y(10.0), ..Camera::default() })
+        .renderer(renderer)
+        .environment(Environment::Gradient { zenith: Color::new(0.2, 0.3, 0.8), horizon: Color::gray(0.6), nadir: Color::gray(0.1) });
+    b.build().unwrap()
+}
+
+#[test]
+fn onoff_flat_and_point_light_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("onoff_flat_and_point_light_match_the_cpu") else { return };
+    for renderer in [
+        Renderer::OnOff { on: Color::new(1.0, 0.5, 0.25), off: Color::new(0.0, 0.1, 0.2) },
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.01) },
+    ] {
+        println!("{}", renderer.name());
+        let scene = shapes_scene(renderer);
+        // Stratified jitter exercises the camera streams.
+        assert_matches_cpu(&gpu, &scene, Some(4), 0.99);
+        assert_matches_cpu(&gpu, &scene, None, 0.99);
+    }
+}

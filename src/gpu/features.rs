@@ -150,6 +150,34 @@ impl FeatureSet {
         self.renderer != RendererKind::OnOff
     }
 
+    /// Every feature name a shader may test (see [`Self::names`]).
+    pub const ALL_NAMES: [&'static str; 24] = [
+        "SPHERE",
+        "PLANE",
+        "CUBE",
+        "CYLINDER",
+        "CSG",
+        "BVH",
+        "SHADING",
+        "PIGMENT_UNIFORM",
+        "PIGMENT_CHECKERED",
+        "PIGMENT_IMAGE",
+        "TEXTURES",
+        "DIFFUSE",
+        "SPECULAR",
+        "DIELECTRIC",
+        "POINT_LIGHTS",
+        "AREA_LIGHTS",
+        "NEE",
+        "ENV_UNIFORM",
+        "ENV_GRADIENT",
+        "ENV_IMAGE",
+        "ONOFF",
+        "FLAT",
+        "POINTLIGHT",
+        "PATHTRACER",
+    ];
+
     /// The names of the `// #if NAME` blocks enabled for this set.
     pub fn names(&self) -> Vec<&'static str> {
         let flags = [
@@ -170,7 +198,7 @@ impl FeatureSet {
             (self.point_lights, "POINT_LIGHTS"),
             (self.area_lights, "AREA_LIGHTS"),
             (self.nee, "NEE"),
-            (self.environment == EnvKind::Uniform, "ENV_UNIFORM"),
+            (matches!(self.environment, EnvKind::Uniform | EnvKind::Background) && self.shading(), "ENV_UNIFORM"),
             (self.environment == EnvKind::Gradient, "ENV_GRADIENT"),
             (self.environment == EnvKind::Image, "ENV_IMAGE"),
             (self.renderer == RendererKind::OnOff, "ONOFF"),
@@ -179,6 +207,11 @@ impl FeatureSet {
             (self.renderer == RendererKind::PathTracer, "PATHTRACER"),
         ];
         flags.iter().filter(|(on, _)| *on).map(|(_, n)| *n).collect()
+    }
+
+    /// The set in the form the shader assembler takes.
+    pub fn assembly_features(&self) -> crate::gpu::FeatureSet {
+        self.names().into_iter().collect()
     }
 }
 

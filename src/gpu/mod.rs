@@ -11,6 +11,7 @@ mod device;
 pub mod features;
 pub mod layout;
 pub mod pack;
+pub mod render;
 mod kernel_cache;
 mod passes;
 mod test_support;

@@ -353,7 +353,7 @@ fn push_pigment(
         }
     }
     p.pigments.push(out);
-    count_u32("pigments", p.pigments.len())
+    Ok(count_u32("pigments", p.pigments.len())? - 1)
 }
 
 /// The environment (a uniform one of the background colour when the scene has none), with
