@@ -8,7 +8,7 @@
 // Count of camera-sample estimates that were NaN or infinite (written as 0 instead).
 @group(1) @binding(2) var<storage, read_write> nan_count: atomic<u32>;
 @group(1) @binding(3) var<storage, read> shapes: array<Shape>;
-// BVH leaf object references from 0, then the plane list, CSG children and area lights.
+// BVH leaf object references from 0, then the plane list and CSG children.
 @group(1) @binding(4) var<storage, read> indices: array<u32>;
 // #if BVH
 @group(1) @binding(5) var<storage, read> bvh_nodes: array<BvhNode>;
@@ -28,4 +28,7 @@
 // #endif
 // #if POINT_LIGHTS
 @group(1) @binding(11) var<storage, read> point_lights: array<PointLight>;
+// #endif
+// #if AREA_LIGHTS
+@group(1) @binding(12) var<storage, read> area_lights: array<AreaLight>;
 // #endif

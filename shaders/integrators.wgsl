@@ -5,6 +5,11 @@
 // #if POINTLIGHT
 // #requires pigment environment brdf offset
 // #endif
+// #if PATHTRACER
+// #if POINT_LIGHTS
+// #requires offset
+// #endif
+// #endif
 // The first-hit integrators (DESIGN.md "Integrators"): OnOff, Flat, PointLight. The path
 // tracer is in path_tracer.wgsl.
 

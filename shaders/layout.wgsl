@@ -53,6 +53,17 @@ struct Pigment {
     _pad1: u32,
 }
 
+// An area light (an emissive top-level sphere or cube, cpu::area_light): its shape, the
+// |determinant| of its linear part, and for spheres placed by a similarity the world centre
+// and radius (radius 0: sampled by area instead of by cone).
+struct AreaLight {
+    sphere: vec4<f32>,
+    shape: u32,
+    det: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 // position.w = linear_radius.
 struct PointLight {
     position: vec4<f32>,
@@ -104,7 +115,7 @@ struct Settings {
     // Ranges of `indices` (BVH leaf objects start at 0).
     plane_offset: u32,
     plane_count: u32,
-    area_light_offset: u32,
+    _pad0: u32,
     area_light_count: u32,
     point_light_count: u32,
     bvh_node_count: u32,

@@ -167,3 +167,58 @@ fn onoff_flat_and_point_light_match_the_cpu() {
         assert_matches_cpu(&gpu, &scene, None, 0.99);
     }
 }
+
+/// A Cornell-like box of cubes with an emissive sphere (area light, cone sampling), an
+/// emissive cube (area sampling), glass and a mirror, under an environment.
+fn path_traced_scene(nee: bool, env: Option<Environment>) -> Scene {
+    let mut b = SceneBuilder::new(20, 15);
+    let white = b.diffuse(Color::gray(0.7));
+    let green = b.diffuse(Color::new(0.2, 0.6, 0.2));
+    let lamp = b.material(Material::new(Brdf::Diffuse { pigment: Pigment::Uniform(Color::BLACK) }, Pigment::Uniform(Color::gray(4.0))));
+    let warm = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
+        Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
+    ));
+    let glass = b.material(Material::new(Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 }, Pigment::Uniform(Color::BLACK)));
+    let mirror = b.material(Material::new(
+        Brdf::Specular { pigment: Pigment::Uniform(Color::gray(0.8)), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD },
+        Pigment::Uniform(Color::BLACK),
+    ));
+    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white)
+        .cube(Transform::translation(DVec3::new(6.0, 0.0, 0.0)) * Transform::scaling(DVec3::new(0.2, 6.0, 4.0)), green)
+        .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.6)) * Transform::scaling(DVec3::splat(0.4)), lamp)
+        .cube(Transform::translation(DVec3::new(4.5, -1.5, 1.5)) * Transform::scaling(DVec3::new(0.6, 0.3, 0.2)), warm)
+        .sphere(Transform::translation(DVec3::new(3.5, -0.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), glass)
+        .sphere(Transform::translation(DVec3::new(4.5, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), mirror)
+        .point_light(PointLight { position: DVec3::new(2.0, 0.0, 2.5), color: Color::gray(0.5), linear_radius: 1.0 })
+        .camera(Camera { aspect_ratio: 20.0 / 15.0, ..Camera::default() })
+        .renderer(Renderer::PathTracer(PathTracerSettings {
+            background: Color::new(0.1, 0.1, 0.2),
+            n: 2,
+            max_depth: 4,
+            roulette_depth: 2,
+            nee,
+            ..Default::default()
+        }))
+        .tracer(Tracer { samples_per_side: 2, rng: PcgSeed { state: 7, inc: 11 } });
+    if let Some(e) = env {
+        b.environment(e);
+    }
+    b.build().unwrap()
+}
+
+#[test]
+fn path_tracer_matches_the_cpu() {
+    let Some(gpu) = gpu_for_tests("path_tracer_matches_the_cpu") else { return };
+    for nee in [true, false] {
+        println!("nee = {nee}");
+        let scene = path_traced_scene(nee, None);
+        let a = assert_matches_cpu(&gpu, &scene, None, 0.99);
+        // Same scene twice: bitwise the same image.
+        let b = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap().image;
+        assert!(a.pixels().iter().zip(b.pixels()).all(|(x, y)| x.r.to_bits() == y.r.to_bits()
+            && x.g.to_bits() == y.g.to_bits() && x.b.to_bits() == y.b.to_bits()));
+    }
+    let gradient = Environment::Gradient { zenith: Color::new(0.3, 0.4, 0.9), horizon: Color::gray(0.8), nadir: Color::gray(0.05) };
+    assert_matches_cpu(&gpu, &path_traced_scene(true, Some(gradient)), None, 0.99);
+}

@@ -133,6 +133,18 @@ pub struct Pigment {
     pub _pad1: u32,
 }
 
+/// An area light: `sphere` = world centre and radius when the light is a sphere placed by a
+/// similarity (sampled by the cone it subtends), radius 0 otherwise (sampled by area).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct AreaLight {
+    pub sphere: [f32; 4],
+    pub shape: u32,
+    pub det: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct PointLight {
@@ -194,7 +206,7 @@ pub struct Settings {
     /// Ranges of the `indices` buffer (BVH leaf objects start at 0).
     pub plane_offset: u32,
     pub plane_count: u32,
-    pub area_light_offset: u32,
+    pub _pad0: u32,
     pub area_light_count: u32,
     pub point_light_count: u32,
     pub bvh_node_count: u32,
@@ -230,6 +242,7 @@ mod tests {
                 [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]
             ),
             expect!(PointLight, "PointLight", [position, color]),
+            expect!(AreaLight, "AreaLight", [sphere, shape, det, _pad0, _pad1]),
             expect!(
                 Environment,
                 "Environment",
@@ -255,7 +268,7 @@ mod tests {
                     spp,
                     plane_offset,
                     plane_count,
-                    area_light_offset,
+                    _pad0,
                     area_light_count,
                     point_light_count,
                     bvh_node_count,

@@ -17,6 +17,7 @@ use super::features::FeatureSet;
 use super::layout::{self, Affine, NONE};
 use crate::accel::BvhNode;
 use crate::color::Color;
+use crate::cpu::area_light::AreaLight;
 use crate::cpu::env_light::image_distribution;
 use crate::cpu::pixel_samples::PixelSamples;
 use crate::cpu::World;
@@ -31,7 +32,7 @@ pub struct PackedScene {
     pub camera: layout::Camera,
     pub environment: layout::Environment,
     pub shapes: Vec<layout::Shape>,
-    /// BVH leaf objects, then planes, CSG children, area lights (see `Settings`).
+    /// BVH leaf objects, then planes and CSG children (see `Settings`).
     pub indices: Vec<u32>,
     pub bvh_nodes: Vec<BvhNode>,
     pub csg_nodes: Vec<layout::CsgNode>,
@@ -40,6 +41,7 @@ pub struct PackedScene {
     /// Texels, then the environment's importance-sampling tables.
     pub floats: Vec<f32>,
     pub point_lights: Vec<layout::PointLight>,
+    pub area_lights: Vec<layout::AreaLight>,
     /// The world point that the packed coordinates are relative to.
     pub origin: DVec3,
 }
@@ -126,6 +128,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         pigments: Vec::new(),
         floats: Vec::new(),
         point_lights: Vec::new(),
+        area_lights: Vec::new(),
         origin,
     };
 
@@ -153,11 +156,9 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         p.csg_nodes[node].first_child = count_u32("indices", p.indices.len())?;
         p.indices.extend(children);
     }
-    let area_light_offset = count_u32("indices", p.indices.len())?;
     for l in &area_lights {
-        p.indices.push(object_ref[l.shape]);
+        p.area_lights.push(packed_area_light(scene, l.shape, object_ref[l.shape], origin));
     }
-    count_u32("indices", p.indices.len())?;
 
     // Appearance.
     let mut textures: HashMap<*const HdrImage, u32> = HashMap::new();
@@ -227,12 +228,25 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         spp,
         plane_offset,
         plane_count,
-        area_light_offset,
+        _pad0: 0,
         area_light_count: count_u32("area lights", area_lights.len())?,
         point_light_count: count_u32("point lights", scene.point_lights.len())?,
         bvh_node_count: count_u32("BVH nodes", p.bvh_nodes.len())?,
     };
     Ok(p)
+}
+
+/// Area light data as `cpu::area_light::AreaLight` computes it, in the camera frame.
+fn packed_area_light(scene: &Scene, shape: usize, shape_ref: u32, origin: DVec3) -> layout::AreaLight {
+    let light = AreaLight::new(scene, shape).expect("Scene::area_lights lists only top-level spheres and cubes");
+    let sphere = match light.sphere {
+        Some((c, r)) => {
+            let c = c - origin;
+            [c.x as f32, c.y as f32, c.z as f32, r as f32]
+        }
+        None => [0.0; 4],
+    };
+    layout::AreaLight { sphere, shape: shape_ref, det: light.det as f32, _pad0: 0, _pad1: 0 }
 }
 
 /// `s` with `shift` applied after its own transformation.

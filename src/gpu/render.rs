@@ -228,6 +228,7 @@ impl SceneBuffers {
             (9, gpu.uniform_buffer("environment", &p.environment)?),
             (10, gpu.storage_buffer("floats", &p.floats)?),
             (11, gpu.storage_buffer("point_lights", &p.point_lights)?),
+            (12, gpu.storage_buffer("area_lights", &p.area_lights)?),
         ];
         Ok(Self { by_binding, nan_count })
     }
