@@ -105,3 +105,16 @@ fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> 
     let normal = select(-outward, outward, front_face);
     return Hit(c.t, point, normal, front_face, sp.uv, s.material, object);
 }
+
+// A candidate hit, kept cheap until the closest is known: the crossing, the primitive
+// that produced it, whether its normal is flipped (CSG DIFF), the top-level object.
+struct Candidate {
+    c: Crossing,
+    shape: u32,
+    flip: bool,
+    object: u32,
+}
+
+fn no_candidate() -> Candidate {
+    return Candidate(Crossing(OPEN, 0u), 0u, false, 0u);
+}

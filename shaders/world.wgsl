@@ -6,19 +6,6 @@
 // same 32-byte nodes the CPU traverses) plus the list of infinite planes tested by every
 // ray. Mirrors cpu::World.
 
-// A candidate hit, kept cheap until the closest is known: the crossing, the primitive
-// that produced it, whether its normal is flipped (CSG DIFF), the top-level object.
-struct Candidate {
-    c: Crossing,
-    shape: u32,
-    flip: bool,
-    object: u32,
-}
-
-fn no_candidate() -> Candidate {
-    return Candidate(Crossing(OPEN, 0u), 0u, false, 0u);
-}
-
 // The first crossing of object reference `r` inside (tmin, tmax).
 fn object_first(r: u32, ray: Ray) -> Candidate {
 // #if CSG

@@ -222,3 +222,84 @@ fn path_tracer_matches_the_cpu() {
     let gradient = Environment::Gradient { zenith: Color::new(0.3, 0.4, 0.9), horizon: Color::gray(0.8), nadir: Color::gray(0.05) };
     assert_matches_cpu(&gpu, &path_traced_scene(true, Some(gradient)), None, 0.99);
 }
+
+/// Every CSG operation, nested, with a plane half-space and transformed CSG nodes; flat
+/// shading shows which leaf's material each surface carries, the path tracer the normals.
+fn csg_scene(renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(24, 18);
+    let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
+    let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
+    let green = b.diffuse(Color::new(0.2, 0.7, 0.2));
+    let glass = b.material(Material::new(Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.4 }, Pigment::Uniform(Color::BLACK)));
+    let p = |k: ShapeKind, t: Transform, m: MaterialId| Shape::primitive(k, t, m);
+    // Cube minus a sphere minus a cylinder.
+    let carved = Shape::csg(
+        CsgOp::Diff,
+        vec![
+            p(ShapeKind::Cube, Transform::scaling(DVec3::splat(1.4)), red),
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(-0.6, 0.2, 0.3)) * Transform::scaling(DVec3::splat(0.6)), blue),
+            p(ShapeKind::Cylinder, Transform::rotation_y(90.0) * Transform::scaling(DVec3::new(0.5, 0.5, 3.0)), green),
+        ],
+        Transform::translation(DVec3::new(5.0, 1.2, 0.0)) * Transform::rotation_z(25.0),
+    );
+    // A lens: two spheres intersected, cut by a plane's half-space.
+    let lens = Shape::csg(
+        CsgOp::Intersect,
+        vec![
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, 0.5, 0.0)), blue),
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, -0.5, 0.0)), green),
+            p(ShapeKind::Plane, Transform::translation(DVec3::new(0.0, 0.0, 0.4)), red),
+        ],
+        Transform::translation(DVec3::new(4.0, -1.5, -0.3)),
+    );
+    // Glass UNITE (inner surfaces kept) and FUSE (merged) of overlapping spheres, nested
+    // in a DIFF.
+    let unite = Shape::csg(
+        CsgOp::Unite,
+        vec![
+            p(ShapeKind::Sphere, Transform::scaling(DVec3::splat(0.5)), glass),
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, 0.5, 0.0)) * Transform::scaling(DVec3::splat(0.5)), glass),
+        ],
+        Transform::translation(DVec3::new(3.0, 0.0, -0.6)),
+    );
+    let fuse = Shape::csg(
+        CsgOp::Fuse,
+        vec![
+            p(ShapeKind::Sphere, Transform::scaling(DVec3::splat(0.45)), glass),
+            p(ShapeKind::Cube, Transform::translation(DVec3::new(0.0, -0.4, 0.0)) * Transform::scaling(DVec3::splat(0.6)), glass),
+        ],
+        Transform::translation(DVec3::new(3.2, -0.2, 0.8)),
+    );
+    let nested = Shape::csg(
+        CsgOp::Diff,
+        vec![fuse, p(ShapeKind::Cube, Transform::translation(DVec3::new(3.2, -0.2, 1.2)) * Transform::scaling(DVec3::splat(0.4)), red)],
+        Transform::IDENTITY,
+    );
+    b.shape(carved)
+        .shape(lens)
+        .shape(unite)
+        .shape(nested)
+        .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.2)), green)
+        .point_light(PointLight { position: DVec3::new(0.0, 2.0, 3.0), color: Color::gray(1.0), linear_radius: 0.0 })
+        .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
+        .renderer(renderer)
+        .environment(Environment::Uniform(Color::gray(0.5)))
+        .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
+    b.build().unwrap()
+}
+
+#[test]
+fn csg_matches_the_cpu() {
+    let Some(gpu) = gpu_for_tests("csg_matches_the_cpu") else { return };
+    for renderer in [
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.02) },
+        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
+    ] {
+        println!("{}", renderer.name());
+        let scene = csg_scene(renderer);
+        let f = lumen::gpu::features::FeatureSet::of(&scene);
+        assert!(f.csg && f.csg_max_depth == 2 && f.csg_max_intervals >= 2, "{f:?}");
+        assert_matches_cpu(&gpu, &scene, None, 0.99);
+    }
+}
