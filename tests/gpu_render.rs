@@ -303,3 +303,152 @@ fn csg_matches_the_cpu() {
         assert_matches_cpu(&gpu, &scene, None, 0.99);
     }
 }
+
+// ---- Analytic answers on the GPU (the CPU's tests/cpu_render.rs, sized for lavapipe) ----
+
+fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
+    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth, nee, ..Default::default() })
+}
+
+fn gpu_run(gpu: &Gpu, scene: &Scene, spp: Option<u32>) -> HdrImage {
+    let out = render(gpu, scene, &GpuRenderOptions { spp, ..Default::default() }).unwrap();
+    assert_eq!(out.non_finite_samples, 0);
+    assert_eq!(out.spp_done, out.spp_requested);
+    out.image
+}
+
+/// Mean of the green channel over the selected pixels and the standard error of that mean
+/// estimated from their spread (valid when they share one expected value).
+fn mean_and_stderr(img: &HdrImage, select: impl Fn(usize, usize) -> bool) -> (f64, f64) {
+    let mut v = Vec::new();
+    for row in 0..img.height() {
+        for col in 0..img.width() {
+            if select(col, row) {
+                v.push(f64::from(img.get(col, row).g));
+            }
+        }
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Camera inside a sphere of radius 10 that emits `le` and reflects diffusely with albedo ρ.
+fn furnace(rho: f64, le: f64, renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(12, 12);
+    let m = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) },
+        Pigment::Uniform(Color::gray(le)),
+    ));
+    b.sphere(Transform::scaling(DVec3::splat(10.0)), m).renderer(renderer);
+    b.build().unwrap()
+}
+
+#[test]
+fn furnace_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("furnace_on_the_gpu") else { return };
+    // Without NEE or roulette every path is exactly Le Σ_{k ≤ 20} ρᵏ = 2(1 − 2⁻²¹).
+    let expected = 2.0 * (1.0 - 0.5f64.powi(21));
+    let img = gpu_run(&gpu, &furnace(0.5, 1.0, pt(1, 20, 1000, false)), Some(1));
+    for p in img.pixels() {
+        assert!((f64::from(p.g) / expected - 1.0).abs() < 2e-6, "{p:?}");
+    }
+    // With NEE (area sampling from inside the light) + MIS: unbiased; tolerance 1 % must
+    // exceed 5 standard errors.
+    let img = gpu_run(&gpu, &furnace(0.5, 1.0, pt(8, 20, 1000, true)), Some(4));
+    let (mean, se) = mean_and_stderr(&img, |_, _| true);
+    println!("furnace ρ 0.5 with NEE: {mean} ± {se} (expected {expected})");
+    assert!(5.0 * se < 0.01 * expected, "test too weak: se {se}");
+    assert!((mean / expected - 1.0).abs() < 0.01, "{mean} vs {expected} (se {se})");
+    // Roulette from depth 2 (q = 0.1) keeps the expectation 1/(1 − ρ) = 10. A path's value
+    // has a standard deviation ≈ 7, so 12² pixels × 4 samples × 64 paths give se ≈ 0.05:
+    // tolerance 3 %.
+    let expected = 10.0;
+    for nee in [false, true] {
+        let img = gpu_run(&gpu, &furnace(0.9, 1.0, pt(64, 300, 2, nee)), Some(4));
+        let (mean, se) = mean_and_stderr(&img, |_, _| true);
+        println!("furnace ρ 0.9 roulette, nee {nee}: {mean} ± {se} (expected {expected})");
+        assert!(5.0 * se < 0.03 * expected, "test too weak: se {se} (nee {nee})");
+        assert!((mean / expected - 1.0).abs() < 0.03, "nee {nee}: {mean} vs {expected} (se {se})");
+    }
+}
+
+/// A sphere of `brdf` under a uniform sky, and the GPU OnOff mask of the pixels that see it.
+fn object_under_sky(gpu: &Gpu, brdf: Brdf, sky: f64, renderer: Renderer) -> (Scene, HdrImage) {
+    let mut b = SceneBuilder::new(16, 16);
+    let m = b.material(Material::new(brdf, Pigment::Uniform(Color::BLACK)));
+    b.sphere(Transform::translation(DVec3::new(2.0, 0.0, 0.0)) * Transform::scaling(DVec3::splat(1.5)), m)
+        .environment(Environment::Uniform(Color::gray(sky)))
+        .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+    let mask = gpu_run(gpu, &b.build().unwrap(), None);
+    b.renderer(renderer);
+    (b.build().unwrap(), mask)
+}
+
+#[test]
+fn glass_and_diffuse_spheres_under_a_uniform_sky_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("glass_and_diffuse_spheres_under_a_uniform_sky_on_the_gpu") else { return };
+    // Diffuse without NEE: one scatter, then escape: exactly ρL.
+    let (rho, sky) = (0.6, 2.0);
+    let brdf = Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) };
+    let (scene, mask) = object_under_sky(&gpu, brdf, sky, pt(1, 3, 100, false));
+    let img = gpu_run(&gpu, &scene, None);
+    let on = |c: usize, r: usize| mask.get(c, r).g > 0.5;
+    let mut hits = 0;
+    for row in 0..16 {
+        for col in 0..16 {
+            let expected = if on(col, row) { rho * sky } else { sky };
+            hits += usize::from(on(col, row));
+            assert!((f64::from(img.get(col, row).g) / expected - 1.0).abs() < 1e-6, "({col},{row})");
+        }
+    }
+    assert!(hits > 20, "the sphere covers {hits} pixels");
+    // Clear glass neither absorbs nor emits: every pixel sees the sky (η² factors cancel).
+    for nee in [false, true] {
+        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 };
+        let (scene, mask) = object_under_sky(&gpu, brdf, 1.5, pt(32, 64, 1000, nee));
+        let img = gpu_run(&gpu, &scene, None);
+        let (mean, se) = mean_and_stderr(&img, |c, r| mask.get(c, r).g > 0.5);
+        println!("glass ball under the sky, nee {nee}: {mean} ± {se} (expected 1.5)");
+        assert!(5.0 * se < 0.01 * 1.5, "test too weak: se {se}");
+        assert!((mean / 1.5 - 1.0).abs() < 0.01, "nee {nee}: {mean} (se {se})");
+    }
+}
+
+#[test]
+fn point_lit_plane_matches_the_closed_form_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("point_lit_plane_matches_the_closed_form_on_the_gpu") else { return };
+    let rho = Color::new(0.8, 0.5, 0.2);
+    let light = DVec3::new(1.0, 0.5, 2.0);
+    let intensity = Color::new(10.0, 20.0, 5.0);
+    for renderer in [Renderer::PointLight { background: Color::BLACK, ambient: Color::BLACK }, pt(1, 1, 10, true)] {
+        let mut b = SceneBuilder::new(12, 10);
+        let m = b.diffuse(rho);
+        let cam = Camera {
+            projection: Projection::Perspective { screen_distance: 1.0 },
+            aspect_ratio: 1.2,
+            transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
+        };
+        b.plane(Transform::IDENTITY, m)
+            .camera(cam)
+            .point_light(PointLight { position: light, color: intensity, linear_radius: 1.0 })
+            .renderer(renderer);
+        let scene = b.build().unwrap();
+        let img = gpu_run(&gpu, &scene, None);
+        for row in 0..10 {
+            for col in 0..12 {
+                let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
+                let p = r.origin - r.dir * (r.origin.z / r.dir.z);
+                let to = light - p;
+                let d2 = to.length_squared();
+                let cos = to.z / d2.sqrt();
+                let expected = rho * intensity * (cos / (std::f64::consts::PI * d2));
+                let got: Color = img.get(col, row).into();
+                for (g, e) in [(got.r, expected.r), (got.g, expected.g), (got.b, expected.b)] {
+                    assert!((g / e - 1.0).abs() < 1e-5, "({col},{row}): {got:?} vs {expected:?}");
+                }
+            }
+        }
+    }
+}
