@@ -209,20 +209,23 @@ impl<'a> Interp<'a> {
             let t = self.peek()?;
             let Tok::Ident(name) = t.tok else { break };
             self.lx.next()?;
-            let (value, _) = self.value()?;
-            count += 1;
-            match self.vars.get(&name) {
-                Some(v) if v.from_cli => {} // the command line wins: parsed, then ignored
+            // Checked before the value is read: the name comes first in the file.
+            let from_cli = match self.vars.get(&name) {
+                Some(v) if v.from_cli => true,
                 Some(v) => {
                     return Err(self
                         .err(t.span, ErrorKind::RedefinedName, format!("`{name}` is already defined"))
                         .expected(format!("a new name, or `UNSET {name}` before setting it again"))
                         .note(format!("`{name}` was defined at {}", v.origin)))
                 }
-                None => {
-                    let origin = self.origin(t.span);
-                    self.vars.insert(name, Var { value, origin, from_cli: false });
-                }
+                None => false,
+            };
+            let (value, _) = self.value()?;
+            count += 1;
+            // A name given on the command line wins: the script's value is parsed, then ignored.
+            if !from_cli {
+                let origin = self.origin(t.span);
+                self.vars.insert(name, Var { value, origin, from_cli: false });
             }
         }
         if count == 0 {
@@ -334,7 +337,6 @@ impl<'a> Interp<'a> {
                 break;
             }
             let (v, span) = self.value()?;
-            let origin = self.origin(span);
             macro_rules! setting {
                 ($field:ident, $val:expr, $name:literal) => {{
                     if let Some((_, first)) = &self.world.$field {
@@ -343,7 +345,6 @@ impl<'a> Interp<'a> {
                             .expected(concat!("one ", $name, " per script"))
                             .note(format!("first set at {}", self.origin(*first))));
                     }
-                    let _ = &origin;
                     self.world.$field = Some(($val, span));
                 }};
             }
