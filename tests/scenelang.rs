@@ -423,7 +423,7 @@ fn syntax_and_type_errors() {
 #[test]
 fn name_errors() {
     let e = check_err("SET a 1\nSET b 2 a 3", ErrorKind::RedefinedName, 2, 9, "`a` is already defined");
-    assert!(e.note.as_deref().unwrap().contains("t.sl:1:5"), "{e}");
+    assert!(e.note().unwrap().contains("t.sl:1:5"), "{e}");
     check_err(
         "SET a 1\nUNSET a\nSPAWN Light(.linear_radius a)",
         ErrorKind::UndefinedName,
@@ -433,7 +433,7 @@ fn name_errors() {
     );
     check_err("UNSET nothing", ErrorKind::UndefinedName, 1, 7, "undefined identifier `nothing`");
     let e = check_err("SET radius 1\nSET x radus", ErrorKind::UndefinedName, 2, 7, "undefined");
-    assert_eq!(e.note.as_deref(), Some("did you mean `radius`?"));
+    assert_eq!(e.note(), Some("did you mean `radius`?"));
     check_err("DUMP nope", ErrorKind::UndefinedName, 1, 6, "undefined identifier");
 }
 
@@ -450,7 +450,7 @@ fn settings_errors() {
         32,
         "the image is already set",
     );
-    assert!(e.note.as_deref().unwrap().contains("1:27"), "{e}");
+    assert!(e.note().unwrap().contains("1:27"), "{e}");
     check_err(
         &format!("{SETTINGS}USING Environment.Uniform() Environment.Uniform()"),
         ErrorKind::RepeatedSetting,
