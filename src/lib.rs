@@ -6,9 +6,11 @@
 //! - [`sampling`]: PCG32 and the per-(pixel, sample, bounce) stream rule;
 //! - [`image`]: HDR images, tone mapping, PFM/EXR/HDR/PNG files.
 
+pub mod accel;
 pub mod cli;
 pub mod color;
 pub mod cpu;
+pub mod gpu;
 pub mod image;
 pub mod sampling;
 pub mod scene;

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod check;
+pub mod devices;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.
@@ -20,12 +21,15 @@ pub struct Cli {
 pub enum Command {
     /// Load a SceneLang script and summarise it (or print its first error).
     Check(check::CheckArgs),
+    /// List the GPU adapters lumen can render on.
+    Devices(devices::DevicesArgs),
 }
 
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Check(args) => check::run(args),
+        Command::Devices(args) => devices::run(args),
     }
 }
 

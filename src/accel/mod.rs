@@ -1,0 +1,34 @@
+//! Acceleration structure: a binned-SAH BVH over top-level shapes, flattened depth-first
+//! into the 32-byte [`BvhNode`]s that the CPU reference and the GPU both traverse.
+//!
+//! ```
+//! use lumen::accel::{Bvh, BvhItem, Visit, MAX_DEPTH};
+//! use lumen::scene::Aabb;
+//! use glam::DVec3;
+//!
+//! let items: Vec<BvhItem> = (0..100)
+//!     .map(|i| {
+//!         let c = DVec3::new(i as f64 * 3.0, 0.0, 0.0);
+//!         BvhItem { id: i, bounds: Aabb::new(c - 1.0, c + 1.0) }
+//!     })
+//!     .collect();
+//! let bvh = Bvh::build(&items);
+//! assert!(bvh.depth() <= MAX_DEPTH);
+//! // Which boxes does a ray along +y at x = 30 pass through?
+//! let mut seen = Vec::new();
+//! bvh.traverse(DVec3::new(30.0, -5.0, 0.0), DVec3::Y, 0.0, f64::INFINITY, |id| {
+//!     seen.push(id);
+//!     Visit::Continue
+//! });
+//! // Leaves may hold a few neighbours; box 10 is among those visited, far ones are not.
+//! assert!(seen.contains(&10));
+//! assert!(seen.iter().all(|&id| (8..=12).contains(&id)));
+//! ```
+
+mod build;
+mod node;
+mod traverse;
+
+pub use build::{Bvh, BvhItem, MAX_DEPTH, MAX_LEAF_SIZE};
+pub use node::BvhNode;
+pub use traverse::{RayBox, Visit};

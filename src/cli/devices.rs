@@ -1,0 +1,52 @@
+//! `lumen devices`: the GPU adapters wgpu can see, best first (the one used by default
+//! comes first; `--adapter NAME` or `LUMEN_ADAPTER` picks another by name).
+
+use clap::Args;
+
+use crate::gpu::{list_adapters, select_adapter, AdapterChoice};
+
+/// Arguments of `lumen devices`.
+#[derive(Debug, Args)]
+pub struct DevicesArgs {
+    #[command(flatten)]
+    pub adapter: AdapterArgs,
+}
+
+/// The `--adapter` option, for any subcommand that renders on the GPU (`#[command(flatten)]`).
+#[derive(Debug, Clone, Args)]
+pub struct AdapterArgs {
+    /// GPU adapter to use: a case-insensitive part of its name as `lumen devices` prints it
+    /// (default: $LUMEN_ADAPTER, else the best adapter).
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
+}
+
+impl AdapterArgs {
+    pub fn choice(&self) -> AdapterChoice {
+        AdapterChoice::new(self.adapter.clone())
+    }
+}
+
+/// Prints one line per adapter; with none, says so and how to get one (not an error:
+/// the CPU renderer still works).
+pub fn run(args: DevicesArgs) -> anyhow::Result<()> {
+    let adapters = list_adapters();
+    if adapters.is_empty() {
+        println!("no GPU adapters found: GPU rendering is unavailable (the CPU renderer still works).");
+        println!("On Linux, Mesa's software Vulkan driver works anywhere: apt-get install mesa-vulkan-drivers");
+        return Ok(());
+    }
+    let choice = args.adapter.choice();
+    let selected = select_adapter(&adapters, &choice);
+    for (i, a) in adapters.iter().enumerate() {
+        let mark = if selected.as_ref().ok() == Some(&i) { "  (selected)" } else { "" };
+        println!("{i}: {}{mark}", a.name);
+        println!("   backend: {}, type: {}", a.backend, a.device_type_name());
+        if !a.driver.is_empty() || !a.driver_info.is_empty() {
+            println!("   driver: {}", [a.driver.trim(), a.driver_info.trim()].join(" ").trim());
+        }
+    }
+    // An adapter name that matches nothing is an error wherever it is used: say so here too.
+    selected?;
+    Ok(())
+}

@@ -1,0 +1,284 @@
+//! Constructive solid geometry by interval logic along the ray.
+//!
+//! Every leaf (a unit primitive, convex) meets the ray's whole line in at most one interval
+//! `[enter, exit]`; each end remembers the surface that bounds it (leaf, face, and whether
+//! its normal is flipped), and open ends (a plane's half-space, a ray starting inside a
+//! solid) lie at ±∞ with no surface. A node combines its children's lists:
+//!
+//! - **UNITE** (POV-Ray `union`) concatenates them: intervals may overlap, and every
+//!   child's surface stays visible, also inside the other children;
+//! - **FUSE** (POV-Ray `merge`) merges overlapping or touching intervals, keeping only the
+//!   outer boundary of the union;
+//! - **INTERSECT** intersects every interval of one list with every interval of the other
+//!   (pairwise, so the inner surfaces of a UNITE child that lie inside the other children
+//!   stay visible, as in POV-Ray);
+//! - **DIFF** subtracts the merged union of the second and later children from each
+//!   interval of the first; ends produced by a subtracted child get their normal flipped.
+//!
+//! INTERSECT and DIFF are regularised: pieces of zero length are dropped, so a subtracted
+//! solid whose face coincides with a face of the first child leaves no sliver behind. The
+//! closest hit is the smallest end with a surface inside (tmin, tmax); its normal comes
+//! from the leaf that produced it, with the leaf's material.
+
+use crate::cpu::shapes::{Crossing, Instance, Span, SurfaceHit};
+use crate::cpu::Ray;
+use crate::scene::{Csg, CsgOp, MaterialId, Shape, Transform};
+
+/// Marks an open end of an interval (±∞, no surface).
+pub const NO_SURFACE: u32 = u32::MAX;
+
+/// One end of an interval: the ray parameter and the surface that bounds the solid there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct End {
+    pub t: f64,
+    /// Index of the leaf in [`CsgTree::leaves`], or [`NO_SURFACE`].
+    pub leaf: u32,
+    pub face: u8,
+    /// The leaf's outward normal points into this solid (a carved surface).
+    pub flip: bool,
+}
+
+impl End {
+    fn from_crossing(c: Crossing, leaf: u32) -> Self {
+        let leaf = if c.t.is_finite() { leaf } else { NO_SURFACE };
+        Self { t: c.t, leaf, face: c.face, flip: false }
+    }
+    fn flipped(self) -> Self {
+        Self { flip: !self.flip, ..self }
+    }
+    fn has_surface(&self) -> bool {
+        self.leaf != NO_SURFACE
+    }
+}
+
+/// A piece of the line inside the solid, `enter.t ≤ exit.t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    pub enter: End,
+    pub exit: End,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Node {
+    Leaf(u32),
+    Op(CsgOp, Vec<Node>),
+}
+
+/// A CSG tree prepared for ray queries: leaves flattened with their full transformations.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsgTree {
+    leaves: Vec<Instance>,
+    root: Node,
+}
+
+/// The closest surface of a CSG tree along a ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CsgHit {
+    pub end: End,
+}
+
+impl CsgTree {
+    /// Prepares any shape (a lone primitive becomes a one-leaf tree).
+    pub fn new(shape: &Shape) -> Self {
+        let mut leaves = Vec::new();
+        let root = build(shape, &Transform::IDENTITY, &mut leaves);
+        Self { leaves, root }
+    }
+
+    /// Prepares a CSG node.
+    pub fn from_csg(csg: &Csg) -> Self {
+        let mut leaves = Vec::new();
+        let root = build_csg(csg, &Transform::IDENTITY, &mut leaves);
+        Self { leaves, root }
+    }
+
+    /// The leaves, in depth-first order (what [`End::leaf`] indexes).
+    pub fn leaves(&self) -> &[Instance] {
+        &self.leaves
+    }
+
+    /// The intervals of the whole line of `ray` inside the solid (t range ignored), sorted
+    /// by entry. Their number never exceeds [`max_intervals`] of the shape.
+    pub fn intervals(&self, ray: &Ray) -> Vec<Interval> {
+        let spans: Vec<Option<Span>> = self.leaves.iter().map(|l| l.span(ray)).collect();
+        eval(&self.root, &spans)
+    }
+
+    /// The closest surface with t in (tmin, tmax).
+    pub fn closest(&self, ray: &Ray) -> Option<CsgHit> {
+        let mut best: Option<End> = None;
+        for iv in self.intervals(ray) {
+            for e in [iv.enter, iv.exit] {
+                if e.has_surface() && e.t > ray.tmin && e.t < ray.tmax && best.is_none_or(|b| e.t < b.t) {
+                    best = Some(e);
+                }
+            }
+        }
+        best.map(|end| CsgHit { end })
+    }
+
+    /// Whether any surface lies in (tmin, tmax).
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.intervals(ray)
+            .iter()
+            .flat_map(|iv| [iv.enter, iv.exit])
+            .any(|e| e.has_surface() && e.t > ray.tmin && e.t < ray.tmax)
+    }
+
+    /// World-space surface data and material at a hit found by [`Self::closest`].
+    pub fn surface_hit(&self, ray: &Ray, hit: CsgHit) -> (SurfaceHit, MaterialId) {
+        let leaf = &self.leaves[hit.end.leaf as usize];
+        let s = leaf.surface_hit(ray, Crossing::new(hit.end.t, hit.end.face), hit.end.flip);
+        (s, leaf.material)
+    }
+}
+
+fn build(shape: &Shape, parent: &Transform, leaves: &mut Vec<Instance>) -> Node {
+    match shape {
+        Shape::Primitive(p) => {
+            leaves.push(Instance { kind: p.kind, to_world: *parent * p.transform, material: p.material });
+            Node::Leaf((leaves.len() - 1) as u32)
+        }
+        Shape::Csg(c) => build_csg(c, parent, leaves),
+    }
+}
+
+fn build_csg(c: &Csg, parent: &Transform, leaves: &mut Vec<Instance>) -> Node {
+    let t = *parent * c.transform;
+    Node::Op(c.op, c.children.iter().map(|ch| build(ch, &t, leaves)).collect())
+}
+
+fn eval(node: &Node, spans: &[Option<Span>]) -> Vec<Interval> {
+    match node {
+        Node::Leaf(i) => spans[*i as usize]
+            .map(|s| Interval { enter: End::from_crossing(s.enter, *i), exit: End::from_crossing(s.exit, *i) })
+            .into_iter()
+            .collect(),
+        Node::Op(op, children) => {
+            let mut lists = children.iter().map(|c| eval(c, spans));
+            let Some(first) = lists.next() else { return Vec::new() };
+            match op {
+                CsgOp::Unite => {
+                    let mut all = first;
+                    lists.for_each(|l| all.extend(l));
+                    sort(&mut all);
+                    all
+                }
+                CsgOp::Fuse => {
+                    let mut all = first;
+                    lists.for_each(|l| all.extend(l));
+                    merge(all)
+                }
+                CsgOp::Intersect => lists.fold(first, |a, b| intersect(&a, &b)),
+                CsgOp::Diff => {
+                    let cut = merge(lists.flatten().collect());
+                    subtract(&first, &cut)
+                }
+            }
+        }
+    }
+}
+
+fn sort(list: &mut [Interval]) {
+    list.sort_by(|a, b| a.enter.t.total_cmp(&b.enter.t));
+}
+
+/// Union into disjoint sorted intervals; touching intervals join (no surface between).
+fn merge(mut list: Vec<Interval>) -> Vec<Interval> {
+    sort(&mut list);
+    let mut out: Vec<Interval> = Vec::with_capacity(list.len());
+    for iv in list {
+        match out.last_mut() {
+            Some(last) if iv.enter.t <= last.exit.t => {
+                if iv.exit.t > last.exit.t {
+                    last.exit = iv.exit;
+                }
+            }
+            _ => out.push(iv),
+        }
+    }
+    out
+}
+
+/// Pairwise intersection, keeping pieces of positive length.
+fn intersect(a: &[Interval], b: &[Interval]) -> Vec<Interval> {
+    let mut out = Vec::new();
+    for x in a {
+        for y in b {
+            let enter = if y.enter.t > x.enter.t { y.enter } else { x.enter };
+            let exit = if y.exit.t < x.exit.t { y.exit } else { x.exit };
+            if enter.t < exit.t {
+                out.push(Interval { enter, exit });
+            }
+        }
+    }
+    sort(&mut out);
+    out
+}
+
+/// Each interval of `a` minus the disjoint sorted `cut`, keeping pieces of positive length;
+/// the ends contributed by `cut` are carved surfaces (flipped normals).
+fn subtract(a: &[Interval], cut: &[Interval]) -> Vec<Interval> {
+    let mut out = Vec::new();
+    for x in a {
+        let mut start = Some(x.enter);
+        for y in cut {
+            let Some(s) = start else { break };
+            if y.exit.t <= s.t {
+                continue;
+            }
+            if y.enter.t >= x.exit.t {
+                break;
+            }
+            if y.enter.t > s.t {
+                out.push(Interval { enter: s, exit: y.enter.flipped() });
+            }
+            start = (y.exit.t < x.exit.t).then(|| y.exit.flipped());
+        }
+        if let Some(s) = start {
+            if s.t < x.exit.t {
+                out.push(Interval { enter: s, exit: x.exit });
+            }
+        }
+    }
+    sort(&mut out);
+    out
+}
+
+/// An upper bound on the number of intervals [`CsgTree::intervals`] can return for this
+/// shape, for any ray, which also bounds every intermediate list the evaluation builds
+/// (each node's bound is at least its children's). The GPU sizes its fixed interval arrays
+/// with it.
+///
+/// Rules, with `n` the bound and `overlap` whether the list may hold overlapping intervals
+/// (only UNITE creates overlaps): a leaf is 1 (convex); UNITE and FUSE sum their children
+/// (FUSE lists are disjoint); INTERSECT of lists `a`, `b` is `a + b − 1` when both are
+/// disjoint (each boundary of one list starts at most one new piece), else `a·b` (pairs);
+/// DIFF of `a` by children summing to `m` is `a + m` when `a` is disjoint (each cut
+/// interval splits at most one piece in two), else `a·(m + 1)`.
+pub fn max_intervals(shape: &Shape) -> usize {
+    bound(shape).0
+}
+
+fn bound(shape: &Shape) -> (usize, bool) {
+    let Shape::Csg(c) = shape else { return (1, false) };
+    let children: Vec<(usize, bool)> = c.children.iter().map(bound).collect();
+    let Some((&first, rest)) = children.split_first() else { return (0, false) };
+    let rest_sum: usize = rest.iter().map(|b| b.0).sum();
+    let (n, overlap) = match c.op {
+        CsgOp::Unite => (first.0 + rest_sum, first.1 || !rest.is_empty()),
+        CsgOp::Fuse => (first.0 + rest_sum, false),
+        CsgOp::Intersect => rest.iter().fold(first, |(n, ov), &(m, ov2)| {
+            if ov || ov2 {
+                ((n * m).max(n).max(m), true)
+            } else {
+                ((n + m).saturating_sub(1).max(n).max(m), false)
+            }
+        }),
+        CsgOp::Diff if first.1 => (first.0 * (rest_sum + 1), true),
+        CsgOp::Diff => (first.0 + rest_sum, false),
+    };
+    // Intermediate lists (a child's, the concatenation of DIFF's cut) must fit too.
+    let widest = children.iter().map(|b| b.0).max().unwrap_or(0);
+    (n.max(widest).max(rest_sum), overlap)
+}

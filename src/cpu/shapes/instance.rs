@@ -1,0 +1,61 @@
+//! A unit primitive placed in the world by a transformation.
+
+use glam::{DVec2, DVec3};
+
+use super::{span, surface, Crossing, Span};
+use crate::cpu::Ray;
+use crate::scene::{MaterialId, ShapeKind, Transform};
+
+/// A unit primitive with its full object-to-world transformation (for CSG leaves, the
+/// product of the transformations of every enclosing node).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Instance {
+    pub kind: ShapeKind,
+    pub to_world: Transform,
+    pub material: MaterialId,
+}
+
+/// World-space surface data at a crossing, oriented against the ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceHit {
+    pub point: DVec3,
+    /// Unit normal with `normal · dir ≤ 0`.
+    pub normal: DVec3,
+    /// The outward normal faced the ray (`outward · dir < 0`).
+    pub front_face: bool,
+    pub uv: DVec2,
+}
+
+impl Instance {
+    /// The ray in object space. The parameter t means the same point in both spaces
+    /// because the direction is transformed without normalising it.
+    pub fn local_ray(&self, ray: &Ray) -> (DVec3, DVec3) {
+        let inv = self.to_world.inverse_matrix();
+        (inv.transform_point3(ray.origin), inv.transform_vector3(ray.dir))
+    }
+
+    /// The span of the ray's whole line through the solid.
+    pub fn span(&self, ray: &Ray) -> Option<Span> {
+        let (o, d) = self.local_ray(ray);
+        span(self.kind, o, d)
+    }
+
+    /// The first surface crossing with t in the open range (tmin, tmax).
+    pub fn first_crossing(&self, ray: &Ray) -> Option<Crossing> {
+        let s = self.span(ray)?;
+        [s.enter, s.exit].into_iter().find(|c| c.t > ray.tmin && c.t < ray.tmax && c.t.is_finite())
+    }
+
+    /// Surface point, normal and uv at crossing `c` of this ray. `flip` reverses the
+    /// outward normal (surfaces carved by a subtracted CSG child).
+    pub fn surface_hit(&self, ray: &Ray, c: Crossing, flip: bool) -> SurfaceHit {
+        let (o, d) = self.local_ray(ray);
+        let s = surface(self.kind, o + c.t * d, c.face);
+        let point = self.to_world.point(s.point);
+        let n = self.to_world.normal(s.normal).normalize_or_zero();
+        let outward = if flip { -n } else { n };
+        let front_face = outward.dot(ray.dir) < 0.0;
+        let normal = if front_face { outward } else { -outward };
+        SurfaceHit { point, normal, front_face, uv: s.uv }
+    }
+}

@@ -1,0 +1,181 @@
+//! The scene's geometry prepared for ray queries: closest hit and occlusion.
+
+use crate::accel::{Bvh, BvhItem, Visit};
+use crate::cpu::csg::{CsgHit, CsgTree};
+use crate::cpu::shapes::{Crossing, Instance};
+use crate::cpu::{Hit, Ray};
+use crate::scene::{Scene, Shape};
+
+/// One top-level shape, prepared.
+#[derive(Debug, Clone, PartialEq)]
+enum Object {
+    Primitive(Instance),
+    Csg(CsgTree),
+}
+
+/// What an object reports before the full hit record is computed (only for the winner).
+#[derive(Debug, Clone, Copy)]
+enum Found {
+    Primitive(Crossing),
+    Csg(CsgHit),
+}
+
+impl Found {
+    fn t(&self) -> f64 {
+        match self {
+            Found::Primitive(c) => c.t,
+            Found::Csg(h) => h.end.t,
+        }
+    }
+}
+
+impl Object {
+    fn closest(&self, ray: &Ray) -> Option<Found> {
+        match self {
+            Object::Primitive(p) => p.first_crossing(ray).map(Found::Primitive),
+            Object::Csg(c) => c.closest(ray).map(Found::Csg),
+        }
+    }
+
+    fn occludes(&self, ray: &Ray) -> bool {
+        match self {
+            Object::Primitive(p) => p.first_crossing(ray).is_some(),
+            Object::Csg(c) => c.occluded(ray),
+        }
+    }
+}
+
+/// Every top-level shape of a scene with its transformations precomputed, the bounded ones
+/// in a BVH and the unbounded ones (planes, CSG trees with unbounded solids) in a list
+/// that every ray tests.
+///
+/// ```
+/// use lumen::cpu::{Ray, World};
+/// use lumen::scene::{SceneBuilder, Transform};
+/// use lumen::color::Color;
+/// use glam::DVec3;
+///
+/// let mut b = SceneBuilder::new(4, 4);
+/// let m = b.diffuse(Color::gray(0.5));
+/// b.sphere(Transform::translation(DVec3::new(5.0, 0.0, 0.0)), m);
+/// b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), m);
+/// let world = World::new(&b.build().unwrap());
+///
+/// let hit = world.intersect(&Ray::new(DVec3::ZERO, DVec3::X, 0.0, f64::INFINITY)).unwrap();
+/// assert_eq!((hit.t, hit.shape), (4.0, 0));
+/// assert_eq!(hit.normal, -DVec3::X);
+/// assert!(world.occluded(&Ray::new(DVec3::ZERO, -DVec3::Z, 0.0, 2.0)));
+/// assert!(!world.occluded(&Ray::new(DVec3::ZERO, -DVec3::Z, 0.0, 0.5)));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct World {
+    objects: Vec<Object>,
+    bvh: Bvh,
+    unbounded: Vec<u32>,
+}
+
+impl World {
+    pub fn new(scene: &Scene) -> World {
+        Self::from_shapes(&scene.shapes)
+    }
+
+    /// Prepares a list of top-level shapes (index i is reported as `Hit::shape = i`).
+    pub fn from_shapes(shapes: &[Shape]) -> World {
+        let mut items = Vec::new();
+        let mut unbounded = Vec::new();
+        let objects = shapes
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let b = s.bounds();
+                if b.is_empty() {
+                    // Nothing to hit (e.g. an INTERSECT of disjoint solids).
+                } else if b.is_finite() {
+                    items.push(BvhItem { id: i as u32, bounds: b });
+                } else {
+                    unbounded.push(i as u32);
+                }
+                match s {
+                    Shape::Primitive(p) => {
+                        Object::Primitive(Instance { kind: p.kind, to_world: p.transform, material: p.material })
+                    }
+                    Shape::Csg(c) => Object::Csg(CsgTree::from_csg(c)),
+                }
+            })
+            .collect();
+        World { objects, bvh: Bvh::build(&items), unbounded }
+    }
+
+    /// The BVH over the bounded top-level shapes; its ids index `Scene::shapes`.
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// Indices (into `Scene::shapes`) of the unbounded shapes, which are outside the BVH.
+    pub fn unbounded(&self) -> &[u32] {
+        &self.unbounded
+    }
+
+    /// The closest hit with t in the open range (tmin, tmax).
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut best: Option<(u32, Found)> = None;
+        let mut tmax = ray.tmax;
+        let mut test = |id: u32, tmax: &mut f64| {
+            let r = Ray { tmax: *tmax, ..*ray };
+            if let Some(f) = self.objects[id as usize].closest(&r) {
+                *tmax = f.t();
+                best = Some((id, f));
+                return Visit::Closer(f.t());
+            }
+            Visit::Continue
+        };
+        for &id in &self.unbounded {
+            test(id, &mut tmax);
+        }
+        let mut t = tmax;
+        self.bvh.traverse(ray.origin, ray.dir, ray.tmin, tmax, |id| test(id, &mut t));
+        let (id, found) = best?;
+        let (s, material) = match (&self.objects[id as usize], found) {
+            (Object::Primitive(p), Found::Primitive(c)) => (p.surface_hit(ray, c, false), p.material),
+            (Object::Csg(c), Found::Csg(h)) => c.surface_hit(ray, h),
+            _ => unreachable!("objects report their own kind of hit"),
+        };
+        Some(Hit {
+            t: found.t(),
+            point: s.point,
+            normal: s.normal,
+            front_face: s.front_face,
+            uv: s.uv,
+            material,
+            shape: id,
+        })
+    }
+
+    /// Whether anything lies on the ray with t in (tmin, tmax); stops at the first hit found.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if self.unbounded.iter().any(|&id| self.objects[id as usize].occludes(ray)) {
+            return true;
+        }
+        let mut hit = false;
+        self.bvh.traverse(ray.origin, ray.dir, ray.tmin, ray.tmax, |id| {
+            if self.objects[id as usize].occludes(ray) {
+                hit = true;
+                Visit::Stop
+            } else {
+                Visit::Continue
+            }
+        });
+        hit
+    }
+
+    /// Closest hit by testing every shape (no BVH): the reference the BVH is checked against.
+    pub fn intersect_brute_force(&self, ray: &Ray) -> Option<f64> {
+        let mut tmax = ray.tmax;
+        for o in &self.objects {
+            if let Some(f) = o.closest(&Ray { tmax, ..*ray }) {
+                tmax = f.t();
+            }
+        }
+        (tmax < ray.tmax).then_some(tmax)
+    }
+}

@@ -1,0 +1,370 @@
+//! A small, general compute runner: Pod buffers in, one WGSL entry point, Pod values out.
+//!
+//! Shaders are parsed and validated with naga first, so a mistake is reported with the
+//! line and a source excerpt instead of wgpu's terser message. Bind group layouts are built
+//! from the module's own declarations (every `var<uniform>` / `var<storage>` of every group)
+//! rather than wgpu's "auto" layout, which silently drops bindings the entry point does not
+//! use and so makes bind groups fail in confusing ways.
+
+use std::collections::BTreeMap;
+
+use bytemuck::Pod;
+use wgpu::util::DeviceExt;
+
+use super::device::{Gpu, GpuError};
+
+/// Smallest buffer the runner creates: wgpu rejects zero-sized bindings, and scenes have
+/// legitimately empty arrays (no lights, no planes). Kernels index by their own counts.
+pub const MIN_BUFFER_BYTES: u64 = 16;
+
+/// What kind of buffer a binding declares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BindingKind {
+    Uniform,
+    Storage { read_only: bool },
+}
+
+/// A validated WGSL module: naga's IR plus its validation info.
+#[derive(Debug)]
+pub struct ValidatedModule {
+    pub module: naga::Module,
+    pub info: naga::valid::ModuleInfo,
+}
+
+/// Parses and validates WGSL with naga; errors carry a rendered excerpt of the source.
+///
+/// ```
+/// let ok = lumen::gpu::validate_wgsl("t", "@compute @workgroup_size(1) fn main() {}");
+/// assert!(ok.is_ok());
+/// let err = lumen::gpu::validate_wgsl("t", "fn f() -> u32 { return 1.5; }").unwrap_err();
+/// assert!(err.to_string().contains("t"));
+/// ```
+pub fn validate_wgsl(label: &str, source: &str) -> Result<ValidatedModule, GpuError> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| GpuError::Shader { label: label.into(), message: e.emit_to_string_with_path(source, label) })?;
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
+    let info = validator
+        .validate(&module)
+        .map_err(|e| GpuError::Shader { label: label.into(), message: e.emit_to_string_with_path(source, label) })?;
+    Ok(ValidatedModule { module, info })
+}
+
+/// One compute entry point, ready to dispatch.
+#[derive(Debug)]
+pub struct ComputeKernel {
+    pub label: String,
+    pub pipeline: wgpu::ComputePipeline,
+    /// One layout per bind group index 0..=max declared (empty for unused indices).
+    pub layouts: Vec<wgpu::BindGroupLayout>,
+    /// Declared bindings per group, sorted by binding number.
+    pub bindings: Vec<Vec<(u32, BindingKind)>>,
+    /// `@workgroup_size` of the entry point.
+    pub workgroup_size: [u32; 3],
+}
+
+impl ComputeKernel {
+    /// Workgroup counts covering `threads` invocations in each dimension (rounded up).
+    pub fn workgroups_for(&self, threads: [u32; 3]) -> [u32; 3] {
+        std::array::from_fn(|i| threads[i].div_ceil(self.workgroup_size[i].max(1)))
+    }
+
+    /// A bind group for `group` whose bindings are `buffers`, in increasing binding order.
+    pub fn bind_group(&self, gpu: &Gpu, group: u32, buffers: &[&wgpu::Buffer]) -> Result<wgpu::BindGroup, GpuError> {
+        let declared = self
+            .bindings
+            .get(group as usize)
+            .ok_or_else(|| GpuError::Validation(format!("kernel {:?} declares no @group({group})", self.label)))?;
+        if declared.len() != buffers.len() {
+            return Err(GpuError::Validation(format!(
+                "kernel {:?} @group({group}) declares {} bindings {:?}, got {} buffers",
+                self.label,
+                declared.len(),
+                declared.iter().map(|b| b.0).collect::<Vec<_>>(),
+                buffers.len()
+            )));
+        }
+        let entries: Vec<wgpu::BindGroupEntry> = declared
+            .iter()
+            .zip(buffers)
+            .map(|(&(binding, _), buf)| wgpu::BindGroupEntry { binding, resource: buf.as_entire_binding() })
+            .collect();
+        gpu.scoped(|| {
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&self.label),
+                layout: &self.layouts[group as usize],
+                entries: &entries,
+            })
+        })
+    }
+
+    /// Records one dispatch of this kernel into `encoder`; bind group `i` is `groups[i]`.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, groups: &[&wgpu::BindGroup], workgroups: [u32; 3]) {
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(&self.label), timestamp_writes: None });
+        pass.set_pipeline(&self.pipeline);
+        for (i, g) in groups.iter().enumerate() {
+            pass.set_bind_group(i as u32, *g, &[]);
+        }
+        pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
+    }
+}
+
+impl Gpu {
+    /// Compiles `entry` of a WGSL compute shader. `label` names it in errors (use the file).
+    pub fn compute_kernel(&self, label: &str, source: &str, entry: &str) -> Result<ComputeKernel, GpuError> {
+        let validated = validate_wgsl(label, source)?;
+        let module = &validated.module;
+        let ep = module
+            .entry_points
+            .iter()
+            .find(|e| e.name == entry && e.stage == naga::ShaderStage::Compute)
+            .ok_or_else(|| GpuError::NoEntryPoint { label: label.into(), entry: entry.into() })?;
+        let workgroup_size = ep.workgroup_size;
+
+        let mut groups: BTreeMap<u32, Vec<(u32, BindingKind)>> = BTreeMap::new();
+        for (_, var) in module.global_variables.iter() {
+            let Some(rb) = &var.binding else { continue };
+            let kind = match var.space {
+                naga::AddressSpace::Uniform => BindingKind::Uniform,
+                naga::AddressSpace::Storage { access } => {
+                    BindingKind::Storage { read_only: !access.contains(naga::StorageAccess::STORE) }
+                }
+                other => {
+                    return Err(GpuError::UnsupportedBinding {
+                        label: label.into(),
+                        group: rb.group,
+                        binding: rb.binding,
+                        kind: format!("{other:?}"),
+                    })
+                }
+            };
+            groups.entry(rb.group).or_default().push((rb.binding, kind));
+        }
+        let n_groups = groups.keys().next_back().map_or(0, |g| g + 1) as usize;
+        if n_groups > self.limits.max_bind_groups as usize {
+            return Err(GpuError::Validation(format!(
+                "shader {label:?} uses {n_groups} bind groups; this adapter allows {}",
+                self.limits.max_bind_groups
+            )));
+        }
+        let mut bindings = vec![Vec::new(); n_groups];
+        for (g, mut list) in groups {
+            list.sort_by_key(|b| b.0);
+            bindings[g as usize] = list;
+        }
+
+        self.scoped(|| {
+            let layouts: Vec<wgpu::BindGroupLayout> = bindings
+                .iter()
+                .map(|list| {
+                    let entries: Vec<wgpu::BindGroupLayoutEntry> = list
+                        .iter()
+                        .map(|&(binding, kind)| wgpu::BindGroupLayoutEntry {
+                            binding,
+                            visibility: wgpu::ShaderStages::COMPUTE,
+                            ty: wgpu::BindingType::Buffer {
+                                ty: match kind {
+                                    BindingKind::Uniform => wgpu::BufferBindingType::Uniform,
+                                    BindingKind::Storage { read_only } => {
+                                        wgpu::BufferBindingType::Storage { read_only }
+                                    }
+                                },
+                                has_dynamic_offset: false,
+                                min_binding_size: None,
+                            },
+                            count: None,
+                        })
+                        .collect();
+                    self.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some(label),
+                        entries: &entries,
+                    })
+                })
+                .collect();
+            let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(Some).collect();
+            let pipeline_layout = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &layout_refs,
+                immediate_size: 0,
+            });
+            let shader = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout),
+                module: &shader,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                cache: None,
+            });
+            ComputeKernel { label: label.into(), pipeline, layouts, bindings, workgroup_size }
+        })
+    }
+
+    fn check_storage_size(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
+        let binding_limit = self.limits.max_storage_buffer_binding_size;
+        if bytes > binding_limit {
+            return Err(GpuError::TooLarge {
+                what: what.into(),
+                needed: bytes,
+                limit: binding_limit,
+                limit_name: "storage buffer binding",
+            });
+        }
+        if bytes > self.limits.max_buffer_size {
+            return Err(GpuError::TooLarge {
+                what: what.into(),
+                needed: bytes,
+                limit: self.limits.max_buffer_size,
+                limit_name: "buffer",
+            });
+        }
+        Ok(())
+    }
+
+    /// A storage buffer holding `data` (also copyable both ways, so it can be read back or
+    /// rewritten). Padded to a multiple of 4 bytes and at least [`MIN_BUFFER_BYTES`].
+    pub fn storage_buffer<T: Pod>(&self, label: &str, data: &[T]) -> Result<wgpu::Buffer, GpuError> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let padded = padded_len(bytes.len() as u64);
+        self.check_storage_size(label, padded)?;
+        let mut contents = bytes.to_vec();
+        contents.resize(padded as usize, 0);
+        self.scoped(|| {
+            self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &contents,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            })
+        })
+    }
+
+    /// A zero-filled storage buffer of `bytes` bytes (padded like [`Self::storage_buffer`]).
+    pub fn storage_buffer_zeroed(&self, label: &str, bytes: u64) -> Result<wgpu::Buffer, GpuError> {
+        let size = padded_len(bytes);
+        self.check_storage_size(label, size)?;
+        self.scoped(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })
+    }
+
+    /// A uniform buffer holding `value` (rewritable with `queue.write_buffer`). The WGSL
+    /// struct must match `T`'s layout, including uniform alignment rules (16-byte vectors).
+    pub fn uniform_buffer<T: Pod>(&self, label: &str, value: &T) -> Result<wgpu::Buffer, GpuError> {
+        let bytes = bytemuck::bytes_of(value);
+        let size = bytes.len().next_multiple_of(16).max(16);
+        let mut contents = bytes.to_vec();
+        contents.resize(size, 0);
+        if size as u64 > self.limits.max_uniform_buffer_binding_size {
+            return Err(GpuError::TooLarge {
+                what: label.into(),
+                needed: size as u64,
+                limit: self.limits.max_uniform_buffer_binding_size,
+                limit_name: "uniform buffer binding",
+            });
+        }
+        self.scoped(|| {
+            self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &contents,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+        })
+    }
+
+    /// Records and submits one dispatch, then waits for it; errors surface here.
+    pub fn dispatch(
+        &self,
+        kernel: &ComputeKernel,
+        groups: &[&wgpu::BindGroup],
+        workgroups: [u32; 3],
+    ) -> Result<(), GpuError> {
+        self.scoped(|| {
+            let mut encoder =
+                self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(&kernel.label) });
+            kernel.encode(&mut encoder, groups, workgroups);
+            self.queue.submit([encoder.finish()]);
+        })?;
+        self.wait_idle()
+    }
+
+    /// Copies the first `count` elements of `buffer` back to the host.
+    pub fn read_buffer<T: Pod>(&self, buffer: &wgpu::Buffer, count: usize) -> Result<Vec<T>, GpuError> {
+        let bytes = (count * std::mem::size_of::<T>()) as u64;
+        if bytes > buffer.size() {
+            return Err(GpuError::Readback(format!(
+                "asked for {bytes} bytes from a buffer of {} bytes",
+                buffer.size()
+            )));
+        }
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let copy = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        let staging = self.scoped(|| {
+            let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: copy,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut encoder =
+                self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+            encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, copy);
+            self.queue.submit([encoder.finish()]);
+            staging
+        })?;
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait_idle()?;
+        rx.recv()
+            .map_err(|_| GpuError::Readback("map callback never ran".into()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let out = {
+            let view = staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
+            bytemuck::pod_collect_to_vec(&view[..bytes as usize])
+        };
+        staging.unmap();
+        Ok(out)
+    }
+}
+
+fn padded_len(bytes: u64) -> u64 {
+    bytes.next_multiple_of(4).max(MIN_BUFFER_BYTES)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn syntax_errors_name_the_file_and_line() {
+        let src = "@compute @workgroup_size(1)\nfn main() {\n  let x: u32 = ;\n}\n";
+        let err = validate_wgsl("broken.wgsl", src).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("broken.wgsl:3"), "{msg}");
+    }
+
+    #[test]
+    fn type_errors_are_caught_by_validation() {
+        let src = "fn f() -> u32 { return 1.5; }";
+        assert!(matches!(validate_wgsl("t.wgsl", src), Err(GpuError::Shader { .. })));
+    }
+
+    #[test]
+    fn padding_keeps_bindings_legal() {
+        assert_eq!(padded_len(0), MIN_BUFFER_BYTES);
+        assert_eq!(padded_len(17), 20);
+        assert_eq!(padded_len(64), 64);
+    }
+}

@@ -1,0 +1,362 @@
+//! Adapter selection and the logical device every GPU path shares.
+//!
+//! wgpu panics on validation errors by default; a renderer must instead report them. [`Gpu`]
+//! installs an uncaptured-error handler and a device-lost callback that record what went
+//! wrong, and [`Gpu::check`] / [`Gpu::scoped`] turn those records into [`GpuError`]s.
+
+use std::fmt;
+use std::sync::{Arc, Mutex};
+
+use thiserror::Error;
+
+/// Environment variable that selects an adapter when no `--adapter` is given.
+pub const ADAPTER_ENV: &str = "LUMEN_ADAPTER";
+
+/// Everything that can go wrong on the GPU side, as values rather than panics.
+#[derive(Debug, Error)]
+pub enum GpuError {
+    #[error(
+        "no GPU adapter found (install a Vulkan, Metal or DX12 driver; on Linux Mesa's lavapipe works without a GPU)"
+    )]
+    NoAdapter,
+    #[error("no GPU adapter matches {wanted:?}; available adapters: {}", list_or_none(.available))]
+    AdapterNotFound { wanted: String, available: Vec<String> },
+    #[error("cannot open device on adapter {adapter:?}: {message}")]
+    RequestDevice { adapter: String, message: String },
+    #[error("shader {label:?} does not compile:\n{message}")]
+    Shader { label: String, message: String },
+    #[error("shader {label:?} has no compute entry point {entry:?}")]
+    NoEntryPoint { label: String, entry: String },
+    #[error("shader {label:?}: binding @group({group}) @binding({binding}) is a {kind}, which the compute runner does not bind (only uniform and storage buffers)")]
+    UnsupportedBinding { label: String, group: u32, binding: u32, kind: String },
+    #[error("GPU validation error: {0}")]
+    Validation(String),
+    #[error("GPU out of memory: {0}")]
+    OutOfMemory(String),
+    #[error("GPU internal error: {0}")]
+    Internal(String),
+    #[error("GPU device lost: {0}")]
+    DeviceLost(String),
+    #[error("reading a GPU buffer back failed: {0}")]
+    Readback(String),
+    #[error("{what} needs {needed} bytes but this adapter allows at most {limit} bytes per {limit_name}")]
+    TooLarge { what: String, needed: u64, limit: u64, limit_name: &'static str },
+}
+
+fn list_or_none(names: &[String]) -> String {
+    if names.is_empty() {
+        "none".to_string()
+    } else {
+        names.iter().map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ")
+    }
+}
+
+impl From<wgpu::Error> for GpuError {
+    fn from(e: wgpu::Error) -> Self {
+        match e {
+            wgpu::Error::OutOfMemory { source } => GpuError::OutOfMemory(source.to_string()),
+            wgpu::Error::Validation { description, .. } => GpuError::Validation(description),
+            wgpu::Error::Internal { description, .. } => GpuError::Internal(description),
+        }
+    }
+}
+
+/// Which adapter to use: `None` picks the best one (discrete > integrated > virtual > CPU).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct AdapterChoice {
+    /// Case-insensitive substring of the adapter name (`lumen devices` lists names).
+    pub name: Option<String>,
+}
+
+impl AdapterChoice {
+    /// The command line's `--adapter` if given, else the `LUMEN_ADAPTER` environment variable.
+    pub fn new(cli: Option<String>) -> Self {
+        let env = std::env::var(ADAPTER_ENV).ok().filter(|s| !s.trim().is_empty());
+        Self { name: cli.filter(|s| !s.trim().is_empty()).or(env) }
+    }
+
+    /// Only the environment (`LUMEN_ADAPTER`): what tests and library callers use.
+    pub fn from_env() -> Self {
+        Self::new(None)
+    }
+}
+
+/// One adapter as `lumen devices` reports it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AdapterDescription {
+    pub name: String,
+    pub backend: wgpu::Backend,
+    pub device_type: wgpu::DeviceType,
+    pub driver: String,
+    pub driver_info: String,
+}
+
+impl AdapterDescription {
+    fn from_info(info: &wgpu::AdapterInfo) -> Self {
+        Self {
+            name: info.name.clone(),
+            backend: info.backend,
+            device_type: info.device_type,
+            driver: info.driver.clone(),
+            driver_info: info.driver_info.clone(),
+        }
+    }
+
+    /// A human word for the device type.
+    pub fn device_type_name(&self) -> &'static str {
+        device_type_name(self.device_type)
+    }
+}
+
+impl fmt::Display for AdapterDescription {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} ({}, {}", self.name, self.backend, self.device_type_name())?;
+        match (self.driver.is_empty(), self.driver_info.is_empty()) {
+            (true, true) => write!(f, ")"),
+            (false, true) => write!(f, ", driver {})", self.driver),
+            (true, false) => write!(f, ", driver {})", self.driver_info),
+            (false, false) => write!(f, ", driver {} {})", self.driver, self.driver_info),
+        }
+    }
+}
+
+fn device_type_name(t: wgpu::DeviceType) -> &'static str {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => "discrete GPU",
+        wgpu::DeviceType::IntegratedGpu => "integrated GPU",
+        wgpu::DeviceType::VirtualGpu => "virtual GPU",
+        wgpu::DeviceType::Cpu => "CPU (software)",
+        wgpu::DeviceType::Other => "other",
+    }
+}
+
+/// Preference order when no name is given: real GPUs first, and among equals the primary
+/// backends (Vulkan/Metal/DX12) before OpenGL, whose compute support is the weakest.
+fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
+    let ty = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    };
+    let backend = u8::from(info.backend == wgpu::Backend::Gl);
+    (ty, backend)
+}
+
+/// Adapters to choose from, best first.
+///
+/// Vulkan/Metal/DX12 are enumerated first and OpenGL only when none of those has an
+/// adapter: probing EGL on a headless machine prints noise and GL compute is the weakest
+/// backend. `WGPU_BACKEND` (e.g. `gl`, `vulkan`) overrides the set, for debugging.
+fn enumerate() -> Vec<wgpu::Adapter> {
+    let probe = |backends: wgpu::Backends| {
+        let desc =
+            wgpu::InstanceDescriptor { backends, ..wgpu::InstanceDescriptor::new_without_display_handle_from_env() };
+        let instance = wgpu::Instance::new(desc);
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        // The no-op backend (if compiled in) is not a device anyone wants to render on.
+        adapters.retain(|a| a.get_info().backend != wgpu::Backend::Noop);
+        adapters
+    };
+    let mut adapters = match wgpu::Backends::from_env() {
+        Some(forced) => probe(forced),
+        None => {
+            let primary = probe(wgpu::Backends::PRIMARY);
+            if primary.is_empty() {
+                probe(wgpu::Backends::SECONDARY)
+            } else {
+                primary
+            }
+        }
+    };
+    adapters.sort_by_key(|a| rank(&a.get_info()));
+    adapters
+}
+
+/// All adapters this machine offers, best first.
+///
+/// ```
+/// for a in lumen::gpu::list_adapters() {
+///     println!("{a}");
+/// }
+/// ```
+pub fn list_adapters() -> Vec<AdapterDescription> {
+    enumerate().iter().map(|a| AdapterDescription::from_info(&a.get_info())).collect()
+}
+
+/// Index of the adapter `choice` selects in `adapters` (ordered best first, as
+/// [`list_adapters`] returns them): the first one whose name contains the wanted name,
+/// ignoring case, or the first one when no name is given.
+///
+/// ```
+/// use lumen::gpu::{select_adapter, AdapterChoice, AdapterDescription};
+/// let a = |name: &str| AdapterDescription {
+///     name: name.into(),
+///     backend: wgpu::Backend::Vulkan,
+///     device_type: wgpu::DeviceType::DiscreteGpu,
+///     driver: String::new(),
+///     driver_info: String::new(),
+/// };
+/// let list = [a("NVIDIA GeForce RTX 4090"), a("llvmpipe (LLVM 15)")];
+/// assert_eq!(select_adapter(&list, &AdapterChoice { name: None }).unwrap(), 0);
+/// assert_eq!(select_adapter(&list, &AdapterChoice { name: Some("LLVM".into()) }).unwrap(), 1);
+/// assert!(select_adapter(&list, &AdapterChoice { name: Some("radeon".into()) }).is_err());
+/// ```
+pub fn select_adapter(adapters: &[AdapterDescription], choice: &AdapterChoice) -> Result<usize, GpuError> {
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter);
+    }
+    let Some(wanted) = &choice.name else { return Ok(0) };
+    let needle = wanted.to_lowercase();
+    adapters.iter().position(|a| a.name.to_lowercase().contains(&needle)).ok_or_else(|| GpuError::AdapterNotFound {
+        wanted: wanted.clone(),
+        available: adapters.iter().map(|a| a.to_string()).collect(),
+    })
+}
+
+/// Errors recorded by wgpu's callbacks, outside any error scope.
+#[derive(Debug, Default)]
+struct ErrorSink {
+    errors: Vec<GpuError>,
+}
+
+/// An open device on one adapter, plus what a renderer needs to know about it.
+#[derive(Debug)]
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter_info: wgpu::AdapterInfo,
+    /// The limits the device was opened with: the adapter's own, not wgpu's defaults, so
+    /// that large scenes (big storage buffers) fit wherever the hardware allows.
+    pub limits: wgpu::Limits,
+    sink: Arc<Mutex<ErrorSink>>,
+}
+
+impl Gpu {
+    /// Opens the chosen adapter (see [`AdapterChoice`]) with its full limits.
+    pub fn new(choice: &AdapterChoice) -> Result<Gpu, GpuError> {
+        let adapters = enumerate();
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter);
+        }
+        let descriptions: Vec<AdapterDescription> =
+            adapters.iter().map(|a| AdapterDescription::from_info(&a.get_info())).collect();
+        let index = select_adapter(&descriptions, choice)?;
+        let adapter = adapters.into_iter().nth(index).ok_or(GpuError::NoAdapter)?;
+        Self::open(adapter)
+    }
+
+    fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
+        let adapter_info = adapter.get_info();
+        let limits = adapter.limits();
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("lumen"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&desc))
+            .map_err(|e| GpuError::RequestDevice { adapter: adapter_info.name.clone(), message: e.to_string() })?;
+        let sink = Arc::new(Mutex::new(ErrorSink::default()));
+        let s = Arc::clone(&sink);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut sink) = s.lock() {
+                sink.errors.push(e.into());
+            }
+        }));
+        let s = Arc::clone(&sink);
+        device.set_device_lost_callback(move |reason, message| {
+            // Dropping the device on purpose is not an error worth reporting.
+            if reason != wgpu::DeviceLostReason::Destroyed {
+                if let Ok(mut sink) = s.lock() {
+                    sink.errors.push(GpuError::DeviceLost(format!("{reason:?}: {message}")));
+                }
+            }
+        });
+        Ok(Gpu { device, queue, adapter_info, limits, sink })
+    }
+
+    /// This device's adapter, as `lumen devices` would print it.
+    pub fn description(&self) -> AdapterDescription {
+        AdapterDescription::from_info(&self.adapter_info)
+    }
+
+    /// Returns (and clears) the first error wgpu reported outside an error scope since the
+    /// last check: validation errors, out-of-memory, device loss.
+    pub fn check(&self) -> Result<(), GpuError> {
+        let mut sink = self.sink.lock().unwrap_or_else(|p| p.into_inner());
+        if sink.errors.is_empty() {
+            Ok(())
+        } else {
+            let first = sink.errors.remove(0);
+            sink.errors.clear();
+            Err(first)
+        }
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes and returns the first error
+    /// either caught (or one already pending from [`Self::check`]).
+    ///
+    /// Error scopes are per thread in wgpu, so `f` must do its GPU calls on this thread.
+    pub fn scoped<T>(&self, f: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        if let Some(e) = v.or(o) {
+            return Err(e.into());
+        }
+        self.check()?;
+        Ok(value)
+    }
+
+    /// Waits for all submitted work, turning a timeout or loss into an error.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+        self.check()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cli_choice_overrides_environment_and_blank_means_none() {
+        // Only the CLI path is tested here: tests must not mutate the process environment.
+        assert_eq!(AdapterChoice { name: Some("llvm".into()) }.name.as_deref(), Some("llvm"));
+        let c = AdapterChoice::new(Some("LLVMpipe".into()));
+        assert_eq!(c.name.as_deref(), Some("LLVMpipe"));
+        if std::env::var(ADAPTER_ENV).is_err() {
+            assert_eq!(AdapterChoice::new(Some("  ".into())).name, None);
+        }
+    }
+
+    #[test]
+    fn unknown_adapter_is_an_error_listing_the_available_ones() {
+        let err = Gpu::new(&AdapterChoice { name: Some("no-such-adapter-xyzzy".into()) }).unwrap_err();
+        match &err {
+            GpuError::AdapterNotFound { wanted, available } => {
+                assert_eq!(wanted, "no-such-adapter-xyzzy");
+                assert_eq!(available.len(), list_adapters().len());
+                assert!(err.to_string().contains("available adapters"));
+            }
+            GpuError::NoAdapter => {}
+            other => panic!("unexpected error {other}"),
+        }
+    }
+
+    #[test]
+    fn ranking_prefers_real_gpus_and_primary_backends() {
+        let mk = wgpu::AdapterInfo::new;
+        let discrete_gl = mk(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Gl);
+        let cpu_vk = mk(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+        let cpu_gl = mk(wgpu::DeviceType::Cpu, wgpu::Backend::Gl);
+        assert!(rank(&discrete_gl) < rank(&cpu_vk));
+        assert!(rank(&cpu_vk) < rank(&cpu_gl));
+    }
+}

@@ -1,0 +1,17 @@
+//! The GPU side of lumen: adapter selection, a general compute runner, progressive passes
+//! with f64 accumulation, and the assembly of WGSL modules from `shaders/`.
+//!
+//! Everything returns [`GpuError`] instead of panicking: wgpu's validation errors are
+//! captured by [`Gpu`] (see [`Gpu::check`] and [`Gpu::scoped`]).
+
+mod accumulate;
+mod compute;
+mod device;
+mod passes;
+mod test_support;
+
+pub use accumulate::{Accumulator, Tile};
+pub use compute::{validate_wgsl, BindingKind, ComputeKernel, ValidatedModule, MIN_BUFFER_BYTES};
+pub use device::{list_adapters, select_adapter, AdapterChoice, AdapterDescription, Gpu, GpuError, ADAPTER_ENV};
+pub use passes::{ctrlc_flag, run_progressive, Accumulated, PassOptions, PassUniform, StopReason, PASS_WGSL};
+pub use test_support::{gpu_for_tests, gpu_required, REQUIRE_GPU_ENV};

@@ -1,0 +1,395 @@
+//! Progressive rendering in short GPU passes, independent of what the kernel computes.
+//!
+//! A desktop GPU that runs one compute submission for more than a second or two gets reset
+//! by the OS watchdog, so an image is rendered as many short *passes*: one dispatch over one
+//! tile of pixels for a small range of camera samples `[j0, j1)`. Each pass writes per-pixel
+//! f32 sums of its samples; the host reads them back and adds them in f64
+//! ([`Accumulator`]), so precision does not plateau however many passes run.
+//!
+//! Kernel contract (also in `shaders/pass.wgsl` and docs/DESIGN.md, "GPU passes"):
+//! - `@group(0) @binding(0) var<uniform> pass_params: PassParams` ([`PassUniform`]);
+//! - `@group(0) @binding(1) var<storage, read_write> pass_out: array<vec4<f32>>`;
+//! - the caller's bind groups are groups 1, 2, … in order;
+//! - invocation `gid.xy` is the tile pixel (column, row); invocations outside the tile
+//!   return; the pixel's sum over samples `j0..j1` goes to `pass_out[row * tile_w + col].rgb`,
+//!   overwriting (the buffer is reused by every pass);
+//! - a sample's value depends only on (pixel, j) and the scene, never on the pass split.
+//!
+//! Uniform sample counts: passes are grouped in *rounds*, one sample range over every tile.
+//! Stopping conditions are checked between rounds (time limit) or abandon the unfinished
+//! round (Ctrl-C), so every pixel of the result has exactly `spp_done` samples.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
+
+use bytemuck::{Pod, Zeroable};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::accumulate::{Accumulator, Tile};
+use super::compute::{BindingKind, ComputeKernel};
+use super::device::{Gpu, GpuError};
+use crate::image::HdrImage;
+
+/// WGSL declarations of the kernel contract (prepend to, or assemble with, a pass kernel).
+pub const PASS_WGSL: &str = include_str!("../../shaders/pass.wgsl");
+
+/// The per-pass uniform: `PassParams` in `shaders/pass.wgsl` (32 bytes, same layout).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct PassUniform {
+    pub tile_origin: [u32; 2],
+    pub tile_size: [u32; 2],
+    pub image_size: [u32; 2],
+    pub sample_begin: u32,
+    pub sample_end: u32,
+}
+
+/// How passes are sized and when rendering stops.
+#[derive(Debug, Clone)]
+pub struct PassOptions {
+    /// Tiles are at most `tile_size × tile_size` pixels (65,536 invocations at 256: enough to
+    /// fill a large GPU, small enough that one sample per pixel is a short pass).
+    pub tile_size: u32,
+    /// Wanted duration of one pass; samples per pass adapt towards it (well under any
+    /// watchdog, long enough that submission overhead is small).
+    pub target_pass_seconds: f64,
+    /// Samples per pixel in the first round (small: the kernel's cost is unknown).
+    pub initial_spp_per_pass: u32,
+    /// Upper bound on samples per pass: a pass sums its samples in f32, and 64 sums of
+    /// similar values keep the relative rounding error below 1e-6.
+    pub max_spp_per_pass: u32,
+    /// Stop after the round during which this much time has passed.
+    pub time_limit: Option<Duration>,
+    /// When set (e.g. by Ctrl-C, see [`ctrlc_flag`]), stop after the current pass and drop
+    /// the unfinished round.
+    pub cancel: Option<Arc<AtomicBool>>,
+    /// Show a progress bar on stderr (hidden anyway when stderr is not a terminal).
+    pub progress: bool,
+}
+
+impl Default for PassOptions {
+    fn default() -> Self {
+        Self {
+            tile_size: 256,
+            target_pass_seconds: 0.025,
+            initial_spp_per_pass: 1,
+            max_spp_per_pass: 64,
+            time_limit: None,
+            cancel: None,
+            progress: false,
+        }
+    }
+}
+
+/// Why [`run_progressive`] returned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// All requested samples were taken.
+    Completed,
+    /// The time limit passed; fewer samples than requested.
+    TimeLimit,
+    /// The cancel flag was set; the unfinished round was dropped.
+    Interrupted,
+}
+
+/// The result of a progressive render.
+#[derive(Debug, Clone)]
+pub struct Accumulated {
+    /// Per-pixel mean over `spp_done` samples (black if `spp_done` is 0).
+    pub image: HdrImage,
+    /// Per-pixel f64 sums over the same samples, row-major.
+    pub sums: Vec<[f64; 3]>,
+    /// Samples per pixel, the same for every pixel.
+    pub spp_done: u32,
+    /// Passes (dispatches) run, including those of a dropped round.
+    pub passes: u32,
+    pub seconds: f64,
+    pub stop: StopReason,
+    /// Pixel-pass sums dropped as NaN/infinite (should be 0; a kernel bug otherwise).
+    pub nonfinite: u64,
+}
+
+/// Renders `total_spp` samples per pixel of a `width × height` image with `kernel`, whose
+/// groups 1.. are `scene_groups` (see the module docs for the kernel contract).
+///
+/// ```
+/// use lumen::gpu::{gpu_for_tests, run_progressive, PassOptions, PASS_WGSL};
+/// let Some(gpu) = gpu_for_tests("run_progressive_doc") else { return };
+/// // Every sample of every pixel is 0.5, so every mean is 0.5.
+/// let src = format!("{PASS_WGSL}
+/// @compute @workgroup_size(8, 8)
+/// fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
+///     if (!pass_in_tile(gid)) {{ return; }}
+///     let n = f32(pass_params.sample_end - pass_params.sample_begin);
+///     pass_write(gid, vec3<f32>(0.5 * n));
+/// }}");
+/// let kernel = gpu.compute_kernel("half.wgsl", &src, "main").unwrap();
+/// let out = run_progressive(&gpu, &kernel, &[], 5, 3, 10, &PassOptions::default()).unwrap();
+/// assert_eq!(out.spp_done, 10);
+/// assert!(out.image.pixels().iter().all(|p| p.r == 0.5));
+/// ```
+pub fn run_progressive(
+    gpu: &Gpu,
+    kernel: &ComputeKernel,
+    scene_groups: &[&wgpu::BindGroup],
+    width: u32,
+    height: u32,
+    total_spp: u32,
+    opts: &PassOptions,
+) -> Result<Accumulated, GpuError> {
+    check_contract(kernel, scene_groups.len())?;
+    if width == 0 || height == 0 || total_spp == 0 {
+        return Err(GpuError::Validation(format!(
+            "progressive render of {width}×{height} pixels at {total_spp} spp: all must be positive"
+        )));
+    }
+    let tile_size = opts.tile_size.clamp(1, 4096);
+    let max_spp = opts.max_spp_per_pass.max(1);
+    let start = Instant::now();
+
+    let tiles = Tile::cover(width, height, tile_size);
+    let max_tile_pixels = tiles.iter().map(Tile::pixel_count).max().unwrap_or(1) as u64;
+    let out_bytes = max_tile_pixels * 16;
+    let uniform = gpu.uniform_buffer("pass uniform", &PassUniform::zeroed())?;
+    let output = gpu.storage_buffer_zeroed("pass output", out_bytes)?;
+    let staging = gpu.scoped(|| {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pass readback"),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    })?;
+    let group0 = kernel.bind_group(gpu, 0, &[&uniform, &output])?;
+    let mut groups: Vec<&wgpu::BindGroup> = vec![&group0];
+    groups.extend_from_slice(scene_groups);
+    let pass = PassRunner { gpu, kernel, groups, uniform: &uniform, output: &output, staging: &staging };
+
+    let progress = progress_bar(opts.progress, u64::from(total_spp) * u64::from(width) * u64::from(height));
+    let mut acc = Accumulator::new(width, height);
+    let mut passes = 0u32;
+    let mut spp_per_pass = opts.initial_spp_per_pass.clamp(1, max_spp);
+    let mut done = 0u32;
+    let mut stop = StopReason::Completed;
+
+    'rounds: while done < total_spp {
+        let j0 = done;
+        let j1 = j0 + spp_per_pass.min(total_spp - done);
+        let mut worst_per_sample = 0.0f64;
+        let mut round_per_sample = 0.0f64;
+        for &tile in &tiles {
+            let params = PassUniform {
+                tile_origin: [tile.x, tile.y],
+                tile_size: [tile.width, tile.height],
+                image_size: [width, height],
+                sample_begin: j0,
+                sample_end: j1,
+            };
+            let t = Instant::now();
+            pass.run(&params, tile, &mut acc)?;
+            let per_sample = t.elapsed().as_secs_f64() / f64::from(j1 - j0);
+            worst_per_sample = worst_per_sample.max(per_sample);
+            round_per_sample += per_sample;
+            passes += 1;
+            progress.inc(u64::from(j1 - j0) * tile.pixel_count() as u64);
+            if opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst)) {
+                acc.discard_round();
+                stop = StopReason::Interrupted;
+                break 'rounds;
+            }
+        }
+        acc.commit_round(j1 - j0);
+        done = j1;
+        progress.set_message(format!("{done}/{total_spp} spp, {passes} passes, {} spp/pass", j1 - j0));
+        let remaining = match opts.time_limit {
+            Some(limit) => {
+                let elapsed = start.elapsed();
+                if elapsed >= limit {
+                    if done < total_spp {
+                        stop = StopReason::TimeLimit;
+                    }
+                    break;
+                }
+                Some((limit - elapsed).as_secs_f64())
+            }
+            None => None,
+        };
+        spp_per_pass = next_spp_per_pass(
+            j1 - j0,
+            worst_per_sample,
+            round_per_sample,
+            remaining,
+            opts.target_pass_seconds,
+            max_spp,
+        );
+    }
+    progress.finish_and_clear();
+
+    Ok(Accumulated {
+        image: acc.mean_image(),
+        sums: acc.sums().to_vec(),
+        spp_done: acc.spp() as u32,
+        passes,
+        seconds: start.elapsed().as_secs_f64(),
+        stop,
+        nonfinite: acc.nonfinite(),
+    })
+}
+
+/// Samples per pass for the next round, from the last round's timings: the slowest tile's
+/// pass should take about `target` seconds, growth is at most ×2 per round (timings of tiny
+/// passes are noisy), and with a time limit the whole round should fit in the time left
+/// (so the limit is overshot by at most a one-sample round).
+fn next_spp_per_pass(
+    current: u32,
+    worst_seconds_per_sample: f64,
+    round_seconds_per_sample: f64,
+    remaining_seconds: Option<f64>,
+    target: f64,
+    max_spp: u32,
+) -> u32 {
+    let by_target = if worst_seconds_per_sample > 0.0 { target / worst_seconds_per_sample } else { f64::INFINITY };
+    let mut spp = by_target.min(f64::from(current.saturating_mul(2)));
+    if let Some(rem) = remaining_seconds {
+        if round_seconds_per_sample > 0.0 {
+            spp = spp.min(rem / round_seconds_per_sample);
+        }
+    }
+    (spp.floor() as u32).clamp(1, max_spp.max(1))
+}
+
+fn check_contract(kernel: &ComputeKernel, scene_groups: usize) -> Result<(), GpuError> {
+    let want = [(0, BindingKind::Uniform), (1, BindingKind::Storage { read_only: false })];
+    let got = kernel.bindings.first().map(Vec::as_slice).unwrap_or(&[]);
+    if got != want {
+        return Err(GpuError::Validation(format!(
+            "kernel {:?} breaks the pass contract: @group(0) must be exactly binding 0 = var<uniform> PassParams \
+             and binding 1 = var<storage, read_write> array<vec4<f32>> (see shaders/pass.wgsl); it declares {got:?}",
+            kernel.label
+        )));
+    }
+    if kernel.bindings.len() != 1 + scene_groups {
+        return Err(GpuError::Validation(format!(
+            "kernel {:?} declares bind groups 0..{} but {} scene bind groups were given (groups 1..)",
+            kernel.label,
+            kernel.bindings.len(),
+            scene_groups
+        )));
+    }
+    Ok(())
+}
+
+/// Resources of one progressive render, reused by every pass.
+struct PassRunner<'a> {
+    gpu: &'a Gpu,
+    kernel: &'a ComputeKernel,
+    groups: Vec<&'a wgpu::BindGroup>,
+    uniform: &'a wgpu::Buffer,
+    output: &'a wgpu::Buffer,
+    staging: &'a wgpu::Buffer,
+}
+
+impl PassRunner<'_> {
+    /// One submission: dispatch over `tile`, copy its sums out, wait, add them to `acc`.
+    fn run(&self, params: &PassUniform, tile: Tile, acc: &mut Accumulator) -> Result<(), GpuError> {
+        let gpu = self.gpu;
+        let bytes = tile.pixel_count() as u64 * 16;
+        let workgroups = self.kernel.workgroups_for([tile.width, tile.height, 1]);
+        gpu.scoped(|| {
+            gpu.queue.write_buffer(self.uniform, 0, bytemuck::bytes_of(params));
+            let mut encoder =
+                gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("pass") });
+            self.kernel.encode(&mut encoder, &self.groups, workgroups);
+            encoder.copy_buffer_to_buffer(self.output, 0, self.staging, 0, bytes);
+            gpu.queue.submit([encoder.finish()]);
+        })?;
+        let (tx, rx) = std::sync::mpsc::channel();
+        self.staging.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
+            let _ = tx.send(r);
+        });
+        gpu.wait_idle()?;
+        rx.recv()
+            .map_err(|_| GpuError::Readback("map callback never ran".into()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        {
+            let view = self.staging.get_mapped_range(0..bytes).map_err(|e| GpuError::Readback(e.to_string()))?;
+            let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&view);
+            acc.add_tile(tile, &sums);
+        }
+        self.staging.unmap();
+        Ok(())
+    }
+}
+
+fn progress_bar(enabled: bool, len: u64) -> ProgressBar {
+    if !enabled {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {percent:>3}% {msg}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}
+
+/// A flag set by Ctrl-C, for [`PassOptions::cancel`]. The first Ctrl-C asks the render to
+/// stop after the current pass (keeping what is done); a second one exits at once. The
+/// handler is installed once per process; later calls return the same flag.
+pub fn ctrlc_flag() -> Arc<AtomicBool> {
+    static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+    FLAG.get_or_init(|| {
+        let flag = Arc::new(AtomicBool::new(false));
+        let f = Arc::clone(&flag);
+        let installed = ctrlc::set_handler(move || {
+            if f.swap(true, Ordering::SeqCst) {
+                eprintln!("\ninterrupted twice: exiting");
+                std::process::exit(130);
+            }
+            eprintln!("\ninterrupted: finishing the current pass (Ctrl-C again to quit now)");
+        });
+        if let Err(e) = installed {
+            eprintln!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");
+        }
+        flag
+    })
+    .clone()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniform_layout_matches_wgsl() {
+        assert_eq!(std::mem::size_of::<PassUniform>(), 32);
+        let v = validate_pass_wgsl();
+        let ty = v.module.types.iter().find(|(_, t)| t.name.as_deref() == Some("PassParams")).unwrap().1;
+        let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("PassParams is not a struct") };
+        assert_eq!(*span, 32);
+        let offsets: Vec<(String, u32)> = members.iter().map(|m| (m.name.clone().unwrap(), m.offset)).collect();
+        let names = ["tile_origin", "tile_size", "image_size", "sample_begin", "sample_end"];
+        let rust = [0, 8, 16, 24, 28];
+        for ((name, off), (want_name, want_off)) in offsets.iter().zip(names.iter().zip(rust)) {
+            assert_eq!((name.as_str(), *off), (*want_name, want_off));
+        }
+    }
+
+    fn validate_pass_wgsl() -> super::super::compute::ValidatedModule {
+        super::super::compute::validate_wgsl("pass.wgsl", PASS_WGSL).unwrap()
+    }
+
+    #[test]
+    fn spp_grows_at_most_twice_and_meets_the_target() {
+        // A pass of 1 spp took 1 ms: 25 would meet 25 ms but growth is capped at ×2.
+        assert_eq!(next_spp_per_pass(1, 0.001, 0.004, None, 0.025, 64), 2);
+        assert_eq!(next_spp_per_pass(16, 0.001, 0.004, None, 0.025, 64), 25);
+        // Too slow: shrink, but never below 1.
+        assert_eq!(next_spp_per_pass(8, 0.010, 0.04, None, 0.025, 64), 2);
+        assert_eq!(next_spp_per_pass(8, 1.0, 4.0, None, 0.025, 64), 1);
+        // The f32 bound.
+        assert_eq!(next_spp_per_pass(64, 1e-9, 1e-8, None, 0.025, 64), 64);
+        // Time left for 3 samples per pixel over the whole image.
+        assert_eq!(next_spp_per_pass(32, 1e-4, 0.1, Some(0.35), 0.025, 64), 3);
+    }
+}
