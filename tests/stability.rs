@@ -1,0 +1,122 @@
+//! Stability suite (issue 7): scale and translation invariance, grazing rays, tiny and
+//! enclosing shapes, roulette, glass, deep and coincident CSG, degenerate input. Each case
+//! measures the CPU f64 image and the GPU f32 image against an answer that neither
+//! renderer produced (closed form, analytic classification, or the unit-scene image); the
+//! cases live in `tests/stability/cases.rs` so `examples/stability_table.rs` can print the
+//! table of docs/STABILITY.md from the same code. GPU halves skip loudly without an
+//! adapter (and fail with LUMEN_REQUIRE_GPU=1); the CPU halves always run.
+
+#[path = "stability/cases.rs"]
+mod cases;
+
+use lumen::gpu::{gpu_for_tests, Gpu};
+
+fn run(name: &str, case: fn(Option<&Gpu>) -> cases::Outcome) {
+    let gpu = gpu_for_tests(name);
+    case(gpu.as_ref()).check();
+}
+
+#[test]
+fn scene_scaled_by_1e_minus_4_renders_like_the_unit_scene() {
+    run("scaled_down", cases::scaled_down);
+}
+
+#[test]
+fn scene_scaled_by_1e4_renders_like_the_unit_scene() {
+    run("scaled_up", cases::scaled_up);
+}
+
+#[test]
+fn scene_translated_by_1e5_renders_like_the_unit_scene() {
+    run("translated", cases::translated);
+}
+
+#[test]
+fn grazing_point_light_on_a_plane_matches_the_closed_form() {
+    run("grazing_point_light", cases::grazing_point_light);
+}
+
+#[test]
+fn plane_seen_at_grazing_angles_has_no_acne() {
+    run("grazing_plane_sky", cases::grazing_plane_sky);
+}
+
+#[test]
+fn sphere_silhouette_has_no_acne() {
+    run("sphere_silhouette", cases::sphere_silhouette);
+}
+
+#[test]
+fn cube_corner_and_edges_have_no_acne() {
+    run("cube_edges", cases::cube_edges);
+}
+
+#[test]
+fn closed_box_does_not_leak_light() {
+    run("light_leak", cases::light_leak);
+}
+
+#[test]
+fn tiny_far_sphere_covers_its_analytic_area_orthogonal() {
+    run("tiny_sphere_orthogonal", cases::tiny_sphere_orthogonal);
+}
+
+#[test]
+fn tiny_far_sphere_covers_its_analytic_area_narrow_perspective() {
+    run("tiny_sphere_narrow", cases::tiny_sphere_narrow);
+}
+
+#[test]
+fn camera_inside_a_sphere_sees_the_furnace() {
+    run("inside_sphere", cases::inside_sphere);
+}
+
+#[test]
+fn camera_inside_a_cube_sees_the_furnace() {
+    run("inside_cube", cases::inside_cube);
+}
+
+#[test]
+fn camera_inside_a_cube_with_nee_is_unbiased() {
+    run("inside_cube_nee", cases::inside_cube_nee);
+}
+
+#[test]
+fn closed_box_furnace_with_albedo_0_99_and_roulette_is_unbiased() {
+    run("furnace_roulette", cases::furnace_roulette);
+}
+
+#[test]
+fn glass_rim_internal_reflections_depth_3() {
+    run("glass_rim_depth_3", cases::glass_rim_depth_3);
+}
+
+#[test]
+fn glass_rim_conserves_energy_depth_64() {
+    run("glass_rim_depth_64", cases::glass_rim_depth_64);
+}
+
+#[test]
+fn csg_nested_8_deep_matches_set_membership() {
+    run("csg_nested_8", cases::csg_nested_8);
+}
+
+#[test]
+fn csg_diff_with_coincident_faces_has_no_speckles() {
+    run("csg_coincident_sides", cases::csg_coincident_sides);
+}
+
+#[test]
+fn csg_diff_touching_along_a_face_stays_closed() {
+    run("csg_touching_face", cases::csg_touching_face);
+}
+
+#[test]
+fn degenerate_scripts_are_load_errors() {
+    cases::degenerate_scripts().check();
+}
+
+#[test]
+fn extreme_valid_scales_render_without_nan() {
+    run("extreme_transforms", cases::extreme_transforms);
+}
