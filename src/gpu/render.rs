@@ -255,3 +255,153 @@ impl SceneBuffers {
             .collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeSet;
+
+    use super::*;
+    use crate::gpu::features::{EnvKind, RendererKind};
+    use crate::sampling::Pcg32;
+
+    /// Names of the functions reachable from the entry point (by naga's call statements).
+    fn reachable_functions(module: &naga::Module) -> BTreeSet<String> {
+        fn walk(block: &naga::Block, module: &naga::Module, seen: &mut BTreeSet<String>) {
+            for st in block.iter() {
+                match st {
+                    naga::Statement::Call { function, .. } => {
+                        let f = &module.functions[*function];
+                        if seen.insert(f.name.clone().unwrap_or_default()) {
+                            walk(&f.body, module, seen);
+                        }
+                    }
+                    naga::Statement::Block(b) => walk(b, module, seen),
+                    naga::Statement::If { accept, reject, .. } => {
+                        walk(accept, module, seen);
+                        walk(reject, module, seen);
+                    }
+                    naga::Statement::Switch { cases, .. } => cases.iter().for_each(|c| walk(&c.body, module, seen)),
+                    naga::Statement::Loop { body, continuing, .. } => {
+                        walk(body, module, seen);
+                        walk(continuing, module, seen);
+                    }
+                    _ => {}
+                }
+            }
+        }
+        let mut seen = BTreeSet::new();
+        for ep in &module.entry_points {
+            walk(&ep.function.body, module, &mut seen);
+        }
+        seen
+    }
+
+    fn function_names(module: &naga::Module) -> BTreeSet<String> {
+        module.functions.iter().map(|(_, f)| f.name.clone().unwrap_or_default()).collect()
+    }
+
+    /// Asserts the assembled kernel holds nothing the features do not need: every function
+    /// is reachable from the entry point and every global (buffer or private array) is used.
+    fn assert_minimal(features: &FeatureSet) -> naga::Module {
+        let assembled = assemble(features).unwrap_or_else(|e| panic!("{features:?}: {e}"));
+        let v = assembled.validate().unwrap();
+        let all = function_names(&v.module);
+        let reachable = reachable_functions(&v.module);
+        let unused: Vec<_> = all.difference(&reachable).collect();
+        assert!(unused.is_empty(), "{features:?}: unused functions {unused:?}");
+        let ep = v.info.get_entry_point(0);
+        for (h, g) in v.module.global_variables.iter() {
+            assert!(!ep[h].is_empty(), "{features:?}: unused global {:?}", g.name);
+        }
+        v.module
+    }
+
+    /// A random feature set respecting the invariants `FeatureSet::of` guarantees.
+    fn random_features(rng: &mut Pcg32, renderer: RendererKind, environment: EnvKind) -> FeatureSet {
+        let mut b = || rng.next_u32() % 2 == 0;
+        let mut f = FeatureSet {
+            sphere: b(),
+            plane: b(),
+            cube: b(),
+            cylinder: b(),
+            csg: b(),
+            pigment_uniform: b(),
+            pigment_checkered: b(),
+            pigment_image: b(),
+            diffuse: b(),
+            specular: b(),
+            dielectric: b(),
+            point_lights: b(),
+            area_lights: b(),
+            nee: b(),
+            renderer,
+            environment,
+            ..FeatureSet::default()
+        };
+        f.bvh = f.csg || f.sphere || f.cube || f.cylinder;
+        if f.csg {
+            f.csg_max_intervals = 1 + rng.next_u32() % 6;
+            f.csg_max_depth = 1 + rng.next_u32() % 3;
+        }
+        if renderer == RendererKind::PointLight && !f.point_lights || renderer == RendererKind::OnOff {
+            f.pigment_uniform = false;
+            f.pigment_checkered = false;
+            f.pigment_image = false;
+        }
+        if renderer == RendererKind::OnOff {
+            f.environment = EnvKind::Background;
+        }
+        if !matches!(renderer, RendererKind::PathTracer | RendererKind::PointLight) {
+            (f.diffuse, f.specular, f.dielectric, f.point_lights) = (false, false, false, false);
+        }
+        if renderer == RendererKind::PointLight {
+            (f.specular, f.dielectric) = (false, false);
+        }
+        f.nee = f.nee && f.diffuse && renderer == RendererKind::PathTracer;
+        f.area_lights = f.area_lights && f.nee;
+        f
+    }
+
+    #[test]
+    fn a_covering_set_of_feature_sets_assembles_to_minimal_valid_wgsl() {
+        let mut rng = Pcg32::new(3, 5);
+        let mut count = 0;
+        for renderer in [RendererKind::OnOff, RendererKind::Flat, RendererKind::PointLight, RendererKind::PathTracer] {
+            for environment in [EnvKind::Background, EnvKind::Uniform, EnvKind::Gradient, EnvKind::Image] {
+                // Everything on, nothing on, and random subsets.
+                let mut all = random_features(&mut rng, renderer, environment);
+                (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) = (true, true, true, true, true, true);
+                all.csg_max_intervals = 4;
+                all.csg_max_depth = 3;
+                let none = random_features(&mut Pcg32::new(0, 0), renderer, environment);
+                let none = FeatureSet { renderer, environment: none.environment, ..FeatureSet::default() };
+                assert_minimal(&none);
+                assert_minimal(&all);
+                for _ in 0..6 {
+                    assert_minimal(&random_features(&mut rng, renderer, environment));
+                    count += 1;
+                }
+            }
+        }
+        assert_eq!(count, 96);
+    }
+
+    #[test]
+    fn a_spheres_only_kernel_has_no_csg_cylinder_texture_or_dielectric_code() {
+        let mut b = crate::scene::SceneBuilder::new(4, 4);
+        let m = b.diffuse(crate::color::Color::gray(0.5));
+        b.sphere(crate::scene::Transform::IDENTITY, m);
+        let scene = b.build().unwrap();
+        let features = FeatureSet::of(&scene);
+        let module = assert_minimal(&features);
+        let names = function_names(&module);
+        assert!(names.contains("sphere_span") && names.contains("radiance_path"), "{names:?}");
+        for bad in ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"] {
+            assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in {names:?}");
+        }
+        let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
+        for bad in ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool"] {
+            assert!(!globals.iter().any(|g| g == bad), "{bad} bound: {globals:?}");
+        }
+    }
+}
