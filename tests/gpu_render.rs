@@ -452,3 +452,79 @@ fn point_lit_plane_matches_the_closed_form_on_the_gpu() {
         }
     }
 }
+
+/// A small HDR image with distinct texels (and one bright spot for importance sampling).
+fn test_image(w: usize, h: usize) -> std::sync::Arc<HdrImage> {
+    let mut img = HdrImage::new(w, h);
+    for row in 0..h {
+        for col in 0..w {
+            img.set(col, row, lumen::color::Rgb32::new(0.1 + col as f32 * 0.1, 0.2 + row as f32 * 0.15, 0.5));
+        }
+    }
+    img.set(w / 3, h / 4, lumen::color::Rgb32::new(40.0, 30.0, 20.0));
+    std::sync::Arc::new(img)
+}
+
+/// Image pigments (nearest and bilinear) on a sphere and a cube, a checkered plane, and an
+/// importance-sampled image environment, with the path tracer and the Flat renderer.
+#[test]
+fn textures_and_image_environment_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("textures_and_image_environment_match_the_cpu") else { return };
+    for renderer in [Renderer::Flat { background: Color::BLACK }, pt(2, 3, 2, true), pt(2, 3, 2, false)] {
+        println!("{}", renderer.name());
+        let mut b = SceneBuilder::new(20, 15);
+        let img = test_image(8, 6);
+        let nearest = b.material(Material::new(
+            Brdf::Diffuse { pigment: Pigment::Image { image: img.clone(), filter: ImageFilter::Nearest } },
+            Pigment::Uniform(Color::BLACK),
+        ));
+        let bilinear = b.material(Material::new(
+            Brdf::Diffuse { pigment: Pigment::Image { image: img.clone(), filter: ImageFilter::Bilinear } },
+            Pigment::Uniform(Color::BLACK),
+        ));
+        let check = b.material(Material::new(
+            Brdf::Diffuse { pigment: Pigment::Checkered { n: 3, on: Color::gray(0.8), off: Color::gray(0.2) } },
+            Pigment::Uniform(Color::BLACK),
+        ));
+        b.sphere(Transform::translation(DVec3::new(4.0, 1.0, 0.0)) * Transform::rotation_z(40.0), nearest)
+            .cube(Transform::translation(DVec3::new(3.5, -1.3, 0.0)) * Transform::rotation_z(30.0) * Transform::rotation_x(20.0), bilinear)
+            .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), check)
+            .camera(Camera { aspect_ratio: 20.0 / 15.0, ..Camera::default() })
+            .environment(Environment::Image { image: test_image(16, 8), intensity: 0.7, rotation_deg: 30.0 })
+            .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() })
+            .renderer(renderer);
+        let scene = b.build().unwrap();
+        assert_matches_cpu(&gpu, &scene, None, 0.99);
+    }
+}
+
+/// The same scene moved 10⁵ units away from the origin: packing relative to the camera
+/// keeps the f32 GPU image as close to the f64 CPU image as near the origin.
+#[test]
+fn far_from_the_origin_the_gpu_still_matches_the_cpu() {
+    let Some(gpu) = gpu_for_tests("far_from_the_origin_the_gpu_still_matches_the_cpu") else { return };
+    let far = DVec3::new(1e5, -2e5, 5e4);
+    let mut scene = shapes_scene(Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.01) });
+    let shift = Transform::translation(far);
+    for s in &mut scene.shapes {
+        if let Shape::Primitive(p) = s {
+            p.transform = shift * p.transform;
+        }
+    }
+    for l in &mut scene.point_lights {
+        l.position += far;
+    }
+    scene.camera.transform = shift * scene.camera.transform;
+    assert_matches_cpu(&gpu, &scene, Some(4), 0.99);
+    let mut pt_scene = path_traced_scene(true, None);
+    for s in &mut pt_scene.shapes {
+        if let Shape::Primitive(p) = s {
+            p.transform = shift * p.transform;
+        }
+    }
+    for l in &mut pt_scene.point_lights {
+        l.position += far;
+    }
+    pt_scene.camera.transform = shift * pt_scene.camera.transform;
+    assert_matches_cpu(&gpu, &pt_scene, None, 0.99);
+}
