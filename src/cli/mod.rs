@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 pub mod devices;
+pub mod gpu_args;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.

@@ -105,7 +105,7 @@ fn directive(line: &str) -> Option<(&str, &str)> {
 ///
 /// ```
 /// use lumen::gpu::{preprocess, FeatureSet};
-/// let known = ["csg"].into_iter().collect();
+/// let known = ["csg".to_string()].into_iter().collect();
 /// let src = "a\n// #if csg\nb\n// #else\nc\n// #endif\n";
 /// let with: Vec<String> = preprocess("x.wgsl", src, &FeatureSet::new().with("csg"), &known).unwrap()
 ///     .lines.into_iter().map(|l| l.text).collect();
