@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod check;
 pub mod devices;
 pub mod gpu_args;
 
@@ -19,6 +20,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Load a SceneLang script and summarise it (or print its first error).
+    Check(check::CheckArgs),
     /// List the GPU adapters lumen can render on.
     Devices(devices::DevicesArgs),
 }
@@ -26,6 +29,7 @@ pub enum Command {
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Check(args) => check::run(args),
         Command::Devices(args) => devices::run(args),
     }
 }
