@@ -528,3 +528,44 @@ fn far_from_the_origin_the_gpu_still_matches_the_cpu() {
     pt_scene.camera.transform = shift * pt_scene.camera.transform;
     assert_matches_cpu(&gpu, &pt_scene, None, 0.99);
 }
+
+/// Every example scene in scenes/, shrunk to a thumbnail with few samples, on both renderers.
+#[test]
+fn example_scenes_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("example_scenes_match_the_cpu") else { return };
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "sl"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    for path in files {
+        let mut scene = lumen::scenelang::load_file(&path, &lumen::scenelang::LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let aspect = f64::from(scene.width) / f64::from(scene.height);
+        scene.width = 24;
+        scene.height = ((24.0 / aspect).round() as u32).clamp(1, 32);
+        if let Renderer::PathTracer(p) = &mut scene.renderer {
+            p.n = 1;
+        }
+        println!("{}: {}×{}, {}", path.display(), scene.width, scene.height, scene.renderer.name());
+        // glass.sl sends 10-bounce paths through curved glass toward a small, very bright
+        // lamp: the f32 and f64 directions, equal to ~1e-7, drift apart through each lens
+        // until a few paths hit the lamp on one side only (about 1.3 % of its pixels).
+        // spheres_10k.sl's N = 50 checkered floor reaches the horizon: hit points 10³–10⁴
+        // units away carry f32 errors of 10⁻⁴–10⁻³, a sizeable part of a 0.02-wide square,
+        // so near the horizon the checker colour differs between f32 and f64 (Flat: 1.2 % of
+        // pixels; the path tracer's later bounces add ~5 %).
+        let min = if path.ends_with("glass.sl") {
+            0.98
+        } else if path.ends_with("spheres_10k.sl") {
+            0.92
+        } else {
+            0.99
+        };
+        assert_matches_cpu(&gpu, &scene, Some(2), min);
+    }
+}
+
