@@ -133,22 +133,35 @@ fn shapes_scene(renderer: Renderer) -> Scene {
         Pigment::Uniform(Color::new(1.0, 0.8, 0.3)),
     ));
     let mirror = b.material(Material::new(
-        Brdf::Specular { pigment: Pigment::Uniform(Color::gray(0.9)), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD },
+        Brdf::Specular {
+            pigment: Pigment::Uniform(Color::gray(0.9)),
+            threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD,
+        },
         Pigment::Uniform(Color::BLACK),
     ));
     b.sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.0)), red)
         .sphere(Transform::translation(DVec3::new(6.0, -2.0, 0.5)) * Transform::scaling(DVec3::splat(0.7)), glow)
         .cube(Transform::translation(DVec3::new(5.0, 2.0, -0.4)) * Transform::rotation_z(30.0), mirror)
         .cylinder(
-            Transform::translation(DVec3::new(3.5, -1.2, -0.5)) * Transform::rotation_x(70.0) * Transform::scaling(DVec3::new(0.6, 0.6, 1.2)),
+            Transform::translation(DVec3::new(3.5, -1.2, -0.5))
+                * Transform::rotation_x(70.0)
+                * Transform::scaling(DVec3::new(0.6, 0.6, 1.2)),
             red,
         )
         .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), check)
         .point_light(PointLight { position: DVec3::new(1.0, 3.0, 4.0), color: Color::gray(1.5), linear_radius: 0.0 })
-        .point_light(PointLight { position: DVec3::new(2.0, -3.0, 2.0), color: Color::new(0.5, 0.6, 1.0), linear_radius: 2.0 })
+        .point_light(PointLight {
+            position: DVec3::new(2.0, -3.0, 2.0),
+            color: Color::new(0.5, 0.6, 1.0),
+            linear_radius: 2.0,
+        })
         .camera(Camera { aspect_ratio: 24.0 / 18.0, transform: Transform::rotation_y(10.0), ..Camera::default() })
         .renderer(renderer)
-        .environment(Environment::Gradient { zenith: Color::new(0.2, 0.3, 0.8), horizon: Color::gray(0.6), nadir: Color::gray(0.1) });
+        .environment(Environment::Gradient {
+            zenith: Color::new(0.2, 0.3, 0.8),
+            horizon: Color::gray(0.6),
+            nadir: Color::gray(0.1),
+        });
     b.build().unwrap()
 }
 
@@ -174,14 +187,23 @@ fn path_traced_scene(nee: bool, env: Option<Environment>) -> Scene {
     let mut b = SceneBuilder::new(20, 15);
     let white = b.diffuse(Color::gray(0.7));
     let green = b.diffuse(Color::new(0.2, 0.6, 0.2));
-    let lamp = b.material(Material::new(Brdf::Diffuse { pigment: Pigment::Uniform(Color::BLACK) }, Pigment::Uniform(Color::gray(4.0))));
+    let lamp = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::BLACK) },
+        Pigment::Uniform(Color::gray(4.0)),
+    ));
     let warm = b.material(Material::new(
         Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
         Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
     ));
-    let glass = b.material(Material::new(Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 }, Pigment::Uniform(Color::BLACK)));
+    let glass = b.material(Material::new(
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 },
+        Pigment::Uniform(Color::BLACK),
+    ));
     let mirror = b.material(Material::new(
-        Brdf::Specular { pigment: Pigment::Uniform(Color::gray(0.8)), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD },
+        Brdf::Specular {
+            pigment: Pigment::Uniform(Color::gray(0.8)),
+            threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD,
+        },
         Pigment::Uniform(Color::BLACK),
     ));
     b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white)
@@ -217,9 +239,14 @@ fn path_tracer_matches_the_cpu() {
         // Same scene twice: bitwise the same image.
         let b = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap().image;
         assert!(a.pixels().iter().zip(b.pixels()).all(|(x, y)| x.r.to_bits() == y.r.to_bits()
-            && x.g.to_bits() == y.g.to_bits() && x.b.to_bits() == y.b.to_bits()));
+            && x.g.to_bits() == y.g.to_bits()
+            && x.b.to_bits() == y.b.to_bits()));
     }
-    let gradient = Environment::Gradient { zenith: Color::new(0.3, 0.4, 0.9), horizon: Color::gray(0.8), nadir: Color::gray(0.05) };
+    let gradient = Environment::Gradient {
+        zenith: Color::new(0.3, 0.4, 0.9),
+        horizon: Color::gray(0.8),
+        nadir: Color::gray(0.05),
+    };
     assert_matches_cpu(&gpu, &path_traced_scene(true, Some(gradient)), None, 0.99);
 }
 
@@ -230,14 +257,21 @@ fn csg_scene(renderer: Renderer) -> Scene {
     let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
     let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
     let green = b.diffuse(Color::new(0.2, 0.7, 0.2));
-    let glass = b.material(Material::new(Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.4 }, Pigment::Uniform(Color::BLACK)));
+    let glass = b.material(Material::new(
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.4 },
+        Pigment::Uniform(Color::BLACK),
+    ));
     let p = |k: ShapeKind, t: Transform, m: MaterialId| Shape::primitive(k, t, m);
     // Cube minus a sphere minus a cylinder.
     let carved = Shape::csg(
         CsgOp::Diff,
         vec![
             p(ShapeKind::Cube, Transform::scaling(DVec3::splat(1.4)), red),
-            p(ShapeKind::Sphere, Transform::translation(DVec3::new(-0.6, 0.2, 0.3)) * Transform::scaling(DVec3::splat(0.6)), blue),
+            p(
+                ShapeKind::Sphere,
+                Transform::translation(DVec3::new(-0.6, 0.2, 0.3)) * Transform::scaling(DVec3::splat(0.6)),
+                blue,
+            ),
             p(ShapeKind::Cylinder, Transform::rotation_y(90.0) * Transform::scaling(DVec3::new(0.5, 0.5, 3.0)), green),
         ],
         Transform::translation(DVec3::new(5.0, 1.2, 0.0)) * Transform::rotation_z(25.0),
@@ -258,7 +292,11 @@ fn csg_scene(renderer: Renderer) -> Scene {
         CsgOp::Unite,
         vec![
             p(ShapeKind::Sphere, Transform::scaling(DVec3::splat(0.5)), glass),
-            p(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, 0.5, 0.0)) * Transform::scaling(DVec3::splat(0.5)), glass),
+            p(
+                ShapeKind::Sphere,
+                Transform::translation(DVec3::new(0.0, 0.5, 0.0)) * Transform::scaling(DVec3::splat(0.5)),
+                glass,
+            ),
         ],
         Transform::translation(DVec3::new(3.0, 0.0, -0.6)),
     );
@@ -266,13 +304,24 @@ fn csg_scene(renderer: Renderer) -> Scene {
         CsgOp::Fuse,
         vec![
             p(ShapeKind::Sphere, Transform::scaling(DVec3::splat(0.45)), glass),
-            p(ShapeKind::Cube, Transform::translation(DVec3::new(0.0, -0.4, 0.0)) * Transform::scaling(DVec3::splat(0.6)), glass),
+            p(
+                ShapeKind::Cube,
+                Transform::translation(DVec3::new(0.0, -0.4, 0.0)) * Transform::scaling(DVec3::splat(0.6)),
+                glass,
+            ),
         ],
         Transform::translation(DVec3::new(3.2, -0.2, 0.8)),
     );
     let nested = Shape::csg(
         CsgOp::Diff,
-        vec![fuse, p(ShapeKind::Cube, Transform::translation(DVec3::new(3.2, -0.2, 1.2)) * Transform::scaling(DVec3::splat(0.4)), red)],
+        vec![
+            fuse,
+            p(
+                ShapeKind::Cube,
+                Transform::translation(DVec3::new(3.2, -0.2, 1.2)) * Transform::scaling(DVec3::splat(0.4)),
+                red,
+            ),
+        ],
         Transform::IDENTITY,
     );
     b.shape(carved)
@@ -487,7 +536,12 @@ fn textures_and_image_environment_match_the_cpu() {
             Pigment::Uniform(Color::BLACK),
         ));
         b.sphere(Transform::translation(DVec3::new(4.0, 1.0, 0.0)) * Transform::rotation_z(40.0), nearest)
-            .cube(Transform::translation(DVec3::new(3.5, -1.3, 0.0)) * Transform::rotation_z(30.0) * Transform::rotation_x(20.0), bilinear)
+            .cube(
+                Transform::translation(DVec3::new(3.5, -1.3, 0.0))
+                    * Transform::rotation_z(30.0)
+                    * Transform::rotation_x(20.0),
+                bilinear,
+            )
             .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), check)
             .camera(Camera { aspect_ratio: 20.0 / 15.0, ..Camera::default() })
             .environment(Environment::Image { image: test_image(16, 8), intensity: 0.7, rotation_deg: 30.0 })
@@ -568,4 +622,3 @@ fn example_scenes_match_the_cpu() {
         assert_matches_cpu(&gpu, &scene, Some(2), min);
     }
 }
-

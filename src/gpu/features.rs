@@ -118,8 +118,8 @@ impl FeatureSet {
             f.specular = false;
             f.dielectric = false;
         }
-        f.point_lights = !scene.point_lights.is_empty()
-            && matches!(f.renderer, RendererKind::PointLight | RendererKind::PathTracer);
+        f.point_lights =
+            !scene.point_lights.is_empty() && matches!(f.renderer, RendererKind::PointLight | RendererKind::PathTracer);
         if let Renderer::PathTracer(p) = &scene.renderer {
             // Light sampling happens only at diffuse vertices.
             f.nee = p.nee && f.diffuse;

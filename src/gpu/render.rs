@@ -173,15 +173,7 @@ pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRe
     let buffers = SceneBuffers::upload(gpu, &packed)?;
     let refs: Vec<&wgpu::Buffer> = buffers.bound(&kernel)?;
     let group = kernel.bind_group(gpu, 1, &refs)?;
-    let acc = run_progressive(
-        gpu,
-        &kernel,
-        &[&group],
-        scene.width,
-        scene.height,
-        packed.settings.spp,
-        &opts.passes,
-    )?;
+    let acc = run_progressive(gpu, &kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
     let nan: Vec<u32> = gpu.read_buffer(&buffers.nan_count, 1)?;
     Ok(GpuRenderOutput {
         image: acc.image,
@@ -197,11 +189,9 @@ pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRe
 /// A clear error when the kernel needs more storage buffers than the adapter allows.
 fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError> {
     let module = assembled.validate()?.module;
-    let storage = module
-        .global_variables
-        .iter()
-        .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
-        .count() as u32;
+    let storage =
+        module.global_variables.iter().filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. })).count()
+            as u32;
     let limit = gpu.limits.max_storage_buffers_per_shader_stage;
     if storage > limit {
         return Err(GpuError::Validation(format!(
@@ -246,11 +236,9 @@ impl SceneBuffers {
                 if b == 2 {
                     return Ok(&self.nan_count);
                 }
-                self.by_binding
-                    .iter()
-                    .find(|(n, _)| *n == b)
-                    .map(|(_, buf)| buf)
-                    .ok_or_else(|| GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})")))
+                self.by_binding.iter().find(|(n, _)| *n == b).map(|(_, buf)| buf).ok_or_else(|| {
+                    GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})"))
+                })
             })
             .collect()
     }
@@ -370,7 +358,8 @@ mod tests {
             for environment in [EnvKind::Background, EnvKind::Uniform, EnvKind::Gradient, EnvKind::Image] {
                 // Everything on, nothing on, and random subsets.
                 let mut all = random_features(&mut rng, renderer, environment);
-                (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) = (true, true, true, true, true, true);
+                (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) =
+                    (true, true, true, true, true, true);
                 all.csg_max_intervals = 4;
                 all.csg_max_depth = 3;
                 let none = random_features(&mut Pcg32::new(0, 0), renderer, environment);
@@ -396,7 +385,8 @@ mod tests {
         let module = assert_minimal(&features);
         let names = function_names(&module);
         assert!(names.contains("sphere_span") && names.contains("radiance_path"), "{names:?}");
-        for bad in ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"] {
+        for bad in ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"]
+        {
             assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in {names:?}");
         }
         let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
