@@ -622,3 +622,29 @@ fn example_scenes_match_the_cpu() {
         assert_matches_cpu(&gpu, &scene, Some(2), min);
     }
 }
+
+/// Radiance beyond f32's range becomes infinite on the GPU: such estimates are counted and
+/// written as 0, so the image stays finite.
+#[test]
+fn non_finite_estimates_are_counted_and_dropped() {
+    let Some(gpu) = gpu_for_tests("non_finite_estimates_are_counted_and_dropped") else { return };
+    let mut b = SceneBuilder::new(8, 6);
+    let hot = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
+        Pigment::Uniform(Color::gray(1e300)),
+    ));
+    b.sphere(Transform::translation(DVec3::new(4.0, 0.0, 0.0)) * Transform::scaling(DVec3::splat(2.0)), hot)
+        .camera(Camera { aspect_ratio: 8.0 / 6.0, ..Camera::default() })
+        .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+    let mask = gpu_run(&gpu, &b.build().unwrap(), Some(4));
+    // The mask is the fraction of each pixel's 4 samples that hit the sphere.
+    let hits: f32 = mask.pixels().iter().map(|p| p.r * 4.0).sum();
+    assert!(hits > 10.0 && hits < 4.0 * 48.0, "{hits}");
+    b.renderer(Renderer::Flat { background: Color::gray(0.25) });
+    let out = render(&gpu, &b.build().unwrap(), &GpuRenderOptions { spp: Some(4), ..Default::default() }).unwrap();
+    assert_eq!(out.non_finite_samples, hits as u64);
+    for (m, p) in mask.pixels().iter().zip(out.image.pixels()) {
+        let expected = 0.25 * (1.0 - m.r);
+        assert_eq!((p.r, p.g, p.b), (expected, expected, expected));
+    }
+}
