@@ -155,13 +155,13 @@ fn pack_error(e: super::pack::PackError) -> GpuError {
 /// use lumen::color::Color;
 /// use lumen::gpu::render::{render, GpuRenderOptions};
 /// let Some(gpu) = lumen::gpu::gpu_for_tests("gpu_render_doc") else { return };
-/// let mut b = SceneBuilder::new(4, 3);
+/// let mut b = SceneBuilder::new(5, 3);
 /// let m = b.diffuse(Color::gray(0.5));
 /// b.sphere(Transform::translation(glam::DVec3::new(3.0, 0.0, 0.0)), m)
 ///     .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
 /// let out = render(&gpu, &b.build().unwrap(), &GpuRenderOptions::default()).unwrap();
 /// assert_eq!(out.spp_done, 1);
-/// assert_eq!(out.image.get(1, 1).r, 1.0); // the sphere covers the centre
+/// assert_eq!(out.image.get(2, 1).r, 1.0); // the sphere covers the centre
 /// assert_eq!(out.image.get(0, 0).r, 0.0);
 /// ```
 pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
