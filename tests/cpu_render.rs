@@ -147,6 +147,24 @@ fn glass_sphere_under_uniform_sky_conserves_energy() {
     }
 }
 
+#[test]
+fn tinted_mirror_under_uniform_sky_shows_tint_times_sky() {
+    // Every path reflects once off the convex mirror and escapes: exactly tint·L, with or
+    // without NEE (after a delta bounce the escape has full weight).
+    let tint = Color::new(0.9, 0.6, 0.3);
+    for nee in [false, true] {
+        let brdf = Brdf::Specular { pigment: Pigment::Uniform(tint), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD };
+        let (scene, mask) = object_under_sky(brdf, 2.0, pt(2, 4, 100, nee));
+        let img = run(&scene, None).image;
+        for row in 0..24 {
+            for col in 0..24 {
+                let e = if mask.get(col, row).g > 0.5 { tint * 2.0 } else { Color::gray(2.0) };
+                assert!(px(&img, col, row).approx_eq(e, 1e-6), "({col},{row})");
+            }
+        }
+    }
+}
+
 /// A diffuse floor (z = 0) seen from a camera at height 3 looking straight down, lit by a
 /// point light of intensity I (linear_radius 1: falloff 1/d²).
 fn lit_floor(rho: Color, light: DVec3, intensity: Color, renderer: Renderer) -> Scene {
@@ -219,15 +237,19 @@ fn point_light_renderer_adds_ambient_and_respects_shadows() {
 
 #[test]
 fn nee_on_and_off_converge_to_the_same_image() {
-    // Floor, a diffuse ball, a spherical lamp and an emissive stretched cube, under a dim
-    // gradient sky: every light kind NEE handles. Camera rays through pixel centres, so
+    // Floor, a diffuse ball, a spherical lamp and an emissive stretched cube (checkered, so
+    // sampled points must read the right uv), under a dim gradient sky: every light kind
+    // NEE handles. Camera rays through pixel centres, so
     // the two seeds differ only in the paths and their difference measures path variance.
     let scene = |nee: bool, seed: u64| {
         let mut b = SceneBuilder::new(16, 12);
         let floor = b.diffuse(Color::new(0.7, 0.6, 0.5));
         let ball = b.diffuse(Color::new(0.3, 0.8, 0.4));
         let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::gray(6.0))));
-        let panel = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::new(2.0, 1.0, 0.5))));
+        let panel = b.material(Material::new(
+            Brdf::default(),
+            Pigment::Checkered { n: 3, on: Color::new(2.0, 1.5, 0.5), off: Color::new(0.5, 0.3, 2.0) },
+        ));
         b.plane(Transform::IDENTITY, floor)
             .sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.6)) * Transform::scaling(DVec3::splat(0.6)), ball)
             .sphere(Transform::translation(DVec3::new(3.0, -1.0, 2.2)) * Transform::scaling(DVec3::splat(0.4)), lamp)
