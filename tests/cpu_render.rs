@@ -237,7 +237,8 @@ fn point_light_renderer_adds_ambient_and_respects_shadows() {
 
 #[test]
 fn nee_on_and_off_converge_to_the_same_image() {
-    // Floor, a diffuse ball, a spherical lamp and an emissive stretched cube (checkered, so
+    // Floor, a diffuse ball, a spherical lamp (cone sampling), an ellipsoidal one (area
+    // sampling) and an emissive stretched cube (checkered, so
     // sampled points must read the right uv), under a dim gradient sky: every light kind
     // NEE handles. Camera rays through pixel centres, so
     // the two seeds differ only in the paths and their difference measures path variance.
@@ -253,6 +254,10 @@ fn nee_on_and_off_converge_to_the_same_image() {
         b.plane(Transform::IDENTITY, floor)
             .sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.6)) * Transform::scaling(DVec3::splat(0.6)), ball)
             .sphere(Transform::translation(DVec3::new(3.0, -1.0, 2.2)) * Transform::scaling(DVec3::splat(0.4)), lamp)
+            .sphere(
+                Transform::translation(DVec3::new(5.0, -2.0, 0.6)) * Transform::scaling(DVec3::new(0.3, 0.6, 0.3)),
+                lamp,
+            )
             .cube(
                 Transform::translation(DVec3::new(5.5, 1.5, 1.0)) * Transform::scaling(DVec3::new(0.3, 1.0, 2.0)),
                 panel,
