@@ -238,10 +238,10 @@ fn point_light_renderer_adds_ambient_and_respects_shadows() {
 #[test]
 fn nee_on_and_off_converge_to_the_same_image() {
     // Floor, a diffuse ball, a spherical lamp (cone sampling), an ellipsoidal one (area
-    // sampling) and an emissive stretched cube (checkered, so
-    // sampled points must read the right uv), under a dim gradient sky: every light kind
-    // NEE handles. Camera rays through pixel centres, so
-    // the two seeds differ only in the paths and their difference measures path variance.
+    // sampling) and an emissive stretched cube (checkered, so sampled points must read the
+    // right uv), under a dim gradient sky: every light kind NEE handles. Camera rays go
+    // through pixel centres, so the two seeds differ only in the paths and their
+    // difference measures path variance.
     let scene = |nee: bool, seed: u64| {
         let mut b = SceneBuilder::new(16, 12);
         let floor = b.diffuse(Color::new(0.7, 0.6, 0.5));
