@@ -28,7 +28,7 @@ type Res<T> = Result<T, SceneLangError>;
 const MAX_DEPTH: usize = 100;
 
 /// Largest blank `Image(w, h)` that may be turned into pixels (as a texture or environment).
-const MAX_BLANK_TEXTURE_PIXELS: u64 = 1 << 24;
+const MAX_BLANK_TEXTURE_PIXELS: u64 = 1 << 22;
 
 /// A defined name.
 #[derive(Debug, Clone)]
