@@ -664,3 +664,10 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     let deep_math = format!("SET a ${}1{}$", "(".repeat(100_000), ")".repeat(100_000));
     assert_eq!(err(&deep_math).kind, ErrorKind::TooDeep);
 }
+
+#[test]
+fn huge_images_are_sizes_not_allocations() {
+    let s = load("USING Image(32768, 32768) Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
+    assert_eq!((s.width, s.height), (32768, 32768));
+    check_err("USING Image(32769, 1)", ErrorKind::BadImageSize, 1, 13, "from 1 to 32768");
+}
