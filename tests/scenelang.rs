@@ -667,6 +667,8 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
 
 #[test]
 fn huge_images_are_sizes_not_allocations() {
+    let s = load("USING Image() Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
+    assert_eq!((s.width, s.height), (1, 1));
     let s = load("USING Image(32768, 32768) Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
     assert_eq!((s.width, s.height), (32768, 32768));
     check_err("USING Image(32769, 1)", ErrorKind::BadImageSize, 1, 13, "from 1 to 32768");

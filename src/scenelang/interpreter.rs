@@ -1154,9 +1154,14 @@ impl<'a> Interp<'a> {
         }
     }
 
-    /// `Image(width, height)` (black) or `Image("file")`.
+    /// `Image(width, height)` (black), `Image("file")`, or `Image()` (1×1, black).
     fn image_constructor(&mut self) -> Res<Value> {
         self.expect_sym('(', "after Image")?;
+        if self.peek()?.tok == Tok::Sym(')') {
+            // Every argument has a default: `Image()` is one black pixel.
+            self.lx.next()?;
+            return Ok(Value::Image(ImageValue::Blank { width: 1, height: 1 }));
+        }
         let (first, fs) = self.value()?;
         match first {
             Value::Str(path) => {
