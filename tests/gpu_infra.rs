@@ -233,3 +233,78 @@ fn kernels_breaking_the_pass_contract_are_refused() {
     let err = run_progressive(&gpu, &kernel, &[], 4, 4, 1, &PassOptions::default()).unwrap_err();
     assert!(err.to_string().contains("pass contract"), "{err}");
 }
+
+// ---- shader assembly ----------------------------------------------------------------
+
+use lumen::gpu::{FeatureSet, KernelCache, ShaderLibrary};
+
+#[test]
+fn assembled_kernels_run_and_are_cached_by_feature_set() {
+    let Some(gpu) = gpu_for_tests("assembled_kernels_run_and_are_cached_by_feature_set") else { return };
+    let mut lib = ShaderLibrary::new(&["bright", "unused"]);
+    lib.add("shaders/pass.wgsl", PASS_WGSL).unwrap();
+    lib.add(
+        "value.wgsl",
+        "fn sample_value(j: u32) -> f32 {\n// #if bright\n    return 2.0 + f32(j & 1u);\n// #else\n    return 1.0;\n// #endif\n}",
+    )
+    .unwrap();
+    lib.add(
+        "main.wgsl",
+        "// #requires pass value\n\
+         @compute @workgroup_size(8, 8)\n\
+         fn main(@builtin(global_invocation_id) gid: vec3<u32>) {\n\
+             if (!pass_in_tile(gid)) { return; }\n\
+             var s = 0.0;\n\
+             for (var j = pass_params.sample_begin; j < pass_params.sample_end; j++) { s += sample_value(j); }\n\
+             pass_write(gid, vec3<f32>(s));\n\
+         }",
+    )
+    .unwrap();
+    let mut cache = KernelCache::new();
+    let plain = FeatureSet::new();
+    let bright = FeatureSet::new().with("bright");
+    // Samples alternate 2, 3 with `bright`: the mean over 10 samples is 2.5.
+    for (features, want) in [(&plain, 1.0f32), (&bright, 2.5), (&plain, 1.0), (&bright, 2.5)] {
+        let kernel = cache
+            .get_or_build(features, "main", || lib.assemble(&["main"], features)?.kernel(&gpu, "main.wgsl", "main"))
+            .unwrap();
+        let out = run_progressive(&gpu, &kernel, &[], 9, 9, 10, &PassOptions::default()).unwrap();
+        assert!(out.image.pixels().iter().all(|p| p.g == want), "{features}");
+    }
+    assert_eq!(cache.len(), 2);
+}
+
+#[test]
+fn tiles_shrink_for_slow_passes_without_changing_the_result() {
+    let Some(gpu) = gpu_for_tests("tiles_shrink_for_slow_passes_without_changing_the_result") else { return };
+    let kernel = pass_kernel(&gpu, "integer.wgsl", "", INTEGER_SAMPLE);
+    // A zero target makes every pass "too slow": one sample per pass, tiles 256 → 128 → 64 → 32.
+    let opts = PassOptions { target_pass_seconds: 0.0, ..PassOptions::default() };
+    let (w, h, spp) = (100u32, 70u32, 6u32);
+    let out = run_progressive(&gpu, &kernel, &[], w, h, spp, &opts).unwrap();
+    assert_eq!(out.passes, 1 + 1 + 4 + 12 + 12 + 12);
+    for (p, s) in out.sums.iter().enumerate() {
+        let want = (0..spp)
+            .map(|j| integer_sample(p as u32, j))
+            .fold([0.0; 3], |a, s| [a[0] + s[0], a[1] + s[1], a[2] + s[2]]);
+        assert_eq!(*s, want, "pixel {p}");
+    }
+}
+
+#[test]
+fn a_lost_device_is_an_error_not_a_panic() {
+    let Some(gpu) = gpu_for_tests("a_lost_device_is_an_error_not_a_panic") else { return };
+    let kernel = gpu.compute_kernel("smoke.wgsl", SMOKE, "main").unwrap();
+    let data = gpu.storage_buffer("data", &[1u32; 8]).unwrap();
+    // Destroying the device is the one portable way to lose it on purpose.
+    gpu.device.destroy();
+    let err = gpu.storage_buffer("after", &[1u32; 4]).unwrap_err();
+    assert!(matches!(err, GpuError::DeviceLost(_)), "{err}");
+    assert!(gpu.read_buffer::<u32>(&data, 8).is_err());
+    let params = gpu.uniform_buffer("params", &SmokeParams { count: 1, scale: 1.0 });
+    let run = params.and_then(|p| {
+        let g = kernel.bind_group(&gpu, 0, &[&p, &data, &data, &data])?;
+        gpu.dispatch(&kernel, &[&g], [1, 1, 1])
+    });
+    assert!(run.is_err());
+}

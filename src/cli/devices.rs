@@ -3,28 +3,14 @@
 
 use clap::Args;
 
-use crate::gpu::{list_adapters, select_adapter, AdapterChoice};
+use super::gpu_args::AdapterArgs;
+use crate::gpu::{list_adapters, select_adapter};
 
 /// Arguments of `lumen devices`.
 #[derive(Debug, Args)]
 pub struct DevicesArgs {
     #[command(flatten)]
     pub adapter: AdapterArgs,
-}
-
-/// The `--adapter` option, for any subcommand that renders on the GPU (`#[command(flatten)]`).
-#[derive(Debug, Clone, Args)]
-pub struct AdapterArgs {
-    /// GPU adapter to use: a case-insensitive part of its name as `lumen devices` prints it
-    /// (default: $LUMEN_ADAPTER, else the best adapter).
-    #[arg(long, value_name = "NAME")]
-    pub adapter: Option<String>,
-}
-
-impl AdapterArgs {
-    pub fn choice(&self) -> AdapterChoice {
-        AdapterChoice::new(self.adapter.clone())
-    }
 }
 
 /// Prints one line per adapter; with none, says so and how to get one (not an error:

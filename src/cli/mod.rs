@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 
 mod check;
 pub mod devices;
+pub mod gpu_args;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.

@@ -9,7 +9,6 @@
 use std::collections::BTreeMap;
 
 use bytemuck::Pod;
-use wgpu::util::DeviceExt;
 
 use super::device::{Gpu, GpuError};
 
@@ -112,6 +111,21 @@ impl ComputeKernel {
 
 impl Gpu {
     /// Compiles `entry` of a WGSL compute shader. `label` names it in errors (use the file).
+    ///
+    /// ```
+    /// use lumen::gpu::gpu_for_tests;
+    /// let Some(gpu) = gpu_for_tests("compute_kernel_doc") else { return };
+    /// let src = "@group(0) @binding(0) var<storage, read_write> v: array<u32>;
+    /// @compute @workgroup_size(64)
+    /// fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    ///     if (id.x < arrayLength(&v)) { v[id.x] = v[id.x] * 3u; }
+    /// }";
+    /// let kernel = gpu.compute_kernel("triple.wgsl", src, "main").unwrap();
+    /// let buf = gpu.storage_buffer("v", &[1u32, 2, 3, 4]).unwrap();
+    /// let group = kernel.bind_group(&gpu, 0, &[&buf]).unwrap();
+    /// gpu.dispatch(&kernel, &[&group], kernel.workgroups_for([4, 1, 1])).unwrap();
+    /// assert_eq!(gpu.read_buffer::<u32>(&buf, 4).unwrap(), [3, 6, 9, 12]);
+    /// ```
     pub fn compute_kernel(&self, label: &str, source: &str, entry: &str) -> Result<ComputeKernel, GpuError> {
         let validated = validate_wgsl(label, source)?;
         let module = &validated.module;
@@ -231,15 +245,9 @@ impl Gpu {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let padded = padded_len(bytes.len() as u64);
         self.check_storage_size(label, padded)?;
-        let mut contents = bytes.to_vec();
-        contents.resize(padded as usize, 0);
-        self.scoped(|| {
-            self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &contents,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            })
-        })
+        let buffer = self.storage_buffer_zeroed(label, padded)?;
+        self.upload(&buffer, bytes)?;
+        Ok(buffer)
     }
 
     /// A zero-filled storage buffer of `bytes` bytes (padded like [`Self::storage_buffer`]).
@@ -271,13 +279,33 @@ impl Gpu {
                 limit_name: "uniform buffer binding",
             });
         }
-        self.scoped(|| {
-            self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let buffer = self.scoped(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                contents: &contents,
+                size: size as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
             })
-        })
+        })?;
+        self.upload(&buffer, &contents)?;
+        Ok(buffer)
+    }
+
+    /// Writes `bytes` at the start of `buffer` (through the queue, not a mapping: a buffer
+    /// that failed to allocate then yields an error instead of wgpu's panic on mapping).
+    fn upload(&self, buffer: &wgpu::Buffer, bytes: &[u8]) -> Result<(), GpuError> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        // Queue writes must be whole 4-byte words.
+        let padded: Vec<u8>;
+        let data = if bytes.len() % 4 == 0 {
+            bytes
+        } else {
+            padded = bytes.iter().copied().chain(std::iter::repeat(0)).take(bytes.len().next_multiple_of(4)).collect();
+            &padded
+        };
+        self.scoped(|| self.queue.write_buffer(buffer, 0, data))
     }
 
     /// Records and submits one dispatch, then waits for it; errors surface here.

@@ -39,6 +39,8 @@ pub enum GpuError {
     DeviceLost(String),
     #[error("reading a GPU buffer back failed: {0}")]
     Readback(String),
+    #[error(transparent)]
+    Assemble(#[from] super::assemble::AssembleError),
     #[error("{what} needs {needed} bytes but this adapter allows at most {limit} bytes per {limit_name}")]
     TooLarge { what: String, needed: u64, limit: u64, limit_name: &'static str },
 }
@@ -235,6 +237,15 @@ pub struct Gpu {
 
 impl Gpu {
     /// Opens the chosen adapter (see [`AdapterChoice`]) with its full limits.
+    ///
+    /// ```
+    /// use lumen::gpu::{AdapterChoice, Gpu, GpuError};
+    /// match Gpu::new(&AdapterChoice::from_env()) {
+    ///     Ok(gpu) => println!("rendering on {}", gpu.description()),
+    ///     Err(GpuError::NoAdapter) => println!("no GPU adapter: use the CPU renderer"),
+    ///     Err(e) => panic!("{e}"),
+    /// }
+    /// ```
     pub fn new(choice: &AdapterChoice) -> Result<Gpu, GpuError> {
         let adapters = enumerate();
         if adapters.is_empty() {
@@ -269,11 +280,8 @@ impl Gpu {
         }));
         let s = Arc::clone(&sink);
         device.set_device_lost_callback(move |reason, message| {
-            // Dropping the device on purpose is not an error worth reporting.
-            if reason != wgpu::DeviceLostReason::Destroyed {
-                if let Ok(mut sink) = s.lock() {
-                    sink.errors.push(GpuError::DeviceLost(format!("{reason:?}: {message}")));
-                }
+            if let Ok(mut sink) = s.lock() {
+                sink.errors.push(GpuError::DeviceLost(format!("{reason:?}: {message}")));
             }
         });
         Ok(Gpu { device, queue, adapter_info, limits, sink })
@@ -285,15 +293,18 @@ impl Gpu {
     }
 
     /// Returns (and clears) the first error wgpu reported outside an error scope since the
-    /// last check: validation errors, out-of-memory, device loss.
+    /// last check (a device loss before any other): validation errors, out-of-memory.
     pub fn check(&self) -> Result<(), GpuError> {
         let mut sink = self.sink.lock().unwrap_or_else(|p| p.into_inner());
-        if sink.errors.is_empty() {
-            Ok(())
-        } else {
-            let first = sink.errors.remove(0);
-            sink.errors.clear();
-            Err(first)
+        // A lost device explains every later error, so it is reported first.
+        let lost = sink.errors.iter().position(|e| matches!(e, GpuError::DeviceLost(_)));
+        match lost.or((!sink.errors.is_empty()).then_some(0)) {
+            None => Ok(()),
+            Some(i) => {
+                let e = sink.errors.swap_remove(i);
+                sink.errors.clear();
+                Err(e)
+            }
         }
     }
 
@@ -307,11 +318,16 @@ impl Gpu {
         let value = f();
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
-        if let Some(e) = v.or(o) {
-            return Err(e.into());
+        // A device loss explains the scope's errors ("buffer is invalid"): report it first.
+        // The loss callback runs from a poll; a non-blocking one is cheap.
+        if v.is_some() || o.is_some() {
+            let _ = self.device.poll(wgpu::PollType::Poll);
         }
         self.check()?;
-        Ok(value)
+        match v.or(o) {
+            Some(e) => Err(e.into()),
+            None => Ok(value),
+        }
     }
 
     /// Waits for all submitted work, turning a timeout or loss into an error.

@@ -49,7 +49,8 @@ pub struct PassUniform {
 #[derive(Debug, Clone)]
 pub struct PassOptions {
     /// Tiles are at most `tile_size × tile_size` pixels (65,536 invocations at 256: enough to
-    /// fill a large GPU, small enough that one sample per pixel is a short pass).
+    /// fill a large GPU, small enough that one sample per pixel is a short pass). Halved
+    /// between rounds, down to 32, while one sample per pass still takes over twice the target.
     pub tile_size: u32,
     /// Wanted duration of one pass; samples per pass adapt towards it (well under any
     /// watchdog, long enough that submission overhead is small).
@@ -144,11 +145,11 @@ pub fn run_progressive(
             "progressive render of {width}×{height} pixels at {total_spp} spp: all must be positive"
         )));
     }
-    let tile_size = opts.tile_size.clamp(1, 4096);
+    let mut tile_size = opts.tile_size.clamp(1, 4096);
     let max_spp = opts.max_spp_per_pass.max(1);
     let start = Instant::now();
 
-    let tiles = Tile::cover(width, height, tile_size);
+    let mut tiles = Tile::cover(width, height, tile_size);
     let max_tile_pixels = tiles.iter().map(Tile::pixel_count).max().unwrap_or(1) as u64;
     let out_bytes = max_tile_pixels * 16;
     let uniform = gpu.uniform_buffer("pass uniform", &PassUniform::zeroed())?;
@@ -215,6 +216,11 @@ pub fn run_progressive(
             }
             None => None,
         };
+        let shrunk = next_tile_size(tile_size, j1 - j0, worst_per_sample, opts.target_pass_seconds);
+        if shrunk != tile_size {
+            tile_size = shrunk;
+            tiles = Tile::cover(width, height, tile_size);
+        }
         spp_per_pass = next_spp_per_pass(
             j1 - j0,
             worst_per_sample,
@@ -258,6 +264,20 @@ fn next_spp_per_pass(
     }
     (spp.floor() as u32).clamp(1, max_spp.max(1))
 }
+
+/// Tile size for the next round: halved (down to [`MIN_TILE_SIZE`]) while even one sample
+/// per pass takes more than twice the target, so a slow kernel on a slow GPU still gets
+/// short passes. Never grows back: cheap kernels grow samples per pass instead.
+fn next_tile_size(current: u32, spp_used: u32, worst_seconds_per_sample: f64, target: f64) -> u32 {
+    if spp_used == 1 && worst_seconds_per_sample > 2.0 * target && current > MIN_TILE_SIZE {
+        (current / 2).max(MIN_TILE_SIZE)
+    } else {
+        current
+    }
+}
+
+/// Smallest tile [`next_tile_size`] shrinks to (1,024 invocations still fill a small GPU).
+const MIN_TILE_SIZE: u32 = 32;
 
 fn check_contract(kernel: &ComputeKernel, scene_groups: usize) -> Result<(), GpuError> {
     let want = [(0, BindingKind::Uniform), (1, BindingKind::Storage { read_only: false })];
@@ -377,6 +397,16 @@ mod tests {
 
     fn validate_pass_wgsl() -> super::super::compute::ValidatedModule {
         super::super::compute::validate_wgsl("pass.wgsl", PASS_WGSL).unwrap()
+    }
+
+    #[test]
+    fn tiles_shrink_only_when_one_sample_is_too_slow() {
+        assert_eq!(next_tile_size(256, 1, 0.2, 0.025), 128);
+        assert_eq!(next_tile_size(256, 1, 0.04, 0.025), 256);
+        assert_eq!(next_tile_size(256, 2, 0.2, 0.025), 256);
+        assert_eq!(next_tile_size(40, 1, 9.0, 0.025), MIN_TILE_SIZE);
+        assert_eq!(next_tile_size(MIN_TILE_SIZE, 1, 9.0, 0.025), MIN_TILE_SIZE);
+        assert_eq!(next_tile_size(8, 1, 9.0, 0.025), 8);
     }
 
     #[test]

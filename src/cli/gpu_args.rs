@@ -1,0 +1,83 @@
+//! Options shared by every subcommand that renders on the GPU (`#[command(flatten)]`):
+//! which adapter, and when to stop a progressive render early.
+
+use std::time::Duration;
+
+use clap::Args;
+
+use crate::gpu::{ctrlc_flag, AdapterChoice, PassOptions};
+
+/// `--adapter NAME` (default: `$LUMEN_ADAPTER`, else the best adapter).
+#[derive(Debug, Clone, Default, Args)]
+pub struct AdapterArgs {
+    /// GPU adapter to use: a case-insensitive part of its name as `lumen devices` prints it
+    /// (default: $LUMEN_ADAPTER, else the best adapter).
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
+}
+
+impl AdapterArgs {
+    pub fn choice(&self) -> AdapterChoice {
+        AdapterChoice::new(self.adapter.clone())
+    }
+}
+
+/// The adapter plus progressive-render controls.
+#[derive(Debug, Clone, Default, Args)]
+pub struct GpuArgs {
+    #[command(flatten)]
+    pub adapter: AdapterArgs,
+    /// Stop after about this many seconds and save what was rendered (every pixel gets the
+    /// same number of samples; the image reports how many).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub time_limit: Option<Duration>,
+}
+
+impl GpuArgs {
+    /// Pass options for an interactive render: progress bar on, Ctrl-C stops early and
+    /// keeps the samples of every completed round.
+    pub fn pass_options(&self) -> PassOptions {
+        PassOptions {
+            time_limit: self.time_limit,
+            cancel: Some(ctrlc_flag()),
+            progress: true,
+            ..PassOptions::default()
+        }
+    }
+}
+
+/// Seconds as a non-negative, finite decimal number.
+fn parse_seconds(s: &str) -> Result<Duration, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("{s:?} is not a number of seconds"))?;
+    Duration::try_from_secs_f64(v).map_err(|_| format!("{s:?}: the time limit must be a finite number of seconds ≥ 0"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct T {
+        #[command(flatten)]
+        gpu: GpuArgs,
+    }
+
+    #[test]
+    fn parses_adapter_and_time_limit() {
+        let t = T::try_parse_from(["t", "--adapter", "llvm", "--time-limit", "2.5"]).unwrap();
+        assert_eq!(t.gpu.adapter.adapter.as_deref(), Some("llvm"));
+        assert_eq!(t.gpu.time_limit, Some(Duration::from_millis(2500)));
+        let t = T::try_parse_from(["t"]).unwrap();
+        assert_eq!(t.gpu.time_limit, None);
+    }
+
+    #[test]
+    fn bad_time_limits_are_usage_errors() {
+        for bad in ["-1", "abc", "inf", "NaN"] {
+            let arg = format!("--time-limit={bad}");
+            let err = T::try_parse_from(["t", arg.as_str()]).err().expect(bad);
+            assert!(err.to_string().contains("time-limit"), "{err}");
+        }
+    }
+}
