@@ -40,6 +40,7 @@ fn main() {
         ("inside_cube", cases::inside_cube),
         ("inside_cube_nee", cases::inside_cube_nee),
         ("furnace_roulette", cases::furnace_roulette),
+        ("many_paths_per_sample", cases::many_paths_per_sample),
         ("glass_rim_depth_3", cases::glass_rim_depth_3),
         ("glass_rim_depth_64", cases::glass_rim_depth_64),
         ("csg_nested_8", cases::csg_nested_8),
@@ -47,6 +48,9 @@ fn main() {
         ("csg_touching_face", cases::csg_touching_face),
         ("degenerate_scripts", |_| cases::degenerate_scripts()),
         ("extreme_transforms", cases::extreme_transforms),
+        ("extreme_script_scales 1e18", |g| cases::extreme_script_scales(g, "1e18")),
+        ("extreme_script_scales 1e30", |g| cases::extreme_script_scales(g, "1e30")),
+        ("extreme_script_scales 1e300", |g| cases::extreme_script_scales(g, "1e300")),
     ];
     println!("| case | expected | error measure | CPU f64 | GPU f32 | tol. CPU / GPU | GPU ≈ CPU pixels | notes |");
     println!("|---|---|---|---|---|---|---|---|");

@@ -102,11 +102,17 @@ fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
 }
 
 fn emissive(b: &mut SceneBuilder, rho: f64, le: f64) -> MaterialId {
-    b.material(Material::new(Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) }, Pigment::Uniform(Color::gray(le))))
+    b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) },
+        Pigment::Uniform(Color::gray(le)),
+    ))
 }
 
 fn glass(b: &mut SceneBuilder, ior: f64) -> MaterialId {
-    b.material(Material::new(Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior }, Pigment::Uniform(Color::BLACK)))
+    b.material(Material::new(
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior },
+        Pigment::Uniform(Color::BLACK),
+    ))
 }
 
 /// An orthogonal camera whose screen is the square of half-side `half` (times the aspect
@@ -273,7 +279,9 @@ pub fn unit_scene() -> Scene {
     b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), floor)
         .sphere(Transform::translation(DVec3::new(4.0, 0.8, -0.3)) * Transform::scaling(DVec3::splat(0.7)), red)
         .cube(
-            Transform::translation(DVec3::new(5.0, -1.2, -0.4)) * Transform::rotation_z(30.0) * Transform::scaling(DVec3::splat(1.2)),
+            Transform::translation(DVec3::new(5.0, -1.2, -0.4))
+                * Transform::rotation_z(30.0)
+                * Transform::scaling(DVec3::splat(1.2)),
             green,
         )
         .sphere(Transform::translation(DVec3::new(3.0, -0.3, -0.6)) * Transform::scaling(DVec3::splat(0.4)), clear)
@@ -473,8 +481,9 @@ pub fn sphere_silhouette(gpu: Option<&Gpu>) -> Outcome {
     let rim = DVec3::new(-3.0, std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2);
     let scene = sky_scene(b, sky, ortho(rim, 2e-3, 1.0));
     let shape = scene.shapes[0].clone();
-    let (cpu, gpu_err, agree, amb) =
-        sky_lit_classified(gpu, &scene, rho, sky, |c, r, e| analytic_material(&scene, &shape, c, r, e).map(|m| m.is_some()));
+    let (cpu, gpu_err, agree, amb) = sky_lit_classified(gpu, &scene, rho, sky, |c, r, e| {
+        analytic_material(&scene, &shape, c, r, e).map(|m| m.is_some())
+    });
     Outcome {
         case: "sphere silhouette (grazing hits and bounces)".into(),
         expected: "ρL on the sphere, L off it (exact per path)".into(),
@@ -494,7 +503,8 @@ pub fn cube_edges(gpu: Option<&Gpu>) -> Outcome {
     let (rho, sky) = (0.6, 1.5);
     let mut b = SceneBuilder::new(32, 32);
     let m = b.diffuse(Color::gray(rho));
-    let t = Transform::translation(DVec3::new(2.0, 0.3, -0.2)) * Transform::rotation_x(30.0) * Transform::rotation_z(40.0);
+    let t =
+        Transform::translation(DVec3::new(2.0, 0.3, -0.2)) * Transform::rotation_x(30.0) * Transform::rotation_z(40.0);
     b.cube(t, m);
     // The corner nearest the camera (smallest x).
     let corner = (0..8)
@@ -503,8 +513,9 @@ pub fn cube_edges(gpu: Option<&Gpu>) -> Outcome {
         .unwrap();
     let scene = sky_scene(b, sky, ortho(DVec3::new(-1.0, corner.y, corner.z), 0.05, 1.0));
     let shape = scene.shapes[0].clone();
-    let (cpu, gpu_err, agree, amb) =
-        sky_lit_classified(gpu, &scene, rho, sky, |c, r, e| analytic_material(&scene, &shape, c, r, e).map(|m| m.is_some()));
+    let (cpu, gpu_err, agree, amb) = sky_lit_classified(gpu, &scene, rho, sky, |c, r, e| {
+        analytic_material(&scene, &shape, c, r, e).map(|m| m.is_some())
+    });
     Outcome {
         case: "cube corner and edges".into(),
         expected: "ρL on the cube, L off it (exact per path)".into(),
@@ -609,7 +620,10 @@ fn tiny_sphere(gpu: Option<&Gpu>, name: &str, camera: Camera, centre: DVec3) -> 
     agree.add(&cpu, &gpu_img);
     Outcome {
         case: format!("sphere r = 1e-3 at 1e4, {name}"),
-        expected: format!("analytic coverage of each of 16384 samples ({covered} inside; area within {:.1}% of πr²)", area_err * 100.0),
+        expected: format!(
+            "analytic coverage of each of 16384 samples ({covered} inside; area within {:.1}% of πr²)",
+            area_err * 100.0
+        ),
         metric: "misclassified samples",
         cpu_tolerance: 0.0,
         gpu_tolerance: 2.0,
@@ -683,7 +697,14 @@ fn mean_and_stderr(img: &HdrImage) -> (f64, f64) {
 
 /// A statistical furnace: relative error of the image mean; the test must be strong enough
 /// (5 standard errors below the 1 % tolerance).
-fn statistical_furnace(gpu: Option<&Gpu>, case: String, expected_text: String, scene: &Scene, expected: f64, spp: u32) -> Outcome {
+fn statistical_furnace(
+    gpu: Option<&Gpu>,
+    case: String,
+    expected_text: String,
+    scene: &Scene,
+    expected: f64,
+    spp: u32,
+) -> Outcome {
     let (cpu, gpu_img) = render_both(gpu, scene, Some(spp));
     let (cm, cse) = mean_and_stderr(&cpu);
     assert!(5.0 * cse < 0.01 * expected, "test too weak: CPU standard error {cse} of {expected}");
@@ -702,7 +723,9 @@ fn statistical_furnace(gpu: Option<&Gpu>, case: String, expected_text: String, s
         cpu: (cm / expected - 1.0).abs(),
         gpu: gm.map(|(m, _)| (m / expected - 1.0).abs()),
         gpu_agrees_with_cpu: agree.0,
-        min_agreement: 0.5,
+        // Long paths with NEE diverge between f32 and f64 at some vertex in most pixels; only
+        // the mean is an invariant here.
+        min_agreement: 0.0,
         note: format!(
             "standard error {:.2}% (CPU){}",
             100.0 * cse / expected,
@@ -733,7 +756,8 @@ pub fn furnace_roulette(gpu: Option<&Gpu>) -> Outcome {
     let (rho, max_depth, rr) = (0.99, 50, 10);
     let mut b = SceneBuilder::new(16, 16);
     let m = emissive(&mut b, rho, 1.0);
-    b.cube(Transform::scaling(DVec3::new(3.0, 4.0, 5.0)), m).renderer(pt(256, max_depth, rr, false));
+    // Few paths per camera sample, many samples: see `many_paths_per_sample` for why.
+    b.cube(Transform::scaling(DVec3::new(3.0, 4.0, 5.0)), m).renderer(pt(16, max_depth, rr, false));
     let scene = b.build().unwrap();
     let expected: f64 = (0..=max_depth).map(|k| rho.powi(k as i32)).sum();
     statistical_furnace(
@@ -742,8 +766,36 @@ pub fn furnace_roulette(gpu: Option<&Gpu>) -> Outcome {
         format!("Σ_(k≤{max_depth}) 0.99ᵏ = {expected:.4}"),
         &scene,
         expected,
-        4,
+        64,
     )
+}
+
+/// The camera inside an emitting cube (ρ 0.5, Le 1, no NEE, depth 50) with 256 paths per
+/// camera sample: every path is exactly Σ_{k≤50} 0.5ᵏ, so every pixel must be too. On
+/// lavapipe the GPU counts only the first ~6,580 ray traversals of each invocation in a
+/// pass (129 of the 256 paths here); later paths contribute 0 (see docs/STABILITY.md).
+pub fn many_paths_per_sample(gpu: Option<&Gpu>) -> Outcome {
+    let mut b = SceneBuilder::new(4, 4);
+    let m = emissive(&mut b, 0.5, 1.0);
+    b.cube(Transform::scaling(DVec3::splat(5.0)), m).renderer(pt(256, 50, 1000, false));
+    let scene = b.build().unwrap();
+    let (cpu, gpu_img) = render_both(gpu, &scene, Some(1));
+    let expected = 2.0 * (1.0 - 0.5f64.powi(51));
+    let err = |img: &HdrImage| img.pixels().iter().map(|p| (f64::from(p.g) / expected - 1.0).abs()).fold(0.0, f64::max);
+    let mut agree = Agreement::default();
+    agree.add(&cpu, &gpu_img);
+    Outcome {
+        case: "256 paths × 51 vertices per camera sample (furnace)".into(),
+        expected: "2(1 − 2⁻⁵¹) exactly per path".into(),
+        metric: "max relative error",
+        cpu_tolerance: 1e-7,
+        gpu_tolerance: 2e-6,
+        cpu: err(&cpu),
+        gpu: gpu_img.as_ref().map(err),
+        gpu_agrees_with_cpu: agree.0,
+        min_agreement: 1.0,
+        note: String::new(),
+    }
 }
 
 // ------------------------------------------------------------------------- 4. glass
@@ -808,7 +860,11 @@ fn glass_rim(gpu: Option<&Gpu>, max_depth: u32) -> Outcome {
     agree.add(&cpu, &gpu_img);
     Outcome {
         case: format!("glass sphere rim under a sky, depth {max_depth}"),
-        expected: format!("L·(1 − (1−F)·F^{}) per pixel, F = Fresnel(θᵢ), θᵢ up to {:.1}°", max_depth - 1, min_cos.acos().to_degrees()),
+        expected: format!(
+            "L·(1 − (1−F)·F^{}) per pixel, F = Fresnel(θᵢ), θᵢ up to {:.1}°",
+            max_depth - 1,
+            min_cos.acos().to_degrees()
+        ),
         metric: "|pooled z-score| (binomial)",
         cpu_tolerance: 4.5,
         gpu_tolerance: 4.5,
@@ -861,16 +917,25 @@ pub fn csg_nested_8(gpu: Option<&Gpu>) -> Outcome {
     let sphere = |k: usize| {
         let a = k as f64 * 1.3;
         let c = DVec3::new(0.3 * (a * 0.7).sin(), 0.7 * a.cos(), 0.5 * a.sin());
-        Shape::primitive(ShapeKind::Sphere, Transform::translation(c) * Transform::scaling(DVec3::splat(0.6 + 0.05 * k as f64)), mats[k])
+        Shape::primitive(
+            ShapeKind::Sphere,
+            Transform::translation(c) * Transform::scaling(DVec3::splat(0.6 + 0.05 * k as f64)),
+            mats[k],
+        )
     };
     let ops = [CsgOp::Unite, CsgOp::Diff, CsgOp::Intersect, CsgOp::Fuse];
     let mut node = sphere(0);
     for k in 1..=8 {
-        let t = Transform::rotation_z(7.0 * k as f64) * Transform::translation(DVec3::new(0.01 * k as f64, -0.02, 0.015))
+        let t = Transform::rotation_z(7.0 * k as f64)
+            * Transform::translation(DVec3::new(0.01 * k as f64, -0.02, 0.015))
             * Transform::scaling(DVec3::splat(1.01));
         let child = if ops[k % 4] == CsgOp::Intersect {
             // A big sphere, so INTERSECT trims without emptying.
-            Shape::primitive(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, 0.2, 0.1)) * Transform::scaling(DVec3::splat(1.3)), mats[k])
+            Shape::primitive(
+                ShapeKind::Sphere,
+                Transform::translation(DVec3::new(0.0, 0.2, 0.1)) * Transform::scaling(DVec3::splat(1.3)),
+                mats[k],
+            )
         } else {
             sphere(k)
         };
@@ -878,10 +943,20 @@ pub fn csg_nested_8(gpu: Option<&Gpu>) -> Outcome {
     }
     assert_eq!(node.csg_depth(), 8);
     b.shape(node.clone())
-        .camera(Camera { projection: Projection::Perspective { screen_distance: 2.0 }, aspect_ratio: 1.0, transform: Transform::translation(DVec3::new(-2.5, 0.0, 0.0)) })
+        .camera(Camera {
+            projection: Projection::Perspective { screen_distance: 2.0 },
+            aspect_ratio: 1.0,
+            transform: Transform::translation(DVec3::new(-2.5, 0.0, 0.0)),
+        })
         .renderer(Renderer::Flat { background: Color::BLACK });
     let scene = b.build().unwrap();
-    flat_case(gpu, "CSG nested 8 deep (9 spheres)".into(), "colour of the analytic first hit (set membership)".into(), &scene, &node)
+    flat_case(
+        gpu,
+        "CSG nested 8 deep (9 spheres)".into(),
+        "colour of the analytic first hit (set membership)".into(),
+        &scene,
+        &node,
+    )
 }
 
 /// DIFF of a cube by a box that shares four side faces with it (it removes the cube's top
@@ -893,10 +968,16 @@ pub fn csg_coincident_sides(gpu: Option<&Gpu>) -> Outcome {
     let diff = Shape::csg(
         CsgOp::Diff,
         vec![Shape::primitive(ShapeKind::Cube, Transform::IDENTITY, a), Shape::primitive(ShapeKind::Cube, cut, c)],
-        Transform::translation(DVec3::new(3.0, 0.1, -0.2)) * Transform::rotation_z(33.0) * Transform::rotation_x(11.0) * Transform::scaling(DVec3::splat(1.7)),
+        Transform::translation(DVec3::new(3.0, 0.1, -0.2))
+            * Transform::rotation_z(33.0)
+            * Transform::rotation_x(11.0)
+            * Transform::scaling(DVec3::splat(1.7)),
     );
     b.shape(diff.clone())
-        .camera(Camera { transform: Transform::translation(DVec3::new(0.0, 0.0, 1.2)) * Transform::rotation_y(25.0), ..Camera::default() })
+        .camera(Camera {
+            transform: Transform::translation(DVec3::new(0.0, 0.0, 1.2)) * Transform::rotation_y(25.0),
+            ..Camera::default()
+        })
         .renderer(Renderer::Flat { background: Color::BLACK });
     let scene = b.build().unwrap();
     flat_case(
@@ -919,10 +1000,16 @@ pub fn csg_touching_face(gpu: Option<&Gpu>) -> Outcome {
             Shape::primitive(ShapeKind::Cube, Transform::IDENTITY, a),
             Shape::primitive(ShapeKind::Cube, Transform::translation(DVec3::new(0.0, 0.0, 1.0)), a),
         ],
-        Transform::translation(DVec3::new(3.0, 0.0, -0.3)) * Transform::rotation_z(21.0) * Transform::rotation_y(-9.0) * Transform::scaling(DVec3::splat(1.3)),
+        Transform::translation(DVec3::new(3.0, 0.0, -0.3))
+            * Transform::rotation_z(21.0)
+            * Transform::rotation_y(-9.0)
+            * Transform::scaling(DVec3::splat(1.3)),
     );
     b.shape(diff.clone())
-        .camera(Camera { transform: Transform::translation(DVec3::new(0.0, 0.0, 1.5)) * Transform::rotation_y(30.0), ..Camera::default() })
+        .camera(Camera {
+            transform: Transform::translation(DVec3::new(0.0, 0.0, 1.5)) * Transform::rotation_y(30.0),
+            ..Camera::default()
+        })
         .renderer(Renderer::Flat { background: Color::BLACK });
     let scene = b.build().unwrap();
     flat_case(gpu, "CSG DIFF touching along a face".into(), "the whole cube, closed".into(), &scene, &diff)
@@ -1015,6 +1102,41 @@ pub fn extreme_transforms(gpu: Option<&Gpu>) -> Outcome {
     }
 }
 
+/// Scales that SceneLang accepts (finite, non-zero, invertible in f64), loaded from a
+/// script: a sphere scaled by 1e-300 in front of the camera (below f32's range) and one
+/// scaled by `big` that encloses everything. No NaN/Inf sample on either renderer; the
+/// camera is inside the huge diffuse sphere (ρ 0.5) with nothing emitting, so every pixel
+/// must be exactly 0.
+pub fn extreme_script_scales(gpu: Option<&Gpu>, big: &str) -> Outcome {
+    use lumen::scenelang::{load_str, LoadOptions};
+    let src = format!(
+        "SET grey Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.5, 0.5, 0.5>)))
+SPAWN Shape.Sphere(.material grey, .transformation TRANSLATE(.X 2) * SCALE 1e-300)
+SPAWN Shape.Sphere(.material grey, .transformation SCALE {big})
+USING Camera.Perspective() Image(8, 8) Renderer.PathTracer(.n 2, .max_depth 3)
+      Tracer(.samples_per_side 2) Environment.Uniform(.color <1, 1, 1>)
+"
+    );
+    let scene = load_str(&src, "extreme.sl", std::path::Path::new("."), &LoadOptions::default())
+        .expect("finite, invertible scales load");
+    let (cpu, gpu_img) = render_both(gpu, &scene, None);
+    let max = |img: &HdrImage| img.pixels().iter().map(|p| f64::from(p.r.max(p.g).max(p.b))).fold(0.0, f64::max);
+    let mut agree = Agreement::default();
+    agree.add(&cpu, &gpu_img);
+    Outcome {
+        case: format!("script scales 1e-300 and {big} (enclosing)"),
+        expected: "no NaN/Inf; black (inside a non-emitting sphere)".into(),
+        metric: "max pixel radiance",
+        cpu_tolerance: 0.0,
+        gpu_tolerance: 0.0,
+        cpu: max(&cpu),
+        gpu: gpu_img.as_ref().map(max),
+        gpu_agrees_with_cpu: agree.0,
+        min_agreement: 1.0,
+        note: String::new(),
+    }
+}
+
 /// Every case, in table order (the GPU may be absent).
 pub fn all(gpu: Option<&Gpu>) -> Vec<Outcome> {
     vec![
@@ -1032,6 +1154,7 @@ pub fn all(gpu: Option<&Gpu>) -> Vec<Outcome> {
         inside_cube(gpu),
         inside_cube_nee(gpu),
         furnace_roulette(gpu),
+        many_paths_per_sample(gpu),
         glass_rim_depth_3(gpu),
         glass_rim_depth_64(gpu),
         csg_nested_8(gpu),
@@ -1039,5 +1162,8 @@ pub fn all(gpu: Option<&Gpu>) -> Vec<Outcome> {
         csg_touching_face(gpu),
         degenerate_scripts(),
         extreme_transforms(gpu),
+        extreme_script_scales(gpu, "1e18"),
+        extreme_script_scales(gpu, "1e30"),
+        extreme_script_scales(gpu, "1e300"),
     ]
 }
