@@ -124,7 +124,16 @@ fn csg_nested_8_deep_matches_set_membership() {
 
 #[test]
 fn csg_diff_with_coincident_faces_has_no_speckles() {
-    run("csg_coincident_sides", cases::csg_coincident_sides);
+    run("csg_coincident_sides", |gpu| cases::csg_coincident_sides(gpu, false));
+}
+
+#[test]
+#[ignore = "bug: src/cpu/csg.rs subtract (and its port in shaders/csg.wgsl) keeps DIFF pieces of any positive \
+            length; when the cutter's face coincides with the first operand's only up to rounding (cutter turned \
+            90° about z), a sliver of ~1e-16 survives and shows as a carved surface: 2 speckles in 1024 pixels \
+            on the CPU (0 on lavapipe, by luck of f32 rounding)"]
+fn csg_diff_with_faces_coincident_up_to_rounding_has_no_speckles() {
+    run("csg_coincident_sides_rotated", |gpu| cases::csg_coincident_sides(gpu, true));
 }
 
 #[test]
