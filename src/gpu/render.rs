@@ -9,7 +9,9 @@ use std::time::Instant;
 
 use super::features::FeatureSet;
 use super::pack::{pack, PackedScene};
-use super::{run_progressive, Assembled, Gpu, GpuError, PassOptions, ShaderLibrary, StopReason};
+use super::{
+    run_progressive, Assembled, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary, StopReason,
+};
 use crate::image::HdrImage;
 use crate::scene::Scene;
 
@@ -165,15 +167,57 @@ fn pack_error(e: super::pack::PackError) -> GpuError {
 /// assert_eq!(out.image.get(0, 0).r, 0.0);
 /// ```
 pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
-    let start = Instant::now();
-    let packed = pack(scene, opts.spp).map_err(pack_error)?;
-    let assembled = assemble(&packed.features)?;
-    check_binding_limits(gpu, &assembled)?;
-    let kernel = gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)?;
-    let buffers = SceneBuffers::upload(gpu, &packed)?;
-    let refs: Vec<&wgpu::Buffer> = buffers.bound(&kernel)?;
+    GpuRenderer::new().render(gpu, scene, opts)
+}
+
+/// Renders several scenes (animation frames, re-renders) compiling each distinct kernel
+/// once: kernels are cached by feature set and scene-dependent constants.
+#[derive(Debug, Default)]
+pub struct GpuRenderer {
+    kernels: KernelCache,
+}
+
+impl GpuRenderer {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Kernels compiled so far.
+    pub fn kernels_compiled(&self) -> usize {
+        self.kernels.len()
+    }
+
+    /// Renders `scene` on `gpu`, like [`render`].
+    pub fn render(&mut self, gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
+        let start = Instant::now();
+        let packed = pack(scene, opts.spp).map_err(pack_error)?;
+        let f = &packed.features;
+        // The cache key: the assembly features plus the generated constants.
+        let key = f
+            .assembly_features()
+            .with(&format!("csg_max_intervals={}", f.csg_max_intervals))
+            .with(&format!("csg_max_depth={}", f.csg_max_depth));
+        let kernel = self.kernels.get_or_build(&key, ENTRY_POINT, || {
+            let assembled = assemble(f)?;
+            check_binding_limits(gpu, &assembled)?;
+            gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)
+        })?;
+        render_packed(gpu, &kernel, scene, &packed, opts, start)
+    }
+}
+
+fn render_packed(
+    gpu: &Gpu,
+    kernel: &ComputeKernel,
+    scene: &Scene,
+    packed: &PackedScene,
+    opts: &GpuRenderOptions,
+    start: Instant,
+) -> Result<GpuRenderOutput, GpuError> {
+    let buffers = SceneBuffers::upload(gpu, packed)?;
+    let refs: Vec<&wgpu::Buffer> = buffers.bound(kernel)?;
     let group = kernel.bind_group(gpu, 1, &refs)?;
-    let acc = run_progressive(gpu, &kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
+    let acc = run_progressive(gpu, kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
     let nan: Vec<u32> = gpu.read_buffer(&buffers.nan_count, 1)?;
     Ok(GpuRenderOutput {
         image: acc.image,
