@@ -236,8 +236,13 @@ fn path_tracer_matches_the_cpu() {
         println!("nee = {nee}");
         let scene = path_traced_scene(nee, None);
         let a = assert_matches_cpu(&gpu, &scene, None, 0.99);
-        // Same scene twice: bitwise the same image.
-        let b = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap().image;
+        // Same scene twice: bitwise the same image, the second time with a cached kernel.
+        let mut renderer = lumen::gpu::render::GpuRenderer::new();
+        let opts = GpuRenderOptions::fixed_passes(None, 4);
+        let first = renderer.render(&gpu, &scene, &opts).unwrap().image;
+        let b = renderer.render(&gpu, &scene, &opts).unwrap().image;
+        assert_eq!(renderer.kernels_compiled(), 1);
+        assert!(a.pixels().iter().zip(first.pixels()).all(|(x, y)| x == y));
         assert!(a.pixels().iter().zip(b.pixels()).all(|(x, y)| x.r.to_bits() == y.r.to_bits()
             && x.g.to_bits() == y.g.to_bits()
             && x.b.to_bits() == y.b.to_bits()));
