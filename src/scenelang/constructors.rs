@@ -22,6 +22,7 @@ type Res<T> = Result<T, SceneLangError>;
 /// Largest blank `Image(w, h)` that may be turned into pixels (as a texture or environment).
 const MAX_BLANK_TEXTURE_PIXELS: u64 = 1 << 22;
 
+/// One constructor parameter: its keyword (also its position in the list) and its type.
 struct Param {
     name: &'static str,
     ty: Ty,
