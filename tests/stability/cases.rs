@@ -868,7 +868,7 @@ fn glass_rim(gpu: Option<&Gpu>, max_depth: u32) -> Outcome {
             max_depth - 1,
             min_cos.acos().to_degrees()
         ),
-        metric: "|pooled z-score| (binomial)",
+        metric: "abs. pooled z-score (binomial)",
         cpu_tolerance: 4.5,
         gpu_tolerance: 4.5,
         cpu: err(&cpu),
