@@ -726,9 +726,9 @@ fn statistical_furnace(
         cpu: (cm / expected - 1.0).abs(),
         gpu: gm.map(|(m, _)| (m / expected - 1.0).abs()),
         gpu_agrees_with_cpu: agree.0,
-        // Long paths with NEE diverge between f32 and f64 at some vertex in most pixels; only
-        // the mean is an invariant here.
-        min_agreement: 0.0,
+        // Same random numbers: most pixels agree, but one f32/f64 branch flip anywhere in a
+        // pixel's long paths moves it by more than 1e-3.
+        min_agreement: 0.9,
         note: format!(
             "standard error {:.2}% (CPU){}",
             100.0 * cse / expected,
