@@ -43,6 +43,7 @@ fn main() {
         ("many_paths_per_sample", cases::many_paths_per_sample),
         ("glass_rim_depth_3", cases::glass_rim_depth_3),
         ("glass_rim_depth_64", cases::glass_rim_depth_64),
+        ("glass_cube_tir", cases::glass_cube_tir),
         ("csg_nested_8", cases::csg_nested_8),
         ("csg_coincident_sides", |g| cases::csg_coincident_sides(g, false)),
         ("csg_coincident_sides rotated", |g| cases::csg_coincident_sides(g, true)),

@@ -119,6 +119,11 @@ fn glass_rim_conserves_energy_depth_64() {
 }
 
 #[test]
+fn glass_cube_total_internal_reflection_path_lengths() {
+    run("glass_cube_tir", cases::glass_cube_tir);
+}
+
+#[test]
 fn csg_nested_8_deep_matches_set_membership() {
     run("csg_nested_8", cases::csg_nested_8);
 }

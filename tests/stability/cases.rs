@@ -885,6 +885,130 @@ pub fn glass_rim_depth_64(gpu: Option<&Gpu>) -> Outcome {
     glass_rim(gpu, 64)
 }
 
+/// Where the line o + t·d (t > 1e-9) first meets the surface of the unit cube
+/// [−0.5, 0.5]³, from outside or inside: (t, outward normal).
+fn unit_cube_next(o: DVec3, d: DVec3) -> Option<(f64, DVec3)> {
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    let (mut n0, mut n1) = (DVec3::ZERO, DVec3::ZERO);
+    for i in 0..3 {
+        if d[i] == 0.0 {
+            if o[i].abs() > 0.5 {
+                return None;
+            }
+            continue;
+        }
+        let (a, b) = ((-0.5 - o[i]) / d[i], (0.5 - o[i]) / d[i]);
+        let (near, far) = if a < b { (a, b) } else { (b, a) };
+        let mut axis = DVec3::ZERO;
+        axis[i] = 1.0;
+        if near > t0 {
+            t0 = near;
+            n0 = axis * -d[i].signum();
+        }
+        if far < t1 {
+            t1 = far;
+            n1 = axis * d[i].signum();
+        }
+    }
+    if t0 >= t1 {
+        return None;
+    }
+    if t0 > 1e-9 {
+        Some((t0, n0))
+    } else if t1 > 1e-9 {
+        Some((t1, n1))
+    } else {
+        None
+    }
+}
+
+/// Probability that a path through a clear glass unit cube (index `ior`) escapes within
+/// `max_depth` vertices, starting with a ray at iteration `b`: a hit at iteration
+/// `max_depth` ends the path; at every other hit the path reflects with the Fresnel
+/// probability (1 under total internal reflection) or refracts (written out here, not the
+/// renderer's code).
+fn glass_cube_escape(o: DVec3, d: DVec3, inside: bool, b: u32, ior: f64, max_depth: u32) -> f64 {
+    let Some((t, n_out)) = unit_cube_next(o, d) else { return 1.0 };
+    if b == max_depth {
+        return 0.0;
+    }
+    let p = o + d * t;
+    let d = d.normalize();
+    let n = if d.dot(n_out) < 0.0 { n_out } else { -n_out };
+    let eta = if inside { 1.0 / ior } else { ior };
+    let cos_i = -d.dot(n);
+    let f = fresnel(cos_i, eta);
+    let reflected = glass_cube_escape(p, d + n * (2.0 * cos_i), inside, b + 1, ior, max_depth);
+    if f >= 1.0 {
+        return reflected;
+    }
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    let refracted = d / eta + n * (cos_i / eta - (1.0 - sin2_t).sqrt());
+    f * reflected + (1.0 - f) * glass_cube_escape(p, refracted, !inside, b + 1, ior, max_depth)
+}
+
+/// A clear glass cube (ior 1.5) under a uniform sky, seen by an orthogonal camera at 80°
+/// from its top face's normal: rays refract to 41°, and those that reach a side face meet
+/// it at 49°, beyond the critical angle (41.8°): total internal reflection. Each pixel's
+/// expectation is L · P(escape within `max_depth` vertices), from an f64 branching trace of
+/// the exact Fresnel/TIR tree in the test; error: the pooled z-score (binomial).
+pub fn glass_cube_tir(gpu: Option<&Gpu>) -> Outcome {
+    let (sky, ior, n, max_depth) = (1.5, 1.5, 256, 4);
+    let mut b = SceneBuilder::new(16, 16);
+    let m = glass(&mut b, ior);
+    let dir = Transform::rotation_y(10.0).vector(DVec3::X);
+    let centre = DVec3::new(0.0, 0.0, 0.5) - dir * 3.0;
+    b.cube(Transform::IDENTITY, m)
+        .environment(Environment::Uniform(Color::gray(sky)))
+        .camera(Camera {
+            projection: Projection::Orthogonal,
+            aspect_ratio: 1.0,
+            transform: Transform::translation(centre + dir * 0.08)
+                * Transform::rotation_y(10.0)
+                * Transform::scaling(DVec3::splat(0.08)),
+        })
+        .renderer(pt(n, max_depth, 1000, false));
+    let scene = b.build().unwrap();
+    let (cpu, gpu_img) = render_both(gpu, &scene, None);
+    let mut p_escape = Vec::new();
+    for row in 0..16 {
+        for col in 0..16 {
+            let r = centre_ray(&scene, col, row);
+            let start = r.origin + r.dir * CAMERA_RAY_TMIN;
+            p_escape.push(glass_cube_escape(start, r.dir, false, 0, ior, max_depth));
+        }
+    }
+    let lost = p_escape.iter().filter(|&&p| p < 1.0).count();
+    assert!(lost > 100, "only {lost} pixels can lose paths: the case no longer tests internal reflection");
+    let err = |img: &HdrImage| {
+        let (mut dev, mut var) = (0.0, 0.0);
+        for (px, &p) in img.pixels().iter().zip(&p_escape) {
+            let v = f64::from(px.g) / sky;
+            assert!(v <= 1.0 + 1e-5, "a pixel exceeds the sky: {v}");
+            dev += (v - p) * f64::from(n);
+            var += f64::from(n) * p * (1.0 - p);
+        }
+        (dev / var.sqrt().max(1e-300)).abs()
+    };
+    let mean_p = p_escape.iter().sum::<f64>() / p_escape.len() as f64;
+    let mut agree = Agreement::default();
+    agree.add(&cpu, &gpu_img);
+    Outcome {
+        case: format!("glass cube at 80° incidence (TIR on the sides), depth {max_depth}"),
+        expected: format!(
+            "L·P(escape within {max_depth} vertices) per pixel, exact Fresnel/TIR tree (mean P {mean_p:.4})"
+        ),
+        metric: "abs. pooled z-score (binomial)",
+        cpu_tolerance: 4.5,
+        gpu_tolerance: 4.5,
+        cpu: err(&cpu),
+        gpu: gpu_img.as_ref().map(err),
+        gpu_agrees_with_cpu: agree.0,
+        min_agreement: 0.9,
+        note: format!("{n} paths per pixel, {lost} of 256 pixels below L"),
+    }
+}
+
 // --------------------------------------------------------------------------- 5. CSG
 
 fn flat_case(gpu: Option<&Gpu>, case: String, expected: String, scene: &Scene, shape: &Shape) -> Outcome {
@@ -1166,6 +1290,7 @@ pub fn all(gpu: Option<&Gpu>) -> Vec<Outcome> {
         many_paths_per_sample(gpu),
         glass_rim_depth_3(gpu),
         glass_rim_depth_64(gpu),
+        glass_cube_tir(gpu),
         csg_nested_8(gpu),
         csg_coincident_sides(gpu, false),
         csg_coincident_sides(gpu, true),
