@@ -1,4 +1,12 @@
 //! The f64 CPU reference renderer (and the fallback when no GPU exists).
+//!
+//! Geometry: [`World`] (closest hit and occlusion over the BVH), shapes, CSG, robust
+//! offsets, ONB. Shading, one concept per file, each mirrored by a WGSL file: [`warp`]
+//! (square → directions), [`fresnel`], [`bsdf`], [`area_light`], [`env_light`], [`lights`]
+//! (what NEE chooses from), [`point_lights`], [`vertex_draws`] (the 7 uniforms per vertex),
+//! [`pixel_samples`] (camera sample placement), [`simple_renderers`] (OnOff, Flat,
+//! PointLight), [`path_tracer`], and [`render()`] (tiles on rayon). DESIGN.md states the
+//! rules they follow.
 
 pub mod csg;
 mod hit;
@@ -13,3 +21,20 @@ pub use offset::offset_origin;
 pub use onb::onb;
 pub use ray::Ray;
 pub use world::World;
+
+// Shading: BSDFs, lights, integrators and the render loop.
+pub mod area_light;
+pub mod bsdf;
+pub mod context;
+pub mod env_light;
+pub mod fresnel;
+pub mod lights;
+pub mod path_tracer;
+pub mod pixel_samples;
+pub mod point_lights;
+mod render;
+pub mod simple_renderers;
+pub mod vertex_draws;
+pub mod warp;
+
+pub use render::{paths_per_sample, render, render_pixel, Progress, RenderOptions, RenderOutput, RenderStats};

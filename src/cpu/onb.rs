@@ -15,8 +15,13 @@ use glam::DVec3;
 /// assert!(t.dot(n).abs() < 1e-15 && b.dot(n).abs() < 1e-15 && t.dot(b).abs() < 1e-15);
 /// assert!((t.cross(b) - n).length() < 1e-15);
 /// ```
+///
+/// The sign is taken as `n.z >= 0` (so −0.0 counts as positive), exactly as
+/// `shaders/onb.wgsl` must (WGSL has no copysign that sees −0.0): facing-flipped normals
+/// such as (−1, −0, −0) then get the same frame, and the same sampled directions, on both
+/// renderers.
 pub fn onb(n: DVec3) -> (DVec3, DVec3) {
-    let sign = 1f64.copysign(n.z);
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
     let t = DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);

@@ -8,8 +8,12 @@ mod accumulate;
 mod assemble;
 mod compute;
 mod device;
+pub mod features;
 mod kernel_cache;
+pub mod layout;
+pub mod pack;
 mod passes;
+pub mod render;
 mod test_support;
 
 pub use accumulate::{Accumulator, Tile};
