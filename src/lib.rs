@@ -14,3 +14,4 @@ pub mod gpu;
 pub mod image;
 pub mod sampling;
 pub mod scene;
+pub mod scenelang;

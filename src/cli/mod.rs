@@ -5,8 +5,10 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod check;
 pub mod devices;
 pub mod gpu_args;
+pub mod render;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.
@@ -21,12 +23,18 @@ pub struct Cli {
 pub enum Command {
     /// List the GPU adapters lumen can render on.
     Devices(devices::DevicesArgs),
+    /// Load a SceneLang script and summarise it (or print its first error).
+    Check(check::CheckArgs),
+    /// Render a SceneLang script to image files.
+    Render(render::RenderArgs),
 }
 
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Devices(args) => devices::run(args),
+        Command::Check(args) => check::run(args),
+        Command::Render(args) => render::run(args),
     }
 }
 

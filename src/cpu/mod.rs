@@ -13,3 +13,20 @@ pub use offset::offset_origin;
 pub use onb::onb;
 pub use ray::Ray;
 pub use world::World;
+
+// Shading: BSDFs, lights, integrators and the render loop.
+pub mod area_light;
+pub mod bsdf;
+pub mod context;
+pub mod env_light;
+pub mod fresnel;
+pub mod lights;
+pub mod path_tracer;
+pub mod pixel_samples;
+pub mod point_lights;
+mod render;
+pub mod simple_renderers;
+pub mod vertex_draws;
+pub mod warp;
+
+pub use render::{paths_per_sample, render, render_pixel, Progress, RenderOptions, RenderOutput, RenderStats};

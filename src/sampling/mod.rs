@@ -15,8 +15,10 @@
 //! Because each stream depends only on these indices, images do not depend on thread
 //! count, tile order or how samples are split into GPU passes.
 
+pub mod distribution;
 mod pcg;
 
+pub use distribution::{Distribution1D, Distribution2D};
 pub use pcg::Pcg32;
 
 use crate::scene::PcgSeed;

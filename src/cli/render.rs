@@ -1,0 +1,314 @@
+//! `lumen render SCENE.sl`: loads a script, renders it and writes the image(s).
+//!
+//! Every argument is checked before rendering starts, so a bad argument never costs a
+//! render and never leaves an output file behind.
+
+use std::path::{Path, PathBuf};
+use std::process::Command as Process;
+
+use anyhow::{anyhow, bail, Context as _};
+use clap::{Args, ValueEnum};
+
+use crate::cpu::{self, paths_per_sample, Progress, RenderOptions, RenderOutput};
+use crate::image::{check_size, write_image, ImageFormat, ToneMap};
+use crate::scene::{Scene, MAX_IMAGE_SIDE};
+use crate::scenelang::{load_file, LoadOptions};
+
+/// Most camera samples per pixel `--spp` accepts.
+pub const MAX_SPP: u32 = 1 << 20;
+/// Most frames `--frames` accepts.
+pub const MAX_FRAMES: u32 = 100_000;
+/// Frame rate of the video assembled from `--frames`.
+pub const VIDEO_FPS: u32 = 24;
+
+/// Where to render.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DeviceChoice {
+    /// The f64 CPU reference renderer.
+    Cpu,
+    /// A GPU through wgpu.
+    Gpu,
+    /// The GPU if one is usable, else the CPU.
+    Auto,
+}
+
+/// Arguments of `lumen render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The SceneLang script to render.
+    pub scene: PathBuf,
+    /// Output image; repeat for several. HDR extensions (.pfm .exr .hdr) get linear
+    /// radiance, LDR ones (.png .jpg) the tone-mapped image. Default: SCENE's name + .png.
+    #[arg(short = 'o', long = "output")]
+    pub outputs: Vec<PathBuf>,
+    #[arg(long, value_enum, default_value_t = DeviceChoice::Auto)]
+    pub device: DeviceChoice,
+    /// Image width in pixels. Given alone, the height follows from the camera's aspect ratio.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels. Given alone, the width follows from the camera's aspect ratio.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Camera samples per pixel (a perfect square s² gives s×s strata), instead of the
+    /// tracer's samples_per_side².
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Value of TIME in the script.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub time: f64,
+    /// Variables defined before the script runs, "name value, name value"; may repeat.
+    #[arg(long)]
+    pub vars: Vec<String>,
+    /// Replaces the state of the tracer's Pcg seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Tone mapping: Raytracer.jl's Reinhard key (implies the Reinhard curve).
+    #[arg(long)]
+    pub alpha: Option<f32>,
+    /// Tone mapping: Reinhard's gamma (implies the Reinhard curve).
+    #[arg(long)]
+    pub gamma: Option<f32>,
+    /// Render TIME from START to END (inclusive) in COUNT frames, into numbered files
+    /// (out.png → out_0001.png ...), plus an mp4 when ffmpeg is on PATH.
+    #[arg(long, value_name = "START:END:COUNT")]
+    pub frames: Option<String>,
+}
+
+/// An animation's times.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frames {
+    pub start: f64,
+    pub end: f64,
+    pub count: u32,
+}
+
+impl Frames {
+    /// Parses `START:END:COUNT`.
+    pub fn parse(s: &str) -> anyhow::Result<Self> {
+        let parts: Vec<&str> = s.split(':').collect();
+        let [a, b, c] = parts[..] else {
+            bail!("--frames must be START:END:COUNT, got {s:?}");
+        };
+        let num = |x: &str, what: &str| -> anyhow::Result<f64> {
+            let v: f64 = x.trim().parse().map_err(|_| anyhow!("--frames: {what} {x:?} is not a number"))?;
+            if !v.is_finite() {
+                bail!("--frames: {what} must be finite, got {x}");
+            }
+            Ok(v)
+        };
+        let count: u32 = c.trim().parse().map_err(|_| anyhow!("--frames: COUNT {c:?} is not a positive integer"))?;
+        if count == 0 || count > MAX_FRAMES {
+            bail!("--frames: COUNT must be 1..={MAX_FRAMES}, got {count}");
+        }
+        Ok(Self { start: num(a, "START")?, end: num(b, "END")?, count })
+    }
+
+    /// TIME of frame k (0-based): evenly spaced, both ends included.
+    pub fn time(&self, k: u32) -> f64 {
+        if self.count == 1 {
+            self.start
+        } else {
+            self.start + (self.end - self.start) * f64::from(k) / f64::from(self.count - 1)
+        }
+    }
+}
+
+/// `out.png`, frame k of n → `out_0001.png` (1-based, at least four digits).
+pub fn frame_path(path: &Path, k: u32, count: u32) -> PathBuf {
+    let digits = count.to_string().len().max(4);
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    path.with_file_name(format!("{stem}_{:0digits$}{ext}", k + 1))
+}
+
+/// Applies `--width/--height`: both given replace the size (the camera keeps the script's
+/// aspect ratio); one alone sets that side and derives the other from the camera's aspect
+/// ratio, so pixels stay square.
+pub fn resize(scene: &mut Scene, width: Option<u32>, height: Option<u32>) -> anyhow::Result<()> {
+    let aspect = scene.camera.aspect_ratio;
+    let derive = |v: f64| -> u32 { v.round().clamp(1.0, f64::from(u32::MAX)) as u32 };
+    let (w, h) = match (width, height) {
+        (None, None) => return Ok(()),
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, derive(f64::from(w) / aspect)),
+        (None, Some(h)) => (derive(f64::from(h) * aspect), h),
+    };
+    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        bail!("image size {w}×{h} is invalid: each side must be 1..={MAX_IMAGE_SIDE}");
+    }
+    check_size(w as usize, h as usize).map_err(|e| anyhow!("image size {w}×{h}: {e}"))?;
+    scene.width = w;
+    scene.height = h;
+    Ok(())
+}
+
+/// The tone mapping for LDR outputs: Reinhard when `--alpha` or `--gamma` is given (with
+/// Raytracer.jl's values for the other), else the image module's default.
+pub fn tone_map(alpha: Option<f32>, gamma: Option<f32>) -> anyhow::Result<ToneMap> {
+    let tm = if alpha.is_some() || gamma.is_some() {
+        let base = ToneMap::raytracer_jl();
+        ToneMap { alpha: alpha.unwrap_or(base.alpha), gamma: gamma.unwrap_or(base.gamma), ..base }
+    } else {
+        ToneMap::default()
+    };
+    tm.validate().context("bad tone mapping")?;
+    Ok(tm)
+}
+
+/// The one place that decides which renderer runs (the GPU path plugs in here).
+fn render_on(device: DeviceChoice, scene: &Scene, opts: &RenderOptions) -> anyhow::Result<RenderOutput> {
+    match device {
+        DeviceChoice::Cpu => Ok(cpu::render(scene, opts, Progress::Bar)),
+        DeviceChoice::Auto => {
+            eprintln!("note: the GPU renderer is not available yet; rendering on the CPU");
+            Ok(cpu::render(scene, opts, Progress::Bar))
+        }
+        DeviceChoice::Gpu => bail!("--device gpu: the GPU renderer is not available yet (use --device cpu)"),
+    }
+}
+
+/// Checks everything that can be checked before rendering.
+fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, Option<Frames>)> {
+    for o in outputs {
+        ImageFormat::from_path(o).with_context(|| format!("output {}", o.display()))?;
+    }
+    if let Some(spp) = args.spp {
+        if spp == 0 || spp > MAX_SPP {
+            bail!("--spp must be 1..={MAX_SPP}, got {spp}");
+        }
+    }
+    if !args.time.is_finite() {
+        bail!("--time must be finite");
+    }
+    let frames = args.frames.as_deref().map(Frames::parse).transpose()?;
+    Ok((tone_map(args.alpha, args.gamma)?, frames))
+}
+
+/// Loads the scene at `time` and applies the command-line overrides.
+fn load(args: &RenderArgs, time: f64) -> anyhow::Result<Scene> {
+    let opts = LoadOptions { time, vars: args.vars.clone() };
+    let mut scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("{e}"))?;
+    resize(&mut scene, args.width, args.height)?;
+    if let Some(seed) = args.seed {
+        scene.tracer.rng.state = seed;
+    }
+    let spp = args.spp.map_or(u64::from(scene.tracer.samples_per_side).pow(2).max(1), u64::from);
+    if spp * paths_per_sample(&scene) > u64::from(u32::MAX) {
+        bail!("{spp} samples per pixel × {} paths per sample is too many (at most 2³² − 1)", paths_per_sample(&scene));
+    }
+    Ok(scene)
+}
+
+/// Renders one image and writes it to every output.
+fn render_one(args: &RenderArgs, time: f64, outputs: &[PathBuf], tm: &ToneMap) -> anyhow::Result<()> {
+    let scene = load(args, time)?;
+    let out = render_on(args.device, &scene, &RenderOptions { spp: args.spp })?;
+    let s = &out.stats;
+    eprintln!(
+        "{}×{} {}: {} samples, {} rays in {:.2} s ({:.2} Mrays/s)",
+        scene.width,
+        scene.height,
+        scene.renderer.name(),
+        s.samples,
+        s.rays,
+        s.seconds,
+        s.rays as f64 / s.seconds.max(1e-9) / 1e6
+    );
+    if s.non_finite_samples > 0 {
+        eprintln!("warning: {} NaN or infinite radiance samples were counted as black", s.non_finite_samples);
+    }
+    for o in outputs {
+        write_image(o, &out.image, tm).with_context(|| format!("cannot write {}", o.display()))?;
+        eprintln!("wrote {}", o.display());
+    }
+    Ok(())
+}
+
+/// Runs `lumen render`.
+pub fn run(args: RenderArgs) -> anyhow::Result<()> {
+    let outputs = if args.outputs.is_empty() {
+        let stem = args.scene.file_stem().ok_or_else(|| anyhow!("{} has no file name", args.scene.display()))?;
+        vec![PathBuf::from(stem).with_extension("png")]
+    } else {
+        args.outputs.clone()
+    };
+    let (tm, frames) = validate(&args, &outputs)?;
+    let Some(frames) = frames else {
+        return render_one(&args, args.time, &outputs, &tm);
+    };
+    for k in 0..frames.count {
+        let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
+        eprintln!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
+        render_one(&args, frames.time(k), &paths, &tm)?;
+    }
+    if let Some(ldr) = outputs.iter().find(|o| ImageFormat::from_path(o).is_ok_and(|f| !f.is_hdr())) {
+        make_video(ldr, frames.count)?;
+    }
+    Ok(())
+}
+
+/// Assembles the numbered LDR frames of `output` into `output`.mp4 with ffmpeg, if present.
+fn make_video(output: &Path, count: u32) -> anyhow::Result<()> {
+    if Process::new("ffmpeg").arg("-version").output().is_err() {
+        eprintln!("note: ffmpeg is not on PATH; no video assembled");
+        return Ok(());
+    }
+    let digits = count.to_string().len().max(4);
+    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    let pattern = output.with_file_name(format!("{stem}_%0{digits}d.{ext}"));
+    let video = output.with_extension("mp4");
+    let status = Process::new("ffmpeg")
+        .args(["-y", "-loglevel", "error", "-framerate", &VIDEO_FPS.to_string(), "-start_number", "1", "-i"])
+        .arg(&pattern)
+        .args(["-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2"])
+        .arg(&video)
+        .status()
+        .context("cannot run ffmpeg")?;
+    if !status.success() {
+        bail!("ffmpeg failed ({status}) assembling {}", video.display());
+    }
+    eprintln!("wrote {}", video.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SceneBuilder;
+
+    #[test]
+    fn frames_parse_and_space_evenly() {
+        let f = Frames::parse("0:2:5").unwrap();
+        assert_eq!((f.time(0), f.time(2), f.time(4)), (0.0, 1.0, 2.0));
+        assert_eq!(Frames::parse("1:9:1").unwrap().time(0), 1.0);
+        for bad in ["0:1", "0:1:0", "a:1:2", "0:inf:2", "0:1:-3", "0:1:2:3"] {
+            assert!(Frames::parse(bad).is_err(), "{bad}");
+        }
+        assert_eq!(frame_path(Path::new("dir/out.png"), 0, 10), PathBuf::from("dir/out_0001.png"));
+        assert_eq!(frame_path(Path::new("o.pfm"), 41, 12345), PathBuf::from("o_00042.pfm"));
+    }
+
+    #[test]
+    fn size_overrides_keep_square_pixels_when_one_side_is_given() {
+        let mut s = SceneBuilder::new(160, 90).build().unwrap();
+        s.camera.aspect_ratio = 16.0 / 9.0;
+        resize(&mut s, Some(320), None).unwrap();
+        assert_eq!((s.width, s.height), (320, 180));
+        resize(&mut s, None, Some(45)).unwrap();
+        assert_eq!((s.width, s.height), (80, 45));
+        resize(&mut s, Some(10), Some(10)).unwrap();
+        assert_eq!((s.width, s.height, s.camera.aspect_ratio), (10, 10, 16.0 / 9.0));
+        assert!(resize(&mut s, Some(0), None).is_err());
+        assert!(resize(&mut s, Some(MAX_IMAGE_SIDE + 1), Some(1)).is_err());
+    }
+
+    #[test]
+    fn tone_map_choice() {
+        assert_eq!(tone_map(None, None).unwrap(), ToneMap::default());
+        let t = tone_map(Some(0.3), None).unwrap();
+        assert_eq!((t.curve, t.alpha, t.gamma), (ToneMap::raytracer_jl().curve, 0.3, 1.0));
+        assert!(tone_map(Some(-1.0), None).is_err());
+        assert!(tone_map(None, Some(f32::NAN)).is_err());
+    }
+}

@@ -1,0 +1,318 @@
+//! Sampling points on area lights (emissive top-level spheres and cubes) as seen from a
+//! shading point, and the solid-angle density of doing so (for MIS).
+//!
+//! Two strategies, chosen by the same test in [`AreaLight::uses_cone`] whether sampling or
+//! evaluating the density, so that MIS weights stay consistent:
+//! - **cone**: a sphere whose transform is a similarity (a true sphere in world space),
+//!   seen from a point outside it that does not lie on it: directions uniform in the cone
+//!   it subtends (pdf 1 / (2π(1 − cos θmax))).
+//! - **area**: otherwise (cubes, ellipsoids, points inside or on the light), a point uniform
+//!   in object space on the unit shape's surface (4π for the sphere, 6 unit faces for the
+//!   cube), mapped to the world. Nanson's formula gives the world area density
+//!   `1 / (A_obj · |det M| · |M⁻ᵀ n_obj|)`, converted to solid angle by `d² / |cos θ_light|`.
+
+use std::f64::consts::PI;
+
+use glam::{DMat3, DVec3};
+
+use crate::color::Color;
+use crate::scene::{MaterialId, Pigment, Scene, Shape, ShapeKind, Transform};
+
+use super::warp::{cone_one_minus_cos, uniform_cone, uniform_cone_pdf, uniform_sphere};
+
+/// One area light, with what sampling needs precomputed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AreaLight {
+    /// Index of the shape in [`Scene::shapes`].
+    pub shape: u32,
+    pub kind: ShapeKind,
+    pub transform: Transform,
+    pub material: MaterialId,
+    /// |det| of the linear part of the object-to-world transform.
+    pub det: f64,
+    /// World centre and radius when the shape is a sphere under a similarity transform.
+    pub sphere: Option<(DVec3, f64)>,
+}
+
+/// A point sampled on a light, seen from the shading point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightPoint {
+    /// World point on the light.
+    pub point: DVec3,
+    /// Unit geometric normal of the light there (outward in object space).
+    pub normal: DVec3,
+    /// Object-space point (for the emitted pigment's uv).
+    pub object_point: DVec3,
+    /// Solid-angle density at the shading point (0: unusable sample).
+    pub pdf: f64,
+}
+
+impl AreaLight {
+    /// The light for `Scene::shapes[shape]`, which must be a sphere or cube primitive.
+    pub fn new(scene: &Scene, shape: usize) -> Option<Self> {
+        let Shape::Primitive(p) = &scene.shapes[shape] else { return None };
+        if !matches!(p.kind, ShapeKind::Sphere | ShapeKind::Cube) {
+            return None;
+        }
+        let lin = DMat3::from_mat4(p.transform.matrix());
+        let sphere = (p.kind == ShapeKind::Sphere).then(|| similarity_scale(lin)).flatten();
+        Some(Self {
+            shape: shape as u32,
+            kind: p.kind,
+            transform: p.transform,
+            material: p.material,
+            det: lin.determinant().abs(),
+            sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
+        })
+    }
+
+    /// Whether directions toward this light are drawn from its cone, for a shading point
+    /// `x` lying on shape `x_shape`.
+    pub fn uses_cone(&self, x: DVec3, x_shape: u32) -> Option<(DVec3, f64, f64)> {
+        let (c, r) = self.sphere?;
+        let d = (c - x).length();
+        (x_shape != self.shape && d > r).then_some((c, r, d))
+    }
+
+    /// Samples a point on the light from shading point `x` (on shape `x_shape`) with the
+    /// vertex draws ξ1, ξ2.
+    pub fn sample(&self, x: DVec3, x_shape: u32, xi0: f64, xi1: f64) -> LightPoint {
+        match self.uses_cone(x, x_shape) {
+            Some((c, r, d)) => {
+                let (point, normal, pdf) = sample_cone(c, r, d, x, xi0, xi1);
+                LightPoint { point, normal, object_point: self.transform.inverse().point(point), pdf }
+            }
+            None => self.sample_area(x, xi0, xi1),
+        }
+    }
+
+    /// Solid-angle density of [`Self::sample`] producing the point `y` on the light (a
+    /// point that a ray from `x` reached).
+    pub fn pdf(&self, x: DVec3, x_shape: u32, y: DVec3) -> f64 {
+        if let Some((_, r, d)) = self.uses_cone(x, x_shape) {
+            return uniform_cone_pdf(cone_one_minus_cos(r, d));
+        }
+        let p_obj = self.transform.inverse().point(y);
+        let n_obj = object_normal(self.kind, p_obj);
+        self.area_pdf_solid_angle(x, y, n_obj)
+    }
+
+    /// Radiance the light's material emits at the sampled point (its pigment read at the
+    /// point's uv, as a ray hitting it there would see).
+    pub fn emission(&self, scene: &Scene, lp: &LightPoint) -> Color {
+        let emitted = &scene.material(self.material).emitted;
+        if let Pigment::Uniform(c) = emitted {
+            return *c;
+        }
+        let n = object_normal(self.kind, lp.object_point);
+        // Cube faces are numbered 2·axis + (1 on the + side), as the shapes number them.
+        let face = if self.kind == ShapeKind::Cube {
+            let axis = n.abs().max_position() as u8;
+            2 * axis + u8::from(n[axis as usize] > 0.0)
+        } else {
+            0
+        };
+        let uv = super::shapes::surface(self.kind, lp.object_point, face).uv;
+        emitted.color_at(uv.x, uv.y)
+    }
+
+    fn sample_area(&self, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
+        let (p_obj, n_obj) = match self.kind {
+            ShapeKind::Sphere => {
+                let p = uniform_sphere(xi0, xi1);
+                (p, p)
+            }
+            _ => sample_cube_surface(xi0, xi1),
+        };
+        let y = self.transform.point(p_obj);
+        let pdf = self.area_pdf_solid_angle(x, y, n_obj);
+        LightPoint { point: y, normal: self.transform.normal(n_obj).normalize(), object_point: p_obj, pdf }
+    }
+
+    /// Area density (object-uniform, mapped by the transform) converted to solid angle at x.
+    fn area_pdf_solid_angle(&self, x: DVec3, y: DVec3, n_obj: DVec3) -> f64 {
+        let n_world = self.transform.normal(n_obj);
+        let jacobian = self.det * n_world.length();
+        let area_obj = if self.kind == ShapeKind::Sphere { 4.0 * PI } else { 6.0 };
+        let to_light = y - x;
+        let dist2 = to_light.length_squared();
+        let cos_light = n_world.normalize().dot(to_light).abs() / dist2.sqrt();
+        if cos_light <= 0.0 || dist2 <= 0.0 {
+            return 0.0;
+        }
+        dist2 / (cos_light * area_obj * jacobian)
+    }
+}
+
+/// Uniform radius of a linear map that is a rotation times a uniform scale, else `None`.
+fn similarity_scale(m: DMat3) -> Option<f64> {
+    let s = m.x_axis.length();
+    let g = m.transpose() * m;
+    let ok = (g - DMat3::from_diagonal(DVec3::splat(s * s))).to_cols_array().iter().all(|v| v.abs() <= 1e-12 * s * s);
+    ok.then_some(s)
+}
+
+/// Unit outward normal of the unit sphere or cube at (or near) object point `p`.
+pub fn object_normal(kind: ShapeKind, p: DVec3) -> DVec3 {
+    match kind {
+        ShapeKind::Sphere => p.normalize(),
+        _ => {
+            let a = p.abs();
+            if a.x >= a.y && a.x >= a.z {
+                DVec3::new(p.x.signum(), 0.0, 0.0)
+            } else if a.y >= a.z {
+                DVec3::new(0.0, p.y.signum(), 0.0)
+            } else {
+                DVec3::new(0.0, 0.0, p.z.signum())
+            }
+        }
+    }
+}
+
+/// A point uniform on the surface of the cube [−0.5, 0.5]³: face ⌊6ξ0⌋ (+x −x +y −y +z −z),
+/// the rest of ξ0 and ξ1 across it. Returns (point, outward normal).
+fn sample_cube_surface(xi0: f64, xi1: f64) -> (DVec3, DVec3) {
+    let f = (xi0 * 6.0).floor().min(5.0);
+    let a = xi0 * 6.0 - f - 0.5;
+    let b = xi1 - 0.5;
+    let face = f as u32;
+    let s = if face % 2 == 0 { 0.5 } else { -0.5 };
+    match face / 2 {
+        0 => (DVec3::new(s, a, b), DVec3::new(2.0 * s, 0.0, 0.0)),
+        1 => (DVec3::new(b, s, a), DVec3::new(0.0, 2.0 * s, 0.0)),
+        _ => (DVec3::new(a, b, s), DVec3::new(0.0, 0.0, 2.0 * s)),
+    }
+}
+
+/// Cone sampling of the sphere (centre c, radius r, at distance d > r from x): a direction
+/// in the subtended cone, then the point where it first meets the sphere, found from the
+/// angle α at the centre without a ray–sphere intersection (robust for tiny spheres).
+fn sample_cone(c: DVec3, r: f64, d: f64, x: DVec3, xi0: f64, xi1: f64) -> (DVec3, DVec3, f64) {
+    let omc_max = cone_one_minus_cos(r, d);
+    let (local, cos_theta) = uniform_cone(xi0, xi1, omc_max);
+    let sin2_theta = local.x * local.x + local.y * local.y;
+    let sin_theta_max = r / d;
+    // Law of sines in the triangle (x, c, y): cos α = sin²θ/sinθmax + cosθ·√(1 − sin²θ/sin²θmax).
+    let cos_alpha =
+        sin2_theta / sin_theta_max + cos_theta * (1.0 - sin2_theta / (sin_theta_max * sin_theta_max)).max(0.0).sqrt();
+    let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+    let w = (c - x) / d;
+    let (t, b) = super::onb(w);
+    let sin_theta = sin2_theta.sqrt();
+    // e: the unit sideways direction of the sampled ray; y − c leans the same way.
+    let e = if sin_theta > 0.0 { (t * local.x + b * local.y) / sin_theta } else { t };
+    let normal = (e * sin_alpha - w * cos_alpha).normalize();
+    let point = c + r * normal;
+    (point, normal, uniform_cone_pdf(omc_max))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Pcg32;
+    use crate::scene::{Material, SceneBuilder};
+
+    fn scene_with(kind: ShapeKind, t: Transform) -> Scene {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.material(Material::new(
+            crate::scene::Brdf::default(),
+            crate::scene::Pigment::Uniform(crate::color::Color::WHITE),
+        ));
+        b.shape(Shape::primitive(kind, t, m));
+        b.build().unwrap()
+    }
+
+    /// Monte Carlo estimate of the solid angle of the light's visible (front-facing) part:
+    /// E[visible / pdf] = Ω. Also checks that `pdf` agrees with the sample's density.
+    fn solid_angle_estimate(light: &AreaLight, x: DVec3, force_area: bool, n: usize) -> f64 {
+        let mut rng = Pcg32::new(3, 5);
+        let mut sum = 0.0;
+        for _ in 0..n {
+            let (a, b) = (rng.next_f64(), rng.next_f64());
+            let s = if force_area { light.sample_area(x, a, b) } else { light.sample(x, u32::MAX, a, b) };
+            if s.pdf <= 0.0 {
+                continue;
+            }
+            if !force_area {
+                let back = light.pdf(x, u32::MAX, s.point);
+                assert!((back / s.pdf - 1.0).abs() < 1e-9, "{back} vs {}", s.pdf);
+            }
+            if (s.point - x).dot(s.normal) < 0.0 {
+                sum += 1.0 / s.pdf;
+            }
+        }
+        sum / n as f64
+    }
+
+    #[test]
+    fn sphere_cone_and_area_sampling_measure_the_same_solid_angle() {
+        let t = Transform::translation(DVec3::new(1.0, 2.0, 3.0)) * Transform::scaling(DVec3::splat(0.5));
+        let scene = scene_with(ShapeKind::Sphere, t);
+        let light = AreaLight::new(&scene, 0).unwrap();
+        let (c, r) = light.sphere.unwrap();
+        assert!((r - 0.5).abs() < 1e-15);
+        let x = c + DVec3::new(0.0, 1.5, 0.2);
+        let omega = 2.0 * PI * cone_one_minus_cos(r, (c - x).length());
+        // Cone: every sample is on the near side and 1/pdf is Ω exactly.
+        let cone = solid_angle_estimate(&light, x, false, 2000);
+        assert!((cone / omega - 1.0).abs() < 1e-12);
+        // Area sampling (uniform on the sphere): relative std ≈ 1 per sample; 4e5 samples.
+        let area = solid_angle_estimate(&light, x, true, 400_000);
+        assert!((area / omega - 1.0).abs() < 0.01, "{area} vs {omega}");
+    }
+
+    #[test]
+    fn cone_points_lie_on_the_near_side_within_the_cone() {
+        let scene = scene_with(ShapeKind::Sphere, Transform::scaling(DVec3::splat(2.0)));
+        let light = AreaLight::new(&scene, 0).unwrap();
+        let x = DVec3::new(0.0, 0.0, 5.0);
+        let omc = cone_one_minus_cos(2.0, 5.0);
+        let mut rng = Pcg32::new(9, 9);
+        let mut inner = 0;
+        let n = 20_000;
+        for _ in 0..n {
+            let s = light.sample(x, u32::MAX, rng.next_f64(), rng.next_f64());
+            assert!((s.point.length() - 2.0).abs() < 1e-12);
+            assert!((s.normal - s.point / 2.0).length() < 1e-12);
+            let dir = (s.point - x).normalize();
+            let one_minus_cos = 1.0 + dir.z;
+            assert!(one_minus_cos <= omc * (1.0 + 1e-9));
+            // Near side: nothing of the sphere lies between x and the point.
+            assert!((s.point - x).dot(s.normal) < 0.0);
+            if one_minus_cos < omc / 2.0 {
+                inner += 1;
+            }
+        }
+        // Uniform in the cone: half the solid angle lies within 1 − cos < (1 − cos θmax)/2.
+        let frac = inner as f64 / n as f64;
+        assert!((frac - 0.5).abs() < 5.0 * (0.25 / n as f64).sqrt(), "{frac}");
+    }
+
+    #[test]
+    fn stretched_cube_area_sampling_measures_its_face() {
+        // A cube scaled to 2 × 0.5 × 1, seen from a point on its +z axis: only the top
+        // face (2 × 0.5 at height h above it) is visible.
+        let t = Transform::scaling(DVec3::new(2.0, 0.5, 1.0));
+        let scene = scene_with(ShapeKind::Cube, t);
+        let light = AreaLight::new(&scene, 0).unwrap();
+        assert!(light.sphere.is_none());
+        let h = 0.7;
+        let x = DVec3::new(0.0, 0.0, 0.5 + h);
+        let (a, b) = (2.0f64, 0.5f64);
+        let omega = 4.0 * (a * b / (2.0 * h * (4.0 * h * h + a * a + b * b).sqrt())).atan();
+        let est = solid_angle_estimate(&light, x, false, 400_000);
+        assert!((est / omega - 1.0).abs() < 0.02, "{est} vs {omega}");
+    }
+
+    #[test]
+    fn ellipsoids_use_area_sampling_and_points_on_the_light_too() {
+        let scene = scene_with(ShapeKind::Sphere, Transform::scaling(DVec3::new(1.0, 2.0, 1.0)));
+        let light = AreaLight::new(&scene, 0).unwrap();
+        assert!(light.sphere.is_none());
+        let scene = scene_with(ShapeKind::Sphere, Transform::rotation_x(30.0));
+        let light = AreaLight::new(&scene, 0).unwrap();
+        assert!(light.uses_cone(DVec3::new(3.0, 0.0, 0.0), 7).is_some());
+        assert!(light.uses_cone(DVec3::new(3.0, 0.0, 0.0), 0).is_none());
+        assert!(light.uses_cone(DVec3::new(0.5, 0.0, 0.0), 7).is_none());
+    }
+}

@@ -1,0 +1,227 @@
+//! Piecewise-constant 1-D and 2-D distributions: importance sampling of environment
+//! images by luminance × sin θ.
+//!
+//! The tables are plain vectors so the GPU packer uploads exactly the arrays the CPU
+//! samples from; the sampling functions are short loops (binary search, one division)
+//! that the WGSL port mirrors line by line.
+
+/// A piecewise-constant density on [0, 1) with `n` equal cells.
+///
+/// `func[i]` is the (unnormalised, non-negative) value of cell i; `cdf` has `n + 1`
+/// entries from 0 to 1. A function that is zero everywhere samples uniformly (its pdf is
+/// then 1), so callers never divide by zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Distribution1D {
+    pub func: Vec<f64>,
+    pub cdf: Vec<f64>,
+    /// ∫ func over [0, 1) = mean of `func`.
+    pub integral: f64,
+}
+
+/// A sample drawn from a [`Distribution1D`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample1D {
+    /// Position in [0, 1).
+    pub x: f64,
+    /// Density at `x` with respect to dx.
+    pub pdf: f64,
+    /// Cell index containing `x`.
+    pub cell: usize,
+}
+
+impl Distribution1D {
+    /// Builds the table. Negative or non-finite values count as 0 (they cannot be radiance
+    /// anyway, and must not poison the CDF). Panics on an empty slice.
+    pub fn new(values: &[f64]) -> Self {
+        assert!(!values.is_empty(), "a distribution needs at least one cell");
+        let n = values.len();
+        let func: Vec<f64> = values.iter().map(|&v| if v.is_finite() && v > 0.0 { v } else { 0.0 }).collect();
+        let mut cdf = Vec::with_capacity(n + 1);
+        cdf.push(0.0);
+        for (i, f) in func.iter().enumerate() {
+            cdf.push(cdf[i] + f / n as f64);
+        }
+        let integral = cdf[n];
+        if integral > 0.0 {
+            for c in cdf.iter_mut().skip(1) {
+                *c /= integral;
+            }
+        } else {
+            for (i, c) in cdf.iter_mut().enumerate() {
+                *c = i as f64 / n as f64;
+            }
+        }
+        cdf[n] = 1.0;
+        Self { func, cdf, integral }
+    }
+
+    pub fn len(&self) -> usize {
+        self.func.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.func.is_empty()
+    }
+
+    /// Density at cell `i` with respect to dx on [0, 1).
+    pub fn pdf_cell(&self, i: usize) -> f64 {
+        if self.integral > 0.0 {
+            self.func[i] / self.integral
+        } else {
+            1.0
+        }
+    }
+
+    /// The cell i with `cdf[i] ≤ u < cdf[i + 1]`, skipping empty cells (binary search).
+    pub fn find_cell(&self, u: f64) -> usize {
+        let (mut lo, mut hi) = (0usize, self.len());
+        // Invariant: cdf[lo] ≤ u and the answer is < hi.
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if self.cdf[mid] <= u {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// Inverts the CDF continuously for `u` ∈ [0, 1).
+    pub fn sample(&self, u: f64) -> Sample1D {
+        let cell = self.find_cell(u);
+        let width = self.cdf[cell + 1] - self.cdf[cell];
+        let du = if width > 0.0 { ((u - self.cdf[cell]) / width).clamp(0.0, 1.0) } else { 0.0 };
+        let n = self.len() as f64;
+        // Keep x strictly inside [0, 1) so the cell lookup of x gives `cell` back.
+        let x = ((cell as f64 + du) / n).min((cell as f64 + 1.0) / n - f64::EPSILON).max(cell as f64 / n);
+        Sample1D { x, pdf: self.pdf_cell(cell), cell }
+    }
+
+    /// Density at x ∈ [0, 1).
+    pub fn pdf(&self, x: f64) -> f64 {
+        let n = self.len();
+        let i = ((x * n as f64).max(0.0) as usize).min(n - 1);
+        self.pdf_cell(i)
+    }
+}
+
+/// A piecewise-constant density on [0, 1)² over a `width × height` grid, row-major with
+/// row 0 first: a marginal distribution over rows and one conditional per row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Distribution2D {
+    pub width: usize,
+    pub height: usize,
+    /// One distribution over u per row.
+    pub conditional: Vec<Distribution1D>,
+    /// Distribution over v of each row's integral.
+    pub marginal: Distribution1D,
+}
+
+/// A sample drawn from a [`Distribution2D`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample2D {
+    pub u: f64,
+    pub v: f64,
+    /// Density with respect to du dv.
+    pub pdf: f64,
+}
+
+impl Distribution2D {
+    /// Builds the tables from `values[row * width + col]`. Panics if the size is wrong or
+    /// zero.
+    pub fn new(values: &[f64], width: usize, height: usize) -> Self {
+        assert!(width > 0 && height > 0 && values.len() == width * height, "distribution size mismatch");
+        let conditional: Vec<Distribution1D> = values.chunks(width).map(Distribution1D::new).collect();
+        let row_integrals: Vec<f64> = conditional.iter().map(|d| d.integral).collect();
+        let marginal = Distribution1D::new(&row_integrals);
+        Self { width, height, conditional, marginal }
+    }
+
+    /// Draws (u, v): v from the marginal with `xi_v`, then u from that row with `xi_u`.
+    pub fn sample(&self, xi_u: f64, xi_v: f64) -> Sample2D {
+        let v = self.marginal.sample(xi_v);
+        let u = self.conditional[v.cell].sample(xi_u);
+        Sample2D { u: u.x, v: v.x, pdf: u.pdf * v.pdf }
+    }
+
+    /// Density at (u, v) with respect to du dv.
+    pub fn pdf(&self, u: f64, v: f64) -> f64 {
+        let row = ((v * self.height as f64).max(0.0) as usize).min(self.height - 1);
+        self.marginal.pdf_cell(row) * self.conditional[row].pdf(u)
+    }
+
+    /// All conditional CDFs, row after row (`height × (width + 1)` values), for upload.
+    pub fn conditional_cdf_flat(&self) -> Vec<f64> {
+        self.conditional.iter().flat_map(|d| d.cdf.iter().copied()).collect()
+    }
+    /// All conditional cell values, row after row (`height × width`), for upload.
+    pub fn conditional_func_flat(&self) -> Vec<f64> {
+        self.conditional.iter().flat_map(|d| d.func.iter().copied()).collect()
+    }
+    /// Each row's integral (the conditional normalisers), for upload.
+    pub fn conditional_integrals(&self) -> Vec<f64> {
+        self.conditional.iter().map(|d| d.integral).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_d_cdf_and_inversion_are_exact() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0]);
+        assert_eq!(d.cdf, vec![0.0, 0.25, 0.25, 1.0]);
+        assert!((d.integral - 4.0 / 3.0).abs() < 1e-15);
+        // u = 0.125 is half-way through cell 0.
+        let s = d.sample(0.125);
+        assert_eq!(s.cell, 0);
+        assert!((s.x - 1.0 / 6.0).abs() < 1e-15);
+        assert!((s.pdf - 0.75).abs() < 1e-15);
+        // The empty cell is never chosen, even at its exact CDF value.
+        let s = d.sample(0.25);
+        assert_eq!(s.cell, 2);
+        assert!((s.x - 2.0 / 3.0).abs() < 1e-15);
+        assert!((s.pdf - 2.25).abs() < 1e-15);
+        assert_eq!(d.pdf(0.5), 0.0);
+        // The density integrates to 1.
+        let total: f64 = (0..3).map(|i| d.pdf_cell(i) / 3.0).sum();
+        assert!((total - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn all_zero_and_bad_values_sample_uniformly() {
+        let d = Distribution1D::new(&[0.0, f64::NAN, -1.0, 0.0]);
+        assert_eq!(d.integral, 0.0);
+        let s = d.sample(0.6);
+        assert_eq!(s.cell, 2);
+        assert!((s.x - 0.6).abs() < 1e-15);
+        assert_eq!(s.pdf, 1.0);
+    }
+
+    #[test]
+    fn two_d_sample_frequencies_match_the_pdf() {
+        // 3 × 2 grid; stratified uniforms give cell frequencies equal to the cell masses.
+        let vals = [1.0, 2.0, 3.0, 0.0, 4.0, 2.0];
+        let d = Distribution2D::new(&vals, 3, 2);
+        let total: f64 = vals.iter().sum();
+        let n = 300;
+        let mut counts = [0usize; 6];
+        for i in 0..n {
+            for j in 0..n {
+                let s = d.sample((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                let col = (s.u * 3.0) as usize;
+                let row = (s.v * 2.0) as usize;
+                counts[row * 3 + col] += 1;
+                assert!((s.pdf - d.pdf(s.u, s.v)).abs() < 1e-12);
+                assert!((s.pdf - vals[row * 3 + col] / total * 6.0).abs() < 1e-12);
+            }
+        }
+        for (c, v) in counts.iter().zip(vals) {
+            let expected = v / total;
+            assert!((*c as f64 / (n * n) as f64 - expected).abs() < 2.0 / n as f64, "{c} vs {expected}");
+        }
+        assert_eq!(d.conditional_cdf_flat().len(), 2 * 4);
+        assert_eq!(d.conditional_func_flat(), vals.to_vec());
+    }
+}

@@ -1,0 +1,153 @@
+//! What `DUMP` prints: a readable listing of variables, world, lights and settings.
+
+use std::fmt::Write;
+
+use super::interpreter::{Vars, World};
+use super::value::{ImageValue, ShapeValue, Value};
+use crate::color::Color;
+use crate::scene::{Shape, Transform};
+
+/// The sections `DUMP.section` accepts.
+pub const SECTIONS: [&str; 9] =
+    ["variables", "world", "lights", "image", "camera", "renderer", "tracer", "environment", "ALL"];
+
+fn color(c: &Color) -> String {
+    format!("<{}, {}, {}>", c.r, c.g, c.b)
+}
+
+fn transform(t: &Transform) -> String {
+    let m = t.matrix().transpose().to_cols_array();
+    format!("Transformation([{}])", m.map(|v| v.to_string()).join(", "))
+}
+
+/// A one-value description (Debug for the composite model types).
+pub fn describe(v: &Value) -> String {
+    match v {
+        Value::Number(n) => n.to_string(),
+        Value::Str(s) => format!("{s:?}"),
+        Value::Color(c) => color(c),
+        Value::Point(p) => format!("{{{}, {}, {}}}", p.x, p.y, p.z),
+        Value::List(l) => format!("[{}]", l.iter().map(f64::to_string).collect::<Vec<_>>().join(", ")),
+        Value::Transformation(t) => transform(t),
+        Value::Image(ImageValue::Blank { width, height }) => format!("Image({width}, {height})"),
+        Value::Image(ImageValue::Loaded(i)) => format!("Image({}×{} pixels, loaded)", i.width(), i.height()),
+        Value::Shape(s) => shape_value(s),
+        Value::Pigment(p) => format!("{p:?}"),
+        Value::Brdf(b) => format!("{b:?}"),
+        Value::Material(m) => format!("{m:?}"),
+        Value::Light(l) => format!("{l:?}"),
+        Value::Pcg(p) => format!("Pcg(.state {}, .inc {})", p.state, p.inc),
+        Value::Camera(c) => format!("{c:?}"),
+        Value::Renderer(r) => format!("{r:?}"),
+        Value::Tracer(t) => format!("{t:?}"),
+        Value::Environment(e) => match e {
+            crate::scene::Environment::Image { image, intensity, rotation_deg } => format!(
+                "Environment.Image({}×{} pixels, .intensity {intensity}, .rotation {rotation_deg})",
+                image.width(),
+                image.height()
+            ),
+            other => format!("{other:?}"),
+        },
+    }
+}
+
+fn shape_value(s: &ShapeValue) -> String {
+    match s {
+        ShapeValue::Primitive { kind, transform: t, material } => {
+            format!("Shape.{:?}(.material {material:?}, .transformation {})", kind, transform(t))
+        }
+        ShapeValue::Csg { op, children, transform: t } => format!(
+            "{}({}, .transformation {})",
+            op.keyword(),
+            children.iter().map(shape_value).collect::<Vec<_>>().join(", "),
+            transform(t)
+        ),
+    }
+}
+
+fn shape(s: &Shape, out: &mut String, indent: usize) {
+    let pad = "  ".repeat(indent);
+    match s {
+        Shape::Primitive(p) => {
+            let _ = writeln!(out, "{pad}{:?} material #{} {}", p.kind, p.material.0, transform(&p.transform));
+        }
+        Shape::Csg(c) => {
+            let _ = writeln!(out, "{pad}{} {}", c.op.keyword(), transform(&c.transform));
+            for ch in &c.children {
+                shape(ch, out, indent + 1);
+            }
+        }
+    }
+}
+
+/// The text of `DUMP.section`, or `None` for an unknown section.
+pub fn section(name: &str, vars: &Vars, world: &World) -> Option<String> {
+    let mut out = String::new();
+    // A snapshot of what SPAWN has added so far (DUMP is for debugging: a copy is fine).
+    let settings = match world.builder.build() {
+        Ok(s) => s,
+        Err(e) => return Some(format!("(world not available: {e})\n")),
+    };
+    let opt = |o: Option<String>| o.unwrap_or_else(|| "(not set)".to_string());
+    match name {
+        "variables" => {
+            let mut names: Vec<_> = vars.iter().collect();
+            names.sort_by(|a, b| a.0.cmp(b.0));
+            let _ = writeln!(out, "variables ({}):", names.len());
+            for (n, v) in names {
+                let _ = writeln!(out, "  {n} = {}  [{}]", describe(&v.value), v.origin);
+            }
+        }
+        "world" => {
+            let _ = writeln!(out, "world ({} shapes):", settings.shapes.len());
+            for s in &settings.shapes {
+                shape(s, &mut out, 1);
+            }
+            let _ = writeln!(out, "materials ({}):", settings.materials.len());
+            for (i, m) in settings.materials.iter().enumerate() {
+                let _ = writeln!(out, "  #{i} {m:?}");
+            }
+        }
+        "lights" => {
+            let _ = writeln!(out, "lights ({}):", settings.point_lights.len());
+            for l in &settings.point_lights {
+                let _ = writeln!(
+                    out,
+                    "  Light(.position {{{}, {}, {}}}, .color {}, .linear_radius {})",
+                    l.position.x,
+                    l.position.y,
+                    l.position.z,
+                    color(&l.color),
+                    l.linear_radius
+                );
+            }
+        }
+        "image" => {
+            let _ =
+                writeln!(out, "image: {}", opt(world.image.as_ref().map(|(i, _)| describe(&Value::Image(i.clone())))));
+        }
+        "camera" => {
+            let _ = writeln!(out, "camera: {}", opt(world.camera.as_ref().map(|(c, _)| format!("{c:?}"))));
+        }
+        "renderer" => {
+            let _ = writeln!(out, "renderer: {}", opt(world.renderer.as_ref().map(|(r, _)| format!("{r:?}"))));
+        }
+        "tracer" => {
+            let _ = writeln!(out, "tracer: {}", opt(world.tracer.as_ref().map(|(t, _)| format!("{t:?}"))));
+        }
+        "environment" => {
+            let _ = writeln!(
+                out,
+                "environment: {}",
+                opt(world.environment.as_ref().map(|(e, _)| describe(&Value::Environment(e.clone()))))
+            );
+        }
+        "ALL" => {
+            for s in SECTIONS.iter().take(SECTIONS.len() - 1) {
+                out.push_str(&section(s, vars, world)?);
+            }
+        }
+        _ => return None,
+    }
+    Some(out)
+}

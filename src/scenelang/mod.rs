@@ -1,0 +1,106 @@
+//! SceneLang, the scene language of Raytracer.jl, with lumen's extensions
+//! (specification: `SCENELANG.md`; decisions: the "SceneLang" section of `docs/DESIGN.md`).
+//!
+//! A script evaluates, instruction by instruction, to a [`Scene`]. Scripts written for
+//! Raytracer.jl load unchanged; errors name `file:line:col`, show the line with a caret and
+//! say what was expected.
+//!
+//! ```
+//! use lumen::scenelang::{load_str, LoadOptions};
+//! let script = r#"
+//!     SET red Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.8, 0.1, 0.1>)))
+//!     SPAWN Shape.Sphere(.material red, .transformation TRANSLATE(.X 3) * SCALE $r / 2$)
+//!     USING Camera.Perspective(.aspect_ratio $16/9$) Image(160, 90)
+//!           Renderer.PathTracer(.n 4) Tracer(.samples_per_side 2)
+//! "#;
+//! let opts = LoadOptions { time: 0.0, vars: vec!["r 2".into()] };
+//! let scene = load_str(script, "inline.sl", std::path::Path::new("."), &opts).unwrap();
+//! assert_eq!((scene.width, scene.height, scene.shapes.len()), (160, 90, 1));
+//!
+//! let err = load_str("SET x <1, 2>", "bad.sl", std::path::Path::new("."), &LoadOptions::default()).unwrap_err();
+//! assert_eq!((err.line, err.col), (1, 12));
+//! assert!(err.to_string().starts_with("bad.sl:1:12: error:"));
+//! ```
+//!
+//! lumen's choices where Raytracer.jl is silent or lumen extends it:
+//! - a CSG node takes its own placement as a trailing keyword:
+//!   `UNITE(a, b, .transformation T)` (also INTERSECT, DIFF, FUSE); it applies after the
+//!   children's own transformations; CSG needs at least two shapes;
+//! - `USING` takes a fifth, optional setting `Environment.Uniform/Gradient/Image(...)`;
+//! - `Brdf.Dielectric(.pigment, .ior 1.5)`; `Pigment.Image(.image, .filter "nearest")` where
+//!   `.filter` is `"nearest"` (Raytracer.jl's lookup, the default) or `"bilinear"`;
+//! - `Environment.Uniform(.color <1,1,1>)`, `Environment.Gradient(.zenith <1,1,1>,
+//!   .horizon <1,1,1>, .nadir <0,0,0>)`, `Environment.Image(.image Image(1, 1), .intensity 1,
+//!   .rotation 0)` (degrees about z);
+//! - `Transformation([...])` reads its 16 numbers row by row;
+//! - `ROTATE(.X a * .Z b)` is the product `ROTATE(.X a) * ROTATE(.Z b)`: the rightmost
+//!   rotation acts on points first, like any `*` chain;
+//! - math expressions also know `pi`, `TIME`, `sqrt` and `abs`;
+//! - `--vars` names win over the script: the script's `SET` of such a name is parsed (so its
+//!   errors are still reported) and then ignored;
+//! - `DUMP name` prints one variable, and `DUMP.environment` the environment;
+//! - `SET a b` copies the value of `b`.
+
+mod dump;
+mod error;
+mod interpreter;
+mod lexer;
+pub mod math;
+mod summary;
+mod value;
+
+use std::io::Write;
+use std::path::Path;
+
+pub use error::{ErrorKind, SceneLangError, Span};
+pub use summary::SceneSummary;
+
+use crate::scene::Scene;
+use interpreter::{Interp, Vars};
+
+/// How to evaluate a script.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadOptions {
+    /// The value of `TIME` (for animations).
+    pub time: f64,
+    /// Raw `--vars` strings, each `"name value, name value"` with values in SET syntax.
+    /// They are read in order (a later one may redefine an earlier name) before the script.
+    pub vars: Vec<String>,
+}
+
+/// Loads the script at `path`; DUMP output goes to stdout.
+pub fn load_file(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneLangError> {
+    let name = path.display().to_string();
+    let source = std::fs::read_to_string(path)
+        .map_err(|e| SceneLangError::whole_file(&name, ErrorKind::Io, format!("cannot read script: {e}")))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    load_str(&source, &name, base, opts)
+}
+
+/// Loads a script from a string. `name` labels diagnostics; relative image paths resolve
+/// against `base_dir`. DUMP output goes to stdout.
+pub fn load_str(source: &str, name: &str, base_dir: &Path, opts: &LoadOptions) -> Result<Scene, SceneLangError> {
+    let stdout = std::io::stdout();
+    let mut lock = stdout.lock();
+    load_str_with_output(source, name, base_dir, opts, &mut lock)
+}
+
+/// [`load_str`] with DUMP output written to `out`.
+pub fn load_str_with_output(
+    source: &str,
+    name: &str,
+    base_dir: &Path,
+    opts: &LoadOptions,
+    out: &mut dyn Write,
+) -> Result<Scene, SceneLangError> {
+    let mut vars = Vars::new();
+    for v in &opts.vars {
+        let mut sink = std::io::sink();
+        let mut it = Interp::new(v, "--vars", opts.time, base_dir, &mut sink, vars);
+        it.cli_vars()?;
+        vars = std::mem::take(&mut it.vars);
+    }
+    let mut it = Interp::new(source, name, opts.time, base_dir, out, vars);
+    it.run()?;
+    it.finish()
+}

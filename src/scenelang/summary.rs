@@ -1,0 +1,172 @@
+//! A summary of a loaded scene (what `lumen check` prints), computed here so it can be tested.
+
+use std::fmt;
+
+use crate::scene::{Aabb, Brdf, Environment, Projection, Renderer, Scene, Shape, ShapeKind};
+
+/// Counts and settings of a [`Scene`], for `lumen check`.
+///
+/// ```
+/// use lumen::scenelang::{load_str, LoadOptions, SceneSummary};
+/// let src = "SPAWN Shape.Sphere() UNITE(Shape.Cube(), Shape.Plane())
+///            USING Camera.Perspective() Image(64, 32) Renderer.Flat() Tracer()";
+/// let scene = load_str(src, "x.sl", std::path::Path::new("."), &LoadOptions::default()).unwrap();
+/// let s = SceneSummary::of(&scene);
+/// assert_eq!((s.count(lumen::scene::ShapeKind::Sphere), s.csg_nodes, s.infinite_shapes), (1, 1, 1));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneSummary {
+    /// Shapes spawned at the top level (a CSG tree counts once).
+    pub top_level_shapes: usize,
+    /// Primitives of each kind, inside CSG trees or not, in [`ShapeKind::ALL`] order.
+    pub primitives: [usize; 4],
+    pub csg_nodes: usize,
+    /// Deepest CSG tree (0 when there is none).
+    pub csg_max_depth: usize,
+    pub point_lights: usize,
+    /// Emissive top-level spheres and cubes ([`Scene::area_lights`]).
+    pub area_lights: usize,
+    pub materials: usize,
+    pub diffuse_materials: usize,
+    pub specular_materials: usize,
+    pub dielectric_materials: usize,
+    pub emissive_materials: usize,
+    /// "perspective" or "orthogonal".
+    pub camera_kind: &'static str,
+    pub aspect_ratio: f64,
+    /// Full opening angle in degrees (perspective cameras only).
+    pub aperture_deg: Option<f64>,
+    pub width: u32,
+    pub height: u32,
+    /// Renderer name and its settings, as one line.
+    pub renderer: String,
+    pub samples_per_side: u32,
+    pub tracer_seed: (u64, u64),
+    /// The environment, as one line ("none" when escaping rays see the background).
+    pub environment: String,
+    /// Bounds of the finite shapes.
+    pub bounds: Option<Aabb>,
+    /// Top-level shapes with infinite bounds (planes, or CSG trees that keep a plane's extent).
+    pub infinite_shapes: usize,
+}
+
+fn rgb(c: crate::color::Color) -> String {
+    format!("<{}, {}, {}>", c.r, c.g, c.b)
+}
+
+impl SceneSummary {
+    pub fn of(scene: &Scene) -> Self {
+        let mut primitives = [0; 4];
+        for s in &scene.shapes {
+            s.for_each_primitive(&mut |p, _| {
+                primitives[ShapeKind::ALL.iter().position(|k| *k == p.kind).unwrap_or(0)] += 1;
+            });
+        }
+        let count_brdf = |f: fn(&Brdf) -> bool| scene.materials.iter().filter(|m| f(&m.brdf)).count();
+        let (camera_kind, aperture_deg) = match scene.camera.projection {
+            Projection::Perspective { .. } => ("perspective", scene.camera.aperture_deg()),
+            Projection::Orthogonal => ("orthogonal", None),
+        };
+        let renderer = match &scene.renderer {
+            Renderer::OnOff { on, off } => format!("OnOff (on {}, off {})", rgb(*on), rgb(*off)),
+            Renderer::Flat { background } => format!("Flat (background {})", rgb(*background)),
+            Renderer::PointLight { background, ambient } => {
+                format!("PointLight (background {}, ambient {})", rgb(*background), rgb(*ambient))
+            }
+            Renderer::PathTracer(p) => format!(
+                "PathTracer (n {}, max_depth {}, roulette_depth {}, background {}, rng state {} inc {})",
+                p.n,
+                p.max_depth,
+                p.roulette_depth,
+                rgb(p.background),
+                p.rng.state,
+                p.rng.inc
+            ),
+        };
+        let environment = match &scene.environment {
+            None => "none (escaping rays see the renderer's background)".to_string(),
+            Some(Environment::Uniform(c)) => format!("uniform {}", rgb(*c)),
+            Some(Environment::Gradient { zenith, horizon, nadir }) => {
+                format!("gradient (zenith {}, horizon {}, nadir {})", rgb(*zenith), rgb(*horizon), rgb(*nadir))
+            }
+            Some(Environment::Image { image, intensity, rotation_deg }) => {
+                format!("image {}×{} (intensity {intensity}, rotation {rotation_deg}°)", image.width(), image.height())
+            }
+        };
+        Self {
+            top_level_shapes: scene.shapes.len(),
+            primitives,
+            csg_nodes: scene.shapes.iter().map(Shape::csg_node_count).sum(),
+            csg_max_depth: scene.shapes.iter().map(Shape::csg_depth).max().unwrap_or(0),
+            point_lights: scene.point_lights.len(),
+            area_lights: scene.area_lights().len(),
+            materials: scene.materials.len(),
+            diffuse_materials: count_brdf(|b| matches!(b, Brdf::Diffuse { .. })),
+            specular_materials: count_brdf(|b| matches!(b, Brdf::Specular { .. })),
+            dielectric_materials: count_brdf(|b| matches!(b, Brdf::Dielectric { .. })),
+            emissive_materials: scene.materials.iter().filter(|m| m.is_emissive()).count(),
+            camera_kind,
+            aspect_ratio: scene.camera.aspect_ratio,
+            aperture_deg,
+            width: scene.width,
+            height: scene.height,
+            renderer,
+            samples_per_side: scene.tracer.samples_per_side,
+            tracer_seed: (scene.tracer.rng.state, scene.tracer.rng.inc),
+            environment,
+            bounds: scene.finite_bounds(),
+            infinite_shapes: scene.shapes.iter().filter(|s| !s.bounds().is_finite()).count(),
+        }
+    }
+
+    /// Primitives of one kind.
+    pub fn count(&self, kind: ShapeKind) -> usize {
+        self.primitives[ShapeKind::ALL.iter().position(|k| *k == kind).unwrap_or(0)]
+    }
+}
+
+impl fmt::Display for SceneSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let kinds: Vec<String> =
+            ShapeKind::ALL.iter().zip(self.primitives).map(|(k, n)| format!("{n} {}", k.name())).collect();
+        writeln!(f, "shapes:       {} top-level; primitives: {}", self.top_level_shapes, kinds.join(", "))?;
+        writeln!(f, "csg:          {} nodes, max depth {}", self.csg_nodes, self.csg_max_depth)?;
+        writeln!(f, "lights:       {} point, {} area (emissive spheres/cubes)", self.point_lights, self.area_lights)?;
+        writeln!(
+            f,
+            "materials:    {} ({} diffuse, {} specular, {} dielectric; {} emissive)",
+            self.materials,
+            self.diffuse_materials,
+            self.specular_materials,
+            self.dielectric_materials,
+            self.emissive_materials
+        )?;
+        match self.aperture_deg {
+            Some(a) => {
+                writeln!(f, "camera:       {}, aspect ratio {}, aperture {a:.2}°", self.camera_kind, self.aspect_ratio)?
+            }
+            None => writeln!(f, "camera:       {}, aspect ratio {}", self.camera_kind, self.aspect_ratio)?,
+        }
+        writeln!(f, "image:        {}×{}", self.width, self.height)?;
+        writeln!(f, "renderer:     {}", self.renderer)?;
+        let spp = if self.samples_per_side == 0 {
+            "1 ray through each pixel centre".to_string()
+        } else {
+            format!("{0}×{0} jittered samples per pixel", self.samples_per_side)
+        };
+        writeln!(f, "tracer:       {spp}, rng state {} inc {}", self.tracer_seed.0, self.tracer_seed.1)?;
+        writeln!(f, "environment:  {}", self.environment)?;
+        match &self.bounds {
+            Some(b) => write!(
+                f,
+                "bounds:       [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",
+                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+            )?,
+            None => write!(f, "bounds:       no finite shapes")?,
+        }
+        if self.infinite_shapes > 0 {
+            write!(f, "; plus {} infinite shape(s)", self.infinite_shapes)?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,436 @@
+//! The CPU reference renderer against analytic answers: furnaces, energy conservation,
+//! point-light shading, NEE/MIS consistency, exact OnOff/Flat images, determinism.
+//!
+//! Every render uses a fixed seed, so results are deterministic; tolerances are still
+//! chosen from each estimator's variance (estimated from the images themselves), so a
+//! different seed would pass as well.
+
+use std::f64::consts::PI;
+
+use glam::DVec3;
+use lumen::color::Color;
+use lumen::cpu::{render, Progress, RenderOptions, RenderOutput};
+use lumen::image::HdrImage;
+use lumen::scene::*;
+
+fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
+    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth, nee, ..Default::default() })
+}
+
+fn run(scene: &Scene, spp: Option<u32>) -> RenderOutput {
+    let out = render(scene, &RenderOptions { spp }, Progress::Hidden);
+    assert_eq!(out.stats.non_finite_samples, 0);
+    out
+}
+
+fn px(img: &HdrImage, col: usize, row: usize) -> Color {
+    img.get(col, row).into()
+}
+
+/// Mean of channel `c` over the selected pixels, and the standard error of that mean
+/// estimated from the spread of the pixels (valid when they share one expected value).
+fn mean_and_stderr(img: &HdrImage, select: impl Fn(usize, usize) -> bool) -> (f64, f64) {
+    let mut v = Vec::new();
+    for row in 0..img.height() {
+        for col in 0..img.width() {
+            if select(col, row) {
+                v.push(px(img, col, row).g);
+            }
+        }
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Camera inside a sphere of radius 10 that emits `le` and reflects diffusely with albedo ρ.
+fn furnace(rho: f64, le: f64, renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(16, 16);
+    let m = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) },
+        Pigment::Uniform(Color::gray(le)),
+    ));
+    b.sphere(Transform::scaling(DVec3::splat(10.0)), m).renderer(renderer);
+    b.build().unwrap()
+}
+
+#[test]
+fn closed_furnace_without_roulette() {
+    // L = Le Σ ρᵏ for k ≤ max_depth: with max_depth 20 the truncation is ρ²¹ = 5e-7 relative.
+    let expected = 1.0 / (1.0 - 0.5);
+    // Without NEE every path is exactly Le Σ ρᵏ (cosine sampling, β = ρᵏ): no variance.
+    let out = run(&furnace(0.5, 1.0, pt(1, 20, 1000, false)), Some(1));
+    for p in out.image.pixels() {
+        assert!((f64::from(p.g) / expected - 1.0).abs() < 1e-5, "{p:?}");
+    }
+    // With NEE (area sampling from inside the light) + MIS: noisy, unbiased. 16×16 pixels
+    // × 64 paths; the stated tolerance 0.5 % must exceed 5 standard errors.
+    let out = run(&furnace(0.5, 1.0, pt(16, 20, 1000, true)), Some(4));
+    let (mean, se) = mean_and_stderr(&out.image, |_, _| true);
+    eprintln!("furnace ρ 0.5 with NEE: {mean} ± {se} (expected {expected})");
+    assert!(5.0 * se < 0.005 * expected, "test too weak: se {se}");
+    assert!((mean / expected - 1.0).abs() < 0.005, "{mean} vs {expected} (se {se})");
+}
+
+#[test]
+fn closed_furnace_with_roulette_is_unbiased() {
+    // ρ = 0.9, roulette from depth 2 (q = 0.1); max_depth 300 truncates by 0.9³⁰¹ ≈ 1e-14.
+    // A path's value has a standard deviation ≈ 7 (its length is geometric), so 5 standard
+    // errors below 0.5 % of 10 need > 5·10⁵ paths: 16×16 pixels × 16 samples × 200 paths.
+    let expected = 1.0 / (1.0 - 0.9);
+    for nee in [false, true] {
+        let out = run(&furnace(0.9, 1.0, pt(200, 300, 2, nee)), Some(16));
+        let (mean, se) = mean_and_stderr(&out.image, |_, _| true);
+        eprintln!("furnace ρ 0.9 roulette, nee {nee}: {mean} ± {se} (expected {expected})");
+        assert!(5.0 * se < 0.005 * expected, "test too weak: se {se} (nee {nee})");
+        assert!((mean / expected - 1.0).abs() < 0.005, "nee {nee}: {mean} vs {expected} (se {se})");
+    }
+}
+
+/// A sphere of `material` at (3, 0, 0) under a uniform environment, and the OnOff mask of
+/// which pixels see it.
+fn object_under_sky(brdf: Brdf, sky: f64, renderer: Renderer) -> (Scene, HdrImage) {
+    let mut b = SceneBuilder::new(24, 24);
+    let m = b.material(Material::new(brdf, Pigment::Uniform(Color::BLACK)));
+    b.sphere(Transform::translation(DVec3::new(2.0, 0.0, 0.0)) * Transform::scaling(DVec3::splat(1.5)), m)
+        .environment(Environment::Uniform(Color::gray(sky)))
+        .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+    let mask = run(&b.build().unwrap(), None).image;
+    b.renderer(renderer);
+    (b.build().unwrap(), mask)
+}
+
+#[test]
+fn convex_diffuse_object_under_uniform_sky_shows_albedo_times_sky() {
+    let (rho, sky) = (0.6, 2.0);
+    let brdf = Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) };
+    // Without NEE: each path scatters once and escapes: exactly ρL (no variance).
+    let (scene, mask) = object_under_sky(brdf.clone(), sky, pt(1, 3, 100, false));
+    let out = run(&scene, None);
+    let mut hits = 0;
+    for row in 0..24 {
+        for col in 0..24 {
+            let expected = if mask.get(col, row).g > 0.5 { rho * sky } else { sky };
+            hits += usize::from(mask.get(col, row).g > 0.5);
+            assert!((px(&out.image, col, row).g / expected - 1.0).abs() < 1e-6, "({col},{row})");
+        }
+    }
+    assert!(hits > 30, "the sphere covers {hits} pixels");
+    // With NEE: MIS of uniform-sphere environment samples and cosine samples; pixel
+    // centres only (the mask's), 1024 paths each; tolerance 1 % > 5 standard errors.
+    let (scene, mask) = object_under_sky(brdf, sky, pt(1024, 3, 100, true));
+    let out = run(&scene, None);
+    let on = |c: usize, r: usize| mask.get(c, r).g > 0.5;
+    let (mean, se) = mean_and_stderr(&out.image, on);
+    eprintln!("diffuse ball under the sky with NEE: {mean} ± {se} (expected {})", rho * sky);
+    assert!(5.0 * se < 0.01 * rho * sky, "test too weak: se {se}");
+    assert!((mean / (rho * sky) - 1.0).abs() < 0.01, "{mean} (se {se})");
+    let (bg, _) = mean_and_stderr(&out.image, |c, r| !on(c, r));
+    assert!((bg / sky - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn glass_sphere_under_uniform_sky_conserves_energy() {
+    // A clear dielectric neither absorbs nor emits: every pixel sees L (the η² radiance
+    // factors of entering and leaving cancel). No roulette; max_depth 64 leaves a path
+    // inside only with probability ≲ F⁶⁴.
+    let sky = 1.5;
+    for nee in [false, true] {
+        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 };
+        let (scene, mask) = object_under_sky(brdf, sky, pt(16, 64, 1000, nee));
+        let out = run(&scene, None);
+        let (mean, se) = mean_and_stderr(&out.image, |c, r| mask.get(c, r).g > 0.5);
+        eprintln!("glass ball under the sky, nee {nee}: {mean} ± {se} (expected {sky})");
+        assert!(5.0 * se < 0.005 * sky, "test too weak: se {se}");
+        assert!((mean / sky - 1.0).abs() < 0.005, "nee {nee}: {mean} (se {se})");
+    }
+}
+
+/// A diffuse floor (z = 0) seen from a camera at height 3 looking straight down, lit by a
+/// point light of intensity I (linear_radius 1: falloff 1/d²).
+fn lit_floor(rho: Color, light: DVec3, intensity: Color, renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(12, 10);
+    let m = b.diffuse(rho);
+    let cam = Camera {
+        projection: Projection::Perspective { screen_distance: 1.0 },
+        aspect_ratio: 1.2,
+        transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
+    };
+    b.plane(Transform::IDENTITY, m)
+        .camera(cam)
+        .point_light(PointLight { position: light, color: intensity, linear_radius: 1.0 })
+        .renderer(renderer);
+    b.build().unwrap()
+}
+
+#[test]
+fn point_light_on_a_diffuse_plane_matches_the_closed_form_pixel_by_pixel() {
+    let rho = Color::new(0.8, 0.5, 0.2);
+    let light = DVec3::new(1.0, 0.5, 2.0);
+    let intensity = Color::new(10.0, 20.0, 5.0);
+    for renderer in [Renderer::PointLight { background: Color::BLACK, ambient: Color::BLACK }, pt(1, 1, 10, true)] {
+        let scene = lit_floor(rho, light, intensity, renderer);
+        let img = run(&scene, None).image;
+        for row in 0..10 {
+            for col in 0..12 {
+                // The camera ray through the pixel centre meets z = 0 at t = −o.z / d.z.
+                let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
+                let p = r.origin - r.dir * (r.origin.z / r.dir.z);
+                let to = light - p;
+                let d2 = to.length_squared();
+                let cos = to.z / d2.sqrt();
+                let expected = rho * intensity * (cos / (PI * d2));
+                let got = px(&img, col, row);
+                for (g, e) in got.to_array().into_iter().zip(expected.to_array()) {
+                    assert!((g / e - 1.0).abs() < 1e-6, "({col},{row}): {got:?} vs {expected:?}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn point_light_renderer_adds_ambient_and_respects_shadows() {
+    // A small sphere half-way between the light and the floor point seen by pixel (2, 5)
+    // puts that point in shadow (ambient only) without hiding it from the camera above.
+    let light = DVec3::new(1.5, -0.2, 2.0);
+    let ambient = Color::gray(0.01);
+    let mut scene =
+        lit_floor(Color::gray(0.5), light, Color::WHITE, Renderer::PointLight { background: Color::BLACK, ambient });
+    let floor_point = |col: usize, row: usize| {
+        let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
+        r.origin - r.dir * (r.origin.z / r.dir.z)
+    };
+    let q = floor_point(2, 5);
+    let Shape::Primitive(p) = scene.shapes[0].clone() else { unreachable!() };
+    scene.shapes.push(Shape::primitive(
+        ShapeKind::Sphere,
+        Transform::translation((light + q) / 2.0) * Transform::scaling(DVec3::splat(0.1)),
+        p.material,
+    ));
+    let img = run(&scene, None).image;
+    assert!(px(&img, 2, 5).approx_eq(ambient, 1e-9));
+    // A corner is lit: ambient + ρ/π · cos θ / d².
+    let to = light - floor_point(0, 0);
+    let expected = 0.01 + 0.5 / PI * (to.z / to.length()) / to.length_squared();
+    assert!((px(&img, 0, 0).g / expected - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn nee_on_and_off_converge_to_the_same_image() {
+    // Floor, a diffuse ball, a spherical lamp and an emissive stretched cube, under a dim
+    // gradient sky: every light kind NEE handles. Camera rays through pixel centres, so
+    // the two seeds differ only in the paths and their difference measures path variance.
+    let scene = |nee: bool, seed: u64| {
+        let mut b = SceneBuilder::new(16, 12);
+        let floor = b.diffuse(Color::new(0.7, 0.6, 0.5));
+        let ball = b.diffuse(Color::new(0.3, 0.8, 0.4));
+        let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::gray(6.0))));
+        let panel = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::new(2.0, 1.0, 0.5))));
+        b.plane(Transform::IDENTITY, floor)
+            .sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.6)) * Transform::scaling(DVec3::splat(0.6)), ball)
+            .sphere(Transform::translation(DVec3::new(3.0, -1.0, 2.2)) * Transform::scaling(DVec3::splat(0.4)), lamp)
+            .cube(
+                Transform::translation(DVec3::new(5.5, 1.5, 1.0)) * Transform::scaling(DVec3::new(0.3, 1.0, 2.0)),
+                panel,
+            )
+            .environment(Environment::Gradient {
+                zenith: Color::new(0.2, 0.3, 0.5),
+                horizon: Color::gray(0.3),
+                nadir: Color::BLACK,
+            })
+            .camera(Camera {
+                aspect_ratio: 16.0 / 12.0,
+                transform: Transform::translation(DVec3::new(0.0, 0.0, 1.0)),
+                ..Camera::default()
+            })
+            .tracer(Tracer { samples_per_side: 0, rng: PcgSeed { state: seed, inc: 54 } })
+            .renderer(pt(512, 3, 2, nee));
+        b.build().unwrap()
+    };
+    let imgs: Vec<HdrImage> = [(true, 1), (true, 2), (false, 1), (false, 2)]
+        .iter()
+        .map(|&(nee, s)| run(&scene(nee, s), None).image)
+        .collect();
+    // Per-pixel variance of each estimator from its two independent renders.
+    let n = imgs[0].pixels().len() as f64;
+    let var = |a: &HdrImage, b: &HdrImage| {
+        a.pixels().iter().zip(b.pixels()).map(|(x, y)| f64::from(x.g - y.g).powi(2) / 2.0).sum::<f64>() / n
+    };
+    let mean = |a: &HdrImage| a.pixels().iter().map(|p| f64::from(p.g)).sum::<f64>() / n;
+    let (v_on, v_off) = (var(&imgs[0], &imgs[1]), var(&imgs[2], &imgs[3]));
+    // Image means (each over both seeds): difference has variance (v_on + v_off) / (2n).
+    let m_on = (mean(&imgs[0]) + mean(&imgs[1])) / 2.0;
+    let m_off = (mean(&imgs[2]) + mean(&imgs[3])) / 2.0;
+    let se = ((v_on + v_off) / (2.0 * n)).sqrt();
+    eprintln!("NEE {m_on} vs BSDF-only {m_off} ± {se}; pixel variances {v_on} vs {v_off}");
+    assert!(se < 0.01 * m_on, "test too weak: se {se} mean {m_on}");
+    assert!((m_on - m_off).abs() < 5.0 * se, "NEE {m_on} vs no NEE {m_off} (se {se})");
+    // Blocks of 4×4 pixels: each block's difference within 5 standard errors.
+    for by in 0..3 {
+        for bx in 0..4 {
+            let block = |img: &HdrImage| {
+                let mut s = 0.0;
+                for r in 0..4 {
+                    for c in 0..4 {
+                        s += f64::from(img.get(bx * 4 + c, by * 4 + r).g);
+                    }
+                }
+                s / 16.0
+            };
+            let on = (block(&imgs[0]) + block(&imgs[1])) / 2.0;
+            let off = (block(&imgs[2]) + block(&imgs[3])) / 2.0;
+            // Block-local variance estimated the same way.
+            let mut v = 0.0;
+            for (a, b) in [(0, 1), (2, 3)] {
+                for r in 0..4 {
+                    for c in 0..4 {
+                        let (x, y) = (bx * 4 + c, by * 4 + r);
+                        v += f64::from(imgs[a].get(x, y).g - imgs[b].get(x, y).g).powi(2) / 2.0;
+                    }
+                }
+            }
+            let se_block = (v / 16.0 / (2.0 * 16.0)).sqrt().max(1e-6 * on.abs());
+            assert!((on - off).abs() < 5.5 * se_block, "block ({bx},{by}): {on} vs {off} (se {se_block})");
+        }
+    }
+    // NEE must actually reduce the variance on this scene.
+    assert!(v_on < v_off, "NEE variance {v_on} vs BSDF-only {v_off}");
+}
+
+#[test]
+fn on_off_and_flat_are_pixel_exact() {
+    // 4×4 pixels, default camera at (−1,0,0); a sphere of radius 1.5 at (3,0,0) subtends
+    // sin θ = 1.5/4 → tan θ = 0.405. Pixel centres have direction (1, ±0.25|±0.75, ±0.25|±0.75):
+    // only the central 2×2 (tan = √0.125 = 0.354) hit it.
+    let mut b = SceneBuilder::new(4, 4);
+    let m = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::new(0.5, 0.25, 0.125)) },
+        Pigment::Uniform(Color::new(0.1, 0.2, 0.3)),
+    ));
+    b.sphere(Transform::translation(DVec3::new(3.0, 0.0, 0.0)) * Transform::scaling(DVec3::splat(1.5)), m)
+        .renderer(Renderer::OnOff { on: Color::new(1.0, 2.0, 3.0), off: Color::new(0.5, 0.0, 0.25) });
+    let img = run(&b.build().unwrap(), None).image;
+    let inside = |c: usize, r: usize| (1..3).contains(&c) && (1..3).contains(&r);
+    for r in 0..4 {
+        for c in 0..4 {
+            let e = if inside(c, r) { Color::new(1.0, 2.0, 3.0) } else { Color::new(0.5, 0.0, 0.25) };
+            assert_eq!(px(&img, c, r), e);
+        }
+    }
+    // Flat: emitted + pigment on the sphere; the gradient sky elsewhere, at z of the unit
+    // direction (1, 1−2u, 2v−1)/|·|.
+    let (zen, hor, nad) = (Color::new(0.0, 0.0, 1.0), Color::new(1.0, 1.0, 1.0), Color::new(1.0, 0.0, 0.0));
+    b.renderer(Renderer::Flat { background: Color::gray(9.0) }).environment(Environment::Gradient {
+        zenith: zen,
+        horizon: hor,
+        nadir: nad,
+    });
+    let img = run(&b.build().unwrap(), None).image;
+    for r in 0..4 {
+        for c in 0..4 {
+            let e = if inside(c, r) {
+                Color::new(0.6, 0.45, 0.425)
+            } else {
+                let (y, z) = (1.0 - 2.0 * (c as f64 + 0.5) / 4.0, 2.0 * (1.0 - (r as f64 + 0.5) / 4.0) - 1.0);
+                let z = z / (1.0 + y * y + z * z).sqrt();
+                if z >= 0.0 {
+                    hor * (1.0 - z) + zen * z
+                } else {
+                    hor * (1.0 + z) + nad * (-z)
+                }
+            };
+            assert!(px(&img, c, r).approx_eq(e, 1e-6), "({c},{r}) {:?} vs {e:?}", px(&img, c, r));
+        }
+    }
+}
+
+#[test]
+fn images_do_not_depend_on_the_thread_count() {
+    let scene = furnace(0.7, 1.0, pt(3, 8, 2, true));
+    let opts = RenderOptions { spp: Some(3) };
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let a = one.install(|| render(&scene, &opts, Progress::Hidden));
+    let b = render(&scene, &opts, Progress::Hidden);
+    assert_eq!(a.image, b.image);
+    assert_eq!(a.stats.rays, b.stats.rays);
+    assert_eq!(a.stats.samples, 16 * 16 * 3 * 3);
+}
+
+#[test]
+fn non_finite_samples_are_counted_and_dropped() {
+    let mut b = SceneBuilder::new(4, 4);
+    let m = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::gray(f64::INFINITY))));
+    b.sphere(Transform::translation(DVec3::new(3.0, 0.0, 0.0)) * Transform::scaling(DVec3::splat(1.5)), m)
+        .renderer(Renderer::Flat { background: Color::gray(0.5) });
+    let out = render(&b.build().unwrap(), &RenderOptions::default(), Progress::Hidden);
+    assert_eq!(out.stats.non_finite_samples, 4);
+    assert_eq!(px(&out.image, 1, 1), Color::BLACK);
+    assert_eq!(px(&out.image, 0, 0), Color::gray(0.5));
+}
+
+/// `lumen render` end to end on a tiny script.
+mod cli {
+    use std::path::Path;
+    use std::process::Command;
+
+    const SCRIPT: &str = r#"
+        SET lamp Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)), .emitted_radiance Pigment.Uniform(<0.25, 0.5, 2>))
+        SPAWN Shape.Sphere(.material lamp, .transformation TRANSLATE(.X 3) * SCALE 1.5)
+        USING Camera.Perspective() Image(4, 4) Renderer.Flat(.background_color <1, 0, 0>) Tracer()
+    "#;
+
+    fn lumen(dir: &Path, args: &[&str]) -> std::process::Output {
+        std::fs::write(dir.join("tiny.sl"), SCRIPT).unwrap();
+        Command::new(env!("CARGO_BIN_EXE_lumen"))
+            .current_dir(dir)
+            .arg("render")
+            .arg("tiny.sl")
+            .args(args)
+            .output()
+            .unwrap()
+    }
+
+    #[test]
+    fn writes_pfm_and_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = lumen(dir.path(), &["-o", "out.pfm", "-o", "out.png", "--device", "cpu", "--width", "8"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        // --width 8 alone: the height follows from the camera's aspect ratio 1.
+        let img = lumen::image::read_image(&dir.path().join("out.pfm")).unwrap();
+        assert_eq!((img.width(), img.height()), (8, 8));
+        // Flat: the sphere's emission (its pigment is black) in the middle, background at
+        // the corners, exactly (linear radiance in the PFM).
+        assert_eq!(img.get(4, 4), lumen::color::Rgb32::new(0.25, 0.5, 2.0));
+        assert_eq!(img.get(0, 0), lumen::color::Rgb32::new(1.0, 0.0, 0.0));
+        let png = lumen::image::read_image(&dir.path().join("out.png")).unwrap();
+        assert_eq!((png.width(), png.height()), (8, 8));
+    }
+
+    #[test]
+    fn bad_arguments_fail_without_output() {
+        let dir = tempfile::tempdir().unwrap();
+        for args in [
+            &["-o", "out.png", "--spp", "0"][..],
+            &["-o", "out.png", "--width", "0"],
+            &["-o", "out.png", "--height", "100000"],
+            &["-o", "out.png", "--device", "gpu"],
+            &["-o", "out.png", "--alpha", "-1"],
+            &["-o", "out.png", "--frames", "0:1:0"],
+            &["-o", "out.png", "-o", "out.txt"],
+            &["-o", "out.png", "--vars", "x <1, 2>"],
+        ] {
+            let out = lumen(dir.path(), args);
+            assert!(!out.status.success(), "{args:?} succeeded");
+            assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
+            assert!(!dir.path().join("out.png").exists(), "{args:?} left an output");
+        }
+        let out = Command::new(env!("CARGO_BIN_EXE_lumen"))
+            .args(["render", "missing.sl"])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+    }
+}
