@@ -1,0 +1,253 @@
+// #requires shapes constants bindings
+// Constructive solid geometry by interval lists along the ray: mirrors cpu::csg.
+//
+// WGSL has neither recursion nor dynamic arrays, so the tree is evaluated depth-first with
+// an explicit frame stack, and interval lists live in fixed slots of CSG_MAX_INTERVALS
+// entries (the bound csg::max_intervals computes from the scene). Frame f (a node at
+// depth f) keeps its accumulated list in slot 2f and, for DIFF, the list to cut in slot
+// 2f + 1; a child's result arrives in slot 2(f + 1); the last slot is scratch.
+
+const CSG_SLOTS: u32 = 2u * CSG_MAX_DEPTH + 2u;
+const CSG_SCRATCH: u32 = CSG_SLOTS - 1u;
+const NO_SURFACE: u32 = 0xFFFFFFFFu;
+
+// One end of an interval: the ray parameter and the surface bounding the solid there
+// (a shape index, or NO_SURFACE at an open end); `flip` marks carved surfaces.
+struct End {
+    t: f32,
+    leaf: u32,
+    face: u32,
+    flip: bool,
+}
+
+struct Interval {
+    enter: End,
+    exit: End,
+}
+
+var<private> csg_pool: array<Interval, CSG_POOL_SIZE>;
+var<private> csg_len: array<u32, CSG_SLOTS>;
+
+fn csg_get(slot: u32, i: u32) -> Interval {
+    return csg_pool[slot * CSG_MAX_INTERVALS + i];
+}
+
+// Appends to a slot; the scene's bound guarantees room (an overflow would drop the rest).
+fn csg_push(slot: u32, iv: Interval) {
+    let n = csg_len[slot];
+    if (n < CSG_MAX_INTERVALS) {
+        csg_pool[slot * CSG_MAX_INTERVALS + n] = iv;
+        csg_len[slot] = n + 1u;
+    }
+}
+
+fn csg_copy(dst: u32, src: u32) {
+    csg_len[dst] = 0u;
+    for (var i = 0u; i < csg_len[src]; i++) {
+        csg_push(dst, csg_get(src, i));
+    }
+}
+
+fn csg_append(dst: u32, src: u32) {
+    for (var i = 0u; i < csg_len[src]; i++) {
+        csg_push(dst, csg_get(src, i));
+    }
+}
+
+// Stable insertion sort by entry (csg::sort).
+fn csg_sort(slot: u32) {
+    let base = slot * CSG_MAX_INTERVALS;
+    for (var i = 1u; i < csg_len[slot]; i++) {
+        let iv = csg_pool[base + i];
+        var j = i;
+        while (j > 0u && csg_pool[base + j - 1u].enter.t > iv.enter.t) {
+            csg_pool[base + j] = csg_pool[base + j - 1u];
+            j--;
+        }
+        csg_pool[base + j] = iv;
+    }
+}
+
+// Union into disjoint sorted intervals, in place (csg::merge).
+fn csg_merge(slot: u32) {
+    csg_sort(slot);
+    let base = slot * CSG_MAX_INTERVALS;
+    var out = 0u;
+    for (var i = 0u; i < csg_len[slot]; i++) {
+        let iv = csg_pool[base + i];
+        if (out > 0u && iv.enter.t <= csg_pool[base + out - 1u].exit.t) {
+            if (iv.exit.t > csg_pool[base + out - 1u].exit.t) {
+                csg_pool[base + out - 1u].exit = iv.exit;
+            }
+        } else {
+            csg_pool[base + out] = iv;
+            out++;
+        }
+    }
+    csg_len[slot] = out;
+}
+
+// a := pairwise intersection of a and b, pieces of positive length (csg::intersect).
+fn csg_intersect(a: u32, b: u32) {
+    csg_len[CSG_SCRATCH] = 0u;
+    for (var i = 0u; i < csg_len[a]; i++) {
+        let x = csg_get(a, i);
+        for (var k = 0u; k < csg_len[b]; k++) {
+            let y = csg_get(b, k);
+            var enter = x.enter;
+            if (y.enter.t > x.enter.t) {
+                enter = y.enter;
+            }
+            var exit = x.exit;
+            if (y.exit.t < x.exit.t) {
+                exit = y.exit;
+            }
+            if (enter.t < exit.t) {
+                csg_push(CSG_SCRATCH, Interval(enter, exit));
+            }
+        }
+    }
+    csg_sort(CSG_SCRATCH);
+    csg_copy(a, CSG_SCRATCH);
+}
+
+fn flipped(e: End) -> End {
+    return End(e.t, e.leaf, e.face, !e.flip);
+}
+
+// a := a minus the disjoint sorted `cut`; cut ends become carved surfaces (csg::subtract).
+fn csg_subtract(a: u32, cut: u32) {
+    csg_len[CSG_SCRATCH] = 0u;
+    for (var i = 0u; i < csg_len[a]; i++) {
+        let x = csg_get(a, i);
+        var start = x.enter;
+        var open = true;
+        for (var k = 0u; k < csg_len[cut]; k++) {
+            if (!open) {
+                break;
+            }
+            let y = csg_get(cut, k);
+            if (y.exit.t <= start.t) {
+                continue;
+            }
+            if (y.enter.t >= x.exit.t) {
+                break;
+            }
+            if (y.enter.t > start.t) {
+                csg_push(CSG_SCRATCH, Interval(start, flipped(y.enter)));
+            }
+            open = y.exit.t < x.exit.t;
+            start = flipped(y.exit);
+        }
+        if (open && start.t < x.exit.t) {
+            csg_push(CSG_SCRATCH, Interval(start, x.exit));
+        }
+    }
+    csg_sort(CSG_SCRATCH);
+    csg_copy(a, CSG_SCRATCH);
+}
+
+fn end_from_crossing(c: Crossing, leaf: u32) -> End {
+    return End(c.t, select(NO_SURFACE, leaf, abs(c.t) < OPEN), c.face, false);
+}
+
+// The leaf's interval (if any) into `slot`.
+fn csg_leaf(slot: u32, shape: u32, ray: Ray) {
+    csg_len[slot] = 0u;
+    let sp = shape_span(shape, ray);
+    if (sp.valid) {
+        csg_push(slot, Interval(end_from_crossing(sp.enter, shape), end_from_crossing(sp.exit, shape)));
+    }
+}
+
+// Folds child number `i` (its list in `src`) into the node of frame f.
+fn csg_combine(op: u32, f: u32, i: u32, src: u32) {
+    let acc = 2u * f;
+    if (i == 0u) {
+        csg_copy(acc, src);
+        csg_len[acc + 1u] = 0u;
+        return;
+    }
+    switch op {
+        case 1u: {
+            csg_intersect(acc, src);
+        }
+        case 2u: {
+            csg_append(acc + 1u, src);
+        }
+        default: {
+            csg_append(acc, src);
+        }
+    }
+}
+
+// The node's final list, in its accumulator slot.
+fn csg_finish(op: u32, f: u32) {
+    let acc = 2u * f;
+    switch op {
+        case 0u: {
+            csg_sort(acc);
+        }
+        case 2u: {
+            csg_merge(acc + 1u);
+            csg_subtract(acc, acc + 1u);
+        }
+        case 3u: {
+            csg_merge(acc);
+        }
+        default: {}
+    }
+}
+
+// Evaluates the tree rooted at node `root` along the ray's whole line; the result is in
+// slot 0, sorted by entry.
+fn csg_intervals(root: u32, ray: Ray) {
+    var frames: array<vec2<u32>, CSG_MAX_DEPTH>;
+    frames[0] = vec2<u32>(root, 0u);
+    var depth = 1u;
+    csg_len[0] = 0u;
+    csg_len[1] = 0u;
+    loop {
+        let f = depth - 1u;
+        let node = csg_nodes[frames[f].x];
+        let i = frames[f].y;
+        if (i == node.child_count) {
+            csg_finish(node.op, f);
+            if (f == 0u) {
+                return;
+            }
+            depth = f;
+            let parent = csg_nodes[frames[f - 1u].x];
+            csg_combine(parent.op, f - 1u, frames[f - 1u].y - 1u, 2u * f);
+            continue;
+        }
+        frames[f].y = i + 1u;
+        let r = indices[node.first_child + i];
+        if ((r & CSG_NODE_BIT) != 0u && depth < CSG_MAX_DEPTH) {
+            frames[depth] = vec2<u32>(r & ~CSG_NODE_BIT, 0u);
+            depth++;
+            continue;
+        }
+        csg_leaf(2u * depth, r & ~CSG_NODE_BIT, ray);
+        csg_combine(node.op, f, i, 2u * depth);
+    }
+}
+
+// The closest surface of the tree inside (tmin, tmax): csg::CsgTree::closest.
+fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
+    csg_intervals(root, ray);
+    var best = no_candidate();
+    for (var i = 0u; i < csg_len[0]; i++) {
+        let iv = csg_get(0u, i);
+        for (var k = 0u; k < 2u; k++) {
+            var e = iv.exit;
+            if (k == 0u) {
+                e = iv.enter;
+            }
+            if (e.leaf != NO_SURFACE && e.t > ray.tmin && e.t < ray.tmax && e.t < best.c.t) {
+                best = Candidate(Crossing(e.t, e.face), e.leaf, e.flip, object);
+            }
+        }
+    }
+    return best;
+}

@@ -1,0 +1,100 @@
+// #requires bindings environment lights
+// The environment as a light: mirrors cpu::env_light and sampling::distribution (the
+// tables are packed in `floats` at environment.dist_offset, see src/gpu/pack.rs).
+
+// #if ENV_IMAGE
+// A Distribution1D of n cells at floats[base]: integral, n values, n + 1 CDF entries.
+fn dist1d_pdf_cell(base: u32, n: u32, i: u32) -> f32 {
+    let integral = floats[base];
+    if (integral > 0.0) {
+        return floats[base + 1u + i] / integral;
+    }
+    return 1.0;
+}
+
+fn dist1d_find_cell(base: u32, n: u32, u: f32) -> u32 {
+    let cdf = base + 1u + n;
+    var lo = 0u;
+    var hi = n;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (floats[cdf + mid] <= u) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// Distribution1D::sample: (x, pdf, cell).
+fn dist1d_sample(base: u32, n: u32, u: f32) -> vec3<f32> {
+    let cell = dist1d_find_cell(base, n, u);
+    let cdf = base + 1u + n;
+    let c0 = floats[cdf + cell];
+    let width = floats[cdf + cell + 1u] - c0;
+    var du = 0.0;
+    if (width > 0.0) {
+        du = clamp((u - c0) / width, 0.0, 1.0);
+    }
+    let nf = f32(n);
+    let upper = bitcast<f32>(bitcast<u32>((f32(cell) + 1.0) / nf) - 1u);
+    let x = max(min((f32(cell) + du) / nf, upper), f32(cell) / nf);
+    return vec3<f32>(x, dist1d_pdf_cell(base, n, cell), f32(cell));
+}
+
+fn env_row_base(row: u32) -> u32 {
+    let w = environment.tex_width;
+    let h = environment.tex_height;
+    return environment.dist_offset + 2u * h + 2u + row * (2u * w + 2u);
+}
+
+// Distribution2D::pdf.
+fn env_dist_pdf(u: f32, v: f32) -> f32 {
+    let w = environment.tex_width;
+    let h = environment.tex_height;
+    let row = min(u32(max(v * f32(h), 0.0)), h - 1u);
+    let col = min(u32(max(u * f32(w), 0.0)), w - 1u);
+    return dist1d_pdf_cell(environment.dist_offset, h, row) * dist1d_pdf_cell(env_row_base(row), w, col);
+}
+
+// env_light::equirect_dir.
+fn equirect_dir(u: f32, v: f32, rotation_rad: f32) -> vec3<f32> {
+    let phi = TAU * u + rotation_rad;
+    let theta = PI * v;
+    let s = sin(theta);
+    return vec3<f32>(s * cos(phi), s * sin(phi), cos(theta));
+}
+
+fn env_image_pdf(pdf_uv: f32, v: f32) -> f32 {
+    let sin_theta = sin(PI * v);
+    if (sin_theta <= 0.0) {
+        return 0.0;
+    }
+    return pdf_uv / (2.0 * PI * PI * sin_theta);
+}
+// #endif
+
+// EnvLight::sample: a unit direction toward the environment (xyz) and its density (w).
+fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
+// #if ENV_IMAGE
+    if (environment.kind == 3u) {
+        let v = dist1d_sample(environment.dist_offset, environment.tex_height, xi1);
+        let u = dist1d_sample(env_row_base(u32(v.z)), environment.tex_width, xi0);
+        let dir = equirect_dir(u.x, v.x, environment.rotation_rad);
+        return vec4<f32>(dir, env_image_pdf(u.y * v.y, v.x));
+    }
+// #endif
+    return vec4<f32>(uniform_sphere(xi0, xi1), UNIFORM_SPHERE_PDF);
+}
+
+// EnvLight::pdf for a unit direction.
+fn env_pdf(dir: vec3<f32>) -> f32 {
+// #if ENV_IMAGE
+    if (environment.kind == 3u) {
+        let uv = equirect_uv(dir, environment.rotation_rad);
+        return env_image_pdf(env_dist_pdf(uv.x, uv.y), uv.y);
+    }
+// #endif
+    return UNIFORM_SPHERE_PDF;
+}

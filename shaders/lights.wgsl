@@ -1,0 +1,180 @@
+// #requires bindings ray onb shapes pigment
+// Area lights for next-event estimation: mirrors cpu::area_light and cpu::warp (cone and
+// sphere warps). Positions are in the camera frame.
+
+struct LightPoint {
+    point: vec3<f32>,
+    normal: vec3<f32>,
+    object_point: vec3<f32>,
+    pdf: f32,
+}
+
+const UNIFORM_SPHERE_PDF: f32 = 0.0795774715459477;
+
+// warp::uniform_sphere.
+fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
+    let z = 1.0 - 2.0 * xi0;
+    let r = sqrt(max(1.0 - z * z, 0.0));
+    let phi = TAU * xi1;
+    return vec3<f32>(r * cos(phi), r * sin(phi), z);
+}
+
+// #if AREA_LIGHTS
+// warp::cone_one_minus_cos: 1 − cos θmax without cancellation.
+fn cone_one_minus_cos(r: f32, d: f32) -> f32 {
+    let sin2 = min((r / d) * (r / d), 1.0);
+    let c = sqrt(1.0 - sin2);
+    return sin2 / (1.0 + c);
+}
+
+fn uniform_cone_pdf(one_minus_cos_max: f32) -> f32 {
+    return 1.0 / (TAU * one_minus_cos_max);
+}
+
+// area_light::object_normal.
+fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
+    if (kind == 0u) {
+        return normalize(p);
+    }
+    let a = abs(p);
+    if (a.x >= a.y && a.x >= a.z) {
+        return vec3<f32>(sign(p.x), 0.0, 0.0);
+    }
+    if (a.y >= a.z) {
+        return vec3<f32>(0.0, sign(p.y), 0.0);
+    }
+    return vec3<f32>(0.0, 0.0, sign(p.z));
+}
+
+// Whether light i is sampled by its cone from x (a sphere, x outside it, not on it).
+fn light_uses_cone(light: AreaLight, x: vec3<f32>, x_object: u32) -> bool {
+    return light.sphere.w > 0.0 && x_object != light.shape && length(light.sphere.xyz - x) > light.sphere.w;
+}
+
+// AreaLight::area_pdf_solid_angle.
+fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>) -> f32 {
+    let s = shapes[light.shape];
+    let n_world = affine_normal(s.to_object, n_obj);
+    let jacobian = light.det * length(n_world);
+    let area_obj = select(6.0, 2.0 * TAU, s.kind == 0u);
+    let to_light = y - x;
+    let dist2 = dot(to_light, to_light);
+    let cos_light = abs(dot(normalize(n_world), to_light)) / sqrt(dist2);
+    if (!(cos_light > 0.0) || !(dist2 > 0.0)) {
+        return 0.0;
+    }
+    return dist2 / (cos_light * area_obj * jacobian);
+}
+
+// area_light::sample_cube_surface.
+fn sample_cube_surface(xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
+    let f = min(floor(xi0 * 6.0), 5.0);
+    let a = xi0 * 6.0 - f - 0.5;
+    let b = xi1 - 0.5;
+    let face = u32(f);
+    let s = select(-0.5, 0.5, face % 2u == 0u);
+    switch face / 2u {
+        case 0u: {
+            return array<vec3<f32>, 2>(vec3<f32>(s, a, b), vec3<f32>(2.0 * s, 0.0, 0.0));
+        }
+        case 1u: {
+            return array<vec3<f32>, 2>(vec3<f32>(b, s, a), vec3<f32>(0.0, 2.0 * s, 0.0));
+        }
+        default: {
+            return array<vec3<f32>, 2>(vec3<f32>(a, b, s), vec3<f32>(0.0, 0.0, 2.0 * s));
+        }
+    }
+}
+
+// area_light::sample_cone: a point on the sphere's visible cap, uniform in the cone of
+// directions it subtends from x.
+fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
+    let c = light.sphere.xyz;
+    let r = light.sphere.w;
+    let d = length(c - x);
+    let omc_max = cone_one_minus_cos(r, d);
+    // warp::uniform_cone.
+    let one_minus_cos = xi0 * omc_max;
+    let cos_theta = 1.0 - one_minus_cos;
+    let sin_theta0 = sqrt(max(one_minus_cos * (2.0 - one_minus_cos), 0.0));
+    let phi = TAU * xi1;
+    let local = vec3<f32>(sin_theta0 * cos(phi), sin_theta0 * sin(phi), cos_theta);
+    let sin2_theta = local.x * local.x + local.y * local.y;
+    let sin_theta_max = r / d;
+    let cos_alpha = sin2_theta / sin_theta_max
+        + cos_theta * sqrt(max(1.0 - sin2_theta / (sin_theta_max * sin_theta_max), 0.0));
+    let sin_alpha = sqrt(max(1.0 - cos_alpha * cos_alpha, 0.0));
+    let w = (c - x) / d;
+    let frame = onb(w);
+    let sin_theta = sqrt(sin2_theta);
+    var e = frame.t;
+    if (sin_theta > 0.0) {
+        e = (frame.t * local.x + frame.b * local.y) / sin_theta;
+    }
+    let normal = normalize(e * sin_alpha - w * cos_alpha);
+    let point = c + r * normal;
+    let s = shapes[light.shape];
+    return LightPoint(point, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max));
+}
+
+// AreaLight::sample.
+fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32) -> LightPoint {
+    if (light_uses_cone(light, x, x_object)) {
+        return light_sample_cone(light, x, xi0, xi1);
+    }
+    let s = shapes[light.shape];
+    var p_obj: vec3<f32>;
+    var n_obj: vec3<f32>;
+    if (s.kind == 0u) {
+        p_obj = uniform_sphere(xi0, xi1);
+        n_obj = p_obj;
+    } else {
+        let pn = sample_cube_surface(xi0, xi1);
+        p_obj = pn[0];
+        n_obj = pn[1];
+    }
+    let y = affine_point(s.to_world, p_obj);
+    let pdf = light_area_pdf(light, x, y, n_obj);
+    return LightPoint(y, normalize(affine_normal(s.to_object, n_obj)), p_obj, pdf);
+}
+
+// AreaLight::pdf: density of light_sample producing y from x.
+fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>) -> f32 {
+    if (light_uses_cone(light, x, x_object)) {
+        return uniform_cone_pdf(cone_one_minus_cos(light.sphere.w, length(light.sphere.xyz - x)));
+    }
+    let s = shapes[light.shape];
+    let p_obj = affine_point(s.to_object, y);
+    return light_area_pdf(light, x, y, light_object_normal(s.kind, p_obj));
+}
+
+// AreaLight::emission at a sampled point.
+fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
+    let s = shapes[light.shape];
+    let m = materials[s.material];
+    let n = light_object_normal(s.kind, lp.object_point);
+    var face = 0u;
+    if (s.kind == 2u) {
+        let a = abs(n);
+        var axis = 0u;
+        if (a.y > a.x && a.y >= a.z) {
+            axis = 1u;
+        } else if (a.z > a.x && a.z > a.y) {
+            axis = 2u;
+        }
+        face = 2u * axis + select(0u, 1u, n[axis] > 0.0);
+    }
+    let uv = primitive_surface(s.kind, lp.object_point, face).uv;
+    return pigment_color(m.emitted, uv);
+}
+// #endif
+
+// Lights NEE chooses from: area lights, then the environment (cpu::lights::Lights).
+fn light_count() -> u32 {
+    return settings.area_light_count + environment.is_light;
+}
+
+fn light_selection_pdf() -> f32 {
+    let n = light_count();
+    return select(0.0, 1.0 / f32(n), n > 0u);
+}

@@ -1,0 +1,56 @@
+// #requires bindings
+// #if PIGMENT_IMAGE
+// #requires textures
+// #endif
+// Pigments: mirrors scene::Pigment::color_at (uniform, checkered, image nearest/bilinear).
+
+// #if PIGMENT_IMAGE
+fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {
+    let w = p.tex_width;
+    let h = p.tex_height;
+    if (w == 0u || h == 0u) {
+        return vec3<f32>(0.0);
+    }
+    if (p.image_filter == 0u) {
+        let col = min(u32(max(u * f32(w), 0.0)), w - 1u);
+        let row = min(u32(max(v * f32(h), 0.0)), h - 1u);
+        return texel(p.tex_offset, w, col, row);
+    }
+    // Bilinear: wrap in u, clamp in v.
+    let x = u * f32(w) - 0.5;
+    let y = clamp(v * f32(h) - 0.5, 0.0, f32(h - 1u));
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let wi = i32(w);
+    let c0 = u32(((i32(x0) % wi) + wi) % wi);
+    let c1 = u32(((i32(x0 + 1.0) % wi) + wi) % wi);
+    let r0 = u32(y0);
+    let r1 = min(r0 + 1u, h - 1u);
+    let top = texel(p.tex_offset, w, c0, r0) * (1.0 - fx) + texel(p.tex_offset, w, c1, r0) * fx;
+    let bottom = texel(p.tex_offset, w, c0, r1) * (1.0 - fx) + texel(p.tex_offset, w, c1, r1) * fx;
+    return top * (1.0 - fy) + bottom * fy;
+}
+// #endif
+
+fn pigment_color(index: u32, uv: vec2<f32>) -> vec3<f32> {
+    let p = pigments[index];
+// #if PIGMENT_CHECKERED
+    if (p.kind == 1u) {
+        let n = f32(p.n);
+        let iu = i32(floor(uv.x * n));
+        let iv = i32(floor(uv.y * n));
+        if (((iu + iv) & 1) == 0) {
+            return p.a.xyz;
+        }
+        return p.b.xyz;
+    }
+// #endif
+// #if PIGMENT_IMAGE
+    if (p.kind == 2u) {
+        return image_lookup(p, uv.x, uv.y);
+    }
+// #endif
+    return p.a.xyz;
+}

@@ -1,0 +1,27 @@
+// #requires ray
+// The ray–sphere quadratic without cancellation: mirrors src/cpu/shapes/quadratic.rs.
+// Used by the sphere and the cylinder's side.
+
+// Roots t0 ≤ t1 of |f + t·d|² = r2 (x, y), or none (z = 0 flags a miss). Δ computed from
+// the closest approach (Ray Tracing Gems ch. 7), roots as q/a and c/q.
+fn sphere_roots(f: vec3<f32>, d: vec3<f32>, r2: f32) -> vec3<f32> {
+    let a = dot(d, d);
+    if (a == 0.0) {
+        return vec3<f32>(0.0, 0.0, 0.0);
+    }
+    let b = dot(f, d);
+    let closest = f - (b / a) * d;
+    let disc = a * (r2 - dot(closest, closest));
+    if (!(disc >= 0.0)) {
+        return vec3<f32>(0.0, 0.0, 0.0);
+    }
+    let c = dot(f, f) - r2;
+    let q = -(b + select(-1.0, 1.0, b >= 0.0) * sqrt(disc));
+    var t0 = 0.0;
+    var t1 = 0.0;
+    if (q != 0.0) {
+        t0 = q / a;
+        t1 = c / q;
+    }
+    return vec3<f32>(min(t0, t1), max(t0, t1), 1.0);
+}

@@ -1,0 +1,74 @@
+// #requires layout
+// Rays, crossings and hits in f32: mirrors src/cpu/{ray,hit}.rs and the Span/Crossing
+// types of src/cpu/shapes. Coordinates are relative to the camera (DESIGN.md "GPU renderer").
+
+// Stands for ±∞ at the open ends of spans (WGSL has no infinity literal).
+const OPEN: f32 = 3.0e38;
+const PI: f32 = 3.14159265358979;
+const TAU: f32 = 6.28318530717959;
+const INV_PI: f32 = 0.318309886183791;
+
+struct Ray {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    tmin: f32,
+    tmax: f32,
+}
+
+// Where a line crosses a primitive's surface (face as in src/cpu/shapes).
+struct Crossing {
+    t: f32,
+    face: u32,
+}
+
+// The interval of the line inside a solid; `valid` is false when the line misses it.
+struct Span {
+    enter: Crossing,
+    exit: Crossing,
+    valid: bool,
+}
+
+fn no_span() -> Span {
+    return Span(Crossing(OPEN, 0u), Crossing(-OPEN, 0u), false);
+}
+
+// Object-space surface data at a crossing.
+struct SurfacePoint {
+    point: vec3<f32>,
+    normal: vec3<f32>,
+    uv: vec2<f32>,
+}
+
+struct Hit {
+    t: f32,
+    point: vec3<f32>,
+    // Unit normal facing the incoming ray.
+    normal: vec3<f32>,
+    front_face: bool,
+    uv: vec2<f32>,
+    material: u32,
+    // Index of the top-level object.
+    object: u32,
+}
+
+fn affine_point(a: Affine, p: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(a.r0.xyz, p) + a.r0.w, dot(a.r1.xyz, p) + a.r1.w, dot(a.r2.xyz, p) + a.r2.w);
+}
+
+fn affine_vector(a: Affine, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(a.r0.xyz, v), dot(a.r1.xyz, v), dot(a.r2.xyz, v));
+}
+
+// Normal out of object space with the inverse transpose: the transpose of the
+// world-to-object linear part.
+fn affine_normal(to_object: Affine, n: vec3<f32>) -> vec3<f32> {
+    return n.x * to_object.r0.xyz + n.y * to_object.r1.xyz + n.z * to_object.r2.xyz;
+}
+
+fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let l2 = dot(v, v);
+    if (l2 > 0.0) {
+        return v * inverseSqrt(l2);
+    }
+    return fallback;
+}

@@ -1,0 +1,120 @@
+// #requires bindings ray
+// #if SPHERE
+// #requires sphere
+// #endif
+// #if PLANE
+// #requires plane
+// #endif
+// #if CUBE
+// #requires cube
+// #endif
+// #if CYLINDER
+// #requires cylinder
+// #endif
+// Placed primitives: mirrors src/cpu/shapes/{mod,instance}.rs. The ray moves into object
+// space without normalising its direction, so t means the same point in both spaces.
+
+fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
+    switch kind {
+// #if SPHERE
+        case 0u: {
+            return sphere_span(o, d);
+        }
+// #endif
+// #if PLANE
+        case 1u: {
+            return plane_span(o, d);
+        }
+// #endif
+// #if CUBE
+        case 2u: {
+            return cube_span(o, d);
+        }
+// #endif
+// #if CYLINDER
+        case 3u: {
+            return cylinder_span(o, d);
+        }
+// #endif
+        default: {
+            return no_span();
+        }
+    }
+}
+
+fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
+    switch kind {
+// #if SPHERE
+        case 0u: {
+            return sphere_surface(p);
+        }
+// #endif
+// #if PLANE
+        case 1u: {
+            return plane_surface(p);
+        }
+// #endif
+// #if CUBE
+        case 2u: {
+            return cube_surface(p, face);
+        }
+// #endif
+// #if CYLINDER
+        case 3u: {
+            return cylinder_surface(p, face);
+        }
+// #endif
+        default: {
+            return SurfacePoint(p, vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.0));
+        }
+    }
+}
+
+// The span of the ray's whole line through shape `i`.
+fn shape_span(i: u32, ray: Ray) -> Span {
+    let s = shapes[i];
+    return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
+}
+
+// The first finite crossing of shape `i` with t in the open range (tmin, tmax); t = OPEN
+// when there is none.
+fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
+    let sp = shape_span(i, ray);
+    if (sp.valid) {
+        if (sp.enter.t > ray.tmin && sp.enter.t < ray.tmax && abs(sp.enter.t) < OPEN) {
+            return sp.enter;
+        }
+        if (sp.exit.t > ray.tmin && sp.exit.t < ray.tmax && abs(sp.exit.t) < OPEN) {
+            return sp.exit;
+        }
+    }
+    return Crossing(OPEN, 0u);
+}
+
+// The hit at crossing `c` of shape `i`; `flip` reverses the outward normal (surfaces
+// carved by a subtracted CSG child).
+fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> Hit {
+    let s = shapes[i];
+    let o = affine_point(s.to_object, ray.origin);
+    let d = affine_vector(s.to_object, ray.dir);
+    let sp = primitive_surface(s.kind, o + c.t * d, c.face);
+    let point = affine_point(s.to_world, sp.point);
+    let n = normalize_or(affine_normal(s.to_object, sp.normal), vec3<f32>(0.0));
+    let outward = select(n, -n, flip);
+    let front_face = dot(outward, ray.dir) < 0.0;
+    let normal = select(-outward, outward, front_face);
+    return Hit(c.t, point, normal, front_face, sp.uv, s.material, object);
+}
+
+// A candidate hit, kept cheap until the closest is known: the crossing, the primitive
+// that produced it, whether its normal is flipped (CSG DIFF), the top-level object.
+struct Candidate {
+    c: Crossing,
+    shape: u32,
+    flip: bool,
+    object: u32,
+}
+
+fn no_candidate() -> Candidate {
+    return Candidate(Crossing(OPEN, 0u), 0u, false, 0u);
+}

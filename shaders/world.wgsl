@@ -1,0 +1,134 @@
+// #requires shapes constants
+// #if CSG
+// #requires csg
+// #endif
+// Closest hit and occlusion over the scene: the flattened BVH of finite objects (the
+// same 32-byte nodes the CPU traverses) plus the list of infinite planes tested by every
+// ray. Mirrors cpu::World.
+
+// The first crossing of object reference `r` inside (tmin, tmax).
+fn object_first(r: u32, ray: Ray) -> Candidate {
+// #if CSG
+    if ((r & CSG_NODE_BIT) != 0u) {
+        return csg_first(r & ~CSG_NODE_BIT, ray, r);
+    }
+// #endif
+    return Candidate(shape_first_crossing(r, ray), r, false, r);
+}
+
+// #if BVH
+// Slab test against a node's box; the exit is widened by 2 ulps-ish (Ize 2013) so f32
+// rounding cannot drop a box the ray grazes. `inv_dir` has no infinities.
+fn box_entry(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
+    let a = (node.min - origin) * inv_dir;
+    let b = (node.max - origin) * inv_dir;
+    let lo = min(a, b);
+    let hi = max(a, b);
+    let enter = max(max(lo.x, lo.y), max(lo.z, tmin));
+    let exit = min(min(hi.x, hi.y), min(hi.z, tmax)) * 1.0000004;
+    return select(OPEN, enter, enter <= exit);
+}
+
+fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
+    let tiny = vec3<f32>(1e-30);
+    let m = select(d, select(-tiny, tiny, d >= vec3<f32>(0.0)), abs(d) < tiny);
+    return 1.0 / m;
+}
+// #endif
+
+// The closest candidate along the ray (t = OPEN when nothing is hit); with `any_hit` it
+// returns as soon as something is found (occlusion queries).
+fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
+    var ray = ray_in;
+    var best = no_candidate();
+// #if PLANE
+    for (var i = 0u; i < settings.plane_count; i++) {
+        let cand = object_first(indices[settings.plane_offset + i], ray);
+        if (cand.c.t < ray.tmax) {
+            best = cand;
+            ray.tmax = cand.c.t;
+            if (any_hit) {
+                return best;
+            }
+        }
+    }
+// #endif
+// #if BVH
+    if (settings.bvh_node_count == 0u) {
+        return best;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    var stack: array<u32, BVH_STACK_SIZE>;
+    var top = 0u;
+    var node_index = 0u;
+    if (box_entry(bvh_nodes[0], ray.origin, inv_dir, ray.tmin, ray.tmax) >= OPEN) {
+        return best;
+    }
+    loop {
+        let node = bvh_nodes[node_index];
+        if (node.count > 0u) {
+            for (var k = 0u; k < node.count; k++) {
+                let cand = object_first(indices[node.left_or_first + k], ray);
+                if (cand.c.t < ray.tmax) {
+                    best = cand;
+                    ray.tmax = cand.c.t;
+                    if (any_hit) {
+                        return best;
+                    }
+                }
+            }
+        } else {
+            // Visit the nearer child first, push the other.
+            let left = node_index + 1u;
+            let right = node.left_or_first;
+            let tl = box_entry(bvh_nodes[left], ray.origin, inv_dir, ray.tmin, ray.tmax);
+            let tr = box_entry(bvh_nodes[right], ray.origin, inv_dir, ray.tmin, ray.tmax);
+            if (tl < OPEN || tr < OPEN) {
+                var near = left;
+                var far = right;
+                var t_far = tr;
+                if (tr < tl) {
+                    near = right;
+                    far = left;
+                    t_far = tl;
+                }
+                if (t_far < OPEN && top < BVH_STACK_SIZE) {
+                    stack[top] = far;
+                    top++;
+                }
+                node_index = near;
+                continue;
+            }
+        }
+        // Pop the next node still in front of the closest hit.
+        var found = false;
+        while (top > 0u) {
+            top--;
+            let candidate = stack[top];
+            if (box_entry(bvh_nodes[candidate], ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
+                node_index = candidate;
+                found = true;
+                break;
+            }
+        }
+        if (!found) {
+            break;
+        }
+    }
+// #endif
+    return best;
+}
+
+// The closest hit; `hit.t = OPEN` when the ray escapes.
+fn closest_hit(ray: Ray) -> Hit {
+    let cand = world_first(ray, false);
+    if (cand.c.t >= OPEN) {
+        return Hit(OPEN, vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
+    }
+    return shape_surface_hit(cand.shape, ray, cand.c, cand.flip, cand.object);
+}
+
+// True when something lies on the ray strictly inside (tmin, tmax).
+fn occluded(ray: Ray) -> bool {
+    return world_first(ray, true).c.t < OPEN;
+}

@@ -1,0 +1,317 @@
+//! The packed scene: `#[repr(C)]` Pod structs uploaded as-is, each mirrored byte for byte
+//! by a struct of `shaders/layout.wgsl`.
+//!
+//! Only `u32`, `f32` and 16-byte-aligned `vec4` members are used, so the Rust and WGSL
+//! layouts agree without hidden padding; the unit test below parses the WGSL with naga
+//! and checks every struct's size and member offsets against Rust's, so they cannot drift.
+//! All positions are relative to the camera (see `pack`), which keeps f32 precise for
+//! scenes far from the origin.
+
+use bytemuck::{Pod, Zeroable};
+use glam::DMat4;
+
+/// WGSL source of the packed structs.
+pub const LAYOUT_WGSL: &str = include_str!("../../shaders/layout.wgsl");
+
+/// "No index" marker (for example, a shape that is not an area light).
+pub const NONE: u32 = u32::MAX;
+/// Set in an object reference (BVH leaf, plane list, CSG child) when it names a CSG node
+/// rather than a shape.
+pub const CSG_NODE_BIT: u32 = 0x8000_0000;
+
+/// `Shape::kind` values (the order of `ShapeKind::ALL`).
+pub mod shape_kind {
+    pub const SPHERE: u32 = 0;
+    pub const PLANE: u32 = 1;
+    pub const CUBE: u32 = 2;
+    pub const CYLINDER: u32 = 3;
+}
+/// `CsgNode::op` values.
+pub mod csg_op {
+    pub const UNITE: u32 = 0;
+    pub const INTERSECT: u32 = 1;
+    pub const DIFF: u32 = 2;
+    pub const FUSE: u32 = 3;
+}
+/// `Material::brdf` values.
+pub mod brdf_kind {
+    pub const DIFFUSE: u32 = 0;
+    pub const SPECULAR: u32 = 1;
+    pub const DIELECTRIC: u32 = 2;
+}
+/// `Pigment::kind` values.
+pub mod pigment_kind {
+    pub const UNIFORM: u32 = 0;
+    pub const CHECKERED: u32 = 1;
+    pub const IMAGE: u32 = 2;
+}
+/// `Environment::kind` values (`NONE_ENV`: escaping rays see the background colour).
+pub mod environment_kind {
+    pub const NONE_ENV: u32 = 0;
+    pub const UNIFORM: u32 = 1;
+    pub const GRADIENT: u32 = 2;
+    pub const IMAGE: u32 = 3;
+}
+/// `Settings::renderer` values.
+pub mod renderer_kind {
+    pub const ON_OFF: u32 = 0;
+    pub const FLAT: u32 = 1;
+    pub const POINT_LIGHT: u32 = 2;
+    pub const PATH_TRACER: u32 = 3;
+}
+/// `Settings::jitter` values: how camera sample j is placed in its pixel.
+pub mod jitter_mode {
+    /// One sample at the pixel centre, no draws.
+    pub const CENTRE: u32 = 0;
+    /// s×s strata, s = `samples_per_side`.
+    pub const STRATIFIED: u32 = 1;
+    /// Jittered over the whole pixel.
+    pub const WHOLE_PIXEL: u32 = 2;
+}
+
+/// Three rows of a 3×4 affine matrix (last column: translation), in f32.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Affine {
+    pub r0: [f32; 4],
+    pub r1: [f32; 4],
+    pub r2: [f32; 4],
+}
+
+impl Affine {
+    /// Rounds the top three rows of an affine f64 matrix to f32.
+    pub fn from_dmat4(m: &DMat4) -> Self {
+        let row = |i: usize| {
+            let r = m.row(i);
+            [r.x as f32, r.y as f32, r.z as f32, r.w as f32]
+        };
+        Self { r0: row(0), r1: row(1), r2: row(2) }
+    }
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Shape {
+    pub to_object: Affine,
+    pub to_world: Affine,
+    pub kind: u32,
+    pub material: u32,
+    pub light: u32,
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct CsgNode {
+    pub op: u32,
+    pub first_child: u32,
+    pub child_count: u32,
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    pub brdf: u32,
+    pub pigment: u32,
+    pub emitted: u32,
+    pub ior: f32,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Pigment {
+    pub a: [f32; 4],
+    pub b: [f32; 4],
+    pub kind: u32,
+    pub n: u32,
+    pub image_filter: u32,
+    pub tex_offset: u32,
+    pub tex_width: u32,
+    pub tex_height: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// An area light: `sphere` = world centre and radius when the light is a sphere placed by a
+/// similarity (sampled by the cone it subtends), radius 0 otherwise (sampled by area).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct AreaLight {
+    pub sphere: [f32; 4],
+    pub shape: u32,
+    pub det: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct PointLight {
+    pub position: [f32; 4],
+    pub color: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Environment {
+    pub a: [f32; 4],
+    pub b: [f32; 4],
+    pub c: [f32; 4],
+    pub kind: u32,
+    pub tex_width: u32,
+    pub tex_height: u32,
+    pub tex_offset: u32,
+    pub intensity: f32,
+    pub rotation_rad: f32,
+    pub dist_offset: u32,
+    pub is_light: u32,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Camera {
+    pub to_world: Affine,
+    pub projection: u32,
+    pub aspect_ratio: f32,
+    pub screen_distance: f32,
+    pub _pad: u32,
+}
+
+/// `Camera::projection` values.
+pub mod projection_kind {
+    pub const PERSPECTIVE: u32 = 0;
+    pub const ORTHOGONAL: u32 = 1;
+}
+
+/// Render parameters (a uniform); the pass's tile and sample range come from
+/// `gpu::PassUniform`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Settings {
+    pub color0: [f32; 4],
+    pub color1: [f32; 4],
+    pub tracer_seed: [u32; 4],
+    pub width: u32,
+    pub height: u32,
+    pub renderer: u32,
+    pub samples_per_side: u32,
+    pub jitter: u32,
+    pub paths_per_sample: u32,
+    pub max_depth: u32,
+    pub roulette_depth: u32,
+    pub nee: u32,
+    /// Camera samples per pixel of the whole render.
+    pub spp: u32,
+    /// Ranges of the `indices` buffer (BVH leaf objects start at 0).
+    pub plane_offset: u32,
+    pub plane_count: u32,
+    pub _pad0: u32,
+    pub area_light_count: u32,
+    pub point_light_count: u32,
+    pub bvh_node_count: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use naga::proc::Layouter;
+    use naga::TypeInner;
+
+    use super::*;
+
+    /// (struct name, Rust size, [(member, Rust offset)]).
+    type Expected = (&'static str, usize, Vec<(&'static str, usize)>);
+
+    macro_rules! expect {
+        ($t:ty, $name:literal, [$($f:ident),* $(,)?]) => {
+            ($name, size_of::<$t>(), vec![$((stringify!($f), offset_of!($t, $f))),*])
+        };
+    }
+
+    fn expected() -> Vec<Expected> {
+        vec![
+            expect!(Affine, "Affine", [r0, r1, r2]),
+            expect!(Shape, "Shape", [to_object, to_world, kind, material, light, _pad]),
+            expect!(CsgNode, "CsgNode", [op, first_child, child_count, _pad]),
+            expect!(Material, "Material", [brdf, pigment, emitted, ior]),
+            expect!(
+                Pigment,
+                "Pigment",
+                [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]
+            ),
+            expect!(PointLight, "PointLight", [position, color]),
+            expect!(AreaLight, "AreaLight", [sphere, shape, det, _pad0, _pad1]),
+            expect!(
+                Environment,
+                "Environment",
+                [a, b, c, kind, tex_width, tex_height, tex_offset, intensity, rotation_rad, dist_offset, is_light]
+            ),
+            expect!(Camera, "Camera", [to_world, projection, aspect_ratio, screen_distance, _pad]),
+            expect!(
+                Settings,
+                "Settings",
+                [
+                    color0,
+                    color1,
+                    tracer_seed,
+                    width,
+                    height,
+                    renderer,
+                    samples_per_side,
+                    jitter,
+                    paths_per_sample,
+                    max_depth,
+                    roulette_depth,
+                    nee,
+                    spp,
+                    plane_offset,
+                    plane_count,
+                    _pad0,
+                    area_light_count,
+                    point_light_count,
+                    bvh_node_count,
+                ]
+            ),
+            expect!(crate::accel::BvhNode, "BvhNode", [min, left_or_first, max, count]),
+        ]
+    }
+
+    #[test]
+    fn wgsl_structs_match_rust_byte_for_byte() {
+        let module = naga::front::wgsl::parse_str(LAYOUT_WGSL).expect("layout.wgsl parses");
+        let mut layouter = Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let expected = expected();
+        let mut seen = 0;
+        for (handle, ty) in module.types.iter() {
+            let (Some(name), TypeInner::Struct { members, span }) = (&ty.name, &ty.inner) else { continue };
+            let (_, size, fields) = expected
+                .iter()
+                .find(|e| e.0 == name)
+                .unwrap_or_else(|| panic!("WGSL struct {name} has no Rust mirror in the test"));
+            seen += 1;
+            assert_eq!(*span as usize, *size, "size of {name}");
+            let align = layouter[handle].alignment.round_up(1) as usize;
+            assert_eq!(size % align, 0, "{name}: array stride would differ (WGSL alignment {align})");
+            let wgsl: Vec<(String, usize)> =
+                members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize)).collect();
+            let rust: Vec<(String, usize)> = fields.iter().map(|(f, o)| (f.to_string(), *o)).collect();
+            assert_eq!(wgsl, rust, "members of {name}");
+            for m in members {
+                let a = layouter[m.ty].alignment.round_up(1) as usize;
+                assert_eq!(m.offset as usize % a, 0, "{name}.{:?} misaligned for WGSL", m.name);
+            }
+        }
+        assert_eq!(seen, expected.len(), "every Rust struct has a WGSL mirror");
+    }
+
+    #[test]
+    fn affine_rows_round_the_matrix() {
+        let m = DMat4::from_translation(glam::DVec3::new(1.0, 2.0, 3.0));
+        let a = Affine::from_dmat4(&m);
+        assert_eq!(a.r0, [1.0, 0.0, 0.0, 1.0]);
+        assert_eq!(a.r2, [0.0, 0.0, 1.0, 3.0]);
+    }
+}

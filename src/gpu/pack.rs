@@ -1,0 +1,427 @@
+//! Packing a [`Scene`] into the Pod buffers of [`super::layout`].
+//!
+//! Precision: the GPU works in f32, whose 24-bit mantissa leaves only ~1 cm of resolution
+//! at 10⁵ units from the origin. So the whole scene is first moved, in f64, so that the
+//! camera sits at the origin ([`camera_origin`]); every transformation, light position and
+//! BVH bound is computed in that frame and only then rounded to f32. Geometry near the
+//! camera (what is seen in detail) keeps full f32 precision however far the scene lies
+//! from the world origin. Rays are moved into object space with the f32 world→object map
+//! (computed as an f64 inverse, then rounded), never by inverting in f32.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use super::features::FeatureSet;
+use super::layout::{self, Affine, NONE};
+use crate::accel::BvhNode;
+use crate::color::Color;
+use crate::cpu::area_light::AreaLight;
+use crate::cpu::env_light::image_distribution;
+use crate::cpu::pixel_samples::PixelSamples;
+use crate::cpu::World;
+use crate::image::HdrImage;
+use crate::scene::{Brdf, CsgOp, Environment, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform};
+
+/// A scene ready for upload: every buffer of `shaders/bindings.wgsl`.
+#[derive(Debug, Clone)]
+pub struct PackedScene {
+    pub features: FeatureSet,
+    pub settings: layout::Settings,
+    pub camera: layout::Camera,
+    pub environment: layout::Environment,
+    pub shapes: Vec<layout::Shape>,
+    /// BVH leaf objects, then planes and CSG children (see `Settings`).
+    pub indices: Vec<u32>,
+    pub bvh_nodes: Vec<BvhNode>,
+    pub csg_nodes: Vec<layout::CsgNode>,
+    pub materials: Vec<layout::Material>,
+    pub pigments: Vec<layout::Pigment>,
+    /// Texels, then the environment's importance-sampling tables.
+    pub floats: Vec<f32>,
+    pub point_lights: Vec<layout::PointLight>,
+    pub area_lights: Vec<layout::AreaLight>,
+    /// The world point that the packed coordinates are relative to.
+    pub origin: DVec3,
+}
+
+/// Why a scene cannot be packed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PackError {
+    #[error("{what}: {count} exceeds the GPU renderer's limit of {limit}")]
+    TooMany { what: &'static str, count: usize, limit: usize },
+    #[error("invalid scene: {0}")]
+    Scene(#[from] crate::scene::SceneError),
+}
+
+/// The camera's position in the world: where the packed frame's origin goes. For a
+/// perspective camera the eye, for an orthogonal one the centre of its ray plane.
+pub fn camera_origin(scene: &Scene) -> DVec3 {
+    let local = match scene.camera.projection {
+        Projection::Perspective { screen_distance } => DVec3::new(-screen_distance, 0.0, 0.0),
+        Projection::Orthogonal => DVec3::new(-1.0, 0.0, 0.0),
+    };
+    scene.camera.transform.point(local)
+}
+
+/// Camera samples per pixel and their placement: the tracer's, or `spp_override` (`--spp`).
+pub fn pixel_samples(scene: &Scene, spp_override: Option<u32>) -> Result<(PixelSamples, u32), PackError> {
+    let ps = PixelSamples::new(&scene.tracer, spp_override);
+    let count = ps.count();
+    let limit = u32::MAX as usize;
+    let spp = u32::try_from(count).map_err(|_| PackError::TooMany { what: "samples per pixel", count: count as usize, limit })?;
+    Ok((ps, spp))
+}
+
+fn rgba(c: Color) -> [f32; 4] {
+    [c.r as f32, c.g as f32, c.b as f32, 0.0]
+}
+
+fn count_u32(what: &'static str, n: usize) -> Result<u32, PackError> {
+    // Leave the top bit free for CSG_NODE_BIT.
+    let limit = (layout::CSG_NODE_BIT - 1) as usize;
+    if n > limit {
+        return Err(PackError::TooMany { what, count: n, limit });
+    }
+    Ok(n as u32)
+}
+
+/// Builds every buffer for `scene`; `spp_override` is the `--spp` option.
+///
+/// ```
+/// use lumen::scene::*;
+/// use lumen::color::Color;
+/// use glam::DVec3;
+/// let mut b = SceneBuilder::new(4, 3);
+/// let m = b.diffuse(Color::gray(0.5));
+/// b.sphere(Transform::translation(DVec3::new(1e5, 0.0, 0.0)), m)
+///     .camera(Camera { transform: Transform::translation(DVec3::new(1e5 - 3.0, 0.0, 0.0)), ..Camera::default() });
+/// let packed = lumen::gpu::pack::pack(&b.build().unwrap(), None).unwrap();
+/// // In the camera frame (eye at the origin) the sphere is 4 units ahead.
+/// assert_eq!(packed.shapes[0].to_world.r0[3], 4.0);
+/// ```
+pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, PackError> {
+    scene.validate()?;
+    let features = FeatureSet::of(scene);
+    let origin = camera_origin(scene);
+    let shift = Transform::translation(-origin);
+    // The scene in the camera frame, as f64.
+    let shifted: Vec<Shape> = scene.shapes.iter().map(|s| shifted_shape(s, &shift)).collect();
+    let world = World::from_shapes(&shifted);
+    let area_lights = scene.area_lights();
+    let mut area_of_shape = vec![NONE; scene.shapes.len()];
+    for (i, l) in area_lights.iter().enumerate() {
+        area_of_shape[l.shape] = i as u32;
+    }
+
+    let mut p = PackedScene {
+        features,
+        settings: bytemuck::Zeroable::zeroed(),
+        camera: bytemuck::Zeroable::zeroed(),
+        environment: bytemuck::Zeroable::zeroed(),
+        shapes: Vec::new(),
+        indices: Vec::new(),
+        bvh_nodes: world.bvh().nodes().to_vec(),
+        csg_nodes: Vec::new(),
+        materials: Vec::new(),
+        pigments: Vec::new(),
+        floats: Vec::new(),
+        point_lights: Vec::new(),
+        area_lights: Vec::new(),
+        origin,
+    };
+
+    // Objects: top-level primitives first (so a top-level primitive's shape index is
+    // stable), then CSG trees with their leaves.
+    let mut object_ref = vec![0u32; shifted.len()];
+    let mut csg_children: Vec<(usize, Vec<u32>)> = Vec::new();
+    for (i, s) in shifted.iter().enumerate() {
+        object_ref[i] = match s {
+            Shape::Primitive(prim) => {
+                p.shapes.push(packed_shape(prim.kind, &prim.transform, prim.material.0, area_of_shape[i]));
+                count_u32("shapes", p.shapes.len())? - 1
+            }
+            Shape::Csg(_) => {
+                let node = pack_csg(s, &Transform::IDENTITY, &mut p, &mut csg_children)?;
+                node | layout::CSG_NODE_BIT
+            }
+        };
+    }
+    p.indices.extend(world.bvh().prim_indices().iter().map(|&i| object_ref[i as usize]));
+    let plane_offset = count_u32("indices", p.indices.len())?;
+    p.indices.extend(world.unbounded().iter().map(|&i| object_ref[i as usize]));
+    let plane_count = count_u32("infinite shapes", world.unbounded().len())?;
+    for (node, children) in csg_children {
+        p.csg_nodes[node].first_child = count_u32("indices", p.indices.len())?;
+        p.indices.extend(children);
+    }
+    for l in &area_lights {
+        p.area_lights.push(packed_area_light(scene, l.shape, object_ref[l.shape], origin));
+    }
+
+    // Appearance.
+    let mut textures: HashMap<*const HdrImage, u32> = HashMap::new();
+    for m in &scene.materials {
+        let (brdf, ior) = match m.brdf {
+            Brdf::Diffuse { .. } => (layout::brdf_kind::DIFFUSE, 1.0),
+            Brdf::Specular { .. } => (layout::brdf_kind::SPECULAR, 1.0),
+            Brdf::Dielectric { ior, .. } => (layout::brdf_kind::DIELECTRIC, ior as f32),
+        };
+        let pigment = push_pigment(&mut p, &mut textures, m.brdf.pigment())?;
+        let emitted = push_pigment(&mut p, &mut textures, &m.emitted)?;
+        p.materials.push(layout::Material { brdf, pigment, emitted, ior });
+    }
+    p.environment = pack_environment(scene, &mut p.floats, &mut textures)?;
+
+    for l in &scene.point_lights {
+        let pos = l.position - origin;
+        p.point_lights.push(layout::PointLight {
+            position: [pos.x as f32, pos.y as f32, pos.z as f32, l.linear_radius as f32],
+            color: rgba(l.color),
+        });
+    }
+
+    let cam = &scene.camera;
+    let (projection, screen_distance) = match cam.projection {
+        Projection::Perspective { screen_distance } => (layout::projection_kind::PERSPECTIVE, screen_distance),
+        Projection::Orthogonal => (layout::projection_kind::ORTHOGONAL, 0.0),
+    };
+    p.camera = layout::Camera {
+        to_world: Affine::from_dmat4(&(shift * cam.transform).matrix()),
+        projection,
+        aspect_ratio: cam.aspect_ratio as f32,
+        screen_distance: screen_distance as f32,
+        _pad: 0,
+    };
+
+    let (ps, spp) = pixel_samples(scene, spp_override)?;
+    let (jitter, samples_per_side) = match ps {
+        PixelSamples::Centre => (layout::jitter_mode::CENTRE, 0),
+        PixelSamples::Strata(s) => (layout::jitter_mode::STRATIFIED, s),
+        PixelSamples::Jittered(_) => (layout::jitter_mode::WHOLE_PIXEL, 0),
+    };
+    let seed = scene.tracer.rng;
+    let (renderer, color0, color1) = match &scene.renderer {
+        Renderer::OnOff { on, off } => (layout::renderer_kind::ON_OFF, *on, *off),
+        Renderer::Flat { background } => (layout::renderer_kind::FLAT, *background, Color::BLACK),
+        Renderer::PointLight { background, ambient } => (layout::renderer_kind::POINT_LIGHT, *background, *ambient),
+        Renderer::PathTracer(pt) => (layout::renderer_kind::PATH_TRACER, pt.background, Color::BLACK),
+    };
+    let (paths_per_sample, max_depth, roulette_depth, nee) = match &scene.renderer {
+        Renderer::PathTracer(pt) => (pt.n, pt.max_depth, pt.roulette_depth, u32::from(pt.nee)),
+        _ => (1, 0, 0, 0),
+    };
+    p.settings = layout::Settings {
+        color0: rgba(color0),
+        color1: rgba(color1),
+        tracer_seed: [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32],
+        width: scene.width,
+        height: scene.height,
+        renderer,
+        samples_per_side,
+        jitter,
+        paths_per_sample,
+        max_depth,
+        roulette_depth,
+        nee,
+        spp,
+        plane_offset,
+        plane_count,
+        _pad0: 0,
+        area_light_count: count_u32("area lights", area_lights.len())?,
+        point_light_count: count_u32("point lights", scene.point_lights.len())?,
+        bvh_node_count: count_u32("BVH nodes", p.bvh_nodes.len())?,
+    };
+    Ok(p)
+}
+
+/// Area light data as `cpu::area_light::AreaLight` computes it, in the camera frame.
+fn packed_area_light(scene: &Scene, shape: usize, shape_ref: u32, origin: DVec3) -> layout::AreaLight {
+    let light = AreaLight::new(scene, shape).expect("Scene::area_lights lists only top-level spheres and cubes");
+    let sphere = match light.sphere {
+        Some((c, r)) => {
+            let c = c - origin;
+            [c.x as f32, c.y as f32, c.z as f32, r as f32]
+        }
+        None => [0.0; 4],
+    };
+    layout::AreaLight { sphere, shape: shape_ref, det: light.det as f32, _pad0: 0, _pad1: 0 }
+}
+
+/// `s` with `shift` applied after its own transformation.
+fn shifted_shape(s: &Shape, shift: &Transform) -> Shape {
+    match s {
+        Shape::Primitive(p) => Shape::primitive(p.kind, *shift * p.transform, p.material),
+        Shape::Csg(c) => Shape::csg(c.op, c.children.clone(), *shift * c.transform),
+    }
+}
+
+fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32) -> layout::Shape {
+    let kind = match kind {
+        ShapeKind::Sphere => layout::shape_kind::SPHERE,
+        ShapeKind::Plane => layout::shape_kind::PLANE,
+        ShapeKind::Cube => layout::shape_kind::CUBE,
+        ShapeKind::Cylinder => layout::shape_kind::CYLINDER,
+    };
+    layout::Shape {
+        to_object: Affine::from_dmat4(&to_world.inverse_matrix()),
+        to_world: Affine::from_dmat4(&to_world.matrix()),
+        kind,
+        material,
+        light,
+        _pad: 0,
+    }
+}
+
+/// Packs CSG tree `s` (placed by `parent`) depth-first; returns its node index. The
+/// children's references are collected in `children` and appended to `indices` later.
+fn pack_csg(
+    s: &Shape,
+    parent: &Transform,
+    p: &mut PackedScene,
+    children: &mut Vec<(usize, Vec<u32>)>,
+) -> Result<u32, PackError> {
+    let Shape::Csg(c) = s else { unreachable!("pack_csg is called on CSG nodes") };
+    let node = p.csg_nodes.len();
+    let op = match c.op {
+        CsgOp::Unite => layout::csg_op::UNITE,
+        CsgOp::Intersect => layout::csg_op::INTERSECT,
+        CsgOp::Diff => layout::csg_op::DIFF,
+        CsgOp::Fuse => layout::csg_op::FUSE,
+    };
+    p.csg_nodes.push(layout::CsgNode {
+        op,
+        first_child: 0,
+        child_count: count_u32("CSG children", c.children.len())?,
+        _pad: 0,
+    });
+    let t = *parent * c.transform;
+    let mut refs = Vec::with_capacity(c.children.len());
+    for ch in &c.children {
+        refs.push(match ch {
+            Shape::Primitive(prim) => {
+                p.shapes.push(packed_shape(prim.kind, &(t * prim.transform), prim.material.0, NONE));
+                count_u32("shapes", p.shapes.len())? - 1
+            }
+            Shape::Csg(_) => pack_csg(ch, &t, p, children)? | layout::CSG_NODE_BIT,
+        });
+    }
+    count_u32("CSG nodes", p.csg_nodes.len())?;
+    children.push((node, refs));
+    Ok(node as u32)
+}
+
+/// Appends an image's texels (rgb triples, row 0 first) once per image; returns the offset.
+fn push_texels(
+    floats: &mut Vec<f32>,
+    textures: &mut HashMap<*const HdrImage, u32>,
+    image: &Arc<HdrImage>,
+) -> Result<u32, PackError> {
+    if let Some(&o) = textures.get(&Arc::as_ptr(image)) {
+        return Ok(o);
+    }
+    let offset = count_u32("texel floats", floats.len())?;
+    for px in image.pixels() {
+        floats.extend([px.r, px.g, px.b]);
+    }
+    count_u32("texel floats", floats.len())?;
+    textures.insert(Arc::as_ptr(image), offset);
+    Ok(offset)
+}
+
+fn push_pigment(
+    p: &mut PackedScene,
+    textures: &mut HashMap<*const HdrImage, u32>,
+    pigment: &Pigment,
+) -> Result<u32, PackError> {
+    let mut out = layout::Pigment {
+        a: [0.0; 4],
+        b: [0.0; 4],
+        kind: layout::pigment_kind::UNIFORM,
+        n: 0,
+        image_filter: 0,
+        tex_offset: 0,
+        tex_width: 0,
+        tex_height: 0,
+        _pad0: 0,
+        _pad1: 0,
+    };
+    match pigment {
+        Pigment::Uniform(c) => out.a = rgba(*c),
+        Pigment::Checkered { n, on, off } => {
+            out.kind = layout::pigment_kind::CHECKERED;
+            out.n = *n;
+            out.a = rgba(*on);
+            out.b = rgba(*off);
+        }
+        Pigment::Image { image, filter } => {
+            out.kind = layout::pigment_kind::IMAGE;
+            out.image_filter = match filter {
+                crate::scene::ImageFilter::Nearest => 0,
+                crate::scene::ImageFilter::Bilinear => 1,
+            };
+            out.tex_offset = push_texels(&mut p.floats, textures, image)?;
+            out.tex_width = image.width() as u32;
+            out.tex_height = image.height() as u32;
+        }
+    }
+    p.pigments.push(out);
+    Ok(count_u32("pigments", p.pigments.len())? - 1)
+}
+
+/// The environment (a uniform one of the background colour when the scene has none), with
+/// an image's texels and importance-sampling tables appended to `floats`.
+///
+/// Table layout at `dist_offset` (mirrors `Distribution2D`): the marginal's integral, its
+/// `h` cell values and `h + 1` CDF entries, then for each row its integral, `w` values and
+/// `w + 1` CDF entries.
+fn pack_environment(
+    scene: &Scene,
+    floats: &mut Vec<f32>,
+    textures: &mut HashMap<*const HdrImage, u32>,
+) -> Result<layout::Environment, PackError> {
+    let mut e = layout::Environment {
+        a: [0.0; 4],
+        b: [0.0; 4],
+        c: [0.0; 4],
+        kind: layout::environment_kind::UNIFORM,
+        tex_width: 0,
+        tex_height: 0,
+        tex_offset: 0,
+        intensity: 1.0,
+        rotation_rad: 0.0,
+        dist_offset: 0,
+        is_light: u32::from(crate::cpu::env_light::EnvLight::new(scene).is_some()),
+    };
+    match &scene.environment {
+        None => e.a = rgba(scene.renderer.background()),
+        Some(Environment::Uniform(c)) => e.a = rgba(*c),
+        Some(Environment::Gradient { zenith, horizon, nadir }) => {
+            e.kind = layout::environment_kind::GRADIENT;
+            e.a = rgba(*zenith);
+            e.b = rgba(*horizon);
+            e.c = rgba(*nadir);
+        }
+        Some(Environment::Image { image, intensity, rotation_deg }) => {
+            e.kind = layout::environment_kind::IMAGE;
+            e.tex_offset = push_texels(floats, textures, image)?;
+            e.tex_width = image.width() as u32;
+            e.tex_height = image.height() as u32;
+            e.intensity = *intensity as f32;
+            e.rotation_rad = rotation_deg.to_radians() as f32;
+            e.dist_offset = count_u32("environment floats", floats.len())?;
+            let dist = image_distribution(image);
+            floats.push(dist.marginal.integral as f32);
+            floats.extend(dist.marginal.func.iter().map(|&v| v as f32));
+            floats.extend(dist.marginal.cdf.iter().map(|&v| v as f32));
+            for row in &dist.conditional {
+                floats.push(row.integral as f32);
+                floats.extend(row.func.iter().map(|&v| v as f32));
+                floats.extend(row.cdf.iter().map(|&v| v as f32));
+            }
+            count_u32("environment floats", floats.len())?;
+        }
+    }
+    Ok(e)
+}

@@ -1,0 +1,257 @@
+//! The GPU renderer: pack the scene, assemble a kernel specialised to it, run progressive
+//! passes, and return the mean image.
+//!
+//! The kernel computes exactly what the CPU reference computes (same random streams, same
+//! integrator structure, function by function in `shaders/`), in f32 and relative to the
+//! camera; GPU-vs-CPU tests in `tests/gpu_render.rs` hold the two together.
+
+use std::time::Instant;
+
+use super::features::FeatureSet;
+use super::pack::{pack, PackedScene};
+use super::{run_progressive, Assembled, Gpu, GpuError, PassOptions, ShaderLibrary, StopReason};
+use crate::image::HdrImage;
+use crate::scene::Scene;
+
+/// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` is not one).
+const MODULES: [(&str, &str); 22] = [
+    ("shaders/pass.wgsl", include_str!("../../shaders/pass.wgsl")),
+    ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
+    ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
+    ("shaders/random.wgsl", include_str!("../../shaders/random.wgsl")),
+    ("shaders/ray.wgsl", include_str!("../../shaders/ray.wgsl")),
+    ("shaders/quadratic.wgsl", include_str!("../../shaders/quadratic.wgsl")),
+    ("shaders/sphere.wgsl", include_str!("../../shaders/sphere.wgsl")),
+    ("shaders/plane.wgsl", include_str!("../../shaders/plane.wgsl")),
+    ("shaders/cube.wgsl", include_str!("../../shaders/cube.wgsl")),
+    ("shaders/cylinder.wgsl", include_str!("../../shaders/cylinder.wgsl")),
+    ("shaders/shapes.wgsl", include_str!("../../shaders/shapes.wgsl")),
+    ("shaders/csg.wgsl", include_str!("../../shaders/csg.wgsl")),
+    ("shaders/world.wgsl", include_str!("../../shaders/world.wgsl")),
+    ("shaders/camera.wgsl", include_str!("../../shaders/camera.wgsl")),
+    ("shaders/offset.wgsl", include_str!("../../shaders/offset.wgsl")),
+    ("shaders/onb.wgsl", include_str!("../../shaders/onb.wgsl")),
+    ("shaders/textures.wgsl", include_str!("../../shaders/textures.wgsl")),
+    ("shaders/pigment.wgsl", include_str!("../../shaders/pigment.wgsl")),
+    ("shaders/environment.wgsl", include_str!("../../shaders/environment.wgsl")),
+    ("shaders/brdf.wgsl", include_str!("../../shaders/brdf.wgsl")),
+    ("shaders/integrators.wgsl", include_str!("../../shaders/integrators.wgsl")),
+    ("shaders/render.wgsl", include_str!("../../shaders/render.wgsl")),
+];
+const EXTRA_MODULES: [(&str, &str); 3] = [
+    ("shaders/lights.wgsl", include_str!("../../shaders/lights.wgsl")),
+    ("shaders/path_tracer.wgsl", include_str!("../../shaders/path_tracer.wgsl")),
+    ("shaders/env_light.wgsl", include_str!("../../shaders/env_light.wgsl")),
+];
+
+/// Name of the kernel's entry point in `shaders/render.wgsl`.
+pub const ENTRY_POINT: &str = "render";
+
+/// How to render on the GPU.
+#[derive(Debug, Clone, Default)]
+pub struct GpuRenderOptions {
+    /// `--spp`: overrides the tracer's samples per pixel (a perfect square s² means s×s
+    /// strata, any other count jitters over the whole pixel).
+    pub spp: Option<u32>,
+    /// Pass sizing, time limit, cancellation and progress display.
+    pub passes: PassOptions,
+}
+
+impl GpuRenderOptions {
+    /// Options whose passes always hold `spp_per_pass` samples: the f32 pass sums, and so the
+    /// image, are then bitwise reproducible (adaptive passes split samples by timing).
+    pub fn fixed_passes(spp: Option<u32>, spp_per_pass: u32) -> Self {
+        let passes = PassOptions {
+            initial_spp_per_pass: spp_per_pass,
+            max_spp_per_pass: spp_per_pass,
+            target_pass_seconds: f64::MAX,
+            ..PassOptions::default()
+        };
+        Self { spp, passes }
+    }
+}
+
+/// What a GPU render produced.
+#[derive(Debug, Clone)]
+pub struct GpuRenderOutput {
+    /// Per-pixel mean over `spp_done` camera samples.
+    pub image: HdrImage,
+    /// Camera samples per pixel taken (fewer than requested after a time limit or Ctrl-C).
+    pub spp_done: u32,
+    pub spp_requested: u32,
+    /// Wall time, including packing and kernel compilation.
+    pub seconds: f64,
+    /// Path (or camera-sample) estimates that were NaN or infinite, written as 0.
+    pub non_finite_samples: u64,
+    pub stop: StopReason,
+    /// Features the kernel was specialised for.
+    pub features: FeatureSet,
+}
+
+/// All modules, in a library that knows every feature name.
+pub fn shader_library() -> ShaderLibrary {
+    let mut lib = ShaderLibrary::new(&FeatureSet::ALL_NAMES);
+    for (file, src) in MODULES.iter().chain(EXTRA_MODULES.iter()) {
+        lib.add(file, src).unwrap_or_else(|e| panic!("built-in shader {file} is malformed: {e}"));
+    }
+    lib
+}
+
+/// Constants that depend on the scene rather than on a feature: the BVH stack size and
+/// the CSG interval-list bound.
+fn constants_module(features: &FeatureSet) -> String {
+    let intervals = features.csg_max_intervals.max(1);
+    let depth = features.csg_max_depth.max(1);
+    format!(
+        "// Scene-dependent constants, generated by src/gpu/render.rs.\n\
+         const BVH_STACK_SIZE: u32 = {}u;\n\
+         const CSG_NODE_BIT: u32 = 0x{:08X}u;\n\
+         const CSG_MAX_INTERVALS: u32 = {}u;\n\
+         const CSG_MAX_DEPTH: u32 = {}u;\n\
+         const CSG_POOL_SIZE: u32 = {}u;\n",
+        crate::accel::MAX_DEPTH + 1,
+        super::layout::CSG_NODE_BIT,
+        intervals,
+        depth,
+        (2 * depth + 2) * intervals,
+    )
+}
+
+/// The render kernel assembled for `features` (validated with naga).
+pub fn assemble(features: &FeatureSet) -> Result<Assembled, GpuError> {
+    let mut lib = shader_library();
+    lib.add("<generated constants>", &format!("// #provides constants\n{}", constants_module(features)))
+        .map_err(|e| GpuError::Validation(e.to_string()))?;
+    let assembled = lib
+        .assemble(&["render"], &features.assembly_features())
+        .map_err(|e| GpuError::Validation(format!("shader assembly: {e}")))?;
+    assembled.validate()?;
+    Ok(assembled)
+}
+
+/// The WGSL of the kernel that renders `scene` (for `lumen shader`).
+///
+/// ```
+/// use lumen::scene::*;
+/// use lumen::color::Color;
+/// let mut b = SceneBuilder::new(4, 4);
+/// let m = b.diffuse(Color::gray(0.5));
+/// b.sphere(Transform::IDENTITY, m);
+/// let src = lumen::gpu::render::shader_source(&b.build().unwrap()).unwrap();
+/// assert!(src.contains("fn sphere_span") && !src.contains("fn cylinder_span"));
+/// ```
+pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
+    Ok(assemble(&FeatureSet::of(scene))?.source)
+}
+
+fn pack_error(e: super::pack::PackError) -> GpuError {
+    GpuError::Validation(format!("cannot pack the scene for the GPU: {e}"))
+}
+
+/// Renders `scene` on `gpu`.
+///
+/// ```
+/// use lumen::scene::*;
+/// use lumen::color::Color;
+/// use lumen::gpu::render::{render, GpuRenderOptions};
+/// let Some(gpu) = lumen::gpu::gpu_for_tests("gpu_render_doc") else { return };
+/// let mut b = SceneBuilder::new(4, 3);
+/// let m = b.diffuse(Color::gray(0.5));
+/// b.sphere(Transform::translation(glam::DVec3::new(3.0, 0.0, 0.0)), m)
+///     .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+/// let out = render(&gpu, &b.build().unwrap(), &GpuRenderOptions::default()).unwrap();
+/// assert_eq!(out.spp_done, 1);
+/// assert_eq!(out.image.get(1, 1).r, 1.0); // the sphere covers the centre
+/// assert_eq!(out.image.get(0, 0).r, 0.0);
+/// ```
+pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
+    let start = Instant::now();
+    let packed = pack(scene, opts.spp).map_err(pack_error)?;
+    let assembled = assemble(&packed.features)?;
+    check_binding_limits(gpu, &assembled)?;
+    let kernel = gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)?;
+    let buffers = SceneBuffers::upload(gpu, &packed)?;
+    let refs: Vec<&wgpu::Buffer> = buffers.bound(&kernel)?;
+    let group = kernel.bind_group(gpu, 1, &refs)?;
+    let acc = run_progressive(
+        gpu,
+        &kernel,
+        &[&group],
+        scene.width,
+        scene.height,
+        packed.settings.spp,
+        &opts.passes,
+    )?;
+    let nan: Vec<u32> = gpu.read_buffer(&buffers.nan_count, 1)?;
+    Ok(GpuRenderOutput {
+        image: acc.image,
+        spp_done: acc.spp_done,
+        spp_requested: packed.settings.spp,
+        seconds: start.elapsed().as_secs_f64(),
+        non_finite_samples: u64::from(nan[0]) + acc.nonfinite,
+        stop: acc.stop,
+        features: packed.features,
+    })
+}
+
+/// A clear error when the kernel needs more storage buffers than the adapter allows.
+fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError> {
+    let module = assembled.validate()?.module;
+    let storage = module
+        .global_variables
+        .iter()
+        .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
+        .count() as u32;
+    let limit = gpu.limits.max_storage_buffers_per_shader_stage;
+    if storage > limit {
+        return Err(GpuError::Validation(format!(
+            "this scene's kernel needs {storage} storage buffers; the adapter allows {limit} per shader stage"
+        )));
+    }
+    Ok(())
+}
+
+/// The uploaded scene: one buffer per binding of `shaders/bindings.wgsl`.
+struct SceneBuffers {
+    by_binding: Vec<(u32, wgpu::Buffer)>,
+    nan_count: wgpu::Buffer,
+}
+
+impl SceneBuffers {
+    fn upload(gpu: &Gpu, p: &PackedScene) -> Result<Self, GpuError> {
+        let nan_count = gpu.storage_buffer("nan_count", &[0u32])?;
+        let by_binding = vec![
+            (0, gpu.uniform_buffer("settings", &p.settings)?),
+            (1, gpu.uniform_buffer("camera", &p.camera)?),
+            (3, gpu.storage_buffer("shapes", &p.shapes)?),
+            (4, gpu.storage_buffer("indices", &p.indices)?),
+            (5, gpu.storage_buffer("bvh_nodes", &p.bvh_nodes)?),
+            (6, gpu.storage_buffer("csg_nodes", &p.csg_nodes)?),
+            (7, gpu.storage_buffer("materials", &p.materials)?),
+            (8, gpu.storage_buffer("pigments", &p.pigments)?),
+            (9, gpu.uniform_buffer("environment", &p.environment)?),
+            (10, gpu.storage_buffer("floats", &p.floats)?),
+            (11, gpu.storage_buffer("point_lights", &p.point_lights)?),
+            (12, gpu.storage_buffer("area_lights", &p.area_lights)?),
+        ];
+        Ok(Self { by_binding, nan_count })
+    }
+
+    /// The buffers for the bindings the kernel declares in group 1, in binding order.
+    fn bound(&self, kernel: &super::ComputeKernel) -> Result<Vec<&wgpu::Buffer>, GpuError> {
+        let declared = kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]);
+        declared
+            .iter()
+            .map(|&(b, _)| {
+                if b == 2 {
+                    return Ok(&self.nan_count);
+                }
+                self.by_binding
+                    .iter()
+                    .find(|(n, _)| *n == b)
+                    .map(|(_, buf)| buf)
+                    .ok_or_else(|| GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})")))
+            })
+            .collect()
+    }
+}

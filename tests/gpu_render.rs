@@ -1,0 +1,454 @@
+//! GPU renderer tests: the WGSL random streams against `sampling::stream`, and (below) GPU
+//! renders against the CPU reference and analytic answers. Every GPU test skips itself
+//! without an adapter (and fails instead with LUMEN_REQUIRE_GPU=1).
+
+use lumen::gpu::gpu_for_tests;
+use lumen::sampling::{stream, CAMERA_BOUNCE};
+use lumen::scene::PcgSeed;
+
+const RANDOM_WGSL: &str = include_str!("../shaders/random.wgsl");
+
+/// Thousands of (pixel, sample, bounce) streams, from two seeds (one with a carry into the
+/// high word), give bitwise the same u32 and f32 sequences on the GPU as on the CPU.
+#[test]
+fn random_streams_match_the_cpu_bit_for_bit() {
+    let Some(gpu) = gpu_for_tests("random_streams_match_the_cpu_bit_for_bit") else { return };
+    const DRAWS: usize = 9;
+    let kernel_src = format!(
+        "{RANDOM_WGSL}
+struct Params {{ seed: vec4<u32>, count: u32 }}
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> keys: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read_write> out_u: array<u32>;
+@group(0) @binding(3) var<storage, read_write> out_f: array<f32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (i >= params.count) {{ return; }}
+    let k = keys[i];
+    var rng = stream(params.seed.xy, params.seed.zw, k.x, k.y, k.z);
+    for (var j = 0u; j < {DRAWS}u; j++) {{ out_u[i * {DRAWS}u + j] = pcg_next_u32(&rng); }}
+    out_f[i] = pcg_next_f32(&rng);
+}}"
+    );
+    let kernel = gpu.compute_kernel("random_test.wgsl", &kernel_src, "main").unwrap();
+    let seeds = [
+        PcgSeed::default(),
+        PcgSeed { state: 0xFFFF_FFFF_FFFF_FF00, inc: 0xDEAD_BEEF_1234_5678 },
+        PcgSeed { state: 0x0000_0000_FFFF_FFFF, inc: u64::MAX },
+    ];
+    // Keys: a grid of pixels, samples and bounces, including the camera bounce and extremes.
+    let mut keys: Vec<[u32; 4]> = Vec::new();
+    for p in (0..40_000u32).step_by(997).chain([u32::MAX, 0]) {
+        for s in [0u32, 1, 2, 7, 63, 1000, u32::MAX] {
+            for b in [0u32, 1, 2, 5, CAMERA_BOUNCE] {
+                keys.push([p, s, b, 0]);
+            }
+        }
+    }
+    assert!(keys.len() > 1000);
+    for seed in seeds {
+        #[repr(C)]
+        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+        struct Params {
+            seed: [u32; 4],
+            count: u32,
+            _pad: [u32; 3],
+        }
+        let params = Params {
+            seed: [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32],
+            count: keys.len() as u32,
+            _pad: [0; 3],
+        };
+        let ub = gpu.uniform_buffer("params", &params).unwrap();
+        let kb = gpu.storage_buffer("keys", &keys).unwrap();
+        let ou = gpu.storage_buffer_zeroed("out_u", (keys.len() * DRAWS * 4) as u64).unwrap();
+        let of = gpu.storage_buffer_zeroed("out_f", (keys.len() * 4) as u64).unwrap();
+        let group = kernel.bind_group(&gpu, 0, &[&ub, &kb, &ou, &of]).unwrap();
+        gpu.dispatch(&kernel, &[&group], kernel.workgroups_for([keys.len() as u32, 1, 1])).unwrap();
+        let got_u: Vec<u32> = gpu.read_buffer(&ou, keys.len() * DRAWS).unwrap();
+        let got_f: Vec<f32> = gpu.read_buffer(&of, keys.len()).unwrap();
+        for (i, k) in keys.iter().enumerate() {
+            let mut rng = stream(seed, k[0], k[1], k[2]);
+            for j in 0..DRAWS {
+                assert_eq!(got_u[i * DRAWS + j], rng.next_u32(), "seed {seed:?} key {k:?} draw {j}");
+            }
+            assert_eq!(got_f[i].to_bits(), rng.next_f32().to_bits(), "seed {seed:?} key {k:?} float");
+        }
+    }
+}
+
+use glam::DVec3;
+use lumen::color::Color;
+use lumen::cpu::{Progress, RenderOptions};
+use lumen::gpu::render::{render, GpuRenderOptions};
+use lumen::gpu::Gpu;
+use lumen::image::HdrImage;
+use lumen::scene::*;
+
+/// Compares two images: the fraction of channels within 1e-3 relative or 1e-4 absolute,
+/// and a description of the worst offenders.
+fn agreement(gpu: &HdrImage, cpu: &HdrImage) -> (f64, String) {
+    assert_eq!((gpu.width(), gpu.height()), (cpu.width(), cpu.height()));
+    let mut bad = Vec::new();
+    let n = gpu.pixels().len();
+    let mut good = 0;
+    for (i, (g, c)) in gpu.pixels().iter().zip(cpu.pixels()).enumerate() {
+        let ok = [(g.r, c.r), (g.g, c.g), (g.b, c.b)].iter().all(|&(a, b)| {
+            let d = (a - b).abs();
+            d <= 1e-4 || d <= 1e-3 * b.abs().max(a.abs())
+        });
+        if ok {
+            good += 1;
+        } else {
+            bad.push(format!("({}, {}): gpu {:?} cpu {:?}", i % gpu.width(), i / gpu.width(), g, c));
+        }
+    }
+    bad.truncate(8);
+    (good as f64 / n as f64, bad.join("; "))
+}
+
+fn assert_matches_cpu(gpu: &Gpu, scene: &Scene, spp: Option<u32>, min_fraction: f64) -> HdrImage {
+    let g = render(gpu, scene, &GpuRenderOptions::fixed_passes(spp, 4)).unwrap();
+    let c = lumen::cpu::render(scene, &RenderOptions { spp }, Progress::Hidden);
+    let (frac, worst) = agreement(&g.image, &c.image);
+    println!("{:.2}% of pixels agree; outliers: {worst}", frac * 100.0);
+    assert!(frac >= min_fraction, "only {:.2}% of pixels agree: {worst}", frac * 100.0);
+    assert_eq!(g.non_finite_samples, 0);
+    assert_eq!(g.spp_done, g.spp_requested);
+    g.image
+}
+
+/// Spheres, a cube, a cylinder, a checkered plane and a far-away translated sphere: every
+/// primitive kind, BVH and plane list, two pigments.
+fn shapes_scene(renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(24, 18);
+    let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
+    let check = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Checkered { n: 4, on: Color::gray(0.9), off: Color::new(0.1, 0.3, 0.1) } },
+        Pigment::Uniform(Color::BLACK),
+    ));
+    let glow = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.2)) },
+        Pigment::Uniform(Color::new(1.0, 0.8, 0.3)),
+    ));
+    let mirror = b.material(Material::new(
+        Brdf::Specular { pigment: Pigment::Uniform(Color::gray(0.9)), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD },
+        Pigment::Uniform(Color::BLACK),
+    ));
+    b.sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.0)), red)
+        .sphere(Transform::translation(DVec3::new(6.0, -2.0, 0.5)) * Transform::scaling(DVec3::splat(0.7)), glow)
+        .cube(Transform::translation(DVec3::new(5.0, 2.0, -0.4)) * Transform::rotation_z(30.0), mirror)
+        .cylinder(
+            Transform::translation(DVec3::new(3.5, -1.2, -0.5)) * Transform::rotation_x(70.0) * Transform::scaling(DVec3::new(0.6, 0.6, 1.2)),
+            red,
+        )
+        .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), check)
+        .point_light(PointLight { position: DVec3::new(1.0, 3.0, 4.0), color: Color::gray(1.5), linear_radius: 0.0 })
+        .point_light(PointLight { position: DVec3::new(2.0, -3.0, 2.0), color: Color::new(0.5, 0.6, 1.0), linear_radius: 2.0 })
+        .camera(Camera { aspect_ratio: 24.0 / 18.0, transform: Transform::rotation_y(10.0), ..Camera::default() })
+        .renderer(renderer)
+        .environment(Environment::Gradient { zenith: Color::new(0.2, 0.3, 0.8), horizon: Color::gray(0.6), nadir: Color::gray(0.1) });
+    b.build().unwrap()
+}
+
+#[test]
+fn onoff_flat_and_point_light_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("onoff_flat_and_point_light_match_the_cpu") else { return };
+    for renderer in [
+        Renderer::OnOff { on: Color::new(1.0, 0.5, 0.25), off: Color::new(0.0, 0.1, 0.2) },
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.01) },
+    ] {
+        println!("{}", renderer.name());
+        let scene = shapes_scene(renderer);
+        // Stratified jitter exercises the camera streams.
+        assert_matches_cpu(&gpu, &scene, Some(4), 0.99);
+        assert_matches_cpu(&gpu, &scene, None, 0.99);
+    }
+}
+
+/// A Cornell-like box of cubes with an emissive sphere (area light, cone sampling), an
+/// emissive cube (area sampling), glass and a mirror, under an environment.
+fn path_traced_scene(nee: bool, env: Option<Environment>) -> Scene {
+    let mut b = SceneBuilder::new(20, 15);
+    let white = b.diffuse(Color::gray(0.7));
+    let green = b.diffuse(Color::new(0.2, 0.6, 0.2));
+    let lamp = b.material(Material::new(Brdf::Diffuse { pigment: Pigment::Uniform(Color::BLACK) }, Pigment::Uniform(Color::gray(4.0))));
+    let warm = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
+        Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
+    ));
+    let glass = b.material(Material::new(Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 }, Pigment::Uniform(Color::BLACK)));
+    let mirror = b.material(Material::new(
+        Brdf::Specular { pigment: Pigment::Uniform(Color::gray(0.8)), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD },
+        Pigment::Uniform(Color::BLACK),
+    ));
+    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white)
+        .cube(Transform::translation(DVec3::new(6.0, 0.0, 0.0)) * Transform::scaling(DVec3::new(0.2, 6.0, 4.0)), green)
+        .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.6)) * Transform::scaling(DVec3::splat(0.4)), lamp)
+        .cube(Transform::translation(DVec3::new(4.5, -1.5, 1.5)) * Transform::scaling(DVec3::new(0.6, 0.3, 0.2)), warm)
+        .sphere(Transform::translation(DVec3::new(3.5, -0.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), glass)
+        .sphere(Transform::translation(DVec3::new(4.5, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), mirror)
+        .point_light(PointLight { position: DVec3::new(2.0, 0.0, 2.5), color: Color::gray(0.5), linear_radius: 1.0 })
+        .camera(Camera { aspect_ratio: 20.0 / 15.0, ..Camera::default() })
+        .renderer(Renderer::PathTracer(PathTracerSettings {
+            background: Color::new(0.1, 0.1, 0.2),
+            n: 2,
+            max_depth: 4,
+            roulette_depth: 2,
+            nee,
+            ..Default::default()
+        }))
+        .tracer(Tracer { samples_per_side: 2, rng: PcgSeed { state: 7, inc: 11 } });
+    if let Some(e) = env {
+        b.environment(e);
+    }
+    b.build().unwrap()
+}
+
+#[test]
+fn path_tracer_matches_the_cpu() {
+    let Some(gpu) = gpu_for_tests("path_tracer_matches_the_cpu") else { return };
+    for nee in [true, false] {
+        println!("nee = {nee}");
+        let scene = path_traced_scene(nee, None);
+        let a = assert_matches_cpu(&gpu, &scene, None, 0.99);
+        // Same scene twice: bitwise the same image.
+        let b = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap().image;
+        assert!(a.pixels().iter().zip(b.pixels()).all(|(x, y)| x.r.to_bits() == y.r.to_bits()
+            && x.g.to_bits() == y.g.to_bits() && x.b.to_bits() == y.b.to_bits()));
+    }
+    let gradient = Environment::Gradient { zenith: Color::new(0.3, 0.4, 0.9), horizon: Color::gray(0.8), nadir: Color::gray(0.05) };
+    assert_matches_cpu(&gpu, &path_traced_scene(true, Some(gradient)), None, 0.99);
+}
+
+/// Every CSG operation, nested, with a plane half-space and transformed CSG nodes; flat
+/// shading shows which leaf's material each surface carries, the path tracer the normals.
+fn csg_scene(renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(24, 18);
+    let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
+    let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
+    let green = b.diffuse(Color::new(0.2, 0.7, 0.2));
+    let glass = b.material(Material::new(Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.4 }, Pigment::Uniform(Color::BLACK)));
+    let p = |k: ShapeKind, t: Transform, m: MaterialId| Shape::primitive(k, t, m);
+    // Cube minus a sphere minus a cylinder.
+    let carved = Shape::csg(
+        CsgOp::Diff,
+        vec![
+            p(ShapeKind::Cube, Transform::scaling(DVec3::splat(1.4)), red),
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(-0.6, 0.2, 0.3)) * Transform::scaling(DVec3::splat(0.6)), blue),
+            p(ShapeKind::Cylinder, Transform::rotation_y(90.0) * Transform::scaling(DVec3::new(0.5, 0.5, 3.0)), green),
+        ],
+        Transform::translation(DVec3::new(5.0, 1.2, 0.0)) * Transform::rotation_z(25.0),
+    );
+    // A lens: two spheres intersected, cut by a plane's half-space.
+    let lens = Shape::csg(
+        CsgOp::Intersect,
+        vec![
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, 0.5, 0.0)), blue),
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, -0.5, 0.0)), green),
+            p(ShapeKind::Plane, Transform::translation(DVec3::new(0.0, 0.0, 0.4)), red),
+        ],
+        Transform::translation(DVec3::new(4.0, -1.5, -0.3)),
+    );
+    // Glass UNITE (inner surfaces kept) and FUSE (merged) of overlapping spheres, nested
+    // in a DIFF.
+    let unite = Shape::csg(
+        CsgOp::Unite,
+        vec![
+            p(ShapeKind::Sphere, Transform::scaling(DVec3::splat(0.5)), glass),
+            p(ShapeKind::Sphere, Transform::translation(DVec3::new(0.0, 0.5, 0.0)) * Transform::scaling(DVec3::splat(0.5)), glass),
+        ],
+        Transform::translation(DVec3::new(3.0, 0.0, -0.6)),
+    );
+    let fuse = Shape::csg(
+        CsgOp::Fuse,
+        vec![
+            p(ShapeKind::Sphere, Transform::scaling(DVec3::splat(0.45)), glass),
+            p(ShapeKind::Cube, Transform::translation(DVec3::new(0.0, -0.4, 0.0)) * Transform::scaling(DVec3::splat(0.6)), glass),
+        ],
+        Transform::translation(DVec3::new(3.2, -0.2, 0.8)),
+    );
+    let nested = Shape::csg(
+        CsgOp::Diff,
+        vec![fuse, p(ShapeKind::Cube, Transform::translation(DVec3::new(3.2, -0.2, 1.2)) * Transform::scaling(DVec3::splat(0.4)), red)],
+        Transform::IDENTITY,
+    );
+    b.shape(carved)
+        .shape(lens)
+        .shape(unite)
+        .shape(nested)
+        .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.2)), green)
+        .point_light(PointLight { position: DVec3::new(0.0, 2.0, 3.0), color: Color::gray(1.0), linear_radius: 0.0 })
+        .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
+        .renderer(renderer)
+        .environment(Environment::Uniform(Color::gray(0.5)))
+        .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
+    b.build().unwrap()
+}
+
+#[test]
+fn csg_matches_the_cpu() {
+    let Some(gpu) = gpu_for_tests("csg_matches_the_cpu") else { return };
+    for renderer in [
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.02) },
+        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
+    ] {
+        println!("{}", renderer.name());
+        let scene = csg_scene(renderer);
+        let f = lumen::gpu::features::FeatureSet::of(&scene);
+        assert!(f.csg && f.csg_max_depth == 2 && f.csg_max_intervals >= 2, "{f:?}");
+        assert_matches_cpu(&gpu, &scene, None, 0.99);
+    }
+}
+
+// ---- Analytic answers on the GPU (the CPU's tests/cpu_render.rs, sized for lavapipe) ----
+
+fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
+    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth, nee, ..Default::default() })
+}
+
+fn gpu_run(gpu: &Gpu, scene: &Scene, spp: Option<u32>) -> HdrImage {
+    let out = render(gpu, scene, &GpuRenderOptions { spp, ..Default::default() }).unwrap();
+    assert_eq!(out.non_finite_samples, 0);
+    assert_eq!(out.spp_done, out.spp_requested);
+    out.image
+}
+
+/// Mean of the green channel over the selected pixels and the standard error of that mean
+/// estimated from their spread (valid when they share one expected value).
+fn mean_and_stderr(img: &HdrImage, select: impl Fn(usize, usize) -> bool) -> (f64, f64) {
+    let mut v = Vec::new();
+    for row in 0..img.height() {
+        for col in 0..img.width() {
+            if select(col, row) {
+                v.push(f64::from(img.get(col, row).g));
+            }
+        }
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Camera inside a sphere of radius 10 that emits `le` and reflects diffusely with albedo ρ.
+fn furnace(rho: f64, le: f64, renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(12, 12);
+    let m = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) },
+        Pigment::Uniform(Color::gray(le)),
+    ));
+    b.sphere(Transform::scaling(DVec3::splat(10.0)), m).renderer(renderer);
+    b.build().unwrap()
+}
+
+#[test]
+fn furnace_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("furnace_on_the_gpu") else { return };
+    // Without NEE or roulette every path is exactly Le Σ_{k ≤ 20} ρᵏ = 2(1 − 2⁻²¹).
+    let expected = 2.0 * (1.0 - 0.5f64.powi(21));
+    let img = gpu_run(&gpu, &furnace(0.5, 1.0, pt(1, 20, 1000, false)), Some(1));
+    for p in img.pixels() {
+        assert!((f64::from(p.g) / expected - 1.0).abs() < 2e-6, "{p:?}");
+    }
+    // With NEE (area sampling from inside the light) + MIS: unbiased; tolerance 1 % must
+    // exceed 5 standard errors.
+    let img = gpu_run(&gpu, &furnace(0.5, 1.0, pt(8, 20, 1000, true)), Some(4));
+    let (mean, se) = mean_and_stderr(&img, |_, _| true);
+    println!("furnace ρ 0.5 with NEE: {mean} ± {se} (expected {expected})");
+    assert!(5.0 * se < 0.01 * expected, "test too weak: se {se}");
+    assert!((mean / expected - 1.0).abs() < 0.01, "{mean} vs {expected} (se {se})");
+    // Roulette from depth 2 (q = 0.1) keeps the expectation 1/(1 − ρ) = 10. A path's value
+    // has a standard deviation ≈ 7, so 12² pixels × 4 samples × 64 paths give se ≈ 0.05:
+    // tolerance 3 %.
+    let expected = 10.0;
+    for nee in [false, true] {
+        let img = gpu_run(&gpu, &furnace(0.9, 1.0, pt(64, 300, 2, nee)), Some(4));
+        let (mean, se) = mean_and_stderr(&img, |_, _| true);
+        println!("furnace ρ 0.9 roulette, nee {nee}: {mean} ± {se} (expected {expected})");
+        assert!(5.0 * se < 0.03 * expected, "test too weak: se {se} (nee {nee})");
+        assert!((mean / expected - 1.0).abs() < 0.03, "nee {nee}: {mean} vs {expected} (se {se})");
+    }
+}
+
+/// A sphere of `brdf` under a uniform sky, and the GPU OnOff mask of the pixels that see it.
+fn object_under_sky(gpu: &Gpu, brdf: Brdf, sky: f64, renderer: Renderer) -> (Scene, HdrImage) {
+    let mut b = SceneBuilder::new(16, 16);
+    let m = b.material(Material::new(brdf, Pigment::Uniform(Color::BLACK)));
+    b.sphere(Transform::translation(DVec3::new(2.0, 0.0, 0.0)) * Transform::scaling(DVec3::splat(1.5)), m)
+        .environment(Environment::Uniform(Color::gray(sky)))
+        .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+    let mask = gpu_run(gpu, &b.build().unwrap(), None);
+    b.renderer(renderer);
+    (b.build().unwrap(), mask)
+}
+
+#[test]
+fn glass_and_diffuse_spheres_under_a_uniform_sky_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("glass_and_diffuse_spheres_under_a_uniform_sky_on_the_gpu") else { return };
+    // Diffuse without NEE: one scatter, then escape: exactly ρL.
+    let (rho, sky) = (0.6, 2.0);
+    let brdf = Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) };
+    let (scene, mask) = object_under_sky(&gpu, brdf, sky, pt(1, 3, 100, false));
+    let img = gpu_run(&gpu, &scene, None);
+    let on = |c: usize, r: usize| mask.get(c, r).g > 0.5;
+    let mut hits = 0;
+    for row in 0..16 {
+        for col in 0..16 {
+            let expected = if on(col, row) { rho * sky } else { sky };
+            hits += usize::from(on(col, row));
+            assert!((f64::from(img.get(col, row).g) / expected - 1.0).abs() < 1e-6, "({col},{row})");
+        }
+    }
+    assert!(hits > 20, "the sphere covers {hits} pixels");
+    // Clear glass neither absorbs nor emits: every pixel sees the sky (η² factors cancel).
+    for nee in [false, true] {
+        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 };
+        let (scene, mask) = object_under_sky(&gpu, brdf, 1.5, pt(32, 64, 1000, nee));
+        let img = gpu_run(&gpu, &scene, None);
+        let (mean, se) = mean_and_stderr(&img, |c, r| mask.get(c, r).g > 0.5);
+        println!("glass ball under the sky, nee {nee}: {mean} ± {se} (expected 1.5)");
+        assert!(5.0 * se < 0.01 * 1.5, "test too weak: se {se}");
+        assert!((mean / 1.5 - 1.0).abs() < 0.01, "nee {nee}: {mean} (se {se})");
+    }
+}
+
+#[test]
+fn point_lit_plane_matches_the_closed_form_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("point_lit_plane_matches_the_closed_form_on_the_gpu") else { return };
+    let rho = Color::new(0.8, 0.5, 0.2);
+    let light = DVec3::new(1.0, 0.5, 2.0);
+    let intensity = Color::new(10.0, 20.0, 5.0);
+    for renderer in [Renderer::PointLight { background: Color::BLACK, ambient: Color::BLACK }, pt(1, 1, 10, true)] {
+        let mut b = SceneBuilder::new(12, 10);
+        let m = b.diffuse(rho);
+        let cam = Camera {
+            projection: Projection::Perspective { screen_distance: 1.0 },
+            aspect_ratio: 1.2,
+            transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
+        };
+        b.plane(Transform::IDENTITY, m)
+            .camera(cam)
+            .point_light(PointLight { position: light, color: intensity, linear_radius: 1.0 })
+            .renderer(renderer);
+        let scene = b.build().unwrap();
+        let img = gpu_run(&gpu, &scene, None);
+        for row in 0..10 {
+            for col in 0..12 {
+                let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
+                let p = r.origin - r.dir * (r.origin.z / r.dir.z);
+                let to = light - p;
+                let d2 = to.length_squared();
+                let cos = to.z / d2.sqrt();
+                let expected = rho * intensity * (cos / (std::f64::consts::PI * d2));
+                let got: Color = img.get(col, row).into();
+                for (g, e) in [(got.r, expected.r), (got.g, expected.g), (got.b, expected.b)] {
+                    assert!((g / e - 1.0).abs() < 1e-5, "({col},{row}): {got:?} vs {expected:?}");
+                }
+            }
+        }
+    }
+}
