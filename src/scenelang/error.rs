@@ -68,10 +68,16 @@ pub struct SceneLangError {
     /// 1-based column (in characters) of the culprit.
     pub col: usize,
     pub message: String,
+    /// Boxed to keep `Result<_, SceneLangError>` small.
+    detail: Box<Detail>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct Detail {
     /// What would have been accepted there.
-    pub expected: Option<String>,
+    expected: Option<String>,
     /// Extra context, such as where a name was first defined.
-    pub note: Option<String>,
+    note: Option<String>,
     source_line: String,
     caret_len: usize,
 }
@@ -127,10 +133,7 @@ impl SceneLangError {
             line,
             col,
             message: message.into(),
-            expected: None,
-            note: None,
-            source_line,
-            caret_len,
+            detail: Box::new(Detail { expected: None, note: None, source_line, caret_len }),
         }
     }
 
@@ -142,24 +145,31 @@ impl SceneLangError {
             line: 1,
             col: 1,
             message: message.into(),
-            expected: None,
-            note: None,
-            source_line: String::new(),
-            caret_len: 1,
+            detail: Box::new(Detail { expected: None, note: None, source_line: String::new(), caret_len: 1 }),
         }
     }
 
-    pub fn expected(mut self, e: impl Into<String>) -> Self {
-        self.expected = Some(e.into());
+    /// Adds what would have been accepted.
+    pub fn with_expected(mut self, e: impl Into<String>) -> Self {
+        self.detail.expected = Some(e.into());
         self
     }
-    pub fn note(mut self, n: impl Into<String>) -> Self {
-        self.note = Some(n.into());
+    /// Adds context (where a name was defined, a suggestion).
+    pub fn with_note(mut self, n: impl Into<String>) -> Self {
+        self.detail.note = Some(n.into());
         self
+    }
+    /// What would have been accepted at the error's location.
+    pub fn expected(&self) -> Option<&str> {
+        self.detail.expected.as_deref()
+    }
+    /// Extra context, such as where a name was first defined or a "did you mean".
+    pub fn note(&self) -> Option<&str> {
+        self.detail.note.as_deref()
     }
     /// The offending source line, without its newline.
     pub fn source_line(&self) -> &str {
-        &self.source_line
+        &self.detail.source_line
     }
 }
 
@@ -170,13 +180,13 @@ impl fmt::Display for SceneLangError {
         let pad = " ".repeat(num.len());
         // Tabs keep their width in the caret line so the caret stays under the culprit.
         let lead: String =
-            self.source_line.chars().take(self.col - 1).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
-        writeln!(f, " {num} | {}", self.source_line)?;
-        write!(f, " {pad} | {lead}{}", "^".repeat(self.caret_len))?;
-        if let Some(e) = &self.expected {
+            self.detail.source_line.chars().take(self.col - 1).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
+        writeln!(f, " {num} | {}", self.detail.source_line)?;
+        write!(f, " {pad} | {lead}{}", "^".repeat(self.detail.caret_len))?;
+        if let Some(e) = &self.detail.expected {
             write!(f, "\n {pad} = expected: {e}")?;
         }
-        if let Some(n) = &self.note {
+        if let Some(n) = &self.detail.note {
             write!(f, "\n {pad} = note: {n}")?;
         }
         Ok(())
@@ -217,7 +227,8 @@ mod tests {
     #[test]
     fn renders_location_line_caret_and_expectation() {
         let src = "SET a 1\nSET b <1, 2>\n";
-        let e = SceneLangError::at(src, "x.sl", Span::new(19, 1), ErrorKind::Syntax, "unexpected `>`").expected("`,`");
+        let e =
+            SceneLangError::at(src, "x.sl", Span::new(19, 1), ErrorKind::Syntax, "unexpected `>`").with_expected("`,`");
         assert_eq!((e.line, e.col), (2, 12));
         assert_eq!(
             e.to_string(),

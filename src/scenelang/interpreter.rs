@@ -134,12 +134,13 @@ impl Args {
     }
 }
 
-fn subtype_error<'s>(lx: &Lexer<'_>, ty: TypeName, span: Span, found: &str, valid: &[&'s str]) -> SceneLangError {
-    let mut e = lx.error(span, ErrorKind::UnknownKeyword, format!("unknown kind `{found}` of {}", ty.name())).expected(
-        format!("one of {}", valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")),
-    );
+fn subtype_error(lx: &Lexer<'_>, ty: TypeName, span: Span, found: &str, valid: &[&str]) -> SceneLangError {
+    let mut e =
+        lx.error(span, ErrorKind::UnknownKeyword, format!("unknown kind `{found}` of {}", ty.name())).with_expected(
+            format!("one of {}", valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")),
+        );
     if let Some(s) = did_you_mean(found.trim_start_matches('.'), valid.iter().copied()) {
-        e = e.note(format!("did you mean `{}.{s}`?", ty.name()));
+        e = e.with_note(format!("did you mean `{}.{s}`?", ty.name()));
     }
     e
 }
@@ -176,7 +177,7 @@ impl<'a> Interp<'a> {
         } else {
             Err(self
                 .err(t.span, ErrorKind::Syntax, format!("expected `{c}` {what}, found {}", t.tok.describe()))
-                .expected(format!("`{c}`")))
+                .with_expected(format!("`{c}`")))
         }
     }
 
@@ -196,7 +197,9 @@ impl<'a> Interp<'a> {
                 other => {
                     return Err(self
                         .err(t.span, ErrorKind::Syntax, format!("expected an instruction, found {}", other.describe()))
-                        .expected("SET, UNSET, SPAWN, USING or DUMP (the previous instruction ended before this)"))
+                        .with_expected(
+                            "SET, UNSET, SPAWN, USING or DUMP (the previous instruction ended before this)",
+                        ))
                 }
             }
         }
@@ -209,28 +212,31 @@ impl<'a> Interp<'a> {
             let t = self.peek()?;
             let Tok::Ident(name) = t.tok else { break };
             self.lx.next()?;
-            let (value, _) = self.value()?;
-            count += 1;
-            match self.vars.get(&name) {
-                Some(v) if v.from_cli => {} // the command line wins: parsed, then ignored
+            // Checked before the value is read: the name comes first in the file.
+            let from_cli = match self.vars.get(&name) {
+                Some(v) if v.from_cli => true,
                 Some(v) => {
                     return Err(self
                         .err(t.span, ErrorKind::RedefinedName, format!("`{name}` is already defined"))
-                        .expected(format!("a new name, or `UNSET {name}` before setting it again"))
-                        .note(format!("`{name}` was defined at {}", v.origin)))
+                        .with_expected(format!("a new name, or `UNSET {name}` before setting it again"))
+                        .with_note(format!("`{name}` was defined at {}", v.origin)))
                 }
-                None => {
-                    let origin = self.origin(t.span);
-                    self.vars.insert(name, Var { value, origin, from_cli: false });
-                }
+                None => false,
+            };
+            let (value, _) = self.value()?;
+            count += 1;
+            // A name given on the command line wins: the script's value is parsed, then ignored.
+            if !from_cli {
+                let origin = self.origin(t.span);
+                self.vars.insert(name, Var { value, origin, from_cli: false });
             }
         }
         if count == 0 {
             let t = self.peek()?;
             return Err(self
                 .err(t.span, ErrorKind::Syntax, format!("expected a name after SET, found {}", t.tok.describe()))
-                .expected("`SET name value`")
-                .note(format!("SET is at {}", self.origin(set.span))));
+                .with_expected("`SET name value`")
+                .with_note(format!("SET is at {}", self.origin(set.span))));
         }
         Ok(())
     }
@@ -251,7 +257,7 @@ impl<'a> Interp<'a> {
             let t = self.peek()?;
             return Err(self
                 .err(t.span, ErrorKind::Syntax, format!("expected a name after UNSET, found {}", t.tok.describe()))
-                .expected("`UNSET name ...`"));
+                .with_expected("`UNSET name ...`"));
         }
         Ok(())
     }
@@ -259,9 +265,9 @@ impl<'a> Interp<'a> {
     fn undefined(&self, name: &str, span: Span) -> SceneLangError {
         let mut e = self
             .err(span, ErrorKind::UndefinedName, format!("undefined identifier `{name}`"))
-            .expected("a name defined with SET (or --vars) and not UNSET");
+            .with_expected("a name defined with SET (or --vars) and not UNSET");
         if let Some(s) = did_you_mean(name, self.vars.keys().map(String::as_str)) {
-            e = e.note(format!("did you mean `{s}`?"));
+            e = e.with_note(format!("did you mean `{s}`?"));
         }
         e
     }
@@ -292,7 +298,7 @@ impl<'a> Interp<'a> {
                 other => {
                     return Err(self
                         .err(span, ErrorKind::WrongType, format!("cannot SPAWN {}", other.ty().article()))
-                        .expected("a Shape or a Light"))
+                        .with_expected("a Shape or a Light"))
                 }
             }
             count += 1;
@@ -305,8 +311,8 @@ impl<'a> Interp<'a> {
                     ErrorKind::Syntax,
                     format!("expected a shape or light after SPAWN, found {}", t.tok.describe()),
                 )
-                .expected("a Shape, a Light, a CSG command or a name bound to one")
-                .note(format!("SPAWN is at {}", self.origin(spawn.span))));
+                .with_expected("a Shape, a Light, a CSG command or a name bound to one")
+                .with_note(format!("SPAWN is at {}", self.origin(spawn.span))));
         }
         Ok(())
     }
@@ -334,16 +340,14 @@ impl<'a> Interp<'a> {
                 break;
             }
             let (v, span) = self.value()?;
-            let origin = self.origin(span);
             macro_rules! setting {
                 ($field:ident, $val:expr, $name:literal) => {{
                     if let Some((_, first)) = &self.world.$field {
                         return Err(self
                             .err(span, ErrorKind::RepeatedSetting, concat!("the ", $name, " is already set"))
-                            .expected(concat!("one ", $name, " per script"))
-                            .note(format!("first set at {}", self.origin(*first))));
+                            .with_expected(concat!("one ", $name, " per script"))
+                            .with_note(format!("first set at {}", self.origin(*first))));
                     }
-                    let _ = &origin;
                     self.world.$field = Some(($val, span));
                 }};
             }
@@ -356,7 +360,7 @@ impl<'a> Interp<'a> {
                 other => {
                     return Err(self
                         .err(span, ErrorKind::WrongType, format!("cannot use {} as a setting", other.ty().article()))
-                        .expected("a Camera, an Image, a Renderer, a Tracer or an Environment"))
+                        .with_expected("a Camera, an Image, a Renderer, a Tracer or an Environment"))
                 }
             }
             count += 1;
@@ -365,8 +369,8 @@ impl<'a> Interp<'a> {
             let t = self.peek()?;
             return Err(self
                 .err(t.span, ErrorKind::Syntax, format!("expected a setting after USING, found {}", t.tok.describe()))
-                .expected("a Camera, an Image, a Renderer, a Tracer or an Environment")
-                .note(format!("USING is at {}", self.origin(using.span))));
+                .with_expected("a Camera, an Image, a Renderer, a Tracer or an Environment")
+                .with_note(format!("USING is at {}", self.origin(using.span))));
         }
         Ok(())
     }
@@ -380,7 +384,7 @@ impl<'a> Interp<'a> {
                 None => {
                     return Err(self
                         .err(t.span, ErrorKind::UnknownKeyword, format!("unknown DUMP section `.{k}`"))
-                        .expected(format!("one of {}", dump::SECTIONS.map(|s| format!(".{s}")).join(" "))))
+                        .with_expected(format!("one of {}", dump::SECTIONS.map(|s| format!(".{s}")).join(" "))))
                 }
             },
             Tok::Ident(name) => match self.vars.get(name) {
@@ -390,7 +394,7 @@ impl<'a> Interp<'a> {
             other => {
                 return Err(self
                     .err(t.span, ErrorKind::Syntax, format!("expected what to DUMP, found {}", other.describe()))
-                    .expected(format!(
+                    .with_expected(format!(
                         "one of {} or a variable name",
                         dump::SECTIONS.map(|s| format!(".{s}")).join(" ")
                     )))
@@ -410,7 +414,7 @@ impl<'a> Interp<'a> {
         if self.depth > MAX_DEPTH {
             return Err(self
                 .err(t.span, ErrorKind::TooDeep, format!("values nested deeper than {MAX_DEPTH} levels"))
-                .expected("a flatter script (SET intermediate values)"));
+                .with_expected("a flatter script (SET intermediate values)"));
         }
         let r = self.value_inner(t);
         self.depth -= 1;
@@ -427,7 +431,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::WrongType,
                             format!("cannot multiply a Transformation by {}", w.ty().article()),
                         )
-                        .expected("a Transformation after `*`"));
+                        .with_expected("a Transformation after `*`"));
                 };
                 tr = self.checked(Ok(tr * w), star.span.to(ws))?;
                 span = span.to(ws);
@@ -510,7 +514,7 @@ impl<'a> Interp<'a> {
                                     ErrorKind::WrongType,
                                     format!("LOAD takes a file name, found {}", v.ty().article()),
                                 )
-                                .expected("a string, as in `LOAD \"sky.hdr\"`"));
+                                .with_expected("a string, as in `LOAD \"sky.hdr\"`"));
                         };
                         Value::Image(self.load_image(&path, s)?)
                     }
@@ -521,7 +525,7 @@ impl<'a> Interp<'a> {
                                 ErrorKind::Syntax,
                                 format!("expected a value, found the instruction {}", c.name()),
                             )
-                            .expected("a value: a number, string, colour, point, constructor or name"))
+                            .with_expected("a value: a number, string, colour, point, constructor or name"))
                     }
                 }
             }
@@ -531,7 +535,7 @@ impl<'a> Interp<'a> {
             }
             other => return Err(self
                 .err(t.span, ErrorKind::Syntax, format!("expected a value, found {}", other.describe()))
-                .expected(
+                .with_expected(
                     "a value: a number, string, `<r, g, b>`, `{x, y, z}`, `[list]`, `$expr$`, a constructor or a name",
                 )),
         };
@@ -553,9 +557,11 @@ impl<'a> Interp<'a> {
             Ok(MathValue::Color(c)) => Ok(Value::Color(c)),
             Ok(MathValue::Point(p)) => Ok(Value::Point(p)),
             Err(e) => {
-                let mut out = self.err(e.span, e.kind, e.message);
-                out.expected = e.expected;
-                Err(out)
+                let out = self.err(e.span, e.kind, e.message);
+                Err(match e.expected {
+                    Some(x) => out.with_expected(x),
+                    None => out,
+                })
             }
         }
     }
@@ -567,7 +573,7 @@ impl<'a> Interp<'a> {
             Value::Number(n) => Ok((n, s)),
             other => Err(self
                 .err(s, ErrorKind::WrongType, format!("expected a number for {what}, found {}", other.ty().article()))
-                .expected("a number")),
+                .with_expected("a number")),
         }
     }
 
@@ -597,7 +603,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::Syntax,
                             format!("expected `,` or `{close}` in a list, found {}", other.describe()),
                         )
-                        .expected(format!("`,` or `{close}`")))
+                        .with_expected(format!("`,` or `{close}`")))
                 }
             }
         }
@@ -622,13 +628,13 @@ impl<'a> Interp<'a> {
                     let names: Vec<&str> = params.iter().map(|p| p.name).collect();
                     let mut e = self
                         .err(t.span, ErrorKind::UnknownKeyword, format!("unknown keyword `.{k}` for {ctor}"))
-                        .expected(if names.is_empty() {
+                        .with_expected(if names.is_empty() {
                             format!("{ctor} takes no keywords")
                         } else {
                             format!("one of {}", names.iter().map(|n| format!(".{n}")).collect::<Vec<_>>().join(" "))
                         });
                     if let Some(s) = did_you_mean(k, names.iter().copied()) {
-                        e = e.note(format!("did you mean `.{s}`?"));
+                        e = e.with_note(format!("did you mean `.{s}`?"));
                     }
                     return Err(e);
                 };
@@ -636,7 +642,7 @@ impl<'a> Interp<'a> {
                     let how = if i < positional { "positionally" } else { "already" };
                     return Err(self
                         .err(t.span, ErrorKind::BadArguments, format!("`.{k}` of {ctor} is given twice ({how} before)"))
-                        .expected("each argument at most once"));
+                        .with_expected("each argument at most once"));
                 }
                 i
             } else {
@@ -647,12 +653,12 @@ impl<'a> Interp<'a> {
                             ErrorKind::BadArguments,
                             format!("positional argument after keyword arguments in {ctor}"),
                         )
-                        .expected("positional arguments first, then `.keyword value` pairs"));
+                        .with_expected("positional arguments first, then `.keyword value` pairs"));
                 }
                 if positional >= params.len() {
                     return Err(self
                         .err(t.span, ErrorKind::BadArguments, format!("too many arguments for {ctor}"))
-                        .expected(format!(
+                        .with_expected(format!(
                             "at most {} argument{}",
                             params.len(),
                             if params.len() == 1 { "" } else { "s" }
@@ -675,7 +681,7 @@ impl<'a> Interp<'a> {
                             v.ty().article()
                         ),
                     )
-                    .expected(param.ty.article()));
+                    .with_expected(param.ty.article()));
             }
             args.vals[index] = Some((v, s));
             let t = self.lx.next()?;
@@ -689,7 +695,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::Syntax,
                             format!("expected `,` or `)` in {ctor}, found {}", other.describe()),
                         )
-                        .expected("`,` or `)`"))
+                        .with_expected("`,` or `)`"))
                 }
             }
         }
@@ -706,7 +712,7 @@ impl<'a> Interp<'a> {
                     ErrorKind::BadValue,
                     format!("`.{name}` must be a whole number from {min} to {max}, got {v}"),
                 )
-                .expected(format!("a whole number from {min} to {max}")));
+                .with_expected(format!("a whole number from {min} to {max}")));
         }
         Ok(v as u64)
     }
@@ -720,7 +726,7 @@ impl<'a> Interp<'a> {
             let bound = if allow_zero { "≥ 0" } else { "> 0" };
             return Err(self
                 .err(span, ErrorKind::BadValue, format!("`.{name}` must be {bound}, got {v}"))
-                .expected(format!("a number {bound}")));
+                .with_expected(format!("a number {bound}")));
         }
         Ok(v)
     }
@@ -730,12 +736,12 @@ impl<'a> Interp<'a> {
     fn checked(&self, t: Result<Transform, SceneError>, span: Span) -> Res<Transform> {
         let t = t.map_err(|e| {
             self.err(span, ErrorKind::InvalidScene, format!("invalid transformation: {e}"))
-                .expected("an invertible affine transformation (no zero scale factors)")
+                .with_expected("an invertible affine transformation (no zero scale factors)")
         })?;
         if !(t.matrix().is_finite() && t.inverse_matrix().is_finite()) {
             return Err(self
                 .err(span, ErrorKind::InvalidScene, "invalid transformation: matrix or inverse is not finite")
-                .expected("scale factors and translations of moderate size"));
+                .with_expected("scale factors and translations of moderate size"));
         }
         Ok(t)
     }
@@ -761,7 +767,7 @@ impl<'a> Interp<'a> {
             let Tok::Keyword(axis) = &k.tok else {
                 return Err(self
                     .err(k.span, ErrorKind::Syntax, format!("expected an axis in ROTATE, found {}", k.tok.describe()))
-                    .expected("`.X`, `.Y` or `.Z` followed by an angle in degrees"));
+                    .with_expected("`.X`, `.Y` or `.Z` followed by an angle in degrees"));
             };
             let (deg, ds) = self.number("a rotation angle")?;
             let r = match axis.as_str() {
@@ -771,7 +777,7 @@ impl<'a> Interp<'a> {
                 _ => {
                     return Err(self
                         .err(k.span, ErrorKind::UnknownKeyword, format!("unknown rotation axis `.{axis}`"))
-                        .expected("`.X`, `.Y` or `.Z`"))
+                        .with_expected("`.X`, `.Y` or `.Z`"))
                 }
             };
             t = self.checked(Ok(t * r), k.span.to(ds))?;
@@ -786,7 +792,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::Syntax,
                             format!("expected `*` or `)` in ROTATE, found {}", other.describe()),
                         )
-                        .expected("`*` between rotations, `)` after the last"))
+                        .with_expected("`*` between rotations, `)` after the last"))
                 }
             }
         }
@@ -808,7 +814,7 @@ impl<'a> Interp<'a> {
                 if k != "transformation" {
                     return Err(self
                         .err(t.span, ErrorKind::UnknownKeyword, format!("unknown keyword `.{k}` for {name}"))
-                        .expected("`.transformation` (after the shapes)"));
+                        .with_expected("`.transformation` (after the shapes)"));
                 }
                 let (v, s) = self.value()?;
                 let Value::Transformation(tr) = v else {
@@ -818,7 +824,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::WrongType,
                             format!("`.transformation` of {name} must be a Transformation, found {}", v.ty().article()),
                         )
-                        .expected("a Transformation"));
+                        .with_expected("a Transformation"));
                 };
                 transform = tr;
                 let close = self.lx.next()?;
@@ -829,7 +835,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::Syntax,
                             format!("expected `)` after `.transformation` in {name}, found {}", close.tok.describe()),
                         )
-                        .expected("`)`: `.transformation` is the last argument"));
+                        .with_expected("`)`: `.transformation` is the last argument"));
                 }
                 break;
             }
@@ -837,7 +843,7 @@ impl<'a> Interp<'a> {
             let Value::Shape(shape) = v else {
                 return Err(self
                     .err(s, ErrorKind::WrongType, format!("{name} combines shapes, found {}", v.ty().article()))
-                    .expected("a Shape"));
+                    .with_expected("a Shape"));
             };
             children.push((shape, s));
             let sep = self.lx.next()?;
@@ -851,7 +857,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::Syntax,
                             format!("expected `,` or `)` in {name}, found {}", other.describe()),
                         )
-                        .expected("`,` or `)`"))
+                        .with_expected("`,` or `)`"))
                 }
             }
         }
@@ -859,7 +865,7 @@ impl<'a> Interp<'a> {
             let span = children.first().map_or(Span::new(self.lx.last_end, 1), |c| c.1);
             return Err(self
                 .err(span, ErrorKind::BadArguments, format!("{name} needs at least two shapes, got {}", children.len()))
-                .expected("two or more shapes"));
+                .with_expected("two or more shapes"));
         }
         Ok(Value::Shape(ShapeValue::Csg { op, children: children.into_iter().map(|c| c.0).collect(), transform }))
     }
@@ -878,7 +884,7 @@ impl<'a> Interp<'a> {
                     ErrorKind::Syntax,
                     format!("expected the kind of {} after `{}`, found {}", ty.name(), ty.name(), other.describe()),
                 )
-                .expected(format!(
+                .with_expected(format!(
                     "one of {}",
                     valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")
                 ))),
@@ -912,7 +918,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::BadValue,
                             format!("a transformation matrix needs 16 numbers, got {}", l.len()),
                         )
-                        .expected("16 numbers, row by row"));
+                        .with_expected("16 numbers, row by row"));
                 };
                 Value::Transformation(self.checked(Transform::from_rows(rows), *ls)?)
             }
@@ -941,7 +947,7 @@ impl<'a> Interp<'a> {
                                 _ => {
                                     return Err(self
                                         .err(fs, ErrorKind::BadValue, format!("unknown image filter {s:?}"))
-                                        .expected("\"nearest\" or \"bilinear\""))
+                                        .with_expected("\"nearest\" or \"bilinear\""))
                                 }
                             },
                             Some(_) => ImageFilter::Nearest,
@@ -1139,7 +1145,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::BadImageSize,
                             format!("blank image {width}×{height} is too large to use as a texture"),
                         )
-                        .expected(format!("at most {MAX_BLANK_TEXTURE_PIXELS} pixels")));
+                        .with_expected(format!("at most {MAX_BLANK_TEXTURE_PIXELS} pixels")));
                 }
                 Ok(Arc::new(HdrImage::new(width as usize, height as usize)))
             }
@@ -1171,7 +1177,7 @@ impl<'a> Interp<'a> {
                                 ErrorKind::BadImageSize,
                                 format!("image {what} {v} is not a whole number from 1 to {MAX_IMAGE_SIDE}"),
                             )
-                            .expected(format!("a whole number of pixels from 1 to {MAX_IMAGE_SIDE}")));
+                            .with_expected(format!("a whole number of pixels from 1 to {MAX_IMAGE_SIDE}")));
                     }
                     Ok(v as u32)
                 };
@@ -1186,7 +1192,7 @@ impl<'a> Interp<'a> {
                     ErrorKind::WrongType,
                     format!("Image takes a size or a file name, found {}", other.ty().article()),
                 )
-                .expected("`Image(width, height)` or `Image(\"file\")`")),
+                .with_expected("`Image(width, height)` or `Image(\"file\")`")),
         }
     }
 
@@ -1197,7 +1203,7 @@ impl<'a> Interp<'a> {
         if !full.is_file() {
             return Err(self
                 .err(span, ErrorKind::ImageFile, format!("image file {} not found", full.display()))
-                .expected(
+                .with_expected(
                     "an existing .pfm, .exr, .hdr, .png or .jpg file (relative paths start at the script's folder)",
                 ));
         }
@@ -1210,7 +1216,7 @@ impl<'a> Interp<'a> {
             }
             Err(e) => Err(self
                 .err(span, ErrorKind::ImageFile, format!("cannot load image: {e}"))
-                .expected("a readable .pfm, .exr, .hdr, .png or .jpg file")),
+                .with_expected("a readable .pfm, .exr, .hdr, .png or .jpg file")),
         }
     }
 
@@ -1221,7 +1227,7 @@ impl<'a> Interp<'a> {
         let end = Span::new(self.lx.source.trim_end().len().saturating_sub(1), 1);
         let missing = |what: &str, example: &str| {
             self.err(end, ErrorKind::MissingSetting, format!("the script never sets the {what}"))
-                .expected(format!("a `USING {example}` instruction"))
+                .with_expected(format!("a `USING {example}` instruction"))
         };
         let Some((camera, _)) = self.world.camera else { return Err(missing("camera", "Camera.Perspective(...)")) };
         let Some((image, image_span)) = &self.world.image else { return Err(missing("image", "Image(width, height)")) };
@@ -1233,7 +1239,7 @@ impl<'a> Interp<'a> {
         if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
             return Err(self
                 .err(*image_span, ErrorKind::BadImageSize, format!("image size {width}×{height} cannot be rendered"))
-                .expected(format!("each side from 1 to {MAX_IMAGE_SIDE}")));
+                .with_expected(format!("each side from 1 to {MAX_IMAGE_SIDE}")));
         }
         let mut scene = self
             .world
@@ -1260,7 +1266,7 @@ impl<'a> Interp<'a> {
             let Tok::Ident(name) = t.tok else {
                 return Err(self
                     .err(t.span, ErrorKind::Syntax, format!("expected a variable name, found {}", t.tok.describe()))
-                    .expected("`name value, name value, ...`"));
+                    .with_expected("`name value, name value, ...`"));
             };
             let (value, _) = self.value()?;
             self.vars.insert(name, Var { value, origin: "--vars".into(), from_cli: true });
@@ -1275,7 +1281,7 @@ impl<'a> Interp<'a> {
                             ErrorKind::Syntax,
                             format!("expected `,` or the end, found {}", other.describe()),
                         )
-                        .expected("`,` between `name value` pairs"))
+                        .with_expected("`,` between `name value` pairs"))
                 }
             }
         }

@@ -203,7 +203,7 @@ impl<'a> Lexer<'a> {
                 if word.is_empty() {
                     return Err(self
                         .error(Span::new(start, 1), ErrorKind::Syntax, "a dot must be followed by a keyword")
-                        .expected("a keyword such as `.color`"));
+                        .with_expected("a keyword such as `.color`"));
                 }
                 if word.starts_with(|c: char| c.is_ascii_digit()) {
                     return Err(self
@@ -212,7 +212,7 @@ impl<'a> Lexer<'a> {
                             ErrorKind::BadNumber,
                             format!("`.{word}` is not a number"),
                         )
-                        .expected(format!("`0.{word}` (a number may not start with a dot)")));
+                        .with_expected(format!("`0.{word}` (a number may not start with a dot)")));
                 }
                 self.pos += 1 + word.len();
                 Tok::Keyword(word)
@@ -222,7 +222,7 @@ impl<'a> Lexer<'a> {
             other => {
                 return Err(self
                     .error(Span::new(start, other.len_utf8()), ErrorKind::Syntax, format!("unexpected character `{other}`"))
-                    .expected("a command, type, keyword, identifier, number, string, `$expression$` or one of ( ) < > { } [ ] , *"));
+                    .with_expected("a command, type, keyword, identifier, number, string, `$expression$` or one of ( ) < > { } [ ] , *"));
             }
         };
         Ok(Token { tok, span: Span::new(start, self.pos - start) })
@@ -253,7 +253,7 @@ impl<'a> Lexer<'a> {
                                     ErrorKind::Syntax,
                                     format!("unknown escape `\\{other}` in string"),
                                 )
-                                .expected("one of \\n \\t \\r \\0 \\\\ \\\" \\$ \\'"));
+                                .with_expected("one of \\n \\t \\r \\0 \\\\ \\\" \\$ \\'"));
                         }
                     });
                 }
@@ -262,7 +262,7 @@ impl<'a> Lexer<'a> {
         }
         Err(self
             .error(Span::new(start, 1), ErrorKind::UnterminatedString, "unterminated string")
-            .expected("a closing `\"` before the end of the file"))
+            .with_expected("a closing `\"` before the end of the file"))
     }
 
     fn math(&mut self, start: usize) -> Result<Tok, SceneLangError> {
@@ -273,7 +273,7 @@ impl<'a> Lexer<'a> {
             }
             None => Err(self
                 .error(Span::new(start, 1), ErrorKind::UnterminatedExpression, "unterminated math expression")
-                .expected("a closing `$` before the end of the file")),
+                .with_expected("a closing `$` before the end of the file")),
         }
     }
 
@@ -307,7 +307,7 @@ impl<'a> Lexer<'a> {
             let sign = &self.source[start..start + 1];
             return Err(self
                 .error(Span::new(start, 1), ErrorKind::Syntax, format!("unexpected `{sign}`"))
-                .expected(format!("a number right after the sign, such as `{sign}1` or `{sign}0.5`")));
+                .with_expected(format!("a number right after the sign, such as `{sign}1` or `{sign}0.5`")));
         }
         if end < b.len() && (b[end] == b'e' || b[end] == b'E') {
             let mut j = end + 1;
@@ -323,7 +323,7 @@ impl<'a> Lexer<'a> {
                         ErrorKind::BadNumber,
                         format!("bad number `{}`", &self.source[start..bad_end]),
                     )
-                    .expected("digits after the exponent, as in `1e2` or `1E-2`"));
+                    .with_expected("digits after the exponent, as in `1e2` or `1E-2`"));
             }
             end = exp_end;
         }
@@ -336,17 +336,17 @@ impl<'a> Lexer<'a> {
                     ErrorKind::BadNumber,
                     format!("bad number `{}`", &self.source[start..bad_end]),
                 )
-                .expected("a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`"));
+                .with_expected("a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`"));
         }
         let text = &self.source[start..end];
         let v: f64 = text.parse().map_err(|_| {
             self.error(Span::new(start, end - start), ErrorKind::BadNumber, format!("bad number `{text}`"))
-                .expected("a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`")
+                .with_expected("a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`")
         })?;
         if !v.is_finite() {
             return Err(self
                 .error(Span::new(start, end - start), ErrorKind::BadNumber, format!("number `{text}` is out of range"))
-                .expected("a finite number (magnitude below about 1.8e308)"));
+                .with_expected("a finite number (magnitude below about 1.8e308)"));
         }
         self.pos = end;
         Ok(Tok::Number(v))
@@ -371,11 +371,12 @@ impl<'a> Lexer<'a> {
             match Command::ALL.iter().find(|(n, _)| *n == w) {
                 Some((_, c)) => Tok::Command(*c),
                 None => {
-                    let mut e = self.error(span, ErrorKind::UnknownCommand, format!("unknown command `{w}`")).expected(
-                        format!("one of {}", Command::ALL.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(" ")),
-                    );
+                    let mut e =
+                        self.error(span, ErrorKind::UnknownCommand, format!("unknown command `{w}`")).with_expected(
+                            format!("one of {}", Command::ALL.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(" ")),
+                        );
                     if let Some(s) = did_you_mean(w, Command::ALL.iter().map(|(n, _)| *n)) {
-                        e = e.note(format!("did you mean `{s}`?"));
+                        e = e.with_note(format!("did you mean `{s}`?"));
                     }
                     return Err(e);
                 }
@@ -384,11 +385,11 @@ impl<'a> Lexer<'a> {
             match TypeName::ALL.iter().find(|(n, _)| *n == w) {
                 Some((_, t)) => Tok::Type(*t),
                 None => {
-                    let mut e = self.error(span, ErrorKind::UnknownType, format!("unknown type `{w}`")).expected(
+                    let mut e = self.error(span, ErrorKind::UnknownType, format!("unknown type `{w}`")).with_expected(
                         format!("one of {}", TypeName::ALL.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(" ")),
                     );
                     if let Some(s) = did_you_mean(w, TypeName::ALL.iter().map(|(n, _)| *n)) {
-                        e = e.note(format!("did you mean `{s}`?"));
+                        e = e.with_note(format!("did you mean `{s}`?"));
                     }
                     return Err(e);
                 }
