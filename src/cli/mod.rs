@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod check;
+pub mod converge;
 pub mod devices;
 pub mod gpu_args;
 pub mod render;
@@ -27,6 +28,8 @@ pub enum Command {
     Check(check::CheckArgs),
     /// Render a SceneLang script to image files.
     Render(render::RenderArgs),
+    /// Measure how error falls with samples and time on each device (table + log-log plot).
+    Converge(converge::ConvergeArgs),
 }
 
 /// Runs one parsed command.
@@ -35,6 +38,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Devices(args) => devices::run(args),
         Command::Check(args) => check::run(args),
         Command::Render(args) => render::run(args),
+        Command::Converge(args) => converge::run(args),
     }
 }
 
