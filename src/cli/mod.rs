@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod bench;
 mod check;
 pub mod converge;
 pub mod devices;
@@ -30,6 +31,8 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Measure how error falls with samples and time on each device (table + log-log plot).
     Converge(converge::ConvergeArgs),
+    /// Benchmark devices on the example scenes, object-count scaling and kernel specialisation.
+    Bench(bench::BenchArgs),
 }
 
 /// Runs one parsed command.
@@ -39,6 +42,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Check(args) => check::run(args),
         Command::Render(args) => render::run(args),
         Command::Converge(args) => converge::run(args),
+        Command::Bench(args) => bench::run(args),
     }
 }
 
