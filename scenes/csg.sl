@@ -43,8 +43,8 @@ SPAWN
     Shape.Plane(.material floor)
 
 USING
-    Camera.Perspective(.aspect_ratio 1.5, .screen_distance 1.4,
-                       .transformation ROTATE(.Z 5) * TRANSLATE(-4, 0, 2.2) * ROTATE(.Y 15))
+    Camera.Perspective(.aspect_ratio 1.5, .screen_distance 1.2,
+                       .transformation TRANSLATE(-1.2, 0.2, 2.1) * ROTATE(.Z 4 * .Y 16))
     Image(600, 400)
     Renderer.PathTracer(.n 1, .max_depth 6)
     Tracer(.samples_per_side 4)

@@ -5,12 +5,12 @@
 SET
     # Sky: a large emissive dome around everything, plus a sun (both are area lights).
     sky_material Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)),
-                          .emitted_radiance Pigment.Uniform(<0.55, 0.7, 1.0>))
+                          .emitted_radiance Pigment.Uniform(<0.3, 0.42, 0.7>))
     sun_material Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)),
-                          .emitted_radiance Pigment.Uniform(<1000, 900, 750>))
+                          .emitted_radiance Pigment.Uniform(<3000, 2800, 2400>))
 
     # Floor
-    floor_material Material(.brdf Brdf.Diffuse(Pigment.Checkered(.N 4,
+    floor_material Material(.brdf Brdf.Diffuse(Pigment.Checkered(.N 2,
                                                                  .color_on  <0.75, 0.75, 0.7>,
                                                                  .color_off <0.15, 0.2, 0.3>)))
 

@@ -10,7 +10,7 @@ SET
 
     iron    Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.12, 0.12, 0.14>)))
     glow    Material(.brdf Brdf.Diffuse(Pigment.Uniform(<1, 0.9, 0.7>)), .emitted_radiance Pigment.Uniform(<1, 0.85, 0.6>))
-    asphalt Material(.brdf Brdf.Diffuse(Pigment.Checkered(.N 1, .color_on <0.3, 0.3, 0.3>, .color_off <0.25, 0.25, 0.27>)))
+    asphalt Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.28, 0.28, 0.3>)))
     grass   Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.1, 0.35, 0.1>)))
 
     # A lamp at the origin: a bowl (hollow sphere cut open at the bottom by two fused boxes)
@@ -22,8 +22,9 @@ SET
     lamp UNITE(bowl, pole)
 
 SPAWN
-    Shape.Plane(.material asphalt, .transformation TRANSLATE(.Z -4) * SCALE 2)
-    Shape.Plane(.material grass, .transformation TRANSLATE(0, 0, -3.95) * TRANSLATE(.Y 6))
+    # Grass everywhere, and a road (a flat box) along the row of lamps.
+    Shape.Plane(.material grass, .transformation TRANSLATE(.Z -4))
+    Shape.Cube(.material asphalt, .transformation TRANSLATE(8, 0, -4) * SCALE(60, 4, 0.02))
 
     UNITE(lamp, Shape.Cube(.material iron, .transformation TRANSLATE(.Z -4)), .transformation TRANSLATE(.Y 3))
     UNITE(lamp, Shape.Cube(.material iron, .transformation TRANSLATE(.Z -4)), .transformation TRANSLATE($spacing$, 3, 0))
@@ -35,7 +36,7 @@ SPAWN
 
 USING
     Camera.Perspective(.aspect_ratio $16/9$, .screen_distance 1.2,
-                       .transformation TRANSLATE(-6, -4, -1) * ROTATE(.Z 25 * .Y 5))
+                       .transformation TRANSLATE(-5, -2, -2.2) * ROTATE(.Z 22 * .Y -6))
     Image(640, 360)
     Renderer.PointLight(.ambient_color <0.002, 0.002, 0.004>, .background_color <0.005, 0.005, 0.02>)
     Tracer(.samples_per_side 2)

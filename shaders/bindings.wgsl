@@ -7,18 +7,22 @@
 @group(1) @binding(1) var<uniform> camera: Camera;
 // Count of camera-sample estimates that were NaN or infinite (written as 0 instead).
 @group(1) @binding(2) var<storage, read_write> nan_count: atomic<u32>;
+// #if GEOMETRY
 @group(1) @binding(3) var<storage, read> shapes: array<Shape>;
 // BVH leaf object references from 0, then the plane list and CSG children.
 @group(1) @binding(4) var<storage, read> indices: array<u32>;
+// #endif
 // #if BVH
 @group(1) @binding(5) var<storage, read> bvh_nodes: array<BvhNode>;
 // #endif
 // #if CSG
 @group(1) @binding(6) var<storage, read> csg_nodes: array<CsgNode>;
 // #endif
-// #if SHADING
+// #if MATERIALS
 @group(1) @binding(7) var<storage, read> materials: array<Material>;
 @group(1) @binding(8) var<storage, read> pigments: array<Pigment>;
+// #endif
+// #if SHADING
 @group(1) @binding(9) var<uniform> environment: Environment;
 // #endif
 // #if TEXTURES

@@ -112,6 +112,7 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
 
 // #endif
 
+// #if SHADOWS
 // bsdf::eval_bsdf: f for light from `l` (0 for delta BRDFs).
 fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     if (m.brdf == 0u && dot(n, l) > 0.0) {
@@ -119,6 +120,7 @@ fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<
     }
     return vec3<f32>(0.0);
 }
+// #endif
 
 // #if NEE
 // bsdf::pdf_bsdf.

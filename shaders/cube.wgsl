@@ -43,6 +43,7 @@ fn cube_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     return no_span();
 }
 
+// #if SHADING
 fn cube_surface(p: vec3<f32>, face_in: u32) -> SurfacePoint {
     let face = min(face_in, 5u);
     let axis = face / 2u;
@@ -56,3 +57,4 @@ fn cube_surface(p: vec3<f32>, face_in: u32) -> SurfacePoint {
     let uv = vec2<f32>((CUBE_FACE_COL[face] + 0.5 * (cu + 1.0)) / 4.0, (CUBE_FACE_ROW[face] + 0.5 * (cv + 1.0)) / 3.0);
     return SurfacePoint(point, normal, uv);
 }
+// #endif

@@ -45,6 +45,7 @@ fn cylinder_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     return no_span();
 }
 
+// #if SHADING
 fn cylinder_surface(p: vec3<f32>, face: u32) -> SurfacePoint {
     if (face == 0u) {
         let r = normalize_or(vec3<f32>(p.x, p.y, 0.0), vec3<f32>(1.0, 0.0, 0.0));
@@ -59,3 +60,4 @@ fn cylinder_surface(p: vec3<f32>, face: u32) -> SurfacePoint {
     return SurfacePoint(vec3<f32>(p.x, p.y, -0.5), vec3<f32>(0.0, 0.0, -1.0),
         vec2<f32>((3.0 - 2.0 * p.x) / 4.0, (1.0 + 2.0 * p.y) / 4.0));
 }
+// #endif

@@ -5,6 +5,7 @@
 // What escaping rays see: mirrors scene::Environment::radiance and cpu::env_light. Without
 // a scene environment the packer stores a uniform one of the background colour.
 
+// #if ENV_IMAGE
 // (u, v) of a unit direction on the equirectangular map: scene::equirect_uv.
 fn equirect_uv(d: vec3<f32>, rotation_rad: f32) -> vec2<f32> {
     var u = (atan2(d.y, d.x) - rotation_rad) / TAU;
@@ -14,6 +15,7 @@ fn equirect_uv(d: vec3<f32>, rotation_rad: f32) -> vec2<f32> {
     }
     return vec2<f32>(u, acos(clamp(d.z, -1.0, 1.0)) / PI);
 }
+// #endif
 
 fn escape_radiance(dir: vec3<f32>) -> vec3<f32> {
     let d = normalize_or(dir, vec3<f32>(0.0, 0.0, 1.0));

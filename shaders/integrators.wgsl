@@ -3,7 +3,10 @@
 // #requires pigment environment
 // #endif
 // #if POINTLIGHT
-// #requires pigment environment brdf offset
+// #requires environment
+// #if POINT_LIGHTS
+// #requires pigment brdf offset
+// #endif
 // #endif
 // #if PATHTRACER
 // #if POINT_LIGHTS
@@ -22,13 +25,6 @@ fn radiance_onoff(ray: Ray) -> vec3<f32> {
 }
 // #endif
 
-// #if SHADING
-// Emitted radiance at a hit (black pigments are packed as uniform black).
-fn emitted_at(m: Material, uv: vec2<f32>) -> vec3<f32> {
-    return pigment_color(m.emitted, uv);
-}
-// #endif
-
 // #if FLAT
 fn radiance_flat(ray: Ray) -> vec3<f32> {
     let hit = closest_hit(ray);
@@ -36,7 +32,7 @@ fn radiance_flat(ray: Ray) -> vec3<f32> {
         return escape_radiance(ray.dir);
     }
     let m = materials[hit.material];
-    return emitted_at(m, hit.uv) + pigment_color(m.pigment, hit.uv);
+    return pigment_color(m.emitted, hit.uv) + pigment_color(m.pigment, hit.uv);
 }
 // #endif
 
@@ -76,7 +72,7 @@ fn radiance_point_light(ray: Ray) -> vec3<f32> {
     var result = settings.color1.xyz;
 // #if POINT_LIGHTS
     let m = materials[hit.material];
-    let emitted = emitted_at(m, hit.uv);
+    let emitted = pigment_color(m.emitted, hit.uv);
     let color = pigment_color(m.pigment, hit.uv);
     for (var i = 0u; i < settings.point_light_count; i++) {
         let s = point_light_at(i, hit);

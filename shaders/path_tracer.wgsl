@@ -33,7 +33,7 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 
 // Emitted radiance at the hit, MIS-weighted when NEE could also have sampled it.
 fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
-    let le = emitted_at(m, hit.uv);
+    let le = pigment_color(m.emitted, hit.uv);
 // #if AREA_LIGHTS
     if (all(le == vec3<f32>(0.0)) || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
         return le;

@@ -15,6 +15,7 @@ fn plane_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     return Span(Crossing(t, 0u), Crossing(OPEN, 0u), true);
 }
 
+// #if SHADING
 fn plane_frac(x: f32) -> f32 {
     let f = x - floor(x);
     return select(f, 0.0, f >= 1.0);
@@ -23,3 +24,4 @@ fn plane_frac(x: f32) -> f32 {
 fn plane_surface(p: vec3<f32>) -> SurfacePoint {
     return SurfacePoint(vec3<f32>(p.x, p.y, 0.0), vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(plane_frac(p.x), plane_frac(p.y)));
 }
+// #endif

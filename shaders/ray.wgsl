@@ -28,9 +28,11 @@ struct Span {
     valid: bool,
 }
 
+// #if GEOMETRY
 fn no_span() -> Span {
     return Span(Crossing(OPEN, 0u), Crossing(-OPEN, 0u), false);
 }
+// #endif
 
 // Object-space surface data at a crossing.
 struct SurfacePoint {
@@ -59,11 +61,14 @@ fn affine_vector(a: Affine, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(a.r0.xyz, v), dot(a.r1.xyz, v), dot(a.r2.xyz, v));
 }
 
+// #if SHADING
+// #if GEOMETRY
 // Normal out of object space with the inverse transpose: the transpose of the
 // world-to-object linear part.
 fn affine_normal(to_object: Affine, n: vec3<f32>) -> vec3<f32> {
     return n.x * to_object.r0.xyz + n.y * to_object.r1.xyz + n.z * to_object.r2.xyz;
 }
+// #endif
 
 fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     let l2 = dot(v, v);
@@ -72,3 +77,4 @@ fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     }
     return fallback;
 }
+// #endif

@@ -14,6 +14,7 @@
 // Placed primitives: mirrors src/cpu/shapes/{mod,instance}.rs. The ray moves into object
 // space without normalising its direction, so t means the same point in both spaces.
 
+// #if GEOMETRY
 fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
     switch kind {
 // #if SPHERE
@@ -42,6 +43,28 @@ fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
     }
 }
 
+// The span of the ray's whole line through shape `i`.
+fn shape_span(i: u32, ray: Ray) -> Span {
+    let s = shapes[i];
+    return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
+}
+
+// The first finite crossing of shape `i` with t in the open range (tmin, tmax); t = OPEN
+// when there is none.
+fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
+    let sp = shape_span(i, ray);
+    if (sp.valid) {
+        if (sp.enter.t > ray.tmin && sp.enter.t < ray.tmax && abs(sp.enter.t) < OPEN) {
+            return sp.enter;
+        }
+        if (sp.exit.t > ray.tmin && sp.exit.t < ray.tmax && abs(sp.exit.t) < OPEN) {
+            return sp.exit;
+        }
+    }
+    return Crossing(OPEN, 0u);
+}
+
+// #if SHADING
 fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
     switch kind {
 // #if SPHERE
@@ -70,27 +93,6 @@ fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
     }
 }
 
-// The span of the ray's whole line through shape `i`.
-fn shape_span(i: u32, ray: Ray) -> Span {
-    let s = shapes[i];
-    return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
-}
-
-// The first finite crossing of shape `i` with t in the open range (tmin, tmax); t = OPEN
-// when there is none.
-fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
-    let sp = shape_span(i, ray);
-    if (sp.valid) {
-        if (sp.enter.t > ray.tmin && sp.enter.t < ray.tmax && abs(sp.enter.t) < OPEN) {
-            return sp.enter;
-        }
-        if (sp.exit.t > ray.tmin && sp.exit.t < ray.tmax && abs(sp.exit.t) < OPEN) {
-            return sp.exit;
-        }
-    }
-    return Crossing(OPEN, 0u);
-}
-
 // The hit at crossing `c` of shape `i`; `flip` reverses the outward normal (surfaces
 // carved by a subtracted CSG child).
 fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> Hit {
@@ -105,6 +107,8 @@ fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> 
     let normal = select(-outward, outward, front_face);
     return Hit(c.t, point, normal, front_face, sp.uv, s.material, object);
 }
+// #endif
+// #endif
 
 // A candidate hit, kept cheap until the closest is known: the crossing, the primitive
 // that produced it, whether its normal is flipped (CSG DIFF), the top-level object.

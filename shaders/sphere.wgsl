@@ -1,6 +1,15 @@
 // #requires ray quadratic
 // Unit sphere (radius 1 at the origin): mirrors src/cpu/shapes/sphere.rs.
 
+fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
+    let r = sphere_roots(o, d, 1.0);
+    if (r.z == 0.0) {
+        return no_span();
+    }
+    return Span(Crossing(r.x, 0u), Crossing(r.y, 0u), true);
+}
+
+// #if SHADING
 // atan2(y, x)/2π wrapped to [0, 1).
 fn turns(y: f32, x: f32) -> f32 {
     var u = atan2(y, x) / TAU;
@@ -13,16 +22,9 @@ fn turns(y: f32, x: f32) -> f32 {
     return u;
 }
 
-fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
-    let r = sphere_roots(o, d, 1.0);
-    if (r.z == 0.0) {
-        return no_span();
-    }
-    return Span(Crossing(r.x, 0u), Crossing(r.y, 0u), true);
-}
-
 fn sphere_surface(p: vec3<f32>) -> SurfacePoint {
     let n = normalize_or(p, vec3<f32>(0.0, 0.0, 1.0));
     let uv = vec2<f32>(turns(n.y, n.x), acos(clamp(n.z, -1.0, 1.0)) / PI);
     return SurfacePoint(n, n, uv);
 }
+// #endif

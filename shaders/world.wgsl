@@ -6,6 +6,7 @@
 // same 32-byte nodes the CPU traverses) plus the list of infinite planes tested by every
 // ray. Mirrors cpu::World.
 
+// #if GEOMETRY
 // The first crossing of object reference `r` inside (tmin, tmax).
 fn object_first(r: u32, ray: Ray) -> Candidate {
 // #if CSG
@@ -15,6 +16,7 @@ fn object_first(r: u32, ray: Ray) -> Candidate {
 // #endif
     return Candidate(shape_first_crossing(r, ray), r, false, r);
 }
+// #endif
 
 // #if BVH
 // Slab test against a node's box; the exit is widened by 2 ulps-ish (Ize 2013) so f32
@@ -119,16 +121,24 @@ fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
     return best;
 }
 
+// #if SHADING
 // The closest hit; `hit.t = OPEN` when the ray escapes.
 fn closest_hit(ray: Ray) -> Hit {
     let cand = world_first(ray, false);
     if (cand.c.t >= OPEN) {
         return Hit(OPEN, vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
     }
+// #if GEOMETRY
     return shape_surface_hit(cand.shape, ray, cand.c, cand.flip, cand.object);
+// #else
+    return Hit(OPEN, vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
+// #endif
 }
+// #endif
 
+// #if SHADOWS
 // True when something lies on the ray strictly inside (tmin, tmax).
 fn occluded(ray: Ray) -> bool {
     return world_first(ray, true).c.t < OPEN;
 }
+// #endif

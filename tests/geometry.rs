@@ -184,6 +184,28 @@ fn uv_of_every_shape_per_spec() {
 }
 
 #[test]
+fn unnormalised_directions_scale_t_only() {
+    let shapes = [
+        sphere(tr(3.0, 0.2, -0.1), 0),
+        cube(tr(-4.0, 0.0, 0.0) * Transform::rotation_z(20.0), 1),
+        cylinder(tr(0.0, 5.0, 0.0) * Transform::rotation_x(70.0), 2),
+    ];
+    let w = World::from_shapes(&shapes);
+    for d in [DVec3::X, -DVec3::X, DVec3::Y] {
+        let base = hit(&w, ray(DVec3::new(0.0, 0.1, 0.05), d));
+        for scale in [1e-6, 3.0, 1e7] {
+            let h = hit(&w, ray(DVec3::new(0.0, 0.1, 0.05), d * scale));
+            assert!((h.t * scale - base.t).abs() < 1e-12 * base.t, "{d} × {scale}");
+            assert!(close(h.point, base.point) && close(h.normal, base.normal) && h.material == base.material);
+        }
+    }
+    // On the cylinder's side surface, parallel to its axis: enters through the cap rim.
+    let w = World::from_shapes(&[cylinder(Transform::IDENTITY, 0)]);
+    let h = hit(&w, ray(DVec3::new(0.5, 0.0, -5.0), DVec3::Z));
+    check_hit(&h, 4.5, -DVec3::Z, 0, true);
+}
+
+#[test]
 fn normals_use_the_inverse_transpose() {
     // Sphere squashed to an ellipsoid x²/4 + y² + z² = 1; at (√2, √0.5, 0) the normal is
     // ∝ (x/4, y, 0).
@@ -234,6 +256,23 @@ fn csg_operations_on_two_spheres() {
     // through the carved surface at x = 0 (front face).
     let back = DVec3::new(5.0, 0.0, 0.0);
     check_hit(&hit(&w, ray(back, -x)), 5.0, x, 1, true);
+}
+
+#[test]
+fn fuse_hides_touching_faces_unite_shows_them() {
+    let pair = |op| {
+        World::from_shapes(&[Shape::csg(
+            op,
+            vec![cube(Transform::IDENTITY, 0), cube(tr(1.0, 0.0, 0.0), 1)],
+            Transform::IDENTITY,
+        )])
+    };
+    let o = DVec3::new(-5.0, 0.1, 0.2);
+    let w = pair(CsgOp::Fuse);
+    check_hit(&hit(&w, ray_from(o, DVec3::X, 4.6)), 6.5, -DVec3::X, 1, false);
+    // UNITE keeps the shared face x = 0.5 (both cubes have a surface there).
+    let w = pair(CsgOp::Unite);
+    assert_eq!(hit(&w, ray_from(o, DVec3::X, 4.6)).t, 5.5);
 }
 
 #[test]
@@ -330,6 +369,21 @@ fn coincident_face_diff_does_not_leak() {
     }
     // From +x the first surface is the carved face x = 0 (material 1, facing the ray).
     check_hit(&hit(&w, ray(DVec3::new(5.0, 0.3, 0.2), -DVec3::X)), 5.0, DVec3::X, 1, true);
+    // The same pair placed by a rotating, translating parent node, rays from random
+    // points above the shared top face in random downward directions.
+    let place = tr(3.0, -2.0, 1.0) * Transform::rotation_z(37.0) * Transform::rotation_x(21.0);
+    let w = World::from_shapes(&[Shape::csg(
+        CsgOp::Diff,
+        vec![cube(sc(2.0, 2.0, 2.0), 0), cube(tr(0.5, 0.0, 0.0) * sc(1.0, 2.0, 2.0), 1)],
+        place,
+    )]);
+    let mut rng = lumen::sampling::Pcg32::new(2, 3);
+    for _ in 0..5000 {
+        let p = DVec3::new(0.1 + 0.8 * rng.next_f64(), -0.98 + 1.96 * rng.next_f64(), 1.0);
+        let d = DVec3::new(0.02 * (rng.next_f64() - 0.5), 0.5 * (rng.next_f64() - 0.5), -1.0);
+        let r = ray(place.point(p - 3.0 * d), place.vector(d));
+        assert!(w.intersect(&r).is_none(), "leak at {p}");
+    }
     // A solid minus itself is empty.
     let w = World::from_shapes(&[Shape::csg(
         CsgOp::Diff,
@@ -366,14 +420,27 @@ fn csg_with_a_plane_half_space() {
 #[test]
 fn max_intervals_bounds_random_trees() {
     let mut rng = lumen::sampling::Pcg32::new(9, 1);
+    fn subtrees<'a>(s: &'a Shape, out: &mut Vec<&'a Shape>) {
+        out.push(s);
+        if let Shape::Csg(c) = s {
+            c.children.iter().for_each(|ch| subtrees(ch, out));
+        }
+    }
     for _ in 0..200 {
-        let shape = random_shape(&mut rng, 3);
-        let bound = max_intervals(&shape);
-        let tree = CsgTree::new(&shape);
-        for _ in 0..50 {
-            let r = random_ray(&mut rng, 3.0);
-            let n = tree.intervals(&r).len();
-            assert!(n <= bound, "{n} intervals > bound {bound} for {shape:?}");
+        let root = random_shape(&mut rng, 3);
+        let root_bound = max_intervals(&root);
+        let mut all = Vec::new();
+        subtrees(&root, &mut all);
+        // Every node's own lists fit its bound, and the root's bound covers them all.
+        for shape in all {
+            let bound = max_intervals(shape);
+            assert!(bound <= root_bound);
+            let tree = CsgTree::new(shape);
+            for _ in 0..30 {
+                let r = random_ray(&mut rng, 3.0);
+                let n = tree.intervals(&r).len();
+                assert!(n <= bound, "{n} intervals > bound {bound} for {shape:?}");
+            }
         }
     }
     // Known values.

@@ -585,8 +585,14 @@ fn lumen_check_summarises_scenes() {
     let out = lumen(&["check", path.to_str().unwrap(), "--vars", "spacing 5"]);
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("lights:       3 point, 0 area") && text.contains("renderer:     PointLight"), "{text}");
-    // The bounds follow the --vars spacing: the third lamp's bowl (radius 1) reaches x = 2·5 + 1.
-    assert!(text.contains("– [11.0000, 4.0000, 1.0000]"), "{text}");
+
+    // --vars wins over the script's SET: the sphere's radius, hence the bounds, follow it.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("r.sl");
+    std::fs::write(&p, format!("SET r 1\nSPAWN Shape.Sphere(.transformation SCALE r){SETTINGS}")).unwrap();
+    let out = lumen(&["check", p.to_str().unwrap(), "--vars", "r 3"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("bounds:       [-3.0000, -3.0000, -3.0000] – [3.0000, 3.0000, 3.0000]"), "{text}");
 
     let out = lumen(&["check", scenes_dir().join("animation.sl").to_str().unwrap(), "--time", "-5"]);
     assert!(out.status.success());

@@ -2,7 +2,7 @@
 //! into the 32-byte [`BvhNode`]s that the CPU reference and the GPU both traverse.
 //!
 //! ```
-//! use lumen::accel::{Bvh, BvhItem, Visit, MAX_DEPTH};
+//! use lumen::accel::{Bvh, BvhItem, Visit, MAX_DEPTH, MAX_LEAF_SIZE};
 //! use lumen::scene::Aabb;
 //! use glam::DVec3;
 //!
@@ -14,15 +14,14 @@
 //!     .collect();
 //! let bvh = Bvh::build(&items);
 //! assert!(bvh.depth() <= MAX_DEPTH);
-//! // Which boxes does a ray along +y at x = 30 pass through?
+//! // Which leaves does a ray along +y at x = 30 reach? The one holding box 10 (a leaf
+//! // may hold a few neighbours too; the caller tests the primitives themselves).
 //! let mut seen = Vec::new();
 //! bvh.traverse(DVec3::new(30.0, -5.0, 0.0), DVec3::Y, 0.0, f64::INFINITY, |id| {
 //!     seen.push(id);
 //!     Visit::Continue
 //! });
-//! // Leaves may hold a few neighbours; box 10 is among those visited, far ones are not.
-//! assert!(seen.contains(&10));
-//! assert!(seen.iter().all(|&id| (8..=12).contains(&id)));
+//! assert!(seen.contains(&10) && seen.len() <= MAX_LEAF_SIZE);
 //! ```
 
 mod build;

@@ -71,6 +71,18 @@ mod tests {
     use super::*;
 
     #[test]
+    fn byte_layout_matches_the_wgsl_struct() {
+        let n = BvhNode { min: [1.0, 2.0, 3.0], left_or_first: 7, max: [4.0, 5.0, 6.0], count: 9 };
+        let b = bytemuck::bytes_of(&n);
+        let word = |i: usize| u32::from_le_bytes(b[4 * i..4 * i + 4].try_into().unwrap());
+        assert_eq!(b.len(), 32);
+        assert_eq!([word(0), word(1), word(2)], [1f32.to_bits(), 2f32.to_bits(), 3f32.to_bits()]);
+        assert_eq!(word(3), 7);
+        assert_eq!([word(4), word(5), word(6)], [4f32.to_bits(), 5f32.to_bits(), 6f32.to_bits()]);
+        assert_eq!(word(7), 9);
+    }
+
+    #[test]
     fn rounding_is_outward() {
         for x in [0.1, -0.1, 1e-40, -1e-40, 1e5 + 1e-9, 3.0, -7.0, 1e39, -1e39, 0.0, f64::INFINITY, f64::NEG_INFINITY] {
             let (lo, hi) = (round_down(x), round_up(x));

@@ -20,7 +20,8 @@ pub enum Visit {
 pub struct RayBox {
     origin: DVec3,
     inv_dir: DVec3,
-    dir: DVec3,
+    /// Some 1/dir component is infinite: take the careful path.
+    parallel: bool,
 }
 
 /// Widening of the far slab distance that makes the f64 slab test conservative
@@ -29,16 +30,29 @@ const FAR_WIDEN: f64 = 1.0 + 2.0 * (3.0 * f64::EPSILON * 0.5) / (1.0 - 3.0 * f64
 
 impl RayBox {
     pub fn new(origin: DVec3, dir: DVec3) -> Self {
-        Self { origin, inv_dir: dir.recip(), dir }
+        let inv_dir = dir.recip();
+        Self { origin, inv_dir, parallel: !inv_dir.is_finite() }
     }
 
     /// The entry t of the ray into `[min, max]` within `[tmin, tmax]`, or `None`. An axis
     /// the ray runs parallel to is decided by the origin alone, so an origin lying on a
     /// slab boundary never produces 0·∞ = NaN.
+    #[inline]
     pub fn hit(&self, min: DVec3, max: DVec3, tmin: f64, tmax: f64) -> Option<f64> {
+        if self.parallel {
+            return self.hit_parallel(min, max, tmin, tmax);
+        }
+        let ta = (min - self.origin) * self.inv_dir;
+        let tb = (max - self.origin) * self.inv_dir;
+        let t0 = ta.min(tb).max_element().max(tmin);
+        let t1 = (ta.max(tb).min_element() * FAR_WIDEN).min(tmax);
+        (t0 <= t1).then_some(t0)
+    }
+
+    fn hit_parallel(&self, min: DVec3, max: DVec3, tmin: f64, tmax: f64) -> Option<f64> {
         let (mut t0, mut t1) = (tmin, tmax);
         for a in 0..3 {
-            if self.dir[a] == 0.0 {
+            if !self.inv_dir[a].is_finite() {
                 if self.origin[a] < min[a] || self.origin[a] > max[a] {
                     return None;
                 }
@@ -46,16 +60,17 @@ impl RayBox {
             }
             let ta = (min[a] - self.origin[a]) * self.inv_dir[a];
             let tb = (max[a] - self.origin[a]) * self.inv_dir[a];
-            let (near, far) = if ta <= tb { (ta, tb) } else { (tb, ta) };
-            t0 = t0.max(near);
-            t1 = t1.min(far * FAR_WIDEN);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb) * FAR_WIDEN);
         }
         (t0 <= t1).then_some(t0)
     }
 
+    #[inline]
     fn node(&self, n: &BvhNode, tmin: f64, tmax: f64) -> Option<f64> {
-        let b = n.bounds();
-        self.hit(b.min, b.max, tmin, tmax)
+        let min = DVec3::new(f64::from(n.min[0]), f64::from(n.min[1]), f64::from(n.min[2]));
+        let max = DVec3::new(f64::from(n.max[0]), f64::from(n.max[1]), f64::from(n.max[2]));
+        self.hit(min, max, tmin, tmax)
     }
 }
 
@@ -135,6 +150,11 @@ mod tests {
         // Origin exactly on the y = 1 slab face, direction 0 in y: inside, no NaN.
         assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), Some(1.0));
         let rb = RayBox::new(DVec3::new(-1.0, 1.0 + 1e-12, 0.0), DVec3::X);
+        assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), None);
+        // Oblique ray (no zero component): enters through x = 0, misses when aimed past.
+        let rb = RayBox::new(DVec3::new(-3.0, 0.5, 0.5), DVec3::new(1.0, 0.1, -0.1));
+        assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), Some(3.0));
+        let rb = RayBox::new(DVec3::new(-3.0, 0.5, 0.5), DVec3::new(1.0, 0.3, -0.1));
         assert_eq!(rb.hit(DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY), None);
         // Infinite boxes work.
         let rb = RayBox::new(DVec3::new(5.0, 5.0, 5.0), DVec3::new(1.0, -2.0, 0.5));

@@ -224,7 +224,8 @@ fn subtract(a: &[Interval], cut: &[Interval]) -> Vec<Interval> {
         let mut start = Some(x.enter);
         for y in cut {
             let Some(s) = start else { break };
-            if y.exit.t <= s.t {
+            // A cut of zero length (a grazed sphere) removes nothing of positive measure.
+            if y.exit.t <= s.t || y.exit.t <= y.enter.t {
                 continue;
             }
             if y.enter.t >= x.exit.t {
@@ -281,4 +282,56 @@ fn bound(shape: &Shape) -> (usize, bool) {
     // Intermediate lists (a child's, the concatenation of DIFF's cut) must fit too.
     let widest = children.iter().map(|b| b.0).max().unwrap_or(0);
     (n.max(widest).max(rest_sum), overlap)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn e(t: f64, leaf: u32) -> End {
+        End { t, leaf, face: 0, flip: false }
+    }
+    fn iv(a: f64, b: f64, leaf: u32) -> Interval {
+        Interval { enter: e(a, leaf), exit: e(b, leaf) }
+    }
+    fn ts(list: &[Interval]) -> Vec<(f64, f64)> {
+        list.iter().map(|i| (i.enter.t, i.exit.t)).collect()
+    }
+
+    #[test]
+    fn merge_joins_overlapping_and_touching() {
+        let m = merge(vec![iv(5.0, 6.0, 2), iv(0.0, 2.0, 0), iv(2.0, 3.0, 1), iv(1.0, 1.5, 3)]);
+        assert_eq!(ts(&m), vec![(0.0, 3.0), (5.0, 6.0)]);
+        assert_eq!((m[0].enter.leaf, m[0].exit.leaf), (0, 1));
+    }
+
+    #[test]
+    fn subtract_splits_trims_and_removes() {
+        let a = [iv(0.0, 10.0, 0)];
+        let cut = [iv(-1.0, 1.0, 1), iv(3.0, 4.0, 2), iv(6.0, 7.0, 3), iv(9.0, 12.0, 4)];
+        let d = subtract(&a, &cut);
+        assert_eq!(ts(&d), vec![(1.0, 3.0), (4.0, 6.0), (7.0, 9.0)]);
+        assert!(d.iter().all(|i| i.enter.flip && i.exit.flip));
+        assert_eq!((d[0].enter.leaf, d[0].exit.leaf), (1, 2));
+        // A grazing (zero-length) cut leaves no crack.
+        assert_eq!(ts(&subtract(&[iv(0.0, 2.0, 0)], &[iv(1.0, 1.0, 1)])), vec![(0.0, 2.0)]);
+        // Coincident ends leave nothing of zero length.
+        assert!(subtract(&[iv(0.0, 1.0, 0)], &[iv(0.0, 1.0, 1)]).is_empty());
+        assert_eq!(ts(&subtract(&[iv(0.0, 2.0, 0)], &[iv(0.0, 1.0, 1)])), vec![(1.0, 2.0)]);
+        // A cut that only touches keeps the original end (and its surface).
+        let d = subtract(&[iv(1.0, 2.0, 0)], &[iv(0.0, 1.0, 1), iv(2.0, 3.0, 2)]);
+        assert_eq!(ts(&d), vec![(1.0, 2.0)]);
+        assert_eq!((d[0].enter.leaf, d[0].exit.leaf, d[0].enter.flip), (0, 0, false));
+    }
+
+    #[test]
+    fn intersect_pairs_and_open_ends() {
+        let a = [iv(0.0, 2.0, 0), iv(3.0, 5.0, 0)];
+        let b = [Interval { enter: e(1.0, 1), exit: End { t: f64::INFINITY, leaf: NO_SURFACE, face: 0, flip: false } }];
+        let x = intersect(&a, &b);
+        assert_eq!(ts(&x), vec![(1.0, 2.0), (3.0, 5.0)]);
+        assert_eq!((x[0].enter.leaf, x[0].exit.leaf), (1, 0));
+        // Touching solids have an empty (measure-zero) intersection.
+        assert!(intersect(&[iv(0.0, 1.0, 0)], &[iv(1.0, 2.0, 1)]).is_empty());
+    }
 }

@@ -6,7 +6,8 @@ use crate::cpu::shapes::{Crossing, Instance};
 use crate::cpu::{Hit, Ray};
 use crate::scene::{Scene, Shape};
 
-/// One top-level shape, prepared.
+/// One top-level shape, prepared. Primitives (the common case) stay inline for locality.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 enum Object {
     Primitive(Instance),

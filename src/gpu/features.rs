@@ -89,7 +89,11 @@ impl FeatureSet {
                 }
             });
         }
-        let needs_shading = f.renderer != RendererKind::OnOff;
+        let needs_shading = match f.renderer {
+            RendererKind::OnOff => false,
+            RendererKind::PointLight => !scene.point_lights.is_empty(),
+            _ => true,
+        };
         for (m, _) in scene.materials.iter().zip(&used).filter(|(_, u)| **u) {
             if needs_shading {
                 f.add_pigment(m.brdf.pigment());
@@ -114,8 +118,8 @@ impl FeatureSet {
             f.specular = false;
             f.dielectric = false;
         }
-        f.point_lights = !scene.point_lights.is_empty()
-            && matches!(f.renderer, RendererKind::PointLight | RendererKind::PathTracer);
+        f.point_lights =
+            !scene.point_lights.is_empty() && matches!(f.renderer, RendererKind::PointLight | RendererKind::PathTracer);
         if let Renderer::PathTracer(p) = &scene.renderer {
             // Light sampling happens only at diffuse vertices.
             f.nee = p.nee && f.diffuse;
@@ -145,13 +149,25 @@ impl FeatureSet {
         self.pigment_image || self.environment == EnvKind::Image
     }
 
-    /// True when the kernel reads materials at all (every renderer but OnOff).
+    /// True when escaping rays see the environment (every renderer but OnOff).
     pub fn shading(&self) -> bool {
         self.renderer != RendererKind::OnOff
     }
 
+    /// True when the kernel reads materials (not OnOff, nor PointLight without lights).
+    pub fn materials(&self) -> bool {
+        match self.renderer {
+            RendererKind::OnOff => false,
+            RendererKind::PointLight => self.point_lights,
+            _ => true,
+        }
+    }
+
     /// Every feature name a shader may test (see [`Self::names`]).
-    pub const ALL_NAMES: [&'static str; 24] = [
+    pub const ALL_NAMES: [&'static str; 27] = [
+        "MATERIALS",
+        "GEOMETRY",
+        "SHADOWS",
         "SPHERE",
         "PLANE",
         "CUBE",
@@ -181,6 +197,9 @@ impl FeatureSet {
     /// The names of the `// #if NAME` blocks enabled for this set.
     pub fn names(&self) -> Vec<&'static str> {
         let flags = [
+            (self.materials(), "MATERIALS"),
+            (self.bvh || self.plane, "GEOMETRY"),
+            (self.renderer == RendererKind::OnOff || self.point_lights || self.nee, "SHADOWS"),
             (self.sphere, "SPHERE"),
             (self.plane, "PLANE"),
             (self.cube, "CUBE"),

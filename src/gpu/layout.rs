@@ -236,11 +236,7 @@ mod tests {
             expect!(Shape, "Shape", [to_object, to_world, kind, material, light, _pad]),
             expect!(CsgNode, "CsgNode", [op, first_child, child_count, _pad]),
             expect!(Material, "Material", [brdf, pigment, emitted, ior]),
-            expect!(
-                Pigment,
-                "Pigment",
-                [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]
-            ),
+            expect!(Pigment, "Pigment", [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]),
             expect!(PointLight, "PointLight", [position, color]),
             expect!(AreaLight, "AreaLight", [sphere, shape, det, _pad0, _pad1]),
             expect!(

@@ -9,11 +9,11 @@ mod assemble;
 mod compute;
 mod device;
 pub mod features;
+mod kernel_cache;
 pub mod layout;
 pub mod pack;
-pub mod render;
-mod kernel_cache;
 mod passes;
+pub mod render;
 mod test_support;
 
 pub use accumulate::{Accumulator, Tile};

@@ -70,7 +70,11 @@ pub fn pixel_samples(scene: &Scene, spp_override: Option<u32>) -> Result<(PixelS
     let ps = PixelSamples::new(&scene.tracer, spp_override);
     let count = ps.count();
     let limit = u32::MAX as usize;
-    let spp = u32::try_from(count).map_err(|_| PackError::TooMany { what: "samples per pixel", count: count as usize, limit })?;
+    let spp = u32::try_from(count).map_err(|_| PackError::TooMany {
+        what: "samples per pixel",
+        count: count as usize,
+        limit,
+    })?;
     Ok((ps, spp))
 }
 

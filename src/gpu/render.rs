@@ -9,7 +9,9 @@ use std::time::Instant;
 
 use super::features::FeatureSet;
 use super::pack::{pack, PackedScene};
-use super::{run_progressive, Assembled, Gpu, GpuError, PassOptions, ShaderLibrary, StopReason};
+use super::{
+    run_progressive, Assembled, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary, StopReason,
+};
 use crate::image::HdrImage;
 use crate::scene::Scene;
 
@@ -155,33 +157,67 @@ fn pack_error(e: super::pack::PackError) -> GpuError {
 /// use lumen::color::Color;
 /// use lumen::gpu::render::{render, GpuRenderOptions};
 /// let Some(gpu) = lumen::gpu::gpu_for_tests("gpu_render_doc") else { return };
-/// let mut b = SceneBuilder::new(4, 3);
+/// let mut b = SceneBuilder::new(5, 3);
 /// let m = b.diffuse(Color::gray(0.5));
 /// b.sphere(Transform::translation(glam::DVec3::new(3.0, 0.0, 0.0)), m)
 ///     .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
 /// let out = render(&gpu, &b.build().unwrap(), &GpuRenderOptions::default()).unwrap();
 /// assert_eq!(out.spp_done, 1);
-/// assert_eq!(out.image.get(1, 1).r, 1.0); // the sphere covers the centre
+/// assert_eq!(out.image.get(2, 1).r, 1.0); // the sphere covers the centre
 /// assert_eq!(out.image.get(0, 0).r, 0.0);
 /// ```
 pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
-    let start = Instant::now();
-    let packed = pack(scene, opts.spp).map_err(pack_error)?;
-    let assembled = assemble(&packed.features)?;
-    check_binding_limits(gpu, &assembled)?;
-    let kernel = gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)?;
-    let buffers = SceneBuffers::upload(gpu, &packed)?;
-    let refs: Vec<&wgpu::Buffer> = buffers.bound(&kernel)?;
+    GpuRenderer::new().render(gpu, scene, opts)
+}
+
+/// Renders several scenes (animation frames, re-renders) compiling each distinct kernel
+/// once: kernels are cached by feature set and scene-dependent constants.
+#[derive(Debug, Default)]
+pub struct GpuRenderer {
+    kernels: KernelCache,
+}
+
+impl GpuRenderer {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Kernels compiled so far.
+    pub fn kernels_compiled(&self) -> usize {
+        self.kernels.len()
+    }
+
+    /// Renders `scene` on `gpu`, like [`render`].
+    pub fn render(&mut self, gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
+        let start = Instant::now();
+        let packed = pack(scene, opts.spp).map_err(pack_error)?;
+        let f = &packed.features;
+        // The cache key: the assembly features plus the generated constants.
+        let key = f
+            .assembly_features()
+            .with(&format!("csg_max_intervals={}", f.csg_max_intervals))
+            .with(&format!("csg_max_depth={}", f.csg_max_depth));
+        let kernel = self.kernels.get_or_build(&key, ENTRY_POINT, || {
+            let assembled = assemble(f)?;
+            check_binding_limits(gpu, &assembled)?;
+            gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)
+        })?;
+        render_packed(gpu, &kernel, scene, &packed, opts, start)
+    }
+}
+
+fn render_packed(
+    gpu: &Gpu,
+    kernel: &ComputeKernel,
+    scene: &Scene,
+    packed: &PackedScene,
+    opts: &GpuRenderOptions,
+    start: Instant,
+) -> Result<GpuRenderOutput, GpuError> {
+    let buffers = SceneBuffers::upload(gpu, packed)?;
+    let refs: Vec<&wgpu::Buffer> = buffers.bound(kernel)?;
     let group = kernel.bind_group(gpu, 1, &refs)?;
-    let acc = run_progressive(
-        gpu,
-        &kernel,
-        &[&group],
-        scene.width,
-        scene.height,
-        packed.settings.spp,
-        &opts.passes,
-    )?;
+    let acc = run_progressive(gpu, kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
     let nan: Vec<u32> = gpu.read_buffer(&buffers.nan_count, 1)?;
     Ok(GpuRenderOutput {
         image: acc.image,
@@ -197,11 +233,9 @@ pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRe
 /// A clear error when the kernel needs more storage buffers than the adapter allows.
 fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError> {
     let module = assembled.validate()?.module;
-    let storage = module
-        .global_variables
-        .iter()
-        .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
-        .count() as u32;
+    let storage =
+        module.global_variables.iter().filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. })).count()
+            as u32;
     let limit = gpu.limits.max_storage_buffers_per_shader_stage;
     if storage > limit {
         return Err(GpuError::Validation(format!(
@@ -246,12 +280,162 @@ impl SceneBuffers {
                 if b == 2 {
                     return Ok(&self.nan_count);
                 }
-                self.by_binding
-                    .iter()
-                    .find(|(n, _)| *n == b)
-                    .map(|(_, buf)| buf)
-                    .ok_or_else(|| GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})")))
+                self.by_binding.iter().find(|(n, _)| *n == b).map(|(_, buf)| buf).ok_or_else(|| {
+                    GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})"))
+                })
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeSet;
+
+    use super::*;
+    use crate::gpu::features::{EnvKind, RendererKind};
+    use crate::sampling::Pcg32;
+
+    /// Names of the functions reachable from the entry point (by naga's call statements).
+    fn reachable_functions(module: &naga::Module) -> BTreeSet<String> {
+        fn walk(block: &naga::Block, module: &naga::Module, seen: &mut BTreeSet<String>) {
+            for st in block.iter() {
+                match st {
+                    naga::Statement::Call { function, .. } => {
+                        let f = &module.functions[*function];
+                        if seen.insert(f.name.clone().unwrap_or_default()) {
+                            walk(&f.body, module, seen);
+                        }
+                    }
+                    naga::Statement::Block(b) => walk(b, module, seen),
+                    naga::Statement::If { accept, reject, .. } => {
+                        walk(accept, module, seen);
+                        walk(reject, module, seen);
+                    }
+                    naga::Statement::Switch { cases, .. } => cases.iter().for_each(|c| walk(&c.body, module, seen)),
+                    naga::Statement::Loop { body, continuing, .. } => {
+                        walk(body, module, seen);
+                        walk(continuing, module, seen);
+                    }
+                    _ => {}
+                }
+            }
+        }
+        let mut seen = BTreeSet::new();
+        for ep in &module.entry_points {
+            walk(&ep.function.body, module, &mut seen);
+        }
+        seen
+    }
+
+    fn function_names(module: &naga::Module) -> BTreeSet<String> {
+        module.functions.iter().map(|(_, f)| f.name.clone().unwrap_or_default()).collect()
+    }
+
+    /// Asserts the assembled kernel holds nothing the features do not need: every function
+    /// is reachable from the entry point and every global (buffer or private array) is used.
+    fn assert_minimal(features: &FeatureSet) -> naga::Module {
+        let assembled = assemble(features).unwrap_or_else(|e| panic!("{features:?}: {e}"));
+        let v = assembled.validate().unwrap();
+        let all = function_names(&v.module);
+        let reachable = reachable_functions(&v.module);
+        let unused: Vec<_> = all.difference(&reachable).collect();
+        assert!(unused.is_empty(), "{features:?}: unused functions {unused:?}");
+        let ep = v.info.get_entry_point(0);
+        for (h, g) in v.module.global_variables.iter() {
+            assert!(!ep[h].is_empty(), "{features:?}: unused global {:?}", g.name);
+        }
+        v.module
+    }
+
+    /// A random feature set respecting the invariants `FeatureSet::of` guarantees.
+    fn random_features(rng: &mut Pcg32, renderer: RendererKind, environment: EnvKind) -> FeatureSet {
+        let mut b = || rng.next_u32() % 2 == 0;
+        let mut f = FeatureSet {
+            sphere: b(),
+            plane: b(),
+            cube: b(),
+            cylinder: b(),
+            csg: b(),
+            pigment_uniform: b(),
+            pigment_checkered: b(),
+            pigment_image: b(),
+            diffuse: b(),
+            specular: b(),
+            dielectric: b(),
+            point_lights: b(),
+            area_lights: b(),
+            nee: b(),
+            renderer,
+            environment,
+            ..FeatureSet::default()
+        };
+        f.bvh = f.csg || f.sphere || f.cube || f.cylinder;
+        if f.csg {
+            f.csg_max_intervals = 1 + rng.next_u32() % 6;
+            f.csg_max_depth = 1 + rng.next_u32() % 3;
+        }
+        if renderer == RendererKind::PointLight && !f.point_lights || renderer == RendererKind::OnOff {
+            f.pigment_uniform = false;
+            f.pigment_checkered = false;
+            f.pigment_image = false;
+        }
+        if renderer == RendererKind::OnOff {
+            f.environment = EnvKind::Background;
+        }
+        if !matches!(renderer, RendererKind::PathTracer | RendererKind::PointLight) {
+            (f.diffuse, f.specular, f.dielectric, f.point_lights) = (false, false, false, false);
+        }
+        if renderer == RendererKind::PointLight {
+            (f.specular, f.dielectric) = (false, false);
+        }
+        f.nee = f.nee && f.diffuse && renderer == RendererKind::PathTracer;
+        f.area_lights = f.area_lights && f.nee;
+        f
+    }
+
+    #[test]
+    fn a_covering_set_of_feature_sets_assembles_to_minimal_valid_wgsl() {
+        let mut rng = Pcg32::new(3, 5);
+        let mut count = 0;
+        for renderer in [RendererKind::OnOff, RendererKind::Flat, RendererKind::PointLight, RendererKind::PathTracer] {
+            for environment in [EnvKind::Background, EnvKind::Uniform, EnvKind::Gradient, EnvKind::Image] {
+                // Everything on, nothing on, and random subsets.
+                let mut all = random_features(&mut rng, renderer, environment);
+                (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) =
+                    (true, true, true, true, true, true);
+                all.csg_max_intervals = 4;
+                all.csg_max_depth = 3;
+                let none = random_features(&mut Pcg32::new(0, 0), renderer, environment);
+                let none = FeatureSet { renderer, environment: none.environment, ..FeatureSet::default() };
+                assert_minimal(&none);
+                assert_minimal(&all);
+                for _ in 0..6 {
+                    assert_minimal(&random_features(&mut rng, renderer, environment));
+                    count += 1;
+                }
+            }
+        }
+        assert_eq!(count, 96);
+    }
+
+    #[test]
+    fn a_spheres_only_kernel_has_no_csg_cylinder_texture_or_dielectric_code() {
+        let mut b = crate::scene::SceneBuilder::new(4, 4);
+        let m = b.diffuse(crate::color::Color::gray(0.5));
+        b.sphere(crate::scene::Transform::IDENTITY, m);
+        let scene = b.build().unwrap();
+        let features = FeatureSet::of(&scene);
+        let module = assert_minimal(&features);
+        let names = function_names(&module);
+        assert!(names.contains("sphere_span") && names.contains("radiance_path"), "{names:?}");
+        for bad in ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"]
+        {
+            assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in {names:?}");
+        }
+        let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
+        for bad in ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool"] {
+            assert!(!globals.iter().any(|g| g == bad), "{bad} bound: {globals:?}");
+        }
     }
 }

@@ -77,15 +77,10 @@ impl Default for PathTracerSettings {
 }
 
 /// How camera samples are placed in each pixel.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Tracer {
     /// s > 0: s×s jittered (stratified) samples; 0: one ray through the pixel centre.
     pub samples_per_side: u32,
     pub rng: PcgSeed,
 }
 
-impl Default for Tracer {
-    fn default() -> Self {
-        Self { samples_per_side: 0, rng: PcgSeed::default() }
-    }
-}

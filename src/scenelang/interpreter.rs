@@ -500,7 +500,7 @@ impl<'a> Interp<'a> {
                         let v = DVec3::new(a.num(0, 0.0), a.num(1, 0.0), a.num(2, 0.0));
                         Value::Transformation(self.checked(Ok(Transform::translation(v)), t.span)?)
                     }
-                    Command::Rotate => self.rotate(t.span)?,
+                    Command::Rotate => self.rotate()?,
                     Command::Unite => self.csg(CsgOp::Unite)?,
                     Command::Intersect => self.csg(CsgOp::Intersect)?,
                     Command::Diff => self.csg(CsgOp::Diff)?,
@@ -531,7 +531,7 @@ impl<'a> Interp<'a> {
             }
             Tok::Type(ty) => {
                 self.lx.next()?;
-                self.constructor(ty, t.span)?
+                self.constructor(ty)?
             }
             other => return Err(self
                 .err(t.span, ErrorKind::Syntax, format!("expected a value, found {}", other.describe()))
@@ -759,7 +759,7 @@ impl<'a> Interp<'a> {
 
     /// `ROTATE(.X a * .Z b ...)` = the product Rx(a)·Rz(b)·…, written left to right exactly as
     /// `ROTATE(.X a) * ROTATE(.Z b)` would be: the rightmost rotation acts on points first.
-    fn rotate(&mut self, span: Span) -> Res<Value> {
+    fn rotate(&mut self) -> Res<Value> {
         self.expect_sym('(', "after ROTATE")?;
         let mut t = Transform::IDENTITY;
         loop {
@@ -796,7 +796,6 @@ impl<'a> Interp<'a> {
                 }
             }
         }
-        let _ = span;
         Ok(Value::Transformation(t))
     }
 
@@ -891,7 +890,7 @@ impl<'a> Interp<'a> {
         }
     }
 
-    fn constructor(&mut self, ty: TypeName, span: Span) -> Res<Value> {
+    fn constructor(&mut self, ty: TypeName) -> Res<Value> {
         use Ty as T;
         Ok(match ty {
             TypeName::Color => {
@@ -922,7 +921,7 @@ impl<'a> Interp<'a> {
                 };
                 Value::Transformation(self.checked(Transform::from_rows(rows), *ls)?)
             }
-            TypeName::Image => self.image_constructor(span)?,
+            TypeName::Image => self.image_constructor()?,
             TypeName::Pigment => {
                 let kind = self.subtype(ty, &["Uniform", "Checkered", "Image"])?;
                 Value::Pigment(match kind {
@@ -952,7 +951,7 @@ impl<'a> Interp<'a> {
                             },
                             Some(_) => ImageFilter::Nearest,
                         };
-                        Pigment::Image { image: self.pixels(a.take(0), span)?, filter }
+                        Pigment::Image { image: self.pixels(a.take(0))?, filter }
                     }
                 })
             }
@@ -1126,7 +1125,7 @@ impl<'a> Interp<'a> {
                         )?;
                         let intensity = self.positive(&a, 1, "intensity", 1.0, true)?;
                         let rotation_deg = a.num(2, 0.0);
-                        Environment::Image { image: self.pixels(a.take(0), span)?, intensity, rotation_deg }
+                        Environment::Image { image: self.pixels(a.take(0))?, intensity, rotation_deg }
                     }
                 })
             }
@@ -1134,7 +1133,7 @@ impl<'a> Interp<'a> {
     }
 
     /// The pixels of an image argument (`Image(1, 1)`, i.e. one black pixel, when absent).
-    fn pixels(&self, arg: Option<(Value, Span)>, span: Span) -> Res<Arc<HdrImage>> {
+    fn pixels(&self, arg: Option<(Value, Span)>) -> Res<Arc<HdrImage>> {
         match arg {
             Some((Value::Image(ImageValue::Loaded(img)), _)) => Ok(img),
             Some((Value::Image(ImageValue::Blank { width, height }), s)) => {
@@ -1149,15 +1148,12 @@ impl<'a> Interp<'a> {
                 }
                 Ok(Arc::new(HdrImage::new(width as usize, height as usize)))
             }
-            _ => {
-                let _ = span;
-                Ok(Arc::new(HdrImage::new(1, 1)))
-            }
+            _ => Ok(Arc::new(HdrImage::new(1, 1))),
         }
     }
 
     /// `Image(width, height)` (black) or `Image("file")`.
-    fn image_constructor(&mut self, span: Span) -> Res<Value> {
+    fn image_constructor(&mut self) -> Res<Value> {
         self.expect_sym('(', "after Image")?;
         let (first, fs) = self.value()?;
         match first {
@@ -1183,7 +1179,6 @@ impl<'a> Interp<'a> {
                 };
                 let width = side(w, fs, "width")?;
                 let height = side(h, hs, "height")?;
-                let _ = span;
                 Ok(Value::Image(ImageValue::Blank { width, height }))
             }
             other => Err(self

@@ -86,7 +86,8 @@ pub fn surface(kind: ShapeKind, p: DVec3, face: u8) -> SurfacePoint {
 /// `atan2(y, x)/2π` wrapped to [0, 1).
 pub(crate) fn turns(y: f64, x: f64) -> f64 {
     let u = y.atan2(x) / std::f64::consts::TAU;
-    let u = if u < 0.0 { u + 1.0 } else { u };
+    // `abs` turns atan2's −0 (y = −0) into +0.
+    let u = if u < 0.0 { u + 1.0 } else { u.abs() };
     if u >= 1.0 {
         0.0
     } else {

@@ -32,6 +32,7 @@ mod tests {
         assert_eq!(surface(-DVec3::Z).uv.y, 1.0);
         let s = surface(DVec3::new(1.0, -1e-300, 0.0));
         assert!(s.uv.x < 1.0 && s.uv.x >= 0.0);
+        assert!(surface(DVec3::new(1.0, -0.0, 0.0)).uv.x.is_sign_positive());
     }
 
     #[test]
