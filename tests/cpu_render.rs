@@ -147,6 +147,24 @@ fn glass_sphere_under_uniform_sky_conserves_energy() {
     }
 }
 
+#[test]
+fn tinted_mirror_under_uniform_sky_shows_tint_times_sky() {
+    // Every path reflects once off the convex mirror and escapes: exactly tint·L, with or
+    // without NEE (after a delta bounce the escape has full weight).
+    let tint = Color::new(0.9, 0.6, 0.3);
+    for nee in [false, true] {
+        let brdf = Brdf::Specular { pigment: Pigment::Uniform(tint), threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD };
+        let (scene, mask) = object_under_sky(brdf, 2.0, pt(2, 4, 100, nee));
+        let img = run(&scene, None).image;
+        for row in 0..24 {
+            for col in 0..24 {
+                let e = if mask.get(col, row).g > 0.5 { tint * 2.0 } else { Color::gray(2.0) };
+                assert!(px(&img, col, row).approx_eq(e, 1e-6), "({col},{row})");
+            }
+        }
+    }
+}
+
 /// A diffuse floor (z = 0) seen from a camera at height 3 looking straight down, lit by a
 /// point light of intensity I (linear_radius 1: falloff 1/d²).
 fn lit_floor(rho: Color, light: DVec3, intensity: Color, renderer: Renderer) -> Scene {
@@ -219,18 +237,27 @@ fn point_light_renderer_adds_ambient_and_respects_shadows() {
 
 #[test]
 fn nee_on_and_off_converge_to_the_same_image() {
-    // Floor, a diffuse ball, a spherical lamp and an emissive stretched cube, under a dim
-    // gradient sky: every light kind NEE handles. Camera rays through pixel centres, so
-    // the two seeds differ only in the paths and their difference measures path variance.
+    // Floor, a diffuse ball, a spherical lamp (cone sampling), an ellipsoidal one (area
+    // sampling) and an emissive stretched cube (checkered, so sampled points must read the
+    // right uv), under a dim gradient sky: every light kind NEE handles. Camera rays go
+    // through pixel centres, so the two seeds differ only in the paths and their
+    // difference measures path variance.
     let scene = |nee: bool, seed: u64| {
         let mut b = SceneBuilder::new(16, 12);
         let floor = b.diffuse(Color::new(0.7, 0.6, 0.5));
         let ball = b.diffuse(Color::new(0.3, 0.8, 0.4));
         let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::gray(6.0))));
-        let panel = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::new(2.0, 1.0, 0.5))));
+        let panel = b.material(Material::new(
+            Brdf::default(),
+            Pigment::Checkered { n: 3, on: Color::new(2.0, 1.5, 0.5), off: Color::new(0.5, 0.3, 2.0) },
+        ));
         b.plane(Transform::IDENTITY, floor)
             .sphere(Transform::translation(DVec3::new(4.0, 0.5, 0.6)) * Transform::scaling(DVec3::splat(0.6)), ball)
             .sphere(Transform::translation(DVec3::new(3.0, -1.0, 2.2)) * Transform::scaling(DVec3::splat(0.4)), lamp)
+            .sphere(
+                Transform::translation(DVec3::new(5.0, -2.0, 0.6)) * Transform::scaling(DVec3::new(0.3, 0.6, 0.3)),
+                lamp,
+            )
             .cube(
                 Transform::translation(DVec3::new(5.5, 1.5, 1.0)) * Transform::scaling(DVec3::new(0.3, 1.0, 2.0)),
                 panel,
@@ -249,53 +276,40 @@ fn nee_on_and_off_converge_to_the_same_image() {
             .renderer(pt(512, 3, 2, nee));
         b.build().unwrap()
     };
-    let imgs: Vec<HdrImage> = [(true, 1), (true, 2), (false, 1), (false, 2)]
-        .iter()
-        .map(|&(nee, s)| run(&scene(nee, s), None).image)
-        .collect();
-    // Per-pixel variance of each estimator from its two independent renders.
-    let n = imgs[0].pixels().len() as f64;
-    let var = |a: &HdrImage, b: &HdrImage| {
-        a.pixels().iter().zip(b.pixels()).map(|(x, y)| f64::from(x.g - y.g).powi(2) / 2.0).sum::<f64>() / n
-    };
-    let mean = |a: &HdrImage| a.pixels().iter().map(|p| f64::from(p.g)).sum::<f64>() / n;
-    let (v_on, v_off) = (var(&imgs[0], &imgs[1]), var(&imgs[2], &imgs[3]));
-    // Image means (each over both seeds): difference has variance (v_on + v_off) / (2n).
-    let m_on = (mean(&imgs[0]) + mean(&imgs[1])) / 2.0;
-    let m_off = (mean(&imgs[2]) + mean(&imgs[3])) / 2.0;
-    let se = ((v_on + v_off) / (2.0 * n)).sqrt();
-    eprintln!("NEE {m_on} vs BSDF-only {m_off} ± {se}; pixel variances {v_on} vs {v_off}");
-    assert!(se < 0.01 * m_on, "test too weak: se {se} mean {m_on}");
-    assert!((m_on - m_off).abs() < 5.0 * se, "NEE {m_on} vs no NEE {m_off} (se {se})");
-    // Blocks of 4×4 pixels: each block's difference within 5 standard errors.
-    for by in 0..3 {
-        for bx in 0..4 {
-            let block = |img: &HdrImage| {
-                let mut s = 0.0;
-                for r in 0..4 {
-                    for c in 0..4 {
-                        s += f64::from(img.get(bx * 4 + c, by * 4 + r).g);
-                    }
-                }
-                s / 16.0
-            };
-            let on = (block(&imgs[0]) + block(&imgs[1])) / 2.0;
-            let off = (block(&imgs[2]) + block(&imgs[3])) / 2.0;
-            // Block-local variance estimated the same way.
-            let mut v = 0.0;
-            for (a, b) in [(0, 1), (2, 3)] {
-                for r in 0..4 {
-                    for c in 0..4 {
-                        let (x, y) = (bx * 4 + c, by * 4 + r);
-                        v += f64::from(imgs[a].get(x, y).g - imgs[b].get(x, y).g).powi(2) / 2.0;
-                    }
-                }
-            }
-            let se_block = (v / 16.0 / (2.0 * 16.0)).sqrt().max(1e-6 * on.abs());
-            assert!((on - off).abs() < 5.5 * se_block, "block ({bx},{by}): {on} vs {off} (se {se_block})");
+    let (v_on, v_off) = assert_nee_agrees(scene);
+    // NEE must actually reduce the variance on this scene.
+    assert!(v_on < v_off, "NEE variance {v_on} vs BSDF-only {v_off}");
+}
+
+#[test]
+fn nee_on_and_off_agree_under_an_image_environment() {
+    // A diffuse ball on a floor under a dim equirectangular sky with one bright "sun"
+    // texel: the importance-sampled environment is the only light.
+    let mut sky = HdrImage::new(16, 8);
+    for row in 0..8 {
+        for col in 0..16 {
+            sky.set(col, row, lumen::color::Rgb32::new(0.2, 0.25 + 0.02 * col as f32, 0.4 - 0.04 * row as f32));
         }
     }
-    // NEE must actually reduce the variance on this scene.
+    sky.set(5, 2, lumen::color::Rgb32::new(30.0, 28.0, 25.0));
+    let sky = std::sync::Arc::new(sky);
+    let scene = |nee: bool, seed: u64| {
+        let mut b = SceneBuilder::new(16, 12);
+        let floor = b.diffuse(Color::gray(0.5));
+        let ball = b.diffuse(Color::new(0.8, 0.3, 0.3));
+        b.plane(Transform::IDENTITY, floor)
+            .sphere(Transform::translation(DVec3::new(4.0, 0.0, 0.8)) * Transform::scaling(DVec3::splat(0.8)), ball)
+            .environment(Environment::Image { image: sky.clone(), intensity: 1.0, rotation_deg: 40.0 })
+            .camera(Camera {
+                aspect_ratio: 16.0 / 12.0,
+                transform: Transform::translation(DVec3::new(0.0, 0.0, 1.0)),
+                ..Camera::default()
+            })
+            .tracer(Tracer { samples_per_side: 0, rng: PcgSeed { state: seed, inc: 7 } })
+            .renderer(pt(512, 2, 5, nee));
+        b.build().unwrap()
+    };
+    let (v_on, v_off) = assert_nee_agrees(scene);
     assert!(v_on < v_off, "NEE variance {v_on} vs BSDF-only {v_off}");
 }
 
@@ -368,6 +382,61 @@ fn non_finite_samples_are_counted_and_dropped() {
     assert_eq!(out.stats.non_finite_samples, 4);
     assert_eq!(px(&out.image, 1, 1), Color::BLACK);
     assert_eq!(px(&out.image, 0, 0), Color::gray(0.5));
+}
+
+/// Renders a 16×12 scene with NEE on and off, two seeds each, and checks that the two
+/// estimators agree: over the image mean and on each 4×4 block, within 5 (5.5 for the 12
+/// blocks) standard errors estimated from the seed-to-seed differences. Returns the mean
+/// per-pixel variances (NEE, BSDF only).
+fn assert_nee_agrees(scene: impl Fn(bool, u64) -> Scene) -> (f64, f64) {
+    let imgs: Vec<HdrImage> = [(true, 1), (true, 2), (false, 1), (false, 2)]
+        .iter()
+        .map(|&(nee, s)| run(&scene(nee, s), None).image)
+        .collect();
+    assert_eq!((imgs[0].width(), imgs[0].height()), (16, 12));
+    // Per-pixel variance of each estimator from its two independent renders.
+    let n = imgs[0].pixels().len() as f64;
+    let var = |a: &HdrImage, b: &HdrImage| {
+        a.pixels().iter().zip(b.pixels()).map(|(x, y)| f64::from(x.g - y.g).powi(2) / 2.0).sum::<f64>() / n
+    };
+    let mean = |a: &HdrImage| a.pixels().iter().map(|p| f64::from(p.g)).sum::<f64>() / n;
+    let (v_on, v_off) = (var(&imgs[0], &imgs[1]), var(&imgs[2], &imgs[3]));
+    // Image means (each over both seeds): difference has variance (v_on + v_off) / (2n).
+    let m_on = (mean(&imgs[0]) + mean(&imgs[1])) / 2.0;
+    let m_off = (mean(&imgs[2]) + mean(&imgs[3])) / 2.0;
+    let se = ((v_on + v_off) / (2.0 * n)).sqrt();
+    eprintln!("NEE {m_on} vs BSDF-only {m_off} ± {se}; pixel variances {v_on} vs {v_off}");
+    assert!(se < 0.01 * m_on, "test too weak: se {se} mean {m_on}");
+    assert!((m_on - m_off).abs() < 5.0 * se, "NEE {m_on} vs no NEE {m_off} (se {se})");
+    // Blocks of 4×4 pixels: each block's difference within 5 standard errors.
+    for by in 0..3 {
+        for bx in 0..4 {
+            let block = |img: &HdrImage| {
+                let mut s = 0.0;
+                for r in 0..4 {
+                    for c in 0..4 {
+                        s += f64::from(img.get(bx * 4 + c, by * 4 + r).g);
+                    }
+                }
+                s / 16.0
+            };
+            let on = (block(&imgs[0]) + block(&imgs[1])) / 2.0;
+            let off = (block(&imgs[2]) + block(&imgs[3])) / 2.0;
+            // Block-local variance estimated the same way.
+            let mut v = 0.0;
+            for (a, b) in [(0, 1), (2, 3)] {
+                for r in 0..4 {
+                    for c in 0..4 {
+                        let (x, y) = (bx * 4 + c, by * 4 + r);
+                        v += f64::from(imgs[a].get(x, y).g - imgs[b].get(x, y).g).powi(2) / 2.0;
+                    }
+                }
+            }
+            let se_block = (v / 16.0 / (2.0 * 16.0)).sqrt().max(1e-6 * on.abs());
+            assert!((on - off).abs() < 5.5 * se_block, "block ({bx},{by}): {on} vs {off} (se {se_block})");
+        }
+    }
+    (v_on, v_off)
 }
 
 /// `lumen render` end to end on a tiny script.

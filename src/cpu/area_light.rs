@@ -212,6 +212,8 @@ mod tests {
     use crate::sampling::Pcg32;
     use crate::scene::{Material, SceneBuilder};
 
+    use crate::color::Color;
+
     fn scene_with(kind: ShapeKind, t: Transform) -> Scene {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.material(Material::new(
@@ -302,6 +304,38 @@ mod tests {
         let omega = 4.0 * (a * b / (2.0 * h * (4.0 * h * h + a * a + b * b).sqrt())).atan();
         let est = solid_angle_estimate(&light, x, false, 400_000);
         assert!((est / omega - 1.0).abs() < 0.02, "{est} vs {omega}");
+    }
+
+    #[test]
+    fn sampled_emission_matches_what_a_ray_sees_there() {
+        // Checkered emitters: the colour at a sampled point must be the one a ray hitting
+        // that point reads through the hit's uv (face numbering and uv agree).
+        let mut b = SceneBuilder::new(4, 4);
+        let check = Pigment::Checkered { n: 3, on: Color::new(1.0, 2.0, 3.0), off: Color::new(0.5, 0.0, 0.0) };
+        let m = b.material(Material::new(crate::scene::Brdf::default(), check));
+        b.cube(Transform::rotation_z(20.0) * Transform::scaling(DVec3::new(1.0, 2.0, 0.5)), m)
+            .sphere(Transform::translation(DVec3::new(0.0, 0.0, 3.0)) * Transform::rotation_x(30.0), m);
+        let scene = b.build().unwrap();
+        let world = super::super::World::new(&scene);
+        let x = DVec3::new(2.5, -1.5, 1.5);
+        let mut rng = Pcg32::new(21, 22);
+        let mut checked = 0;
+        for shape in 0..2 {
+            let light = AreaLight::new(&scene, shape).unwrap();
+            for _ in 0..2000 {
+                let s = light.sample(x, u32::MAX, rng.next_f64(), rng.next_f64());
+                let ray = super::super::Ray::new(x, s.point - x, 0.0, 1.0 + 1e-9);
+                let Some(hit) = world.intersect(&ray) else { continue };
+                if (hit.point - s.point).length() > 1e-9 {
+                    continue; // the sample is hidden behind the shape's near side
+                }
+                assert_eq!(hit.shape as usize, shape);
+                let seen = scene.material(hit.material).emitted.color_at(hit.uv.x, hit.uv.y);
+                assert_eq!(light.emission(&scene, &s), seen, "at {}", s.point);
+                checked += 1;
+            }
+        }
+        assert!(checked > 1000, "{checked}");
     }
 
     #[test]

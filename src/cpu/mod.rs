@@ -1,4 +1,12 @@
 //! The f64 CPU reference renderer (and the fallback when no GPU exists).
+//!
+//! Geometry: [`World`] (closest hit and occlusion over the BVH), shapes, CSG, robust
+//! offsets, ONB. Shading, one concept per file, each mirrored by a WGSL file: [`warp`]
+//! (square → directions), [`fresnel`], [`bsdf`], [`area_light`], [`env_light`], [`lights`]
+//! (what NEE chooses from), [`point_lights`], [`vertex_draws`] (the 7 uniforms per vertex),
+//! [`pixel_samples`] (camera sample placement), [`simple_renderers`] (OnOff, Flat,
+//! PointLight), [`path_tracer`], and [`render()`] (tiles on rayon). DESIGN.md states the
+//! rules they follow.
 
 pub mod csg;
 mod hit;

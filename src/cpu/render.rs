@@ -145,6 +145,7 @@ fn render_tile(ctx: &Context, layout: PixelSamples, x0: u32, y0: u32) -> (Vec<Rg
 }
 
 /// Mean radiance of pixel (col, row); non-finite samples count as 0 and are tallied.
+/// Sample indices j·n + i are taken modulo 2³² (the stream rule's u32).
 pub fn render_pixel(
     ctx: &Context,
     layout: PixelSamples,
@@ -157,7 +158,10 @@ pub fn render_pixel(
     let pixel = row * scene.width + col;
     let paths = paths_per_sample(scene) as u32;
     let mut sum = Color::BLACK;
-    for j in 0..layout.count() as u32 {
+    // Stream indices are u32 as on the GPU: counts whose sample indices j·n + i would wrap
+    // are refused by the CLI.
+    for j in 0..layout.count() {
+        let j = j as u32;
         let (upx, vpx) = layout.position(scene.tracer.rng, pixel, j);
         let u = (f64::from(col) + upx) / f64::from(scene.width);
         let v = 1.0 - (f64::from(row) + vpx) / f64::from(scene.height);
