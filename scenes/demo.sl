@@ -34,7 +34,7 @@ SPAWN
 
 USING
     Camera.Perspective(.aspect_ratio $16/9$, .screen_distance 1.5,
-                       .transformation TRANSLATE(.X -3, .Z 1.6) * ROTATE(.Y 12))
+                       .transformation TRANSLATE(.X -1.5, .Z 1.3) * ROTATE(.Y 10))
     Image(640, 360)
     Renderer.PathTracer(.n 1, .max_depth 5, .roulette_depth 3)
     Tracer(.samples_per_side 4)

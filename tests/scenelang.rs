@@ -664,3 +664,31 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     let deep_math = format!("SET a ${}1{}$", "(".repeat(100_000), ")".repeat(100_000));
     assert_eq!(err(&deep_math).kind, ErrorKind::TooDeep);
 }
+
+#[test]
+fn huge_images_are_sizes_not_allocations() {
+    let s = load("USING Image() Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
+    assert_eq!((s.width, s.height), (1, 1));
+    let s = load("USING Image(32768, 32768) Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
+    assert_eq!((s.width, s.height), (32768, 32768));
+    check_err("USING Image(32769, 1)", ErrorKind::BadImageSize, 1, 13, "from 1 to 32768");
+}
+
+#[test]
+fn dump_shows_images_by_size_and_values_in_scenelang_syntax() {
+    let mut out = Vec::new();
+    let src = format!(
+        "SET m Material(Brdf.Specular(Pigment.Image(Image(64, 32))), Pigment.Checkered(3, <1, 0, 0>))
+         SPAWN UNITE(Shape.Cube(m), Shape.Sphere(), .transformation SCALE 2)
+         DUMP m DUMP.world{SETTINGS}USING Environment.Image(Image(8, 4)) DUMP.environment"
+    );
+    load_str_with_output(&src, "t.sl", Path::new("."), &LoadOptions::default(), &mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    let m = "Material(Brdf.Specular(Pigment.Image(<64×32 image>, .filter Nearest), 0.0017453294), \
+             Pigment.Checkered(3, <1, 0, 0>, <0, 0, 0>))";
+    assert!(text.contains(&format!("m = {m}")), "{text}");
+    assert!(text.contains("UNITE Transformation([2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1])"), "{text}");
+    assert!(text.contains("    Cube material #0") && text.contains(&format!("#0 {m}")), "{text}");
+    assert!(text.contains("environment: Environment.Image(8×4 pixels, .intensity 1, .rotation 0)"), "{text}");
+    assert!(text.len() < 2000, "DUMP must not print pixels:\n{text}");
+}

@@ -24,7 +24,8 @@ pub struct CheckArgs {
 /// Loads the scene and prints its summary; the error is the full diagnostic.
 pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     let opts = LoadOptions { time: args.time, vars: args.vars };
-    let scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("{e}"))?;
+    // The diagnostic starts its own line, so that `file:line:col:` is where editors look.
+    let scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("the scene does not load\n{e}"))?;
     println!("{}: ok", args.scene.display());
     println!("{}", SceneSummary::of(&scene));
     Ok(())

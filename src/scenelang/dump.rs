@@ -5,7 +5,7 @@ use std::fmt::Write;
 use super::interpreter::{Vars, World};
 use super::value::{ImageValue, ShapeValue, Value};
 use crate::color::Color;
-use crate::scene::{Shape, Transform};
+use crate::scene::{Brdf, Material, Pigment, Shape, Transform};
 
 /// The sections `DUMP.section` accepts.
 pub const SECTIONS: [&str; 9] =
@@ -20,7 +20,32 @@ fn transform(t: &Transform) -> String {
     format!("Transformation([{}])", m.map(|v| v.to_string()).join(", "))
 }
 
-/// A one-value description (Debug for the composite model types).
+/// A pigment in SceneLang syntax (images by size: their pixels would flood the output).
+fn pigment(p: &Pigment) -> String {
+    match p {
+        Pigment::Uniform(c) => format!("Pigment.Uniform({})", color(c)),
+        Pigment::Checkered { n, on, off } => format!("Pigment.Checkered({n}, {}, {})", color(on), color(off)),
+        Pigment::Image { image, filter } => {
+            format!("Pigment.Image(<{}×{} image>, .filter {filter:?})", image.width(), image.height())
+        }
+    }
+}
+
+fn brdf(b: &Brdf) -> String {
+    match b {
+        Brdf::Diffuse { pigment: p } => format!("Brdf.Diffuse({})", pigment(p)),
+        Brdf::Specular { pigment: p, threshold_angle_rad } => {
+            format!("Brdf.Specular({}, {threshold_angle_rad})", pigment(p))
+        }
+        Brdf::Dielectric { pigment: p, ior } => format!("Brdf.Dielectric({}, {ior})", pigment(p)),
+    }
+}
+
+fn material(m: &Material) -> String {
+    format!("Material({}, {})", brdf(&m.brdf), pigment(&m.emitted))
+}
+
+/// A one-value description, in SceneLang syntax where it has one.
 pub fn describe(v: &Value) -> String {
     match v {
         Value::Number(n) => n.to_string(),
@@ -32,9 +57,9 @@ pub fn describe(v: &Value) -> String {
         Value::Image(ImageValue::Blank { width, height }) => format!("Image({width}, {height})"),
         Value::Image(ImageValue::Loaded(i)) => format!("Image({}×{} pixels, loaded)", i.width(), i.height()),
         Value::Shape(s) => shape_value(s),
-        Value::Pigment(p) => format!("{p:?}"),
-        Value::Brdf(b) => format!("{b:?}"),
-        Value::Material(m) => format!("{m:?}"),
+        Value::Pigment(p) => pigment(p),
+        Value::Brdf(b) => brdf(b),
+        Value::Material(m) => material(m),
         Value::Light(l) => format!("{l:?}"),
         Value::Pcg(p) => format!("Pcg(.state {}, .inc {})", p.state, p.inc),
         Value::Camera(c) => format!("{c:?}"),
@@ -53,8 +78,8 @@ pub fn describe(v: &Value) -> String {
 
 fn shape_value(s: &ShapeValue) -> String {
     match s {
-        ShapeValue::Primitive { kind, transform: t, material } => {
-            format!("Shape.{:?}(.material {material:?}, .transformation {})", kind, transform(t))
+        ShapeValue::Primitive { kind, transform: t, material: m } => {
+            format!("Shape.{kind:?}(.material {}, .transformation {})", material(m), transform(t))
         }
         ShapeValue::Csg { op, children, transform: t } => format!(
             "{}({}, .transformation {})",
@@ -105,7 +130,7 @@ pub fn section(name: &str, vars: &Vars, world: &World) -> Option<String> {
             }
             let _ = writeln!(out, "materials ({}):", settings.materials.len());
             for (i, m) in settings.materials.iter().enumerate() {
-                let _ = writeln!(out, "  #{i} {m:?}");
+                let _ = writeln!(out, "  #{i} {}", material(m));
             }
         }
         "lights" => {

@@ -215,7 +215,8 @@ pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str
     candidates
         .into_iter()
         .map(|c| (edit_distance(&lw, &c.to_lowercase()), c))
-        .filter(|(d, c)| *d <= (c.len() / 3).max(1))
+        // Short names only match up to case (`.x` → `.X`, but not `.X` → `.R`).
+        .filter(|(d, c)| if c.len() < 3 { *d == 0 } else { *d <= (c.len() / 3).max(1) })
         .min_by_key(|(d, _)| *d)
         .map(|(_, c)| c)
 }
@@ -247,5 +248,7 @@ mod tests {
     fn suggestions() {
         assert_eq!(did_you_mean("Pigmnet", ["Pigment", "Point"]), Some("Pigment"));
         assert_eq!(did_you_mean("zzz", ["Pigment", "Point"]), None);
+        assert_eq!(did_you_mean("X", ["R", "G", "B"]), None);
+        assert_eq!(did_you_mean("x", ["X", "Y", "Z"]), Some("X"));
     }
 }

@@ -28,7 +28,7 @@ type Res<T> = Result<T, SceneLangError>;
 const MAX_DEPTH: usize = 100;
 
 /// Largest blank `Image(w, h)` that may be turned into pixels (as a texture or environment).
-const MAX_BLANK_TEXTURE_PIXELS: u64 = 1 << 24;
+const MAX_BLANK_TEXTURE_PIXELS: u64 = 1 << 22;
 
 /// A defined name.
 #[derive(Debug, Clone)]
@@ -400,9 +400,9 @@ impl<'a> Interp<'a> {
                     )))
             }
         };
-        self.out
-            .write_all(text.as_bytes())
-            .map_err(|e| self.err(t.span, ErrorKind::Io, format!("cannot write DUMP output: {e}")))
+        self.out.write_all(text.as_bytes()).map_err(|e| {
+            self.err(t.span, ErrorKind::Io, format!("cannot write DUMP output: {e}")).with_expected("a writable output")
+        })
     }
 
     // ----------------------------------------------------------------- values
@@ -446,7 +446,9 @@ impl<'a> Interp<'a> {
         let t = self.peek()?;
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(self.err(t.span, ErrorKind::TooDeep, format!("values nested deeper than {MAX_DEPTH} levels")));
+            return Err(self
+                .err(t.span, ErrorKind::TooDeep, format!("values nested deeper than {MAX_DEPTH} levels"))
+                .with_expected("a flatter script (SET intermediate values)"));
         }
         let r = self.value_inner(t);
         self.depth -= 1;
@@ -1152,9 +1154,14 @@ impl<'a> Interp<'a> {
         }
     }
 
-    /// `Image(width, height)` (black) or `Image("file")`.
+    /// `Image(width, height)` (black), `Image("file")`, or `Image()` (1×1, black).
     fn image_constructor(&mut self) -> Res<Value> {
         self.expect_sym('(', "after Image")?;
+        if self.peek()?.tok == Tok::Sym(')') {
+            // Every argument has a default: `Image()` is one black pixel.
+            self.lx.next()?;
+            return Ok(Value::Image(ImageValue::Blank { width: 1, height: 1 }));
+        }
         let (first, fs) = self.value()?;
         match first {
             Value::Str(path) => {
@@ -1205,7 +1212,9 @@ impl<'a> Interp<'a> {
         match crate::image::read_image(&full) {
             Ok(img) => {
                 if img.width() == 0 || img.height() == 0 {
-                    return Err(self.err(span, ErrorKind::BadImageSize, format!("image {} is empty", full.display())));
+                    return Err(self
+                        .err(span, ErrorKind::BadImageSize, format!("image {} is empty", full.display()))
+                        .with_expected("an image with at least one pixel"));
                 }
                 Ok(ImageValue::Loaded(Arc::new(img)))
             }
@@ -1236,18 +1245,18 @@ impl<'a> Interp<'a> {
                 .err(*image_span, ErrorKind::BadImageSize, format!("image size {width}×{height} cannot be rendered"))
                 .with_expected(format!("each side from 1 to {MAX_IMAGE_SIDE}")));
         }
-        let mut scene = self
-            .world
-            .builder
-            .build()
-            .map_err(|e| self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")))?;
+        let mut scene = self.world.builder.build().map_err(|e| {
+            self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")).with_expected("a valid scene")
+        })?;
         scene.width = width;
         scene.height = height;
         scene.camera = camera;
         scene.renderer = renderer.clone();
         scene.tracer = tracer;
         scene.environment = self.world.environment.as_ref().map(|(e, _)| e.clone());
-        scene.validate().map_err(|e| self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")))?;
+        scene.validate().map_err(|e| {
+            self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")).with_expected("a valid scene")
+        })?;
         Ok(scene)
     }
 

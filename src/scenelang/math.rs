@@ -160,11 +160,15 @@ fn tokenize(text: &str, offset: usize) -> Result<Vec<Tok>, MathError> {
                 }
             }
             let span = Span::new(offset + start, i - start);
-            let v: f64 = text[start..i].parse().map_err(|_| {
-                err(span, ErrorKind::BadNumber, format!("bad number `{}` in math expression", &text[start..i]))
+            let v: f64 = text[start..i].parse().map_err(|_| MathError {
+                expected: Some("a number such as `1`, `1.5` or `2e-3`".into()),
+                ..err(span, ErrorKind::BadNumber, format!("bad number `{}` in math expression", &text[start..i]))
             })?;
             if !v.is_finite() {
-                return Err(err(span, ErrorKind::BadNumber, format!("number `{}` is out of range", &text[start..i])));
+                return Err(MathError {
+                    expected: Some("a finite number (magnitude below about 1.8e308)".into()),
+                    ..err(span, ErrorKind::BadNumber, format!("number `{}` is out of range", &text[start..i]))
+                });
             }
             out.push(Tok { t: M::Num(v), span });
         } else if c.is_alphabetic() || c == '_' {
@@ -229,11 +233,10 @@ impl Parser<'_> {
     fn enter(&mut self, span: Span) -> Result<(), MathError> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(err(
-                span,
-                ErrorKind::TooDeep,
-                format!("math expression nested deeper than {MAX_DEPTH} levels"),
-            ));
+            return Err(MathError {
+                expected: Some("a flatter expression (SET intermediate values)".into()),
+                ..err(span, ErrorKind::TooDeep, format!("math expression nested deeper than {MAX_DEPTH} levels"))
+            });
         }
         Ok(())
     }

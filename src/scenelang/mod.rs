@@ -39,7 +39,9 @@
 //! - `--vars` names win over the script: the script's `SET` of such a name is parsed (so its
 //!   errors are still reported) and then ignored;
 //! - `DUMP name` prints one variable, and `DUMP.environment` the environment;
-//! - `SET a b` copies the value of `b`.
+//! - `SET a b` copies the value of `b`; `Image()` is one black pixel;
+//! - a blank `Image(w, h)` is only a size until used as a texture, so `USING Image(...)`
+//!   never allocates pixels.
 
 mod dump;
 mod error;

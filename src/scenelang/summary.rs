@@ -170,3 +170,49 @@ impl fmt::Display for SceneSummary {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::color::Color;
+    use crate::scene::{CsgOp, Material, Pigment, SceneBuilder, Transform};
+
+    #[test]
+    fn counts_and_bounds_of_a_built_scene() {
+        let mut b = SceneBuilder::new(8, 4);
+        let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::WHITE)));
+        let glass = b.material(Material::new(
+            Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5 },
+            Pigment::Uniform(Color::BLACK),
+        ));
+        let t = |x: f64| Transform::translation(DVec3::new(x, 0.0, 0.0));
+        b.sphere(t(2.0), lamp).cube(t(-3.0), lamp).plane(Transform::IDENTITY, glass);
+        let inner = Shape::csg(
+            CsgOp::Diff,
+            vec![
+                Shape::primitive(ShapeKind::Cylinder, t(0.0), glass),
+                Shape::primitive(ShapeKind::Sphere, t(0.0), glass),
+            ],
+            Transform::IDENTITY,
+        );
+        b.shape(Shape::csg(CsgOp::Unite, vec![inner, Shape::primitive(ShapeKind::Cube, t(0.0), glass)], t(5.0)));
+        let s = SceneSummary::of(&b.build().unwrap());
+        assert_eq!((s.top_level_shapes, s.primitives), (4, [2, 1, 2, 1]));
+        assert_eq!((s.csg_nodes, s.csg_max_depth, s.area_lights, s.infinite_shapes), (2, 2, 2, 1));
+        assert_eq!((s.materials, s.dielectric_materials, s.emissive_materials), (2, 1, 1));
+        // Sphere at x = 2 (radius 1), cube at x = −3 (half-side 0.5), CSG tree at x = 5.
+        let bounds = s.bounds.unwrap();
+        assert_eq!((bounds.min, bounds.max), (DVec3::new(-3.5, -1.0, -1.0), DVec3::new(5.5, 1.0, 1.0)));
+        assert_eq!(
+            (s.camera_kind, s.aperture_deg, s.width, s.height),
+            ("perspective", Some(2.0 * 1f64.atan2(2.0).to_degrees()), 8, 4)
+        );
+        let text = s.to_string();
+        assert!(
+            text.contains("2 sphere, 1 plane, 2 cube, 1 cylinder") && text.contains("plus 1 infinite shape"),
+            "{text}"
+        );
+    }
+}
