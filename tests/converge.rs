@@ -37,7 +37,20 @@ fn cpu_error_falls_like_one_over_spp() {
     let dir = tempfile::tempdir().unwrap();
     let out = lumen(
         dir.path(),
-        &["--device", "cpu", "--spp", "16,1,4", "--reference-spp", "256", "--width", "16", "--height", "12", "-o", "res"],
+        &[
+            "--device",
+            "cpu",
+            "--spp",
+            "16,1,4",
+            "--reference-spp",
+            "256",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "-o",
+            "res",
+        ],
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
@@ -87,7 +100,10 @@ fn a_given_reference_of_the_wrong_size_is_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("reference") && err.contains("8×6") && err.contains("32×24"), "{err}");
     // The same reference at the matching size is accepted.
-    let out = lumen(dir.path(), &["--device", "cpu", "--spp", "1,4", "--reference", "a/reference.pfm", "-o", "c", "--width", "8"]);
+    let out = lumen(
+        dir.path(),
+        &["--device", "cpu", "--spp", "1,4", "--reference", "a/reference.pfm", "-o", "c", "--width", "8"],
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 

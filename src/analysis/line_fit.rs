@@ -12,7 +12,8 @@ pub struct LineFit {
 
 /// Ordinary least squares over finite points; `None` with fewer than two distinct x.
 pub fn fit_line(xs: &[f64], ys: &[f64]) -> Option<LineFit> {
-    let pts: Vec<(f64, f64)> = xs.iter().zip(ys).map(|(&x, &y)| (x, y)).filter(|(x, y)| x.is_finite() && y.is_finite()).collect();
+    let pts: Vec<(f64, f64)> =
+        xs.iter().zip(ys).map(|(&x, &y)| (x, y)).filter(|(x, y)| x.is_finite() && y.is_finite()).collect();
     let n = pts.len() as f64;
     if pts.len() < 2 {
         return None;

@@ -2,10 +2,11 @@
 //! from it; devices that cannot be opened are skipped with a warning rather than failing a
 //! whole study.
 
+use std::cell::RefCell;
 use std::fmt;
 
 use crate::cpu::{self, paths_per_sample, Progress, RenderOptions};
-use crate::gpu::render::{self as gpu_render, GpuRenderOptions};
+use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
 use crate::gpu::{AdapterChoice, Gpu, GpuError, PassOptions};
 use crate::image::HdrImage;
 use crate::scene::Scene;
@@ -28,18 +29,19 @@ impl fmt::Display for Device {
     }
 }
 
-/// An opened device: the CPU, or a GPU with its open device.
+/// An opened device: the CPU, or a GPU with its open device and a renderer that keeps
+/// compiled kernels, so only the first render of a kind of scene pays for kernel creation.
 #[derive(Debug)]
 pub enum OpenDevice {
     Cpu,
-    Gpu(Box<Gpu>),
+    Gpu { gpu: Box<Gpu>, renderer: RefCell<GpuRenderer> },
 }
 
 impl OpenDevice {
     pub fn kind(&self) -> Device {
         match self {
             OpenDevice::Cpu => Device::Cpu,
-            OpenDevice::Gpu(_) => Device::Gpu,
+            OpenDevice::Gpu { .. } => Device::Gpu,
         }
     }
 
@@ -47,7 +49,7 @@ impl OpenDevice {
     pub fn describe(&self) -> String {
         match self {
             OpenDevice::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
-            OpenDevice::Gpu(g) => format!("gpu ({})", g.adapter_info.name),
+            OpenDevice::Gpu { gpu, .. } => format!("gpu ({})", gpu.adapter_info.name),
         }
     }
 }
@@ -63,7 +65,7 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
         match d {
             Device::Cpu => out.push(OpenDevice::Cpu),
             Device::Gpu => match Gpu::new(adapter) {
-                Ok(g) => out.push(OpenDevice::Gpu(Box::new(g))),
+                Ok(g) => out.push(OpenDevice::Gpu { gpu: Box::new(g), renderer: RefCell::new(GpuRenderer::new()) }),
                 Err(GpuError::NoAdapter) => eprintln!("warning: skipping device gpu: no GPU adapter"),
                 Err(e) => eprintln!("warning: skipping device gpu: {e}"),
             },
@@ -78,7 +80,8 @@ pub struct Measurement {
     pub image: HdrImage,
     /// Camera samples per pixel actually taken.
     pub spp: u32,
-    /// Wall time of the whole render call (the GPU's includes packing and kernel creation).
+    /// Wall time of the whole render call (the GPU's includes packing, and kernel creation
+    /// the first time a kernel is needed).
     pub seconds: f64,
     /// Radiance samples: pixels × spp × paths per sample.
     pub samples: u64,
@@ -111,9 +114,9 @@ pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> 
                 non_finite_samples: out.stats.non_finite_samples,
             })
         }
-        OpenDevice::Gpu(gpu) => {
+        OpenDevice::Gpu { gpu, renderer } => {
             let opts = GpuRenderOptions { spp: Some(spp), passes: PassOptions { progress, ..PassOptions::default() } };
-            let out = gpu_render::render(gpu, scene, &opts)?;
+            let out = renderer.borrow_mut().render(gpu, scene, &opts)?;
             let pixels = u64::from(scene.width) * u64::from(scene.height);
             Ok(Measurement {
                 image: out.image,

@@ -165,7 +165,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     report.push_str(&format!("\nPeak resident memory of the whole run: {}\n", format_bytes(peak_memory_bytes())));
     println!("{report}");
     if let Some(path) = &args.output {
-        crate::image::write_atomically(path, report.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
+        crate::image::write_atomically(path, report.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }
     Ok(())
@@ -201,7 +202,16 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
             Ok(s) => s,
             Err(e) => {
                 eprintln!("warning: skipping {name}: {e}");
-                rows.push(vec![name.clone(), "-".into(), format!("error: {e}"), "".into(), "".into(), "".into(), "".into(), "".into()]);
+                rows.push(vec![
+                    name.clone(),
+                    "-".into(),
+                    format!("error: {e}"),
+                    "".into(),
+                    "".into(),
+                    "".into(),
+                    "".into(),
+                    "".into(),
+                ]);
                 continue;
             }
         };
@@ -228,18 +238,27 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                 Err(e) => {
                     eprintln!("warning: {name} on {}: {e}", d.kind());
                     let msg = format!("error: {e}").replace('\n', " ");
-                    rows.push(vec![name.clone(), d.kind().to_string(), size, msg, "".into(), "".into(), "".into(), "".into()]);
+                    rows.push(vec![
+                        name.clone(),
+                        d.kind().to_string(),
+                        size,
+                        msg,
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                    ]);
                 }
             }
         }
     }
     format!(
-            "### Scenes\n\nEach scene is rendered at 1 spp and at 1 + {} spp; seconds = the second render's wall time, \
+        "### Scenes\n\nEach scene is rendered at 1 spp and at 1 + {} spp; seconds = the second render's wall time, \
              samples/s and rays/s = the extra samples (rays) over the extra time, which leaves out fixed costs (BVH \
              build, packing, kernel creation). Peak memory = VmHWM of the process so far.\n\n{}",
-            plan.spp,
-            markdown_table(&headers, &rows)
-        )
+        plan.spp,
+        markdown_table(&headers, &rows)
+    )
 }
 
 /// Two renders whose difference removes fixed costs (loading the BVH, packing, kernel
@@ -371,9 +390,10 @@ fn kernel_cost(gpu: &Gpu, features: &FeatureSet) -> anyhow::Result<(usize, usize
 }
 
 fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow::Result<String> {
-    let OpenDevice::Gpu(gpu) = device else { bail!("the shader comparison needs a GPU device") };
+    let OpenDevice::Gpu { gpu, .. } = device else { bail!("the shader comparison needs a GPU device") };
     let headers = ["scene", "kernel", "features", "WGSL bytes", "WGSL lines", "pipeline creation", "samples/s"];
-    let mut scenes = vec![("1000 spheres only (generated)".to_string(), spheres_scene(1000, plan.width, plan.width * 3 / 4))];
+    let mut scenes =
+        vec![("1000 spheres only (generated)".to_string(), spheres_scene(1000, plan.width, plan.width * 3 / 4))];
     for file in files {
         match load_scene(file, plan.width) {
             Ok(s) => scenes.push((name_of(file), s)),

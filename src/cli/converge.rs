@@ -118,7 +118,8 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
     if let Some(r) = args.reference_spp {
         check_spp(r, "--reference-spp", None)?;
     }
-    let mut scene = load_file(&args.scene, &LoadOptions { time: 0.0, vars: args.vars.clone() }).map_err(|e| anyhow!("{e}"))?;
+    let mut scene =
+        load_file(&args.scene, &LoadOptions { time: 0.0, vars: args.vars.clone() }).map_err(|e| anyhow!("{e}"))?;
     resize(&mut scene, args.width, args.height)?;
     let max_spp = *spp.last().unwrap_or(&1);
     check_spp(max_spp, "--spp", Some(&scene))?;
@@ -135,8 +136,8 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
     let mut table = ConvergeTable::default();
     let total = devices.len() * spp.len();
     for device in &devices {
-        // One discarded 1-spp render first, so one-off costs (driver start-up, first JIT)
-        // do not land on the first row.
+        // One discarded 1-spp render first, so one-off costs (driver start-up, kernel
+        // creation, which the GPU renderer then caches) do not land on the first row.
         eprintln!("warming up {} ...", device.kind());
         measure(device, &scene, 1, false).map_err(|e| anyhow!("{}: {e}", device.kind()))?;
         for &s in &spp {
@@ -149,7 +150,8 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
             if m.spp != s {
                 bail!("{} stopped after {} of {s} spp", device.kind(), m.spp);
             }
-            let e = ErrorMetrics::of(&m.image, &reference).ok_or_else(|| anyhow!("image and reference sizes differ"))?;
+            let e =
+                ErrorMetrics::of(&m.image, &reference).ok_or_else(|| anyhow!("image and reference sizes differ"))?;
             eprintln!(
                 "[{step}/{total}] {} {s} spp: {}  RMSE {:.4e}  relMSE {:.4e}",
                 device.kind(),
@@ -201,12 +203,13 @@ fn write_results(
         println!("{l}");
     }
     let csv = dir.join("converge.csv");
-    crate::image::write_atomically(&csv, table.to_csv().as_bytes()).with_context(|| format!("cannot write {}", csv.display()))?;
+    crate::image::write_atomically(&csv, table.to_csv().as_bytes())
+        .with_context(|| format!("cannot write {}", csv.display()))?;
     let name = args.scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let md = format!(
         "# lumen converge {name}\n\n{}×{} pixels, {} renderer; reference: {reference_note}; devices: {}.\n\
          relMSE = mean((x − r)² / (r² + {REL_MSE_EPSILON})); efficiency = 1 / (MSE · seconds); seconds are the \
-         wall time of each render call (GPU: including packing and kernel creation).\n\n{}\n{}\n",
+         wall time of each render call (GPU: including packing; its kernel is compiled once, in a discarded warm-up render).\n\n{}\n{}\n",
         scene.width,
         scene.height,
         scene.renderer.name(),
@@ -215,7 +218,8 @@ fn write_results(
         slopes.iter().map(|l| format!("- {l}\n")).collect::<String>()
     );
     let md_path = dir.join("converge.md");
-    crate::image::write_atomically(&md_path, md.as_bytes()).with_context(|| format!("cannot write {}", md_path.display()))?;
+    crate::image::write_atomically(&md_path, md.as_bytes())
+        .with_context(|| format!("cannot write {}", md_path.display()))?;
     let plot = Plot {
         title: format!("{name}: error vs time"),
         x_label: "seconds".into(),
