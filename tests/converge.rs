@@ -126,3 +126,57 @@ fn bad_arguments_fail_clearly() {
     }
     assert!(!dir.path().join("converge/converge.csv").exists());
 }
+
+fn lumen_bench(dir: &Path, args: &[&str]) -> Output {
+    std::fs::write(dir.join("tiny.sl"), SCENE).unwrap();
+    Command::new(env!("CARGO_BIN_EXE_lumen")).arg("bench").args(args).current_dir(dir).output().expect("run lumen")
+}
+
+#[test]
+fn bench_reports_scenes_and_sphere_scaling_on_the_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = lumen_bench(
+        dir.path(),
+        &[
+            "--device",
+            "cpu",
+            "--scenes",
+            "tiny.sl",
+            "--spp",
+            "1",
+            "--width",
+            "16",
+            "--max-spheres",
+            "100",
+            "-o",
+            "b.md",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let md = std::fs::read_to_string(dir.path().join("b.md")).unwrap();
+    assert_eq!(md, String::from_utf8_lossy(&out.stdout).trim_end_matches('\n').to_string() + "\n");
+    let row = md.lines().find(|l| l.starts_with("| tiny.sl | cpu | 16×12 | 2 |")).unwrap_or_else(|| panic!("{md}"));
+    assert_eq!(row.matches('|').count(), 9, "{row}");
+    for n in ["| 1 | cpu |", "| 10 | cpu |", "| 100 | cpu |"] {
+        assert!(md.contains(n), "{n} missing in {md}");
+    }
+    assert!(!md.contains("| 1000 |"));
+    assert!(md.contains("- cpu: ") && md.contains("Peak resident memory"));
+}
+
+#[test]
+fn bench_bad_arguments_fail_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&[&str], &str); 3] = [
+        (&["--device", "cpu", "--spp", "0"], "--spp must be 1..="),
+        (&["--device", "cpu", "--scenes", "nowhere"], "nowhere"),
+        (&["--device", "gpu,dsp"], "dsp"),
+    ];
+    for (args, expect) in cases {
+        let out = lumen_bench(dir.path(), args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(expect) && !err.contains("panicked"), "{args:?}: {err}");
+    }
+}
