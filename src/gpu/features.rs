@@ -244,3 +244,55 @@ impl RendererKind {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::color::Color;
+    use crate::scene::{CsgOp, Material, PathTracerSettings, PointLight, SceneBuilder, Transform};
+
+    #[test]
+    fn features_follow_what_the_scene_uses() {
+        let mut b = SceneBuilder::new(4, 4);
+        let diffuse = b.diffuse(Color::gray(0.5));
+        let glass = b.material(Material::new(
+            Brdf::Dielectric { pigment: Pigment::Checkered { n: 2, on: Color::WHITE, off: Color::BLACK }, ior: 1.5 },
+            Pigment::Uniform(Color::BLACK),
+        ));
+        // A material nobody uses does not count.
+        b.material(Material::new(
+            Brdf::Specular { pigment: Pigment::default(), threshold_angle_rad: 0.0 },
+            Pigment::default(),
+        ));
+        let leaf = |k, m| Shape::primitive(k, Transform::translation(DVec3::X), m);
+        let inner = Shape::csg(
+            CsgOp::Diff,
+            vec![leaf(ShapeKind::Cube, glass), leaf(ShapeKind::Cylinder, glass)],
+            Transform::IDENTITY,
+        );
+        b.shape(Shape::csg(CsgOp::Unite, vec![inner, leaf(ShapeKind::Sphere, diffuse)], Transform::IDENTITY))
+            .plane(Transform::IDENTITY, diffuse)
+            .point_light(PointLight::default());
+        let f = FeatureSet::of(&b.build().unwrap());
+        assert!(f.sphere && f.cube && f.cylinder && f.plane && f.csg && f.bvh);
+        assert_eq!((f.csg_max_depth, f.csg_max_intervals), (2, 3));
+        assert!(f.diffuse && f.dielectric && !f.specular);
+        assert!(f.pigment_uniform && f.pigment_checkered && !f.pigment_image && !f.textures());
+        assert!(f.point_lights && f.nee && !f.area_lights);
+        assert_eq!((f.renderer, f.environment), (RendererKind::PathTracer, EnvKind::Background));
+        let names = f.names();
+        assert!(names.contains(&"ENV_UNIFORM") && names.contains(&"SHADOWS") && !names.contains(&"ONOFF"));
+        assert!(names.iter().all(|n| FeatureSet::ALL_NAMES.contains(n)));
+
+        // OnOff needs no materials, pigments, BRDFs, lights or environment.
+        b.renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+        let f = FeatureSet::of(&b.build().unwrap());
+        assert!(!f.materials() && !f.diffuse && !f.pigment_uniform && !f.point_lights && !f.shading());
+        // Without NEE the path tracer samples no lights but still visits point lights.
+        b.renderer(Renderer::PathTracer(PathTracerSettings { nee: false, ..Default::default() }));
+        let f = FeatureSet::of(&b.build().unwrap());
+        assert!(!f.nee && f.point_lights);
+    }
+}

@@ -46,6 +46,10 @@ pub struct PackedScene {
     pub origin: DVec3,
 }
 
+/// Most CSG intervals one GPU invocation may hold in private memory (32 bytes each): the
+/// evaluation needs (2·depth + 2) lists of `csg::max_intervals` entries.
+pub const MAX_CSG_POOL: usize = 8192;
+
 /// Why a scene cannot be packed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PackError {
@@ -108,6 +112,16 @@ fn count_u32(what: &'static str, n: usize) -> Result<u32, PackError> {
 pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, PackError> {
     scene.validate()?;
     let features = FeatureSet::of(scene);
+    if features.csg {
+        let pool = (2 * features.csg_max_depth as usize + 2) * features.csg_max_intervals as usize;
+        if pool > MAX_CSG_POOL {
+            return Err(PackError::TooMany {
+                what: "CSG interval slots (2·tree depth + 2 lists of csg::max_intervals entries)",
+                count: pool,
+                limit: MAX_CSG_POOL,
+            });
+        }
+    }
     let origin = camera_origin(scene);
     let shift = Transform::translation(-origin);
     // The scene in the camera frame, as f64.
@@ -136,8 +150,8 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         origin,
     };
 
-    // Objects: top-level primitives first (so a top-level primitive's shape index is
-    // stable), then CSG trees with their leaves.
+    // Objects in scene order: a top-level primitive is one shape, a CSG tree its nodes and
+    // leaves (depth first).
     let mut object_ref = vec![0u32; shifted.len()];
     let mut csg_children: Vec<(usize, Vec<u32>)> = Vec::new();
     for (i, s) in shifted.iter().enumerate() {
@@ -428,4 +442,64 @@ fn pack_environment(
         }
     }
     Ok(e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::color::Color;
+    use crate::scene::{CsgOp, SceneBuilder};
+
+    fn sphere_at(x: f64, m: crate::scene::MaterialId) -> Shape {
+        Shape::primitive(ShapeKind::Sphere, Transform::translation(DVec3::new(x, 0.0, 0.0)), m)
+    }
+
+    #[test]
+    fn objects_reference_shapes_and_csg_nodes_in_the_camera_frame() {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        let n = b.diffuse(Color::gray(0.25));
+        let tree =
+            Shape::csg(CsgOp::Diff, vec![sphere_at(0.0, m), sphere_at(0.5, n)], Transform::translation(DVec3::Z));
+        b.sphere(Transform::translation(DVec3::new(5.0, 0.0, 0.0)), m)
+            .shape(tree)
+            .plane(Transform::IDENTITY, n)
+            .camera(crate::scene::Camera {
+                transform: Transform::translation(DVec3::new(0.0, 0.0, 2.0)),
+                ..Default::default()
+            });
+        let p = pack(&b.build().unwrap(), None).unwrap();
+        // Eye at (−1, 0, 2): everything is shifted by (1, 0, −2).
+        assert_eq!(p.origin, DVec3::new(-1.0, 0.0, 2.0));
+        assert_eq!(p.shapes.len(), 4);
+        assert_eq!(p.shapes[0].to_world.r0[3], 6.0);
+        assert_eq!(p.shapes[0].to_object.r0[3], -6.0);
+        // CSG leaves carry the node's transformation and their materials.
+        assert_eq!((p.shapes[1].to_world.r0[3], p.shapes[1].to_world.r2[3]), (1.0, -1.0));
+        assert_eq!((p.shapes[2].to_world.r0[3], p.shapes[2].material), (1.5, 1));
+        assert_eq!(p.csg_nodes.len(), 1);
+        let node = p.csg_nodes[0];
+        assert_eq!((node.op, node.child_count), (layout::csg_op::DIFF, 2));
+        let children = &p.indices[node.first_child as usize..][..2];
+        assert_eq!(children, [1, 2]);
+        // Two finite objects in the BVH, the plane in the unbounded list.
+        let bvh_refs: Vec<u32> = p.indices[..p.settings.plane_offset as usize].to_vec();
+        assert_eq!(bvh_refs.len(), 2);
+        assert!(bvh_refs.contains(&0) && bvh_refs.contains(&layout::CSG_NODE_BIT));
+        assert_eq!(p.settings.plane_count, 1);
+        assert_eq!(p.indices[p.settings.plane_offset as usize], 3);
+        // Each material pushes its BRDF pigment, then its emission.
+        assert_eq!((p.materials[1].pigment, p.materials[1].emitted), (2, 3));
+    }
+
+    #[test]
+    fn a_csg_tree_too_wide_for_private_memory_is_a_clear_error() {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        let many = (0..3000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
+        b.shape(Shape::csg(CsgOp::Unite, many, Transform::IDENTITY));
+        let err = pack(&b.build().unwrap(), None).unwrap_err();
+        assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
+        assert!(err.to_string().contains("CSG interval slots"), "{err}");
+    }
 }

@@ -214,11 +214,10 @@ fn render_packed(
     opts: &GpuRenderOptions,
     start: Instant,
 ) -> Result<GpuRenderOutput, GpuError> {
-    let buffers = SceneBuffers::upload(gpu, packed)?;
-    let refs: Vec<&wgpu::Buffer> = buffers.bound(kernel)?;
-    let group = kernel.bind_group(gpu, 1, &refs)?;
+    let buffers = SceneBuffers::upload(gpu, kernel, packed)?;
+    let group = kernel.bind_group(gpu, 1, &buffers.refs())?;
     let acc = run_progressive(gpu, kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
-    let nan: Vec<u32> = gpu.read_buffer(&buffers.nan_count, 1)?;
+    let nan: Vec<u32> = gpu.read_buffer(&buffers.buffers[buffers.nan_count], 1)?;
     Ok(GpuRenderOutput {
         image: acc.image,
         spp_done: acc.spp_done,
@@ -245,46 +244,52 @@ fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError
     Ok(())
 }
 
-/// The uploaded scene: one buffer per binding of `shaders/bindings.wgsl`.
+/// Binding number of the NaN/∞ counter in `shaders/bindings.wgsl`.
+const NAN_COUNT_BINDING: u32 = 2;
+
+/// The uploaded scene: a buffer for each binding the kernel declares (buffers a kernel
+/// does not read, such as texels in an OnOff render, are never uploaded).
 struct SceneBuffers {
-    by_binding: Vec<(u32, wgpu::Buffer)>,
-    nan_count: wgpu::Buffer,
+    /// In the kernel's binding order.
+    buffers: Vec<wgpu::Buffer>,
+    nan_count: usize,
 }
 
 impl SceneBuffers {
-    fn upload(gpu: &Gpu, p: &PackedScene) -> Result<Self, GpuError> {
-        let nan_count = gpu.storage_buffer("nan_count", &[0u32])?;
-        let by_binding = vec![
-            (0, gpu.uniform_buffer("settings", &p.settings)?),
-            (1, gpu.uniform_buffer("camera", &p.camera)?),
-            (3, gpu.storage_buffer("shapes", &p.shapes)?),
-            (4, gpu.storage_buffer("indices", &p.indices)?),
-            (5, gpu.storage_buffer("bvh_nodes", &p.bvh_nodes)?),
-            (6, gpu.storage_buffer("csg_nodes", &p.csg_nodes)?),
-            (7, gpu.storage_buffer("materials", &p.materials)?),
-            (8, gpu.storage_buffer("pigments", &p.pigments)?),
-            (9, gpu.uniform_buffer("environment", &p.environment)?),
-            (10, gpu.storage_buffer("floats", &p.floats)?),
-            (11, gpu.storage_buffer("point_lights", &p.point_lights)?),
-            (12, gpu.storage_buffer("area_lights", &p.area_lights)?),
-        ];
-        Ok(Self { by_binding, nan_count })
+    fn upload(gpu: &Gpu, kernel: &ComputeKernel, p: &PackedScene) -> Result<Self, GpuError> {
+        let declared = kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]);
+        let mut buffers = Vec::with_capacity(declared.len());
+        let mut nan_count = None;
+        for &(binding, _) in declared {
+            buffers.push(match binding {
+                0 => gpu.uniform_buffer("settings", &p.settings)?,
+                1 => gpu.uniform_buffer("camera", &p.camera)?,
+                NAN_COUNT_BINDING => {
+                    nan_count = Some(buffers.len());
+                    gpu.storage_buffer("nan_count", &[0u32])?
+                }
+                3 => gpu.storage_buffer("shapes", &p.shapes)?,
+                4 => gpu.storage_buffer("indices", &p.indices)?,
+                5 => gpu.storage_buffer("bvh_nodes", &p.bvh_nodes)?,
+                6 => gpu.storage_buffer("csg_nodes", &p.csg_nodes)?,
+                7 => gpu.storage_buffer("materials", &p.materials)?,
+                8 => gpu.storage_buffer("pigments", &p.pigments)?,
+                9 => gpu.uniform_buffer("environment", &p.environment)?,
+                10 => gpu.storage_buffer("floats (texels and environment tables)", &p.floats)?,
+                11 => gpu.storage_buffer("point_lights", &p.point_lights)?,
+                12 => gpu.storage_buffer("area_lights", &p.area_lights)?,
+                b => {
+                    return Err(GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})")))
+                }
+            });
+        }
+        let nan_count =
+            nan_count.ok_or_else(|| GpuError::Validation("render kernel does not declare the NaN counter".into()))?;
+        Ok(Self { buffers, nan_count })
     }
 
-    /// The buffers for the bindings the kernel declares in group 1, in binding order.
-    fn bound(&self, kernel: &super::ComputeKernel) -> Result<Vec<&wgpu::Buffer>, GpuError> {
-        let declared = kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]);
-        declared
-            .iter()
-            .map(|&(b, _)| {
-                if b == 2 {
-                    return Ok(&self.nan_count);
-                }
-                self.by_binding.iter().find(|(n, _)| *n == b).map(|(_, buf)| buf).ok_or_else(|| {
-                    GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})"))
-                })
-            })
-            .collect()
+    fn refs(&self) -> Vec<&wgpu::Buffer> {
+        self.buffers.iter().collect()
     }
 }
 
