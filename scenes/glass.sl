@@ -7,7 +7,7 @@ SET
     tinted   Material(.brdf Brdf.Dielectric(.pigment Pigment.Uniform(<0.75, 0.9, 1>), .ior 1.5))
     diamond  Material(.brdf Brdf.Dielectric(.ior 2.42))
     water    Material(.brdf Brdf.Dielectric(.ior 1.33))
-    floor    Material(.brdf Brdf.Diffuse(Pigment.Checkered(.N 8, .color_on <0.8, 0.8, 0.8>, .color_off <0.25, 0.25, 0.3>)))
+    floor    Material(.brdf Brdf.Diffuse(Pigment.Checkered(.N 4, .color_on <0.8, 0.8, 0.8>, .color_off <0.25, 0.25, 0.3>)))
     backdrop Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.6, 0.55, 0.5>)))
     lamp     Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)), .emitted_radiance Pigment.Uniform(<60, 58, 54>))
 

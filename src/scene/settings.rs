@@ -83,4 +83,3 @@ pub struct Tracer {
     pub samples_per_side: u32,
     pub rng: PcgSeed,
 }
-

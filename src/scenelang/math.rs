@@ -110,8 +110,14 @@ pub fn evaluate(text: &str, offset: usize, time: f64, lookup: &dyn Fn(&str) -> L
     let mut p = Parser { toks, i: 0, end: offset + text.len(), time, lookup, depth: 0 };
     let (v, _) = p.expr()?;
     if let Some(t) = p.toks.get(p.i) {
+        let after_number = p.i > 0 && matches!(p.toks[p.i - 1].t, M::Num(_));
+        let hint = if after_number && matches!(t.t, M::Ident(_) | M::Op('(')) {
+            " (juxtaposition is written without a space, as in `2a`)"
+        } else {
+            ""
+        };
         return Err(MathError {
-            expected: Some("an operator (+ - * / % ^) or the closing `$`".into()),
+            expected: Some(format!("an operator (+ - * / % ^) or the closing `$`{hint}")),
             ..err(t.span, ErrorKind::BadExpression, format!("unexpected {} in math expression", show(&t.t)))
         });
     }
@@ -574,8 +580,10 @@ mod tests {
         assert_eq!(num("2(x + 1)"), 6.0);
         assert_eq!(num("1/2x"), 0.25);
         assert_eq!(num("3sin(0)"), 0.0);
-        // With a space it is not juxtaposition.
-        assert_eq!(ev("2 a").unwrap_err().kind, ErrorKind::BadExpression);
+        // With a space it is not juxtaposition, and the error says so.
+        let e = ev("2 a").unwrap_err();
+        assert_eq!((e.kind, e.span), (ErrorKind::BadExpression, Span::new(2, 1)));
+        assert!(e.expected.unwrap().contains("without a space"));
     }
 
     #[test]

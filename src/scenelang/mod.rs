@@ -43,6 +43,7 @@
 //! - a blank `Image(w, h)` is only a size until used as a texture, so `USING Image(...)`
 //!   never allocates pixels.
 
+mod constructors;
 mod dump;
 mod error;
 mod interpreter;

@@ -1,0 +1,724 @@
+//! Named and command constructors (`Pigment.Uniform(...)`, `SCALE`, `ROTATE`, `UNITE`, images):
+//! argument lists with positional-then-keyword arguments, defaults, type and range checks.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use super::error::{did_you_mean, ErrorKind, SceneLangError, Span};
+use super::interpreter::Interp;
+use super::lexer::{Lexer, Tok, TypeName};
+use super::value::{ImageValue, ShapeValue, Ty, Value};
+use crate::color::Color;
+use crate::image::HdrImage;
+use crate::scene::{
+    Brdf, Camera, CsgOp, Environment, ImageFilter, Material, PathTracerSettings, PcgSeed, Pigment, PointLight,
+    Projection, Renderer, SceneError, ShapeKind, Tracer, Transform, DEFAULT_THRESHOLD_ANGLE_RAD, MAX_IMAGE_SIDE,
+};
+
+type Res<T> = Result<T, SceneLangError>;
+
+/// Largest blank `Image(w, h)` that may be turned into pixels (as a texture or environment).
+const MAX_BLANK_TEXTURE_PIXELS: u64 = 1 << 22;
+
+/// One constructor parameter: its keyword (also its position in the list) and its type.
+struct Param {
+    name: &'static str,
+    ty: Ty,
+}
+
+const fn p(name: &'static str, ty: Ty) -> Param {
+    Param { name, ty }
+}
+
+/// Arguments of one constructor call, by parameter index.
+struct Args {
+    vals: Vec<Option<(Value, Span)>>,
+}
+
+impl Args {
+    fn span(&self, i: usize) -> Option<Span> {
+        self.vals[i].as_ref().map(|(_, s)| *s)
+    }
+    fn num(&self, i: usize, default: f64) -> f64 {
+        match &self.vals[i] {
+            Some((Value::Number(v), _)) => *v,
+            _ => default,
+        }
+    }
+    fn color(&self, i: usize, default: Color) -> Color {
+        match &self.vals[i] {
+            Some((Value::Color(v), _)) => *v,
+            _ => default,
+        }
+    }
+    fn point(&self, i: usize, default: DVec3) -> DVec3 {
+        match &self.vals[i] {
+            Some((Value::Point(v), _)) => *v,
+            _ => default,
+        }
+    }
+    fn transform(&self, i: usize) -> Transform {
+        match &self.vals[i] {
+            Some((Value::Transformation(v), _)) => *v,
+            _ => Transform::IDENTITY,
+        }
+    }
+    fn pigment(&self, i: usize) -> Pigment {
+        match &self.vals[i] {
+            Some((Value::Pigment(v), _)) => v.clone(),
+            _ => Pigment::Uniform(Color::WHITE),
+        }
+    }
+    fn pcg(&self, i: usize) -> PcgSeed {
+        match &self.vals[i] {
+            Some((Value::Pcg(v), _)) => *v,
+            _ => PcgSeed::default(),
+        }
+    }
+    fn take(&mut self, i: usize) -> Option<(Value, Span)> {
+        self.vals[i].take()
+    }
+}
+
+fn subtype_error(lx: &Lexer<'_>, ty: TypeName, span: Span, found: &str, valid: &[&str]) -> SceneLangError {
+    let mut e =
+        lx.error(span, ErrorKind::UnknownKeyword, format!("unknown kind `{found}` of {}", ty.name())).with_expected(
+            format!("one of {}", valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")),
+        );
+    if let Some(s) = did_you_mean(found.trim_start_matches('.'), valid.iter().copied()) {
+        e = e.with_note(format!("did you mean `{}.{s}`?", ty.name()));
+    }
+    e
+}
+
+impl Interp<'_> {
+    /// Parses `( positional..., .keyword value, ... )` against `params`, checking types.
+    fn args(&mut self, ctor: &str, params: &[Param]) -> Res<Args> {
+        self.expect_sym('(', &format!("after {ctor}"))?;
+        let mut args = Args { vals: params.iter().map(|_| None).collect() };
+        let mut positional = 0;
+        let mut seen_keyword = false;
+        if self.peek()?.tok == Tok::Sym(')') {
+            self.lx.next()?;
+            return Ok(args);
+        }
+        loop {
+            let t = self.peek()?;
+            let index = if let Tok::Keyword(k) = &t.tok {
+                self.lx.next()?;
+                seen_keyword = true;
+                let Some(i) = params.iter().position(|p| p.name == k) else {
+                    let names: Vec<&str> = params.iter().map(|p| p.name).collect();
+                    let mut e = self
+                        .err(t.span, ErrorKind::UnknownKeyword, format!("unknown keyword `.{k}` for {ctor}"))
+                        .with_expected(if names.is_empty() {
+                            format!("{ctor} takes no keywords")
+                        } else {
+                            format!("one of {}", names.iter().map(|n| format!(".{n}")).collect::<Vec<_>>().join(" "))
+                        });
+                    if let Some(s) = did_you_mean(k, names.iter().copied()) {
+                        e = e.with_note(format!("did you mean `.{s}`?"));
+                    }
+                    return Err(e);
+                };
+                if args.vals[i].is_some() {
+                    let how = if i < positional { "positionally" } else { "already" };
+                    return Err(self
+                        .err(t.span, ErrorKind::BadArguments, format!("`.{k}` of {ctor} is given twice ({how} before)"))
+                        .with_expected("each argument at most once"));
+                }
+                i
+            } else {
+                if seen_keyword {
+                    return Err(self
+                        .err(
+                            t.span,
+                            ErrorKind::BadArguments,
+                            format!("positional argument after keyword arguments in {ctor}"),
+                        )
+                        .with_expected("positional arguments first, then `.keyword value` pairs"));
+                }
+                if positional >= params.len() {
+                    return Err(self
+                        .err(t.span, ErrorKind::BadArguments, format!("too many arguments for {ctor}"))
+                        .with_expected(format!(
+                            "at most {} argument{}",
+                            params.len(),
+                            if params.len() == 1 { "" } else { "s" }
+                        )));
+                }
+                positional += 1;
+                positional - 1
+            };
+            let (v, s) = self.value()?;
+            let param = &params[index];
+            if v.ty() != param.ty {
+                return Err(self
+                    .err(
+                        s,
+                        ErrorKind::WrongType,
+                        format!(
+                            "`.{}` of {ctor} must be {}, found {}",
+                            param.name,
+                            param.ty.article(),
+                            v.ty().article()
+                        ),
+                    )
+                    .with_expected(param.ty.article()));
+            }
+            args.vals[index] = Some((v, s));
+            let t = self.lx.next()?;
+            match t.tok {
+                Tok::Sym(',') => {}
+                Tok::Sym(')') => return Ok(args),
+                other => {
+                    return Err(self
+                        .err(
+                            t.span,
+                            ErrorKind::Syntax,
+                            format!("expected `,` or `)` in {ctor}, found {}", other.describe()),
+                        )
+                        .with_expected("`,` or `)`"))
+                }
+            }
+        }
+    }
+
+    /// A whole number in `min..=max` from argument `i`, or `default`.
+    fn int(&self, a: &Args, i: usize, name: &str, default: u64, min: u64, max: u64) -> Res<u64> {
+        let Some(span) = a.span(i) else { return Ok(default) };
+        let v = a.num(i, default as f64);
+        if v.fract() != 0.0 || v < min as f64 || v > max as f64 {
+            return Err(self
+                .err(
+                    span,
+                    ErrorKind::BadValue,
+                    format!("`.{name}` must be a whole number from {min} to {max}, got {v}"),
+                )
+                .with_expected(format!("a whole number from {min} to {max}")));
+        }
+        Ok(v as u64)
+    }
+
+    /// A finite number `> 0` (or `>= 0` when `allow_zero`) from argument `i`, or `default`.
+    fn positive(&self, a: &Args, i: usize, name: &str, default: f64, allow_zero: bool) -> Res<f64> {
+        let v = a.num(i, default);
+        let ok = if allow_zero { v >= 0.0 } else { v > 0.0 };
+        if !ok {
+            let span = a.span(i).unwrap_or_default();
+            let bound = if allow_zero { "≥ 0" } else { "> 0" };
+            return Err(self
+                .err(span, ErrorKind::BadValue, format!("`.{name}` must be {bound}, got {v}"))
+                .with_expected(format!("a number {bound}")));
+        }
+        Ok(v)
+    }
+
+    /// Maps the scene model's refusal of a transformation to a located error, and refuses
+    /// transformations whose matrix or inverse overflowed.
+    pub(super) fn checked(&self, t: Result<Transform, SceneError>, span: Span) -> Res<Transform> {
+        let t = t.map_err(|e| {
+            self.err(span, ErrorKind::InvalidScene, format!("invalid transformation: {e}"))
+                .with_expected("an invertible affine transformation (no zero scale factors)")
+        })?;
+        if !(t.matrix().is_finite() && t.inverse_matrix().is_finite()) {
+            return Err(self
+                .err(span, ErrorKind::InvalidScene, "invalid transformation: matrix or inverse is not finite")
+                .with_expected("scale factors and translations of moderate size"));
+        }
+        Ok(t)
+    }
+
+    /// `TRANSLATE(.X 0, .Y 0, .Z 0)`.
+    pub(super) fn translate(&mut self, span: Span) -> Res<Value> {
+        let a = self.args("TRANSLATE", &[p("X", Ty::Number), p("Y", Ty::Number), p("Z", Ty::Number)])?;
+        let v = DVec3::new(a.num(0, 0.0), a.num(1, 0.0), a.num(2, 0.0));
+        Ok(Value::Transformation(self.checked(Ok(Transform::translation(v)), span.to(Span::new(self.lx.last_end, 0)))?))
+    }
+
+    pub(super) fn scale(&mut self, span: Span) -> Res<Value> {
+        let t = if self.peek()?.tok == Tok::Sym('(') {
+            let a = self.args("SCALE", &[p("X", Ty::Number), p("Y", Ty::Number), p("Z", Ty::Number)])?;
+            Transform::try_scaling(DVec3::new(a.num(0, 1.0), a.num(1, 1.0), a.num(2, 1.0)))
+        } else {
+            let (s, ns) = self.number("SCALE")?;
+            return Ok(Value::Transformation(self.checked(Transform::try_scaling(DVec3::splat(s)), span.to(ns))?));
+        };
+        Ok(Value::Transformation(self.checked(t, span.to(Span::new(self.lx.last_end, 0)))?))
+    }
+
+    /// `ROTATE(.X a * .Z b ...)` = the product Rx(a)·Rz(b)·…, written left to right exactly as
+    /// `ROTATE(.X a) * ROTATE(.Z b)` would be: the rightmost rotation acts on points first.
+    pub(super) fn rotate(&mut self) -> Res<Value> {
+        self.expect_sym('(', "after ROTATE")?;
+        let mut t = Transform::IDENTITY;
+        loop {
+            let k = self.lx.next()?;
+            let Tok::Keyword(axis) = &k.tok else {
+                return Err(self
+                    .err(k.span, ErrorKind::Syntax, format!("expected an axis in ROTATE, found {}", k.tok.describe()))
+                    .with_expected("`.X`, `.Y` or `.Z` followed by an angle in degrees"));
+            };
+            let (deg, ds) = self.number("a rotation angle")?;
+            let r = match axis.as_str() {
+                "X" => Transform::rotation_x(deg),
+                "Y" => Transform::rotation_y(deg),
+                "Z" => Transform::rotation_z(deg),
+                _ => {
+                    return Err(self
+                        .err(k.span, ErrorKind::UnknownKeyword, format!("unknown rotation axis `.{axis}`"))
+                        .with_expected("`.X`, `.Y` or `.Z`"))
+                }
+            };
+            t = self.checked(Ok(t * r), k.span.to(ds))?;
+            let sep = self.lx.next()?;
+            match sep.tok {
+                Tok::Sym('*') => {}
+                Tok::Sym(')') => break,
+                other => {
+                    return Err(self
+                        .err(
+                            sep.span,
+                            ErrorKind::Syntax,
+                            format!("expected `*` or `)` in ROTATE, found {}", other.describe()),
+                        )
+                        .with_expected("`*` between rotations, `)` after the last"))
+                }
+            }
+        }
+        Ok(Value::Transformation(t))
+    }
+
+    /// `UNITE(a, b, ..., .transformation T)` (the trailing keyword is lumen's way to place a
+    /// CSG node; it applies after the children's own transformations).
+    pub(super) fn csg(&mut self, op: CsgOp) -> Res<Value> {
+        let name = op.keyword();
+        self.expect_sym('(', &format!("after {name}"))?;
+        let mut children = Vec::new();
+        let mut transform = Transform::IDENTITY;
+        loop {
+            let t = self.peek()?;
+            if let Tok::Keyword(k) = &t.tok {
+                self.lx.next()?;
+                if k != "transformation" {
+                    return Err(self
+                        .err(t.span, ErrorKind::UnknownKeyword, format!("unknown keyword `.{k}` for {name}"))
+                        .with_expected("`.transformation` (after the shapes)"));
+                }
+                let (v, s) = self.value()?;
+                let Value::Transformation(tr) = v else {
+                    return Err(self
+                        .err(
+                            s,
+                            ErrorKind::WrongType,
+                            format!("`.transformation` of {name} must be a Transformation, found {}", v.ty().article()),
+                        )
+                        .with_expected("a Transformation"));
+                };
+                transform = tr;
+                let close = self.lx.next()?;
+                if close.tok != Tok::Sym(')') {
+                    return Err(self
+                        .err(
+                            close.span,
+                            ErrorKind::Syntax,
+                            format!("expected `)` after `.transformation` in {name}, found {}", close.tok.describe()),
+                        )
+                        .with_expected("`)`: `.transformation` is the last argument"));
+                }
+                break;
+            }
+            let (v, s) = self.value()?;
+            let Value::Shape(shape) = v else {
+                return Err(self
+                    .err(s, ErrorKind::WrongType, format!("{name} combines shapes, found {}", v.ty().article()))
+                    .with_expected("a Shape"));
+            };
+            children.push((shape, s));
+            let sep = self.lx.next()?;
+            match sep.tok {
+                Tok::Sym(',') => {}
+                Tok::Sym(')') => break,
+                other => {
+                    return Err(self
+                        .err(
+                            sep.span,
+                            ErrorKind::Syntax,
+                            format!("expected `,` or `)` in {name}, found {}", other.describe()),
+                        )
+                        .with_expected("`,` or `)`"))
+                }
+            }
+        }
+        if children.len() < 2 {
+            let span = children.first().map_or(Span::new(self.lx.last_end, 1), |c| c.1);
+            return Err(self
+                .err(span, ErrorKind::BadArguments, format!("{name} needs at least two shapes, got {}", children.len()))
+                .with_expected("two or more shapes"));
+        }
+        Ok(Value::Shape(ShapeValue::Csg { op, children: children.into_iter().map(|c| c.0).collect(), transform }))
+    }
+
+    /// Reads the `.Kind` after a type word.
+    fn subtype(&mut self, ty: TypeName, valid: &[&'static str]) -> Res<&'static str> {
+        let t = self.lx.next()?;
+        match &t.tok {
+            Tok::Keyword(k) => match valid.iter().find(|v| **v == k) {
+                Some(v) => Ok(v),
+                None => Err(subtype_error(&self.lx, ty, t.span, &format!(".{k}"), valid)),
+            },
+            other => Err(self
+                .err(
+                    t.span,
+                    ErrorKind::Syntax,
+                    format!("expected the kind of {} after `{}`, found {}", ty.name(), ty.name(), other.describe()),
+                )
+                .with_expected(format!(
+                    "one of {}",
+                    valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")
+                ))),
+        }
+    }
+
+    pub(super) fn constructor(&mut self, ty: TypeName) -> Res<Value> {
+        use Ty as T;
+        Ok(match ty {
+            TypeName::Color => {
+                let a = self.args("Color", &[p("R", T::Number), p("G", T::Number), p("B", T::Number)])?;
+                Value::Color(Color::new(a.num(0, 0.0), a.num(1, 0.0), a.num(2, 0.0)))
+            }
+            TypeName::Point => {
+                let a = self.args("Point", &[p("X", T::Number), p("Y", T::Number), p("Z", T::Number)])?;
+                Value::Point(DVec3::new(a.num(0, 0.0), a.num(1, 0.0), a.num(2, 0.0)))
+            }
+            TypeName::List => {
+                self.expect_sym('(', "after List")?;
+                Value::List(self.number_list(')')?)
+            }
+            TypeName::Transformation => {
+                let a = self.args("Transformation", &[p("matrix", T::List)])?;
+                let Some((Value::List(l), ls)) = &a.vals[0] else {
+                    return Ok(Value::Transformation(Transform::IDENTITY));
+                };
+                let Ok(rows) = <[f64; 16]>::try_from(l.as_slice()) else {
+                    return Err(self
+                        .err(
+                            *ls,
+                            ErrorKind::BadValue,
+                            format!("a transformation matrix needs 16 numbers, got {}", l.len()),
+                        )
+                        .with_expected("16 numbers, row by row"));
+                };
+                Value::Transformation(self.checked(Transform::from_rows(rows), *ls)?)
+            }
+            TypeName::Image => self.image_constructor()?,
+            TypeName::Pigment => {
+                let kind = self.subtype(ty, &["Uniform", "Checkered", "Image"])?;
+                Value::Pigment(match kind {
+                    "Uniform" => {
+                        Pigment::Uniform(self.args("Pigment.Uniform", &[p("color", T::Color)])?.color(0, Color::WHITE))
+                    }
+                    "Checkered" => {
+                        let a = self.args(
+                            "Pigment.Checkered",
+                            &[p("N", T::Number), p("color_on", T::Color), p("color_off", T::Color)],
+                        )?;
+                        let n = self.int(&a, 0, "N", 2, 1, 1 << 20)? as u32;
+                        Pigment::Checkered { n, on: a.color(1, Color::WHITE), off: a.color(2, Color::BLACK) }
+                    }
+                    _ => {
+                        let mut a = self.args("Pigment.Image", &[p("image", T::Image), p("filter", T::Str)])?;
+                        let filter = match a.take(1) {
+                            None => ImageFilter::Nearest,
+                            Some((Value::Str(s), fs)) => match s.as_str() {
+                                "nearest" => ImageFilter::Nearest,
+                                "bilinear" => ImageFilter::Bilinear,
+                                _ => {
+                                    return Err(self
+                                        .err(fs, ErrorKind::BadValue, format!("unknown image filter {s:?}"))
+                                        .with_expected("\"nearest\" or \"bilinear\""))
+                                }
+                            },
+                            Some(_) => ImageFilter::Nearest,
+                        };
+                        Pigment::Image { image: self.pixels(a.take(0))?, filter }
+                    }
+                })
+            }
+            TypeName::Brdf => {
+                let kind = self.subtype(ty, &["Diffuse", "Specular", "Dielectric"])?;
+                Value::Brdf(match kind {
+                    "Diffuse" => {
+                        Brdf::Diffuse { pigment: self.args("Brdf.Diffuse", &[p("pigment", T::Pigment)])?.pigment(0) }
+                    }
+                    "Specular" => {
+                        let a = self
+                            .args("Brdf.Specular", &[p("pigment", T::Pigment), p("threshold_angle_rad", T::Number)])?;
+                        let threshold_angle_rad =
+                            self.positive(&a, 1, "threshold_angle_rad", DEFAULT_THRESHOLD_ANGLE_RAD, true)?;
+                        Brdf::Specular { pigment: a.pigment(0), threshold_angle_rad }
+                    }
+                    _ => {
+                        let a = self.args("Brdf.Dielectric", &[p("pigment", T::Pigment), p("ior", T::Number)])?;
+                        let ior = self.positive(&a, 1, "ior", 1.5, false)?;
+                        Brdf::Dielectric { pigment: a.pigment(0), ior }
+                    }
+                })
+            }
+            TypeName::Material => {
+                let mut a = self.args("Material", &[p("brdf", T::Brdf), p("emitted_radiance", T::Pigment)])?;
+                let brdf = match a.take(0) {
+                    Some((Value::Brdf(b), _)) => b,
+                    _ => Brdf::default(),
+                };
+                let emitted = match a.take(1) {
+                    Some((Value::Pigment(p), _)) => p,
+                    _ => Pigment::Uniform(Color::BLACK),
+                };
+                Value::Material(Material::new(brdf, emitted))
+            }
+            TypeName::Shape => {
+                let kind = self.subtype(ty, &["Sphere", "Plane", "Cube", "Cylinder"])?;
+                let kind = match kind {
+                    "Sphere" => ShapeKind::Sphere,
+                    "Plane" => ShapeKind::Plane,
+                    "Cube" => ShapeKind::Cube,
+                    _ => ShapeKind::Cylinder,
+                };
+                let ctor = format!("Shape.{}", kind_name(kind));
+                let mut a = self.args(&ctor, &[p("material", T::Material), p("transformation", T::Transformation)])?;
+                let transform = a.transform(1);
+                let material = match a.take(0) {
+                    Some((Value::Material(m), _)) => m,
+                    _ => Material::default(),
+                };
+                Value::Shape(ShapeValue::Primitive { kind, transform, material })
+            }
+            TypeName::Light => {
+                let a = self
+                    .args("Light", &[p("position", T::Point), p("color", T::Color), p("linear_radius", T::Number)])?;
+                let linear_radius = self.positive(&a, 2, "linear_radius", 0.0, true)?;
+                Value::Light(PointLight {
+                    position: a.point(0, DVec3::ZERO),
+                    color: a.color(1, Color::WHITE),
+                    linear_radius,
+                })
+            }
+            TypeName::Pcg => {
+                let a = self.args("Pcg", &[p("state", T::Number), p("inc", T::Number)])?;
+                let state = self.int(&a, 0, "state", 42, 0, 1 << 53)?;
+                let inc = self.int(&a, 1, "inc", 54, 0, 1 << 53)?;
+                Value::Pcg(PcgSeed { state, inc })
+            }
+            TypeName::Camera => {
+                let kind = self.subtype(ty, &["Perspective", "Orthogonal"])?;
+                if kind == "Perspective" {
+                    let a = self.args(
+                        "Camera.Perspective",
+                        &[
+                            p("aspect_ratio", T::Number),
+                            p("transformation", T::Transformation),
+                            p("screen_distance", T::Number),
+                        ],
+                    )?;
+                    let aspect_ratio = self.positive(&a, 0, "aspect_ratio", 1.0, false)?;
+                    let screen_distance = self.positive(&a, 2, "screen_distance", 1.0, false)?;
+                    Value::Camera(Camera {
+                        projection: Projection::Perspective { screen_distance },
+                        aspect_ratio,
+                        transform: a.transform(1),
+                    })
+                } else {
+                    let a = self.args(
+                        "Camera.Orthogonal",
+                        &[p("aspect_ratio", T::Number), p("transformation", T::Transformation)],
+                    )?;
+                    let aspect_ratio = self.positive(&a, 0, "aspect_ratio", 1.0, false)?;
+                    Value::Camera(Camera {
+                        projection: Projection::Orthogonal,
+                        aspect_ratio,
+                        transform: a.transform(1),
+                    })
+                }
+            }
+            TypeName::Renderer => {
+                let kind = self.subtype(ty, &["OnOff", "Flat", "PointLight", "PathTracer"])?;
+                Value::Renderer(match kind {
+                    "OnOff" => {
+                        let a = self.args("Renderer.OnOff", &[p("on_color", T::Color), p("off_color", T::Color)])?;
+                        Renderer::OnOff { on: a.color(0, Color::WHITE), off: a.color(1, Color::BLACK) }
+                    }
+                    "Flat" => Renderer::Flat {
+                        background: self
+                            .args("Renderer.Flat", &[p("background_color", T::Color)])?
+                            .color(0, Color::BLACK),
+                    },
+                    "PointLight" => {
+                        let a = self.args(
+                            "Renderer.PointLight",
+                            &[p("background_color", T::Color), p("ambient_color", T::Color)],
+                        )?;
+                        Renderer::PointLight {
+                            background: a.color(0, Color::BLACK),
+                            ambient: a.color(1, Color::gray(1e-3)),
+                        }
+                    }
+                    _ => {
+                        let a = self.args(
+                            "Renderer.PathTracer",
+                            &[
+                                p("background_color", T::Color),
+                                p("rng", T::Pcg),
+                                p("n", T::Number),
+                                p("max_depth", T::Number),
+                                p("roulette_depth", T::Number),
+                            ],
+                        )?;
+                        let d = PathTracerSettings::default();
+                        Renderer::PathTracer(PathTracerSettings {
+                            background: a.color(0, d.background),
+                            rng: a.pcg(1),
+                            n: self.int(&a, 2, "n", d.n.into(), 1, 1 << 20)? as u32,
+                            max_depth: self.int(&a, 3, "max_depth", d.max_depth.into(), 0, 1024)? as u32,
+                            roulette_depth: self.int(&a, 4, "roulette_depth", d.roulette_depth.into(), 0, 1024)? as u32,
+                            nee: d.nee,
+                        })
+                    }
+                })
+            }
+            TypeName::Tracer => {
+                let a = self.args("Tracer", &[p("samples_per_side", T::Number), p("rng", T::Pcg)])?;
+                let samples_per_side = self.int(&a, 0, "samples_per_side", 0, 0, 1024)? as u32;
+                Value::Tracer(Tracer { samples_per_side, rng: a.pcg(1) })
+            }
+            TypeName::Environment => {
+                let kind = self.subtype(ty, &["Uniform", "Gradient", "Image"])?;
+                Value::Environment(match kind {
+                    "Uniform" => Environment::Uniform(
+                        self.args("Environment.Uniform", &[p("color", T::Color)])?.color(0, Color::WHITE),
+                    ),
+                    "Gradient" => {
+                        let a = self.args(
+                            "Environment.Gradient",
+                            &[p("zenith", T::Color), p("horizon", T::Color), p("nadir", T::Color)],
+                        )?;
+                        Environment::Gradient {
+                            zenith: a.color(0, Color::WHITE),
+                            horizon: a.color(1, Color::WHITE),
+                            nadir: a.color(2, Color::BLACK),
+                        }
+                    }
+                    _ => {
+                        let mut a = self.args(
+                            "Environment.Image",
+                            &[p("image", T::Image), p("intensity", T::Number), p("rotation", T::Number)],
+                        )?;
+                        let intensity = self.positive(&a, 1, "intensity", 1.0, true)?;
+                        let rotation_deg = a.num(2, 0.0);
+                        Environment::Image { image: self.pixels(a.take(0))?, intensity, rotation_deg }
+                    }
+                })
+            }
+        })
+    }
+
+    /// The pixels of an image argument (`Image(1, 1)`, i.e. one black pixel, when absent).
+    fn pixels(&self, arg: Option<(Value, Span)>) -> Res<Arc<HdrImage>> {
+        match arg {
+            Some((Value::Image(ImageValue::Loaded(img)), _)) => Ok(img),
+            Some((Value::Image(ImageValue::Blank { width, height }), s)) => {
+                if u64::from(width) * u64::from(height) > MAX_BLANK_TEXTURE_PIXELS {
+                    return Err(self
+                        .err(
+                            s,
+                            ErrorKind::BadImageSize,
+                            format!("blank image {width}×{height} is too large to use as a texture"),
+                        )
+                        .with_expected(format!("at most {MAX_BLANK_TEXTURE_PIXELS} pixels")));
+                }
+                Ok(Arc::new(HdrImage::new(width as usize, height as usize)))
+            }
+            _ => Ok(Arc::new(HdrImage::new(1, 1))),
+        }
+    }
+
+    /// `Image(width, height)` (black), `Image("file")`, or `Image()` (1×1, black).
+    fn image_constructor(&mut self) -> Res<Value> {
+        self.expect_sym('(', "after Image")?;
+        if self.peek()?.tok == Tok::Sym(')') {
+            // Every argument has a default: `Image()` is one black pixel.
+            self.lx.next()?;
+            return Ok(Value::Image(ImageValue::Blank { width: 1, height: 1 }));
+        }
+        let (first, fs) = self.value()?;
+        match first {
+            Value::Str(path) => {
+                self.expect_sym(')', "after the file name in Image(\"file\")")?;
+                Ok(Value::Image(self.load_image(&path, fs)?))
+            }
+            Value::Number(w) => {
+                self.expect_sym(',', "between width and height in Image(width, height)")?;
+                let (h, hs) = self.number("the image height")?;
+                self.expect_sym(')', "after Image(width, height)")?;
+                let side = |v: f64, s: Span, what: &str| -> Res<u32> {
+                    if v.fract() != 0.0 || v < 1.0 || v > f64::from(MAX_IMAGE_SIDE) {
+                        return Err(self
+                            .err(
+                                s,
+                                ErrorKind::BadImageSize,
+                                format!("image {what} {v} is not a whole number from 1 to {MAX_IMAGE_SIDE}"),
+                            )
+                            .with_expected(format!("a whole number of pixels from 1 to {MAX_IMAGE_SIDE}")));
+                    }
+                    Ok(v as u32)
+                };
+                let width = side(w, fs, "width")?;
+                let height = side(h, hs, "height")?;
+                Ok(Value::Image(ImageValue::Blank { width, height }))
+            }
+            other => Err(self
+                .err(
+                    fs,
+                    ErrorKind::WrongType,
+                    format!("Image takes a size or a file name, found {}", other.ty().article()),
+                )
+                .with_expected("`Image(width, height)` or `Image(\"file\")`")),
+        }
+    }
+
+    /// Loads an image file, relative to the script's directory.
+    pub(super) fn load_image(&self, path: &str, span: Span) -> Res<ImageValue> {
+        let p = Path::new(path);
+        let full: PathBuf = if p.is_absolute() { p.to_path_buf() } else { self.base_dir.join(p) };
+        if !full.is_file() {
+            return Err(self
+                .err(span, ErrorKind::ImageFile, format!("image file {} not found", full.display()))
+                .with_expected(
+                    "an existing .pfm, .exr, .hdr, .png or .jpg file (relative paths start at the script's folder)",
+                ));
+        }
+        match crate::image::read_image(&full) {
+            Ok(img) => {
+                if img.width() == 0 || img.height() == 0 {
+                    return Err(self
+                        .err(span, ErrorKind::BadImageSize, format!("image {} is empty", full.display()))
+                        .with_expected("an image with at least one pixel"));
+                }
+                Ok(ImageValue::Loaded(Arc::new(img)))
+            }
+            Err(e) => Err(self
+                .err(span, ErrorKind::ImageFile, format!("cannot load image: {e}"))
+                .with_expected("a readable .pfm, .exr, .hdr, .png or .jpg file")),
+        }
+    }
+}
+fn kind_name(k: ShapeKind) -> &'static str {
+    match k {
+        ShapeKind::Sphere => "Sphere",
+        ShapeKind::Plane => "Plane",
+        ShapeKind::Cube => "Cube",
+        ShapeKind::Cylinder => "Cylinder",
+    }
+}
