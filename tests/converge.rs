@@ -108,6 +108,23 @@ fn a_given_reference_of_the_wrong_size_is_refused() {
 }
 
 #[test]
+fn an_unavailable_gpu_is_skipped_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let args =
+        ["--device", "gpu,cpu", "--adapter", "no-such-adapter-xyz", "--spp", "1,4", "--reference-spp", "16", "-o", "r"];
+    let out = lumen(dir.path(), &args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("warning: skipping device gpu"), "{err}");
+    let csv = std::fs::read_to_string(dir.path().join("r/converge.csv")).unwrap();
+    assert_eq!(csv.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect::<Vec<_>>(), ["cpu", "cpu"]);
+    // With no device left, the command fails.
+    let out = lumen(dir.path(), &["--device", "gpu", "--adapter", "no-such-adapter-xyz", "-o", "s"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("none of the requested devices is available"), "{err}");
+}
+
+#[test]
 fn bad_arguments_fail_clearly() {
     let dir = tempfile::tempdir().unwrap();
     let cases: [(&[&str], &str); 5] = [

@@ -100,6 +100,24 @@ impl Measurement {
 }
 
 /// Renders `scene` with `spp` camera samples per pixel on `device`.
+///
+/// ```
+/// use lumen::analysis::{measure, open_devices, Device};
+/// use lumen::color::Color;
+/// use lumen::gpu::AdapterChoice;
+/// use lumen::scene::{Renderer, SceneBuilder, Transform};
+///
+/// let mut b = SceneBuilder::new(4, 4);
+/// let m = b.diffuse(Color::WHITE);
+/// b.sphere(Transform::translation(glam::DVec3::new(3.0, 0.0, 0.0)), m)
+///     .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+/// let scene = b.build().unwrap();
+/// for device in open_devices(&[Device::Cpu], &AdapterChoice::new(None)) {
+///     let m = measure(&device, &scene, 2, false).unwrap();
+///     assert_eq!(m.samples, 4 * 4 * 2);
+///     println!("{}: {:.0} samples/s", device.describe(), m.samples_per_second());
+/// }
+/// ```
 pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> Result<Measurement, GpuError> {
     match device {
         OpenDevice::Cpu => {
