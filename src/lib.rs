@@ -7,6 +7,7 @@
 //! - [`image`]: HDR images, tone mapping, PFM/EXR/HDR/PNG files.
 
 pub mod accel;
+pub mod analysis;
 pub mod cli;
 pub mod color;
 pub mod cpu;

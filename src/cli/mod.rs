@@ -5,11 +5,13 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod bench;
 mod check;
+pub mod converge;
 pub mod devices;
 pub mod gpu_args;
-mod tonemap;
 pub mod render;
+mod tonemap;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
 /// f64 CPU reference.
@@ -30,6 +32,10 @@ pub enum Command {
     Check(check::CheckArgs),
     /// Render a SceneLang script to image files.
     Render(render::RenderArgs),
+    /// Measure how error falls with samples and time on each device (table + log-log plot).
+    Converge(converge::ConvergeArgs),
+    /// Benchmark devices on the example scenes, object-count scaling and kernel specialisation.
+    Bench(bench::BenchArgs),
 }
 
 /// Runs one parsed command.
@@ -39,6 +45,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Devices(args) => devices::run(args),
         Command::Check(args) => check::run(args),
         Command::Render(args) => render::run(args),
+        Command::Converge(args) => converge::run(args),
+        Command::Bench(args) => bench::run(args),
     }
 }
 

@@ -1,0 +1,173 @@
+//! One timed render on a chosen device, with what `lumen converge` and `lumen bench` need
+//! from it; devices that cannot be opened are skipped with a warning rather than failing a
+//! whole study.
+
+use std::cell::RefCell;
+use std::fmt;
+
+use crate::cpu::{self, paths_per_sample, Progress, RenderOptions};
+use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
+use crate::gpu::{AdapterChoice, Gpu, GpuError, PassOptions};
+use crate::image::HdrImage;
+use crate::scene::Scene;
+
+/// A device to measure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Device {
+    /// A GPU through wgpu (the adapter `--adapter` / $LUMEN_ADAPTER picks).
+    Gpu,
+    /// The f64 CPU reference renderer on every core.
+    Cpu,
+}
+
+impl fmt::Display for Device {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Device::Gpu => "gpu",
+            Device::Cpu => "cpu",
+        })
+    }
+}
+
+/// An opened device: the CPU, or a GPU with its open device and a renderer that keeps
+/// compiled kernels, so only the first render of a kind of scene pays for kernel creation.
+#[derive(Debug)]
+pub enum OpenDevice {
+    Cpu,
+    Gpu { gpu: Box<Gpu>, renderer: RefCell<GpuRenderer> },
+}
+
+impl OpenDevice {
+    pub fn kind(&self) -> Device {
+        match self {
+            OpenDevice::Cpu => Device::Cpu,
+            OpenDevice::Gpu { .. } => Device::Gpu,
+        }
+    }
+
+    /// A name for tables: `cpu`, or `gpu` with the adapter's name.
+    pub fn describe(&self) -> String {
+        match self {
+            OpenDevice::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
+            OpenDevice::Gpu { gpu, .. } => format!("gpu ({})", gpu.adapter_info.name),
+        }
+    }
+}
+
+/// Opens each requested device once (duplicates dropped, order kept). A GPU that cannot be
+/// opened is reported on standard error and skipped.
+pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevice> {
+    let mut out: Vec<OpenDevice> = Vec::new();
+    for &d in devices {
+        if out.iter().any(|o| o.kind() == d) {
+            continue;
+        }
+        match d {
+            Device::Cpu => out.push(OpenDevice::Cpu),
+            Device::Gpu => match Gpu::new(adapter) {
+                Ok(g) => out.push(OpenDevice::Gpu { gpu: Box::new(g), renderer: RefCell::new(GpuRenderer::new()) }),
+                Err(GpuError::NoAdapter) => eprintln!("warning: skipping device gpu: no GPU adapter"),
+                Err(e) => eprintln!("warning: skipping device gpu: {e}"),
+            },
+        }
+    }
+    out
+}
+
+/// What one render produced and cost.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    pub image: HdrImage,
+    /// Camera samples per pixel actually taken.
+    pub spp: u32,
+    /// Wall time of the whole render call (the GPU's includes packing, and kernel creation
+    /// the first time a kernel is needed).
+    pub seconds: f64,
+    /// Radiance samples: pixels × spp × paths per sample.
+    pub samples: u64,
+    /// Rays traced, where the renderer counts them (the CPU does; the GPU kernel does not).
+    pub rays: Option<u64>,
+    pub non_finite_samples: u64,
+}
+
+impl Measurement {
+    pub fn samples_per_second(&self) -> f64 {
+        self.samples as f64 / self.seconds.max(1e-12)
+    }
+    pub fn rays_per_second(&self) -> Option<f64> {
+        self.rays.map(|r| r as f64 / self.seconds.max(1e-12))
+    }
+}
+
+/// Renders `scene` with `spp` camera samples per pixel on `device`.
+///
+/// ```
+/// use lumen::analysis::{measure, open_devices, Device};
+/// use lumen::color::Color;
+/// use lumen::gpu::AdapterChoice;
+/// use lumen::scene::{Renderer, SceneBuilder, Transform};
+///
+/// let mut b = SceneBuilder::new(4, 4);
+/// let m = b.diffuse(Color::WHITE);
+/// b.sphere(Transform::translation(glam::DVec3::new(3.0, 0.0, 0.0)), m)
+///     .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+/// let scene = b.build().unwrap();
+/// for device in open_devices(&[Device::Cpu], &AdapterChoice::new(None)) {
+///     let m = measure(&device, &scene, 2, false).unwrap();
+///     assert_eq!(m.samples, 4 * 4 * 2);
+///     println!("{}: {:.0} samples/s", device.describe(), m.samples_per_second());
+/// }
+/// ```
+pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> Result<Measurement, GpuError> {
+    match device {
+        OpenDevice::Cpu => {
+            let bar = if progress { Progress::Bar } else { Progress::Hidden };
+            let out = cpu::render(scene, &RenderOptions { spp: Some(spp) }, bar);
+            Ok(Measurement {
+                image: out.image,
+                spp,
+                seconds: out.stats.seconds,
+                samples: out.stats.samples,
+                rays: Some(out.stats.rays),
+                non_finite_samples: out.stats.non_finite_samples,
+            })
+        }
+        OpenDevice::Gpu { gpu, renderer } => {
+            let opts = GpuRenderOptions { spp: Some(spp), passes: PassOptions { progress, ..PassOptions::default() } };
+            let out = renderer.borrow_mut().render(gpu, scene, &opts)?;
+            let pixels = u64::from(scene.width) * u64::from(scene.height);
+            Ok(Measurement {
+                image: out.image,
+                spp: out.spp_done,
+                seconds: out.seconds,
+                samples: pixels * u64::from(out.spp_done) * paths_per_sample(scene),
+                rays: None,
+                non_finite_samples: out.non_finite_samples,
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::color::Color;
+    use crate::scene::{Renderer, SceneBuilder, Transform};
+
+    #[test]
+    fn cpu_measurement_counts_samples_and_rays() {
+        let mut b = SceneBuilder::new(6, 4);
+        let m = b.diffuse(Color::WHITE);
+        b.sphere(Transform::translation(glam::DVec3::new(3.0, 0.0, 0.0)), m)
+            .renderer(Renderer::OnOff { on: Color::WHITE, off: Color::BLACK });
+        let scene = b.build().unwrap();
+        let devices = open_devices(&[Device::Cpu, Device::Cpu], &AdapterChoice::new(None));
+        assert_eq!(devices.len(), 1);
+        let m = measure(&devices[0], &scene, 4, false).unwrap();
+        assert_eq!((m.spp, m.samples), (4, 6 * 4 * 4));
+        // OnOff traces exactly one camera ray per sample.
+        assert_eq!(m.rays, Some(6 * 4 * 4));
+        assert_eq!(m.image.width(), 6);
+        assert_eq!(Device::Gpu.to_string(), "gpu");
+    }
+}

@@ -1,0 +1,36 @@
+//! Measuring renderers: image error metrics, least-squares fits on log-log data, result
+//! tables (CSV and Markdown), a log-log plot written as PNG, and the process's peak memory.
+//!
+//! `lumen converge` and `lumen bench` are thin drivers over this module, so everything that
+//! turns numbers into conclusions (slopes, plateaus, efficiencies) is unit-tested here on
+//! synthetic data with known answers.
+//!
+//! ```
+//! use lumen::analysis::{fit_loglog, mse};
+//! use lumen::color::Rgb32;
+//! use lumen::image::HdrImage;
+//!
+//! let reference = HdrImage::from_fn(4, 4, |_, _| Rgb32 { r: 1.0, g: 1.0, b: 1.0 });
+//! let noisy = reference.map(|c| Rgb32 { r: c.r + 0.5, ..c });
+//! assert!((mse(&noisy, &reference).unwrap() - 0.25 / 3.0).abs() < 1e-12);
+//!
+//! // MSE ∝ 1/spp: slope exactly −1 in log-log.
+//! let spp = [1.0, 4.0, 16.0, 64.0];
+//! let err: Vec<f64> = spp.iter().map(|s| 0.3 / s).collect();
+//! assert!((fit_loglog(&spp, &err).unwrap().slope + 1.0).abs() < 1e-12);
+//! ```
+
+mod font;
+mod line_fit;
+mod measure;
+mod memory;
+mod metrics;
+mod plot;
+mod table;
+
+pub use line_fit::{fit_line, fit_loglog, tail_flattens, LineFit};
+pub use measure::{measure, open_devices, Device, Measurement, OpenDevice};
+pub use memory::{format_bytes, peak_memory_bytes};
+pub use metrics::{mse, rel_mse, rmse, ErrorMetrics, REL_MSE_EPSILON};
+pub use plot::{plot_loglog, Plot, Series};
+pub use table::{format_seconds, markdown_table, ConvergeRow, ConvergeTable};

@@ -1,0 +1,479 @@
+//! `lumen bench`: throughput of every device on the example scenes, how the time per sample
+//! grows with the number of objects (it should grow like log n, thanks to the BVH), peak
+//! memory, and (`--shaders`) what specialising the GPU kernel to a scene buys.
+//!
+//! Output is Markdown on standard output (and in `-o FILE`); progress goes to standard error.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{anyhow, bail, Context as _};
+use clap::Args;
+use glam::DVec3;
+
+use super::gpu_args::AdapterArgs;
+use super::render::{resize, MAX_SPP};
+use crate::analysis::{
+    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, open_devices, peak_memory_bytes,
+    Device, Measurement, OpenDevice,
+};
+use crate::color::Color;
+use crate::cpu::World;
+use crate::gpu::features::{FeatureSet, RendererKind};
+use crate::gpu::render::{assemble, ENTRY_POINT};
+use crate::gpu::Gpu;
+use crate::sampling::Pcg32;
+use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Transform};
+use crate::scenelang::{load_file, LoadOptions};
+
+/// Object counts of the scaling study (cut at `--max-spheres`).
+pub const SPHERE_COUNTS: [u32; 6] = [1, 10, 100, 1_000, 10_000, 100_000];
+/// CSG bounds compiled into the full-featured kernel (a general kernel must be sized for
+/// the worst scene it accepts; these cover every example scene).
+pub const FULL_CSG_MAX_INTERVALS: u32 = 16;
+pub const FULL_CSG_MAX_DEPTH: u32 = 8;
+
+/// Arguments of `lumen bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Devices to measure, comma-separated; an unavailable GPU is skipped with a warning.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Device::Gpu, Device::Cpu])]
+    pub device: Vec<Device>,
+    /// Scene scripts, or directories whose *.sl files are all benchmarked, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "scenes")]
+    pub scenes: Vec<PathBuf>,
+    /// Camera samples per pixel for the scene table (default 16; the scaling study takes 16× as
+    /// many, so the GPU's kernel-creation jitter does not swamp the difference).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Width every scene is rendered at (the height follows its camera's aspect ratio).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Small and fast: width 64, 4 spp, scaling up to 10 000 spheres.
+    #[arg(long)]
+    pub quick: bool,
+    /// Largest sphere count of the scaling study (0 skips it).
+    #[arg(long)]
+    pub max_spheres: Option<u32>,
+    /// Also compare the scene-specialised GPU kernel with a full-featured one: WGSL size and
+    /// pipeline creation time.
+    #[arg(long)]
+    pub shaders: bool,
+    /// Also write the Markdown report to this file.
+    #[arg(short = 'o', long = "output")]
+    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub adapter: AdapterArgs,
+}
+
+/// Settings after `--quick` and the defaults are applied.
+struct Plan {
+    spp: u32,
+    width: u32,
+    max_spheres: u32,
+}
+
+impl Plan {
+    fn of(args: &BenchArgs) -> anyhow::Result<Self> {
+        let (spp, width, max_spheres) = if args.quick { (4, 64, 10_000) } else { (16, 160, 100_000) };
+        let plan = Plan {
+            spp: args.spp.unwrap_or(spp),
+            width: args.width.unwrap_or(width),
+            max_spheres: args.max_spheres.unwrap_or(max_spheres),
+        };
+        if plan.spp == 0 || plan.spp > MAX_SPP / 16 {
+            bail!("--spp must be 1..={}, got {}", MAX_SPP / 16, plan.spp);
+        }
+        Ok(plan)
+    }
+}
+
+/// The scripts named by `--scenes`: files as given, directories' `*.sl` sorted by name.
+pub fn scene_files(list: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for p in list {
+        if p.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(p)
+                .with_context(|| format!("cannot list {}", p.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| f.is_file() && f.extension().is_some_and(|e| e == "sl"))
+                .collect();
+            found.sort();
+            out.extend(found);
+        } else if p.is_file() {
+            out.push(p.clone());
+        } else {
+            bail!("--scenes: {} is neither a file nor a directory", p.display());
+        }
+    }
+    if out.is_empty() {
+        bail!("--scenes: no .sl scripts found");
+    }
+    Ok(out)
+}
+
+/// `n` diffuse spheres scattered in a cube in front of the default camera, under a uniform
+/// sky. Radii shrink as n^(−1/3) so the cloud covers about the same part of the image at
+/// every n: what grows is only the number of objects a ray must be tested against.
+pub fn spheres_scene(n: u32, width: u32, height: u32) -> Scene {
+    let mut b = SceneBuilder::new(width, height);
+    let mut rng = Pcg32::new(42, 54);
+    let side = 4.0;
+    let spacing = side / f64::from(n).cbrt();
+    let materials: Vec<_> =
+        [Color::new(0.8, 0.3, 0.2), Color::new(0.2, 0.6, 0.3), Color::new(0.3, 0.4, 0.8)].map(|c| b.diffuse(c)).into();
+    for i in 0..n {
+        let p = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * side - DVec3::splat(side / 2.0);
+        let t = Transform::translation(DVec3::new(5.0, 0.0, 0.0) + p) * Transform::scaling(DVec3::splat(0.3 * spacing));
+        b.sphere(t, materials[i as usize % materials.len()]);
+    }
+    b.environment(Environment::Uniform(Color::gray(1.0)))
+        .renderer(Renderer::PathTracer(PathTracerSettings { n: 1, ..PathTracerSettings::default() }));
+    b.build().expect("generated spheres scene is valid")
+}
+
+/// Runs `lumen bench`.
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    let plan = Plan::of(&args)?;
+    let files = scene_files(&args.scenes)?;
+    let devices = open_devices(&args.device, &args.adapter.choice());
+    if devices.is_empty() {
+        bail!("none of the requested devices is available");
+    }
+    for d in &devices {
+        eprintln!("warming up {} ...", d.describe());
+        measure(d, &spheres_scene(1, 8, 8), 1, false).map_err(|e| anyhow!("{}: {e}", d.kind()))?;
+    }
+    let mut report = format!(
+        "Devices: {}. Scenes at width {} px, {} spp.\n\n",
+        devices.iter().map(OpenDevice::describe).collect::<Vec<_>>().join(", "),
+        plan.width,
+        plan.spp
+    );
+    report.push_str(&scenes_table(&files, &devices, &plan));
+    if plan.max_spheres > 0 {
+        report.push('\n');
+        report.push_str(&scaling_table(&devices, &plan)?);
+    }
+    if args.shaders {
+        report.push('\n');
+        match devices.iter().find(|d| d.kind() == Device::Gpu) {
+            Some(gpu) => report.push_str(&shaders_table(gpu, &files, &plan)?),
+            None => report.push_str("Shader comparison skipped: no GPU device.\n"),
+        }
+    }
+    report.push_str(&format!("\nPeak resident memory of the whole run: {}\n", format_bytes(peak_memory_bytes())));
+    println!("{report}");
+    if let Some(path) = &args.output {
+        crate::image::write_atomically(path, report.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn load_scene(path: &Path, width: u32) -> anyhow::Result<Scene> {
+    let mut scene = load_file(path, &LoadOptions::default()).map_err(|e| anyhow!("{e}"))?;
+    resize(&mut scene, Some(width), None)?;
+    Ok(scene)
+}
+
+/// Rates with an SI prefix: 1.23 M.
+fn si(v: f64) -> String {
+    match v {
+        v if !v.is_finite() => "n/a".into(),
+        v if v >= 1e9 => format!("{:.2} G", v / 1e9),
+        v if v >= 1e6 => format!("{:.2} M", v / 1e6),
+        v if v >= 1e3 => format!("{:.2} k", v / 1e3),
+        v => format!("{v:.1}"),
+    }
+}
+
+fn name_of(path: &Path) -> String {
+    path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| path.display().to_string())
+}
+
+fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> String {
+    let headers = ["scene", "device", "size", "spp", "seconds", "samples/s", "rays/s", "peak memory"];
+    let mut rows = Vec::new();
+    for file in files {
+        let name = name_of(file);
+        let scene = match load_scene(file, plan.width) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("warning: skipping {name}: {e}");
+                rows.push(vec![
+                    name.clone(),
+                    "-".into(),
+                    format!("error: {e}"),
+                    "".into(),
+                    "".into(),
+                    "".into(),
+                    "".into(),
+                    "".into(),
+                ]);
+                continue;
+            }
+        };
+        for d in devices {
+            eprintln!("{name} on {} ...", d.kind());
+            let size = format!("{}×{}", scene.width, scene.height);
+            match Differential::run(d, &scene, plan.spp) {
+                Ok(diff) => {
+                    let rate = diff.per_sample().map(|t| 1.0 / t);
+                    rows.push(vec![
+                        name.clone(),
+                        d.kind().to_string(),
+                        size,
+                        diff.more.spp.to_string(),
+                        format!("{:.3}", diff.more.seconds),
+                        rate.map_or("n/a (timing noise)".into(), si),
+                        match (d.kind(), diff.rays_per_second()) {
+                            (Device::Gpu, _) => "n/a (not counted)".into(),
+                            (_, r) => r.map_or("n/a (timing noise)".into(), si),
+                        },
+                        format_bytes(peak_memory_bytes()),
+                    ]);
+                }
+                Err(e) => {
+                    eprintln!("warning: {name} on {}: {e}", d.kind());
+                    let msg = format!("error: {e}").replace('\n', " ");
+                    rows.push(vec![
+                        name.clone(),
+                        d.kind().to_string(),
+                        size,
+                        msg,
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                    ]);
+                }
+            }
+        }
+    }
+    format!(
+        "### Scenes\n\nEach scene is rendered at 1 spp and at 1 + {} spp; seconds = the second render's wall time, \
+             samples/s and rays/s = the extra samples (rays) over the extra time, which leaves out fixed costs (BVH \
+             build, packing, kernel creation). Peak memory = VmHWM of the process so far.\n\n{}",
+        plan.spp,
+        markdown_table(&headers, &rows)
+    )
+}
+
+/// Two renders whose difference removes fixed costs (loading the BVH, packing, kernel
+/// creation): one at 1 spp and one at `1 + spp`.
+struct Differential {
+    more: Measurement,
+    extra_samples: f64,
+    extra_seconds: f64,
+    extra_rays: Option<f64>,
+}
+
+impl Differential {
+    fn run(d: &OpenDevice, scene: &Scene, spp: u32) -> anyhow::Result<Self> {
+        let one = measure(d, scene, 1, false).map_err(|e| anyhow!("{e}"))?;
+        let more = measure(d, scene, 1 + spp, true).map_err(|e| anyhow!("{e}"))?;
+        Ok(Self {
+            extra_samples: more.samples.saturating_sub(one.samples) as f64,
+            extra_seconds: more.seconds - one.seconds,
+            extra_rays: one.rays.zip(more.rays).map(|(a, b)| b.saturating_sub(a) as f64),
+            more,
+        })
+    }
+
+    /// Seconds per radiance sample, `None` when timing noise swamped the difference.
+    fn per_sample(&self) -> Option<f64> {
+        (self.extra_seconds > 0.0 && self.extra_samples > 0.0).then(|| self.extra_seconds / self.extra_samples)
+    }
+
+    fn rays_per_second(&self) -> Option<f64> {
+        self.extra_rays.filter(|_| self.extra_seconds > 0.0).map(|r| r / self.extra_seconds)
+    }
+}
+
+fn scaling_table(devices: &[OpenDevice], plan: &Plan) -> anyhow::Result<String> {
+    let (w, h) = (96, 72);
+    let spp = 16 * plan.spp;
+    let headers = ["spheres", "device", "BVH build (CPU)", "time per sample", "samples/s"];
+    let mut rows = Vec::new();
+    let mut series: Vec<(Device, Vec<f64>, Vec<f64>)> = devices.iter().map(|d| (d.kind(), vec![], vec![])).collect();
+    for &n in SPHERE_COUNTS.iter().filter(|&&n| n <= plan.max_spheres) {
+        let scene = spheres_scene(n, w, h);
+        let start = Instant::now();
+        let world = World::new(&scene);
+        let build = start.elapsed().as_secs_f64();
+        drop(world);
+        for (d, (_, ns, ts)) in devices.iter().zip(series.iter_mut()) {
+            eprintln!("{n} spheres on {} ...", d.kind());
+            let diff = Differential::run(d, &scene, spp).with_context(|| format!("{n} spheres on {}", d.kind()))?;
+            let t = diff.per_sample().unwrap_or(0.0);
+            if t > 0.0 {
+                ns.push(f64::from(n));
+                ts.push(t);
+            }
+            rows.push(vec![
+                n.to_string(),
+                d.kind().to_string(),
+                format_seconds(build),
+                if t > 0.0 { format_seconds(t) } else { "n/a (timing noise)".into() },
+                if t > 0.0 { si(1.0 / t) } else { "n/a".into() },
+            ]);
+        }
+    }
+    let mut out = format!(
+        "### Scaling with object count\n\n{w}×{h} px, path tracer (1 path per sample, depth 2) under a uniform sky; \
+         time per sample = (t(1 + {spp} spp) − t(1 spp)) / extra samples, so set-up and kernel creation cancel.\n\n{}\n",
+        markdown_table(&headers, &rows)
+    );
+    for (d, ns, ts) in &series {
+        out.push_str(&growth_line(*d, ns, ts));
+        out.push('\n');
+    }
+    eprint!("{}", out.lines().filter(|l| l.starts_with("- ")).map(|l| format!("{l}\n")).collect::<String>());
+    Ok(out)
+}
+
+/// How time per sample grows with n: per decade (log n model) and as a power law.
+fn growth_line(d: Device, ns: &[f64], ts: &[f64]) -> String {
+    let logn: Vec<f64> = ns.iter().map(|n| n.log10()).collect();
+    match (fit_line(&logn, ts), fit_loglog(ns, ts)) {
+        (Some(lin), Some(pow)) => format!(
+            "- {d}: time per sample ≈ {} + {} × log10(n) (r² = {:.3}); as a power law ∝ n^{:.3} \
+             (0 = flat, 1 = linear: a BVH gives a small exponent)",
+            format_seconds(lin.intercept),
+            format_seconds(lin.slope),
+            lin.r2,
+            pow.slope
+        ),
+        _ => format!("- {d}: growth n/a (fewer than two usable points)"),
+    }
+}
+
+/// The kernel for every scene of the same renderer and environment kind: all shapes, CSG,
+/// pigments, BRDFs and lights compiled in. (Renderer and environment kinds are exclusive
+/// choices in [`FeatureSet`], so they stay the scene's.)
+pub fn full_features(spec: &FeatureSet) -> FeatureSet {
+    let path = spec.renderer == RendererKind::PathTracer;
+    FeatureSet {
+        sphere: true,
+        plane: true,
+        cube: true,
+        cylinder: true,
+        csg: true,
+        csg_max_intervals: spec.csg_max_intervals.max(FULL_CSG_MAX_INTERVALS),
+        csg_max_depth: spec.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
+        pigment_uniform: true,
+        pigment_checkered: true,
+        pigment_image: true,
+        diffuse: true,
+        specular: true,
+        dielectric: true,
+        point_lights: true,
+        area_lights: path,
+        environment: spec.environment,
+        renderer: spec.renderer,
+        bvh: true,
+        nee: path,
+    }
+}
+
+/// WGSL size and pipeline creation time (naga validation + driver compile) of a kernel.
+fn kernel_cost(gpu: &Gpu, features: &FeatureSet) -> anyhow::Result<(usize, usize, f64)> {
+    let source = assemble(features).map_err(|e| anyhow!("{e}"))?.source;
+    let start = Instant::now();
+    let kernel = gpu.compute_kernel("bench kernel", &source, ENTRY_POINT).map_err(|e| anyhow!("{e}"))?;
+    gpu.wait_idle().map_err(|e| anyhow!("{e}"))?;
+    let seconds = start.elapsed().as_secs_f64();
+    drop(kernel);
+    Ok((source.len(), source.lines().count(), seconds))
+}
+
+fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow::Result<String> {
+    let OpenDevice::Gpu { gpu, .. } = device else { bail!("the shader comparison needs a GPU device") };
+    let headers = ["scene", "kernel", "features", "WGSL bytes", "WGSL lines", "pipeline creation", "samples/s"];
+    let mut scenes =
+        vec![("1000 spheres only (generated)".to_string(), spheres_scene(1000, plan.width, plan.width * 3 / 4))];
+    for file in files {
+        match load_scene(file, plan.width) {
+            Ok(s) => scenes.push((name_of(file), s)),
+            Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),
+        }
+    }
+    let mut rows = Vec::new();
+    for (name, scene) in &scenes {
+        let spec = FeatureSet::of(scene);
+        eprintln!("{name}: kernels ...");
+        let rate = Differential::run(device, scene, plan.spp)
+            .with_context(|| format!("{name} on the GPU"))?
+            .per_sample()
+            .map_or("n/a (timing noise)".into(), |t| si(1.0 / t));
+        for (kind, f) in [("specialised", spec), ("full-featured", full_features(&spec))] {
+            let (bytes, lines, secs) = kernel_cost(gpu, &f).with_context(|| format!("{name}: {kind} kernel"))?;
+            rows.push(vec![
+                name.clone(),
+                kind.into(),
+                f.names().len().to_string(),
+                bytes.to_string(),
+                lines.to_string(),
+                format_seconds(secs),
+                if kind == "specialised" { rate.clone() } else { "n/a (gpu::render has no feature override)".into() },
+            ]);
+        }
+    }
+    Ok(format!(
+        "### Specialised vs full-featured GPU kernel\n\nfeatures = number of `// #if` feature flags on; full-featured = \
+         every shape, CSG ({FULL_CSG_MAX_INTERVALS} intervals, depth {FULL_CSG_MAX_DEPTH}), pigment, BRDF and light \
+         kind, with the scene's renderer and environment kind. Pipeline creation = naga validation + \
+         `create_compute_pipeline` until the device is idle.\n\n{}",
+        markdown_table(&headers, &rows)
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu::paths_per_sample;
+
+    #[test]
+    fn spheres_scene_has_n_spheres_in_view() {
+        for n in [1, 1000] {
+            let mut s = spheres_scene(n, 32, 24);
+            assert_eq!(s.shapes.len(), n as usize);
+            assert_eq!(paths_per_sample(&s), 1);
+            // The cloud covers a similar, partial share of the image at every n.
+            s.renderer = Renderer::OnOff { on: Color::WHITE, off: Color::BLACK };
+            let img = crate::cpu::render(&s, &crate::cpu::RenderOptions::default(), crate::cpu::Progress::Hidden).image;
+            let covered = img.mean().r;
+            assert!((0.005..0.9).contains(&covered), "{n} spheres cover {covered}");
+        }
+    }
+
+    #[test]
+    fn full_features_contain_the_specialised_ones() {
+        let s = spheres_scene(3, 4, 4);
+        let spec = FeatureSet::of(&s);
+        let full = full_features(&spec);
+        let (a, b) = (spec.names(), full.names());
+        assert!(a.iter().all(|n| b.contains(n)), "{a:?} ⊄ {b:?}");
+        assert!(b.len() > a.len() && b.contains(&"CSG") && b.contains(&"DIELECTRIC"));
+        assert_eq!((full.renderer, full.environment), (spec.renderer, spec.environment));
+        // Both assemble to valid WGSL, the full one larger.
+        let (sa, sb) = (assemble(&spec).unwrap().source, assemble(&full).unwrap().source);
+        assert!(sb.len() > sa.len());
+    }
+
+    #[test]
+    fn scene_lists_and_plan() {
+        let dir = tempfile::tempdir().unwrap();
+        for f in ["b.sl", "a.sl", "c.txt"] {
+            std::fs::write(dir.path().join(f), "").unwrap();
+        }
+        let files = scene_files(&[dir.path().to_path_buf()]).unwrap();
+        assert_eq!(files.iter().map(|f| name_of(f)).collect::<Vec<_>>(), vec!["a.sl", "b.sl"]);
+        assert!(scene_files(&[dir.path().join("none")]).is_err());
+        assert_eq!(si(1.5e6), "1.50 M");
+        assert_eq!(si(12.0), "12.0");
+        assert_eq!(growth_line(Device::Cpu, &[1.0], &[1.0]), "- cpu: growth n/a (fewer than two usable points)");
+    }
+}
