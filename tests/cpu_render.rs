@@ -477,6 +477,46 @@ mod cli {
         assert_eq!((png.width(), png.height()), (8, 8));
     }
 
+    /// The default device is the GPU; its image is the CPU's (Flat is exact in f32 here).
+    #[test]
+    fn renders_on_the_gpu_by_default() {
+        if lumen::gpu::gpu_for_tests("cli_renders_on_the_gpu_by_default").is_none() {
+            return;
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let out = lumen(dir.path(), &["-o", "gpu.pfm", "--width", "8"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(stderr.contains("on the GPU"), "{stderr}");
+        let out = lumen(dir.path(), &["-o", "cpu.pfm", "--width", "8", "--device", "cpu"]);
+        assert!(out.status.success());
+        let gpu = lumen::image::read_image(&dir.path().join("gpu.pfm")).unwrap();
+        let cpu = lumen::image::read_image(&dir.path().join("cpu.pfm")).unwrap();
+        assert_eq!(gpu.pixels(), cpu.pixels());
+        assert_eq!(gpu.get(4, 4), lumen::color::Rgb32::new(0.25, 0.5, 2.0));
+    }
+
+    /// `lumen shader` prints a kernel specialised to the script; `lumen check` its features.
+    #[test]
+    fn shader_and_check_show_the_specialised_kernel() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("tiny.sl"), SCRIPT).unwrap();
+        let run = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_lumen")).current_dir(dir.path()).args(args).output();
+        let out = run(&["shader", "tiny.sl", "-o", "tiny.wgsl"]).unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let wgsl = std::fs::read_to_string(dir.path().join("tiny.wgsl")).unwrap();
+        let module = naga::front::wgsl::parse_str(&wgsl).expect("the printed kernel parses");
+        let has = |name: &str| module.functions.iter().any(|(_, f)| f.name.as_deref() == Some(name));
+        assert!(has("sphere_span") && has("radiance_flat"), "the kernel lacks what the scene needs");
+        assert!(!has("cylinder_span") && !has("radiance_path"), "the kernel holds what the scene does not use");
+        let out = run(&["check", "tiny.sl"]).unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("GPU kernel features:") && stdout.contains(" SPHERE ") && stdout.contains("FLAT"));
+        assert!(!stdout.contains("CYLINDER"), "{stdout}");
+        let out = run(&["shader", "missing.sl"]).unwrap();
+        assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing.sl"));
+    }
+
     #[test]
     fn bad_arguments_fail_without_output() {
         let dir = tempfile::tempdir().unwrap();
@@ -484,7 +524,9 @@ mod cli {
             &["-o", "out.png", "--spp", "0"][..],
             &["-o", "out.png", "--width", "0"],
             &["-o", "out.png", "--height", "100000"],
-            &["-o", "out.png", "--device", "gpu"],
+            &["-o", "out.png", "--device", "gpu", "--adapter", "no-such-adapter-xyz"],
+            &["-o", "out.png", "--device", "auto", "--adapter", "no-such-adapter-xyz"],
+            &["-o", "out.png", "--time-limit", "-1"],
             &["-o", "out.png", "--alpha", "-1"],
             &["-o", "out.png", "--frames", "0:1:0"],
             &["-o", "out.png", "-o", "out.txt"],

@@ -162,6 +162,15 @@ fn settings_and_their_defaults() {
             nee: true
         })
     );
+    // Extension: `.nee 0` turns next-event estimation off; only 0 and 1 are accepted.
+    let nee = |v: &str| match r(&format!("Renderer.PathTracer(.nee {v})")) {
+        Renderer::PathTracer(p) => p.nee,
+        other => panic!("{other:?}"),
+    };
+    assert!(!nee("0"));
+    assert!(nee("1"));
+    let err = load("USING Renderer.PathTracer(.nee 2) Image(1, 1) Camera.Orthogonal() Tracer()").unwrap_err();
+    assert!(err.to_string().contains("`.nee` must be a whole number from 0 to 1"), "{err}");
     let c =
         load("USING Camera.Perspective(2, TRANSLATE(.X -1), 3) Image(1, 1) Renderer.Flat() Tracer()").unwrap().camera;
     assert_eq!((c.aspect_ratio, c.projection), (2.0, Projection::Perspective { screen_distance: 3.0 }));

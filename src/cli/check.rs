@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::anyhow;
 use clap::Args;
 
+use crate::gpu::features::FeatureSet;
 use crate::scenelang::{load_file, LoadOptions, SceneSummary};
 
 /// Arguments of `lumen check`.
@@ -28,5 +29,14 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     let scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("the scene does not load\n{e}"))?;
     println!("{}: ok", args.scene.display());
     println!("{}", SceneSummary::of(&scene));
+    // What the GPU kernel is specialised for (`lumen shader` prints the kernel itself).
+    let features = FeatureSet::of(&scene);
+    println!("GPU kernel features: {}", features.names().join(" "));
+    if features.csg {
+        println!(
+            "CSG interval lists: at most {} intervals, trees {} deep",
+            features.csg_max_intervals, features.csg_max_depth
+        );
+    }
     Ok(())
 }

@@ -11,6 +11,7 @@ pub mod converge;
 pub mod devices;
 pub mod gpu_args;
 pub mod render;
+mod shader;
 mod tonemap;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
@@ -32,6 +33,8 @@ pub enum Command {
     Check(check::CheckArgs),
     /// Render a SceneLang script to image files.
     Render(render::RenderArgs),
+    /// Print the WGSL kernel assembled for a scene (only what the scene uses).
+    Shader(shader::ShaderArgs),
     /// Measure how error falls with samples and time on each device (table + log-log plot).
     Converge(converge::ConvergeArgs),
     /// Benchmark devices on the example scenes, object-count scaling and kernel specialisation.
@@ -45,6 +48,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Devices(args) => devices::run(args),
         Command::Check(args) => check::run(args),
         Command::Render(args) => render::run(args),
+        Command::Shader(args) => shader::run(args),
         Command::Converge(args) => converge::run(args),
         Command::Bench(args) => bench::run(args),
     }

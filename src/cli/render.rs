@@ -9,9 +9,13 @@ use std::process::Command as Process;
 use anyhow::{anyhow, bail, Context as _};
 use clap::{Args, ValueEnum};
 
-use crate::cpu::{self, paths_per_sample, Progress, RenderOptions, RenderOutput};
-use crate::image::{check_size, write_image, ImageFormat, ToneMap};
-use crate::scene::{Scene, MAX_IMAGE_SIDE};
+use super::gpu_args::GpuArgs;
+use crate::analysis::OpenDevice;
+use crate::cpu::{self, paths_per_sample, Progress, RenderOptions};
+use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
+use crate::gpu::{Gpu, GpuError, StopReason};
+use crate::image::{check_size, write_image, HdrImage, ImageFormat, ToneMap};
+use crate::scene::{Renderer, Scene, MAX_IMAGE_SIDE};
 use crate::scenelang::{load_file, LoadOptions};
 
 /// Most camera samples per pixel `--spp` accepts.
@@ -24,11 +28,11 @@ pub const VIDEO_FPS: u32 = 24;
 /// Where to render.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum DeviceChoice {
-    /// The f64 CPU reference renderer.
+    /// The f64 CPU reference renderer (all cores).
     Cpu,
-    /// A GPU through wgpu.
+    /// A GPU through wgpu; an error when none can be used.
     Gpu,
-    /// The GPU if one is usable, else the CPU.
+    /// The GPU when one can be used, else the CPU with a warning.
     Auto,
 }
 
@@ -41,8 +45,11 @@ pub struct RenderArgs {
     /// radiance, LDR ones (.png .jpg) the tone-mapped image. Default: SCENE's name + .png.
     #[arg(short = 'o', long = "output")]
     pub outputs: Vec<PathBuf>,
+    /// Where to render.
     #[arg(long, value_enum, default_value_t = DeviceChoice::Auto)]
     pub device: DeviceChoice,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
     /// Image width in pixels. Given alone, the height follows from the camera's aspect ratio.
     #[arg(long)]
     pub width: Option<u32>,
@@ -62,6 +69,10 @@ pub struct RenderArgs {
     /// Replaces the state of the tracer's Pcg seed.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Path tracer: no next-event estimation (light only found by BSDF sampling, as in
+    /// Raytracer.jl); the script's `.nee 0` does the same.
+    #[arg(long)]
+    pub no_nee: bool,
     /// Tone mapping: Raytracer.jl's Reinhard key (implies the Reinhard curve).
     #[arg(long)]
     pub alpha: Option<f32>,
@@ -155,16 +166,118 @@ pub fn tone_map(alpha: Option<f32>, gamma: Option<f32>) -> anyhow::Result<ToneMa
     Ok(tm)
 }
 
-/// The one place that decides which renderer runs (the GPU path plugs in here).
-fn render_on(device: DeviceChoice, scene: &Scene, opts: &RenderOptions) -> anyhow::Result<RenderOutput> {
-    match device {
-        DeviceChoice::Cpu => Ok(cpu::render(scene, opts, Progress::Bar)),
-        DeviceChoice::Auto => {
-            eprintln!("note: the GPU renderer is not available yet; rendering on the CPU");
-            Ok(cpu::render(scene, opts, Progress::Bar))
+/// Opens the device `--device` asks for. `auto` falls back to the CPU, with a warning, when
+/// no GPU can be opened; an adapter asked for by name that does not exist is an error even
+/// then (the user wanted that one).
+fn open_device(args: &RenderArgs) -> anyhow::Result<OpenDevice> {
+    let open_gpu = || Gpu::new(&args.gpu.adapter.choice());
+    let gpu_device = |g: Gpu| {
+        if g.adapter_info.device_type == wgpu::DeviceType::Cpu {
+            eprintln!(
+                "note: {} is a software adapter (the GPU API emulated on the CPU); lumen's own CPU renderer \
+                 (--device cpu) is usually faster on this machine",
+                g.adapter_info.name
+            );
         }
-        DeviceChoice::Gpu => bail!("--device gpu: the GPU renderer is not available yet (use --device cpu)"),
+        OpenDevice::Gpu { gpu: Box::new(g), renderer: Default::default() }
+    };
+    match args.device {
+        DeviceChoice::Cpu => {
+            if args.gpu.time_limit.is_some() {
+                eprintln!("warning: --time-limit applies to GPU renders; the CPU renders every sample");
+            }
+            Ok(OpenDevice::Cpu)
+        }
+        DeviceChoice::Gpu => Ok(gpu_device(open_gpu().context("--device gpu")?)),
+        DeviceChoice::Auto => match open_gpu() {
+            Ok(g) => Ok(gpu_device(g)),
+            Err(e @ GpuError::AdapterNotFound { .. }) => Err(e.into()),
+            Err(e) => {
+                eprintln!("warning: {e}");
+                eprintln!("warning: rendering on the CPU reference renderer instead (slower; --device cpu says so)");
+                Ok(OpenDevice::Cpu)
+            }
+        },
     }
+}
+
+/// One rendered image and how it went.
+struct Rendered {
+    image: HdrImage,
+    non_finite_samples: u64,
+    /// The render was cut short (time limit, Ctrl-C): later frames are not rendered.
+    stopped_early: bool,
+}
+
+/// Renders on the open device. With `--device auto`, a scene the GPU refuses (too large
+/// for the adapter's limits, say) is rendered on the CPU instead, with a warning.
+fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene) -> anyhow::Result<Rendered> {
+    let OpenDevice::Gpu { gpu, renderer } = device else {
+        return Ok(render_on_cpu(scene, args.spp));
+    };
+    match render_on_gpu(gpu, &mut renderer.borrow_mut(), args, scene) {
+        Err(e) if args.device == DeviceChoice::Auto && !matches!(e, GpuError::DeviceLost(_)) => {
+            eprintln!("warning: the GPU cannot render this scene: {e}");
+            eprintln!("warning: rendering on the CPU reference renderer instead");
+            Ok(render_on_cpu(scene, args.spp))
+        }
+        other => other.map_err(|e| anyhow!("GPU render failed: {e}")),
+    }
+}
+
+fn render_on_cpu(scene: &Scene, spp: Option<u32>) -> Rendered {
+    let out = cpu::render(scene, &RenderOptions { spp }, Progress::Bar);
+    let s = &out.stats;
+    eprintln!(
+        "{}×{} {} on the CPU ({} threads): {} samples, {} rays in {:.2} s ({:.2} Mrays/s)",
+        scene.width,
+        scene.height,
+        scene.renderer.name(),
+        rayon::current_num_threads(),
+        s.samples,
+        s.rays,
+        s.seconds,
+        s.rays as f64 / s.seconds.max(1e-9) / 1e6
+    );
+    Rendered { image: out.image, non_finite_samples: s.non_finite_samples, stopped_early: false }
+}
+
+fn render_on_gpu(
+    gpu: &Gpu,
+    renderer: &mut GpuRenderer,
+    args: &RenderArgs,
+    scene: &Scene,
+) -> Result<Rendered, GpuError> {
+    let opts = GpuRenderOptions { spp: args.spp, passes: args.gpu.pass_options() };
+    let out = renderer.render(gpu, scene, &opts)?;
+    let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
+    eprintln!(
+        "{}×{} {} on the GPU ({}): {} of {} samples per pixel, {} samples in {:.2} s ({:.2} Msamples/s)",
+        scene.width,
+        scene.height,
+        scene.renderer.name(),
+        gpu.adapter_info.name,
+        out.spp_done,
+        out.spp_requested,
+        samples,
+        out.seconds,
+        samples as f64 / out.seconds.max(1e-9) / 1e6
+    );
+    let stopped_early = match out.stop {
+        StopReason::Completed => false,
+        StopReason::TimeLimit => {
+            eprintln!("note: stopped at the time limit with {} samples per pixel", out.spp_done);
+            true
+        }
+        StopReason::Interrupted => {
+            eprintln!("note: interrupted; keeping the {} samples per pixel of the completed rounds", out.spp_done);
+            true
+        }
+    };
+    if out.spp_done == 0 {
+        return Err(GpuError::Validation("stopped before any sample was complete; nothing to write".into()));
+    }
+    Ok(Rendered { image: out.image, non_finite_samples: out.non_finite_samples, stopped_early })
 }
 
 /// Checks everything that can be checked before rendering.
@@ -192,6 +305,11 @@ fn load(args: &RenderArgs, time: f64) -> anyhow::Result<Scene> {
     if let Some(seed) = args.seed {
         scene.tracer.rng.state = seed;
     }
+    if args.no_nee {
+        if let Renderer::PathTracer(p) = &mut scene.renderer {
+            p.nee = false;
+        }
+    }
     let spp = args.spp.map_or(u64::from(scene.tracer.samples_per_side).pow(2).max(1), u64::from);
     if spp * paths_per_sample(&scene) > u64::from(u32::MAX) {
         bail!("{spp} samples per pixel × {} paths per sample is too many (at most 2³² − 1)", paths_per_sample(&scene));
@@ -199,29 +317,24 @@ fn load(args: &RenderArgs, time: f64) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
-/// Renders one image and writes it to every output.
-fn render_one(args: &RenderArgs, time: f64, outputs: &[PathBuf], tm: &ToneMap) -> anyhow::Result<()> {
+/// Renders one image and writes it to every output; returns whether it stopped early.
+fn render_one(
+    device: &OpenDevice,
+    args: &RenderArgs,
+    time: f64,
+    outputs: &[PathBuf],
+    tm: &ToneMap,
+) -> anyhow::Result<bool> {
     let scene = load(args, time)?;
-    let out = render_on(args.device, &scene, &RenderOptions { spp: args.spp })?;
-    let s = &out.stats;
-    eprintln!(
-        "{}×{} {}: {} samples, {} rays in {:.2} s ({:.2} Mrays/s)",
-        scene.width,
-        scene.height,
-        scene.renderer.name(),
-        s.samples,
-        s.rays,
-        s.seconds,
-        s.rays as f64 / s.seconds.max(1e-9) / 1e6
-    );
-    if s.non_finite_samples > 0 {
-        eprintln!("warning: {} NaN or infinite radiance samples were counted as black", s.non_finite_samples);
+    let out = render_on(device, args, &scene)?;
+    if out.non_finite_samples > 0 {
+        eprintln!("warning: {} NaN or infinite radiance samples were counted as black", out.non_finite_samples);
     }
     for o in outputs {
         write_image(o, &out.image, tm).with_context(|| format!("cannot write {}", o.display()))?;
         eprintln!("wrote {}", o.display());
     }
-    Ok(())
+    Ok(out.stopped_early)
 }
 
 /// Runs `lumen render`.
@@ -233,13 +346,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         args.outputs.clone()
     };
     let (tm, frames) = validate(&args, &outputs)?;
+    // Load once before opening a device: a broken script fails fast, without GPU start-up.
+    load(&args, frames.map_or(args.time, |f| f.time(0)))?;
+    let device = open_device(&args)?;
     let Some(frames) = frames else {
-        return render_one(&args, args.time, &outputs, &tm);
+        return render_one(&device, &args, args.time, &outputs, &tm).map(|_| ());
     };
     for k in 0..frames.count {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
         eprintln!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
-        render_one(&args, frames.time(k), &paths, &tm)?;
+        if render_one(&device, &args, frames.time(k), &paths, &tm)? {
+            eprintln!("note: stopping the animation after frame {}", k + 1);
+            return Ok(());
+        }
     }
     if let Some(ldr) = outputs.iter().find(|o| ImageFormat::from_path(o).is_ok_and(|f| !f.is_hdr())) {
         make_video(ldr, frames.count)?;

@@ -574,6 +574,7 @@ impl Interp<'_> {
                                 p("n", T::Number),
                                 p("max_depth", T::Number),
                                 p("roulette_depth", T::Number),
+                                p("nee", T::Number),
                             ],
                         )?;
                         let d = PathTracerSettings::default();
@@ -583,7 +584,9 @@ impl Interp<'_> {
                             n: self.int(&a, 2, "n", d.n.into(), 1, 1 << 20)? as u32,
                             max_depth: self.int(&a, 3, "max_depth", d.max_depth.into(), 0, 1024)? as u32,
                             roulette_depth: self.int(&a, 4, "roulette_depth", d.roulette_depth.into(), 0, 1024)? as u32,
-                            nee: d.nee,
+                            // Extension: `.nee 0` turns next-event estimation off (plain BSDF
+                            // sampling, as Raytracer.jl's path tracer); 1, the default, keeps it.
+                            nee: self.int(&a, 5, "nee", u64::from(d.nee), 0, 1)? == 1,
                         })
                     }
                 })

@@ -74,10 +74,11 @@ impl SceneSummary {
                 format!("PointLight (background {}, ambient {})", rgb(*background), rgb(*ambient))
             }
             Renderer::PathTracer(p) => format!(
-                "PathTracer (n {}, max_depth {}, roulette_depth {}, background {}, rng state {} inc {})",
+                "PathTracer (n {}, max_depth {}, roulette_depth {}, nee {}, background {}, rng state {} inc {})",
                 p.n,
                 p.max_depth,
                 p.roulette_depth,
+                if p.nee { "on" } else { "off" },
                 rgb(p.background),
                 p.rng.state,
                 p.rng.inc

@@ -1,0 +1,51 @@
+//! `lumen shader SCENE.sl`: prints the WGSL compute kernel lumen assembles for a scene
+//! (only the shader modules and `// #if` blocks the scene's features need).
+
+use std::io::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{anyhow, Context as _};
+use clap::Args;
+
+use crate::gpu::features::FeatureSet;
+use crate::gpu::render::assemble;
+use crate::image::write_atomically;
+use crate::scenelang::{load_file, LoadOptions};
+
+/// Arguments of `lumen shader`.
+#[derive(Debug, Args)]
+pub struct ShaderArgs {
+    /// The SceneLang script whose kernel to print.
+    pub scene: PathBuf,
+    /// Write the WGSL to this file instead of standard output.
+    #[arg(short = 'o', long = "output")]
+    pub output: Option<PathBuf>,
+    /// Value of TIME in the script.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub time: f64,
+    /// Variables defined before the script runs, "name value, name value"; may repeat.
+    #[arg(long)]
+    pub vars: Vec<String>,
+}
+
+/// Loads the scene, assembles and validates its kernel (naga), and prints it.
+pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
+    let opts = LoadOptions { time: args.time, vars: args.vars };
+    let scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("the scene does not load\n{e}"))?;
+    let features = FeatureSet::of(&scene);
+    let assembled = assemble(&features).map_err(|e| anyhow!("cannot assemble the kernel: {e}"))?;
+    let text = format!(
+        "// lumen render kernel for {}\n// features: {}\n{}",
+        args.scene.display(),
+        features.names().join(" "),
+        assembled.source
+    );
+    match &args.output {
+        Some(path) => {
+            write_atomically(path, text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
+            eprintln!("wrote {} ({} bytes, {} lines)", path.display(), text.len(), text.lines().count());
+        }
+        None => std::io::stdout().lock().write_all(text.as_bytes()).context("cannot write to standard output")?,
+    }
+    Ok(())
+}
