@@ -2,31 +2,24 @@
 
 use std::path::PathBuf;
 
-use anyhow::anyhow;
 use clap::Args;
 
+use super::script_args::ScriptArgs;
 use crate::gpu::features::FeatureSet;
-use crate::scenelang::{load_file, LoadOptions, SceneSummary};
+use crate::scenelang::SceneSummary;
 
 /// Arguments of `lumen check`.
 #[derive(Debug, Args)]
 pub struct CheckArgs {
     /// The SceneLang script to check.
     pub scene: PathBuf,
-    /// Value of TIME in the script.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub time: f64,
-    /// Variables defined before the script runs, as "name value, name value" (values in SET
-    /// syntax); they win over the script's own SET of the same name. May repeat.
-    #[arg(long)]
-    pub vars: Vec<String>,
+    #[command(flatten)]
+    pub script: ScriptArgs,
 }
 
 /// Loads the scene and prints its summary; the error is the full diagnostic.
 pub fn run(args: CheckArgs) -> anyhow::Result<()> {
-    let opts = LoadOptions { time: args.time, vars: args.vars };
-    // The diagnostic starts its own line, so that `file:line:col:` is where editors look.
-    let scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("the scene does not load\n{e}"))?;
+    let scene = args.script.load(&args.scene)?;
     println!("{}: ok", args.scene.display());
     println!("{}", SceneSummary::of(&scene));
     // What the GPU kernel is specialised for (`lumen shader` prints the kernel itself).

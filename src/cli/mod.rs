@@ -11,6 +11,7 @@ pub mod converge;
 pub mod devices;
 pub mod gpu_args;
 pub mod render;
+pub mod script_args;
 mod shader;
 mod tonemap;
 

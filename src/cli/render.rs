@@ -10,13 +10,13 @@ use anyhow::{anyhow, bail, Context as _};
 use clap::{Args, ValueEnum};
 
 use super::gpu_args::GpuArgs;
+use super::script_args::ScriptArgs;
 use crate::analysis::OpenDevice;
 use crate::cpu::{self, paths_per_sample, Progress, RenderOptions};
 use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
 use crate::gpu::{Gpu, GpuError, StopReason};
 use crate::image::{check_size, write_image, HdrImage, ImageFormat, ToneMap};
 use crate::scene::{Renderer, Scene, MAX_IMAGE_SIDE};
-use crate::scenelang::{load_file, LoadOptions};
 
 /// Most camera samples per pixel `--spp` accepts.
 pub const MAX_SPP: u32 = 1 << 20;
@@ -60,12 +60,8 @@ pub struct RenderArgs {
     /// tracer's samples_per_side².
     #[arg(long)]
     pub spp: Option<u32>,
-    /// Value of TIME in the script.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub time: f64,
-    /// Variables defined before the script runs, "name value, name value"; may repeat.
-    #[arg(long)]
-    pub vars: Vec<String>,
+    #[command(flatten)]
+    pub script: ScriptArgs,
     /// Replaces the state of the tracer's Pcg seed.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -290,7 +286,7 @@ fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, 
             bail!("--spp must be 1..={MAX_SPP}, got {spp}");
         }
     }
-    if !args.time.is_finite() {
+    if !args.script.time.is_finite() {
         bail!("--time must be finite");
     }
     let frames = args.frames.as_deref().map(Frames::parse).transpose()?;
@@ -299,8 +295,7 @@ fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, 
 
 /// Loads the scene at `time` and applies the command-line overrides.
 fn load(args: &RenderArgs, time: f64) -> anyhow::Result<Scene> {
-    let opts = LoadOptions { time, vars: args.vars.clone() };
-    let mut scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("{e}"))?;
+    let mut scene = args.script.load_at(&args.scene, time)?;
     resize(&mut scene, args.width, args.height)?;
     if let Some(seed) = args.seed {
         scene.tracer.rng.state = seed;
@@ -347,10 +342,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let (tm, frames) = validate(&args, &outputs)?;
     // Load once before opening a device: a broken script fails fast, without GPU start-up.
-    load(&args, frames.map_or(args.time, |f| f.time(0)))?;
+    load(&args, frames.map_or(args.script.time, |f| f.time(0)))?;
     let device = open_device(&args)?;
     let Some(frames) = frames else {
-        return render_one(&device, &args, args.time, &outputs, &tm).map(|_| ());
+        return render_one(&device, &args, args.script.time, &outputs, &tm).map(|_| ());
     };
     for k in 0..frames.count {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();

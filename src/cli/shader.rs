@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{anyhow, Context as _};
 use clap::Args;
 
+use super::script_args::ScriptArgs;
 use crate::gpu::features::FeatureSet;
 use crate::gpu::render::assemble;
 use crate::image::write_atomically;
-use crate::scenelang::{load_file, LoadOptions};
 
 /// Arguments of `lumen shader`.
 #[derive(Debug, Args)]
@@ -20,18 +20,13 @@ pub struct ShaderArgs {
     /// Write the WGSL to this file instead of standard output.
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
-    /// Value of TIME in the script.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub time: f64,
-    /// Variables defined before the script runs, "name value, name value"; may repeat.
-    #[arg(long)]
-    pub vars: Vec<String>,
+    #[command(flatten)]
+    pub script: ScriptArgs,
 }
 
 /// Loads the scene, assembles and validates its kernel (naga), and prints it.
 pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
-    let opts = LoadOptions { time: args.time, vars: args.vars };
-    let scene = load_file(&args.scene, &opts).map_err(|e| anyhow!("the scene does not load\n{e}"))?;
+    let scene = args.script.load(&args.scene)?;
     let features = FeatureSet::of(&scene);
     let assembled = assemble(&features).map_err(|e| anyhow!("cannot assemble the kernel: {e}"))?;
     let text = format!(
