@@ -517,6 +517,32 @@ mod cli {
         assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing.sl"));
     }
 
+    /// `--frames` renders TIME over the range into numbered files, and an mp4 with ffmpeg.
+    #[test]
+    fn frames_render_time_into_numbered_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let script = SCRIPT.replace("TRANSLATE(.X 3)", "TRANSLATE(.X 3, .Y $4*TIME$)");
+        std::fs::write(dir.path().join("anim.sl"), script).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_lumen"))
+            .current_dir(dir.path())
+            .args(["render", "anim.sl", "--device", "cpu", "--frames", "0:1:3", "-o", "f.pfm", "-o", "f.png"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        let frame = |k: u32| lumen::image::read_image(&dir.path().join(format!("f_000{k}.pfm"))).unwrap();
+        // TIME 0: the sphere fills the centre; TIME 1: it has moved 4 units to the side.
+        assert_eq!(frame(1).get(2, 2), lumen::color::Rgb32::new(0.25, 0.5, 2.0));
+        assert_eq!(frame(3).get(2, 2), lumen::color::Rgb32::new(1.0, 0.0, 0.0));
+        assert!(dir.path().join("f_0003.png").exists() && !dir.path().join("f_0004.png").exists());
+        // The video exists exactly when ffmpeg does.
+        let ffmpeg = Command::new("ffmpeg").arg("-version").output().is_ok();
+        assert_eq!(dir.path().join("f.mp4").exists(), ffmpeg, "{stderr}");
+        if !ffmpeg {
+            assert!(stderr.contains("ffmpeg is not on PATH"), "{stderr}");
+        }
+    }
+
     #[test]
     fn bad_arguments_fail_without_output() {
         let dir = tempfile::tempdir().unwrap();
