@@ -1,4 +1,4 @@
-//! Generates `scenes/sky.hdr`, the small equirectangular environment that `scenes/skybox.sl`
+//! Generates `scenes/sky.hdr`, the equirectangular environment that `scenes/skybox.sl`
 //! reflects: a blue sky graded to a pale horizon, a bright sun, and a tiled ground that
 //! shows off reflections and refractions.
 //!
@@ -26,7 +26,7 @@ fn radiance(d: DVec3) -> Color {
         let t = d.z.powf(0.6);
         let sky = horizon * (1.0 - t) + zenith * t;
         let cos_sun = d.dot(sun_dir());
-        // A disc of about 4° across (a few texels wide at 256 columns) and a soft halo.
+        // A disc of about 4° across (about eleven texels wide at 1024 columns) and a soft halo.
         let disc = if cos_sun > 2f64.to_radians().cos() { 400.0 } else { 0.0 };
         let halo = 2.0 * cos_sun.max(0.0).powi(64);
         sky + Color::new(1.0, 0.95, 0.85) * (disc + halo)
@@ -43,7 +43,7 @@ fn radiance(d: DVec3) -> Color {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = PathBuf::from(args.next().unwrap_or_else(|| "scenes/sky.hdr".into()));
-    let width: usize = args.next().map(|w| w.parse()).transpose()?.unwrap_or(256);
+    let width: usize = args.next().map(|w| w.parse()).transpose()?.unwrap_or(1024);
     let height = (width / 2).max(1);
     // 4×4 supersampling per texel keeps the tile edges and the sun from aliasing.
     const S: usize = 4;

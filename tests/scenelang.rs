@@ -557,7 +557,7 @@ fn shipped_scenes_have_what_they_promise() {
     let glass = summary("glass.sl");
     assert!(glass.dielectric_materials >= 3 && glass.area_lights == 1);
     let sky = summary("skybox.sl");
-    assert!(sky.environment.starts_with("image 256×128"), "{}", sky.environment);
+    assert!(sky.environment.starts_with("image 1024×512"), "{}", sky.environment);
     assert_eq!((sky.specular_materials, sky.dielectric_materials), (1, 1));
     let lamp = summary("streetlamp.sl");
     assert_eq!(lamp.point_lights, 3);
