@@ -1,4 +1,7 @@
 // #requires ray quadratic
+// #if SHADING
+// #requires angles
+// #endif
 // Unit cylinder (axis z, radius 0.5, z ∈ [−0.5, 0.5], capped): mirrors
 // src/cpu/shapes/cylinder.rs. Faces: 0 side, 1 bottom cap, 2 top cap.
 
@@ -50,7 +53,7 @@ fn cylinder_surface(p: vec3<f32>, face: u32) -> SurfacePoint {
     if (face == 0u) {
         let r = normalize_or(vec3<f32>(p.x, p.y, 0.0), vec3<f32>(1.0, 0.0, 0.0));
         let z = clamp(p.z, -0.5, 0.5);
-        let uv = vec2<f32>(z + 0.5, (atan2(r.y, r.x) / TAU + 1.0) / 2.0);
+        let uv = vec2<f32>(z + 0.5, (atan2_precise(r.y, r.x) / TAU + 1.0) / 2.0);
         return SurfacePoint(vec3<f32>(0.5 * r.x, 0.5 * r.y, z), r, uv);
     }
     if (face == 2u) {

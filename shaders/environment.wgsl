@@ -1,6 +1,6 @@
 // #requires bindings ray
 // #if ENV_IMAGE
-// #requires textures
+// #requires textures angles
 // #endif
 // What escaping rays see: mirrors scene::Environment::radiance and cpu::env_light. Without
 // a scene environment the packer stores a uniform one of the background colour.
@@ -8,12 +8,12 @@
 // #if ENV_IMAGE
 // (u, v) of a unit direction on the equirectangular map: scene::equirect_uv.
 fn equirect_uv(d: vec3<f32>, rotation_rad: f32) -> vec2<f32> {
-    var u = (atan2(d.y, d.x) - rotation_rad) / TAU;
+    var u = (atan2_precise(d.y, d.x) - rotation_rad) / TAU;
     u -= floor(u);
     if (u >= 1.0) {
         u = 0.0;
     }
-    return vec2<f32>(u, acos(clamp(d.z, -1.0, 1.0)) / PI);
+    return vec2<f32>(u, atan2_precise(length(d.xy), d.z) / PI);
 }
 // #endif
 

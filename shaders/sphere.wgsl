@@ -1,4 +1,7 @@
 // #requires ray quadratic
+// #if SHADING
+// #requires angles
+// #endif
 // Unit sphere (radius 1 at the origin): mirrors src/cpu/shapes/sphere.rs.
 
 fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
@@ -12,7 +15,7 @@ fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
 // #if SHADING
 // atan2(y, x)/2π wrapped to [0, 1).
 fn turns(y: f32, x: f32) -> f32 {
-    var u = atan2(y, x) / TAU;
+    var u = atan2_precise(y, x) / TAU;
     if (u < 0.0) {
         u += 1.0;
     }
@@ -24,7 +27,7 @@ fn turns(y: f32, x: f32) -> f32 {
 
 fn sphere_surface(p: vec3<f32>) -> SurfacePoint {
     let n = normalize_or(p, vec3<f32>(0.0, 0.0, 1.0));
-    let uv = vec2<f32>(turns(n.y, n.x), acos(clamp(n.z, -1.0, 1.0)) / PI);
+    let uv = vec2<f32>(turns(n.y, n.x), atan2_precise(length(n.xy), n.z) / PI);
     return SurfacePoint(n, n, uv);
 }
 // #endif

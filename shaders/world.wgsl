@@ -7,14 +7,36 @@
 // ray. Mirrors cpu::World.
 
 // #if GEOMETRY
-// The first crossing of object reference `r` inside (tmin, tmax).
+// The first crossing of object reference `r` inside (tmin, tmax). With CSG_DEFER the
+// traversal never passes a CSG reference here (it defers them), and the CSG branch is
+// compiled out: reachable CSG code in the traversal loop would cost every iteration on
+// SIMD software GPUs (DESIGN.md, "Software adapters").
 fn object_first(r: u32, ray: Ray) -> Candidate {
 // #if CSG
-    if ((r & CSG_NODE_BIT) != 0u) {
+    if (!CSG_DEFER && (r & CSG_NODE_BIT) != 0u) {
         return csg_first(r & ~CSG_NODE_BIT, ray, r);
     }
 // #endif
     return Candidate(shape_first_crossing(r, ray), r, false, r);
+}
+// #endif
+
+// #if CSG
+// CSG references met by one traversal, evaluated after it (as cpu::World does).
+struct Deferred {
+    refs: array<u32, CSG_DEFER_SLOTS>,
+    count: u32,
+}
+
+// Whether `r` is a CSG tree to evaluate later; if so it is recorded (the scene has at most
+// CSG_DEFER_SLOTS trees, each met at most once per traversal).
+fn defer_csg(deferred: ptr<function, Deferred>, r: u32) -> bool {
+    if (CSG_DEFER && (r & CSG_NODE_BIT) != 0u && (*deferred).count < CSG_DEFER_SLOTS) {
+        (*deferred).refs[(*deferred).count] = r;
+        (*deferred).count++;
+        return true;
+    }
+    return false;
 }
 // #endif
 
@@ -43,9 +65,18 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
     var ray = ray_in;
     var best = no_candidate();
+// #if CSG
+    var deferred: Deferred;
+// #endif
 // #if PLANE
     for (var i = 0u; i < settings.plane_count; i++) {
-        let cand = object_first(indices[settings.plane_offset + i], ray);
+        let r = indices[settings.plane_offset + i];
+// #if CSG
+        if (defer_csg(&deferred, r)) {
+            continue;
+        }
+// #endif
+        let cand = object_first(r, ray);
         if (cand.c.t < ray.tmax) {
             best = cand;
             ray.tmax = cand.c.t;
@@ -56,21 +87,25 @@ fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
     }
 // #endif
 // #if BVH
-    if (settings.bvh_node_count == 0u) {
-        return best;
-    }
     let inv_dir = safe_inverse(ray.dir);
     var stack: array<u32, BVH_STACK_SIZE>;
     var top = 0u;
     var node_index = 0u;
-    if (box_entry(bvh_nodes[0], ray.origin, inv_dir, ray.tmin, ray.tmax) >= OPEN) {
-        return best;
-    }
-    loop {
+    // An empty tree or a missed root box skips the loop (not a return: deferred CSG
+    // trees are still to be evaluated).
+    var more = settings.bvh_node_count != 0u
+        && box_entry(bvh_nodes[0], ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN;
+    while (more) {
         let node = bvh_nodes[node_index];
         if (node.count > 0u) {
             for (var k = 0u; k < node.count; k++) {
-                let cand = object_first(indices[node.left_or_first + k], ray);
+                let r = indices[node.left_or_first + k];
+// #if CSG
+                if (defer_csg(&deferred, r)) {
+                    continue;
+                }
+// #endif
+                let cand = object_first(r, ray);
                 if (cand.c.t < ray.tmax) {
                     best = cand;
                     ray.tmax = cand.c.t;
@@ -103,18 +138,29 @@ fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
             }
         }
         // Pop the next node still in front of the closest hit.
-        var found = false;
+        more = false;
         while (top > 0u) {
             top--;
             let candidate = stack[top];
             if (box_entry(bvh_nodes[candidate], ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
                 node_index = candidate;
-                found = true;
+                more = true;
                 break;
             }
         }
-        if (!found) {
-            break;
+    }
+// #endif
+// #if CSG
+    // The only call of csg_first when CSG_DEFER: once per query, outside the loops.
+    for (var k = 0u; k < deferred.count; k++) {
+        let r = deferred.refs[k];
+        let cand = csg_first(r & ~CSG_NODE_BIT, ray, r);
+        if (cand.c.t < ray.tmax) {
+            best = cand;
+            ray.tmax = cand.c.t;
+            if (any_hit) {
+                return best;
+            }
         }
     }
 // #endif

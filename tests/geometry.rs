@@ -572,3 +572,44 @@ proptest! {
         }
     }
 }
+
+/// Closest-hit queries evaluate up to `CSG_DEFER_MAX` CSG trees after the BVH traversal
+/// (more: where the traversal meets them). Both ways must find what testing every shape
+/// finds, with CSG trees in front of, behind and among primitives, planes included.
+#[test]
+fn deferred_and_immediate_csg_trees_find_the_brute_force_hit() {
+    use lumen::cpu::CSG_DEFER_MAX;
+    use lumen::sampling::Pcg32;
+    for trees in [3, CSG_DEFER_MAX, CSG_DEFER_MAX + 5] {
+        let mut rng = Pcg32::new(trees as u64, 99);
+        let mut at = || DVec3::new(rng.next_f64() * 20.0 - 10.0, rng.next_f64() * 20.0 - 10.0, rng.next_f64() * 4.0);
+        let mut shapes = vec![prim(ShapeKind::Plane, tr(0.0, 0.0, -0.5), 9)];
+        let mut centres = Vec::new();
+        for i in 0..trees {
+            let c = at();
+            shapes.push(Shape::csg(
+                [CsgOp::Diff, CsgOp::Intersect, CsgOp::Unite, CsgOp::Fuse][i % 4],
+                vec![cube(sc(1.6, 1.6, 1.6), 1), sphere(tr(0.3, 0.2, 0.4), 2)],
+                tr(c.x, c.y, c.z),
+            ));
+            let p = at();
+            shapes.push(sphere(tr(p.x, p.y, p.z) * sc(0.7, 0.7, 0.7), 3));
+            centres.extend([c, p]);
+        }
+        let w = World::from_shapes(&shapes);
+        let mut rng = Pcg32::new(7, trees as u64);
+        let mut hits = 0;
+        for k in 0..4000 {
+            let o = DVec3::new(rng.next_f64() * 30.0 - 15.0, rng.next_f64() * 30.0 - 15.0, 8.0);
+            // Aimed near a shape's centre: through CSG trees, grazing them, or missing.
+            let jitter = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE;
+            let d = centres[k % centres.len()] + jitter - o;
+            let r = ray(o, d);
+            let got = w.intersect(&r).map(|h| h.t);
+            let want = w.intersect_brute_force(&r);
+            assert_eq!(got, want, "{trees} trees, ray {r:?}");
+            hits += usize::from(got.is_some_and(|t| (o + d * t).z > -0.49));
+        }
+        assert!(hits > 2000, "the rays must hit shapes, not only the floor ({hits})");
+    }
+}

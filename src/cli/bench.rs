@@ -363,6 +363,7 @@ pub fn full_features(spec: &FeatureSet) -> FeatureSet {
         csg: true,
         csg_max_intervals: spec.csg_max_intervals.max(FULL_CSG_MAX_INTERVALS),
         csg_max_depth: spec.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
+        csg_trees: spec.csg_trees,
         pigment_uniform: true,
         pigment_checkered: true,
         pigment_image: true,

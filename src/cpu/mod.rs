@@ -20,7 +20,7 @@ pub use hit::Hit;
 pub use offset::offset_origin;
 pub use onb::onb;
 pub use ray::Ray;
-pub use world::World;
+pub use world::{World, CSG_DEFER_MAX};
 
 // Shading: BSDFs, lights, integrators and the render loop.
 pub mod area_light;

@@ -46,6 +46,15 @@ impl Object {
     }
 }
 
+/// Most top-level CSG trees whose evaluation a closest-hit query defers until the
+/// traversal is over (more trees: each is evaluated where the traversal meets it).
+///
+/// Why defer: on SIMD software GPUs (lavapipe) the CSG code inside the traversal loop costs
+/// on every iteration, even when no ray takes it (DESIGN.md, "Software adapters"); the GPU
+/// kernel evaluates the trees after the traversal, and the CPU does the same so that both
+/// compare candidates in one order (ties between coincident surfaces resolve alike).
+pub const CSG_DEFER_MAX: usize = 16;
+
 /// Every top-level shape of a scene with its transformations precomputed, the bounded ones
 /// in a BVH and the unbounded ones (planes, CSG trees with unbounded solids) in a list
 /// that every ray tests.
@@ -73,6 +82,9 @@ pub struct World {
     objects: Vec<Object>,
     bvh: Bvh,
     unbounded: Vec<u32>,
+    /// Whether closest-hit queries evaluate CSG trees after the traversal
+    /// (at most [`CSG_DEFER_MAX`] trees).
+    defer_csg: bool,
 }
 
 impl World {
@@ -104,7 +116,8 @@ impl World {
                 }
             })
             .collect();
-        World { objects, bvh: Bvh::build(&items), unbounded }
+        let csg_trees = shapes.iter().filter(|s| matches!(s, Shape::Csg(_))).count();
+        World { objects, bvh: Bvh::build(&items), unbounded, defer_csg: csg_trees <= CSG_DEFER_MAX }
     }
 
     /// The BVH over the bounded top-level shapes; its ids index `Scene::shapes`.
@@ -130,11 +143,33 @@ impl World {
             }
             Visit::Continue
         };
+        // CSG trees met on the way, evaluated after the traversal (see [`CSG_DEFER_MAX`]).
+        let mut deferred = [0u32; CSG_DEFER_MAX];
+        let mut n_deferred = 0;
+        let mut defer = |id: u32| {
+            let csg = self.defer_csg && matches!(self.objects[id as usize], Object::Csg(_));
+            if csg {
+                deferred[n_deferred] = id;
+                n_deferred += 1;
+            }
+            csg
+        };
         for &id in &self.unbounded {
-            test(id, &mut tmax);
+            if !defer(id) {
+                test(id, &mut tmax);
+            }
         }
         let mut t = tmax;
-        self.bvh.traverse(ray.origin, ray.dir, ray.tmin, tmax, |id| test(id, &mut t));
+        self.bvh.traverse(ray.origin, ray.dir, ray.tmin, tmax, |id| {
+            if defer(id) {
+                Visit::Continue
+            } else {
+                test(id, &mut t)
+            }
+        });
+        for &id in &deferred[..n_deferred] {
+            test(id, &mut t);
+        }
         let (id, found) = best?;
         let (s, material) = match (&self.objects[id as usize], found) {
             (Object::Primitive(p), Found::Primitive(c)) => (p.surface_hit(ray, c, false), p.material),

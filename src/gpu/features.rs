@@ -41,6 +41,9 @@ pub struct FeatureSet {
     pub csg_max_intervals: u32,
     /// Bound on the depth of any CSG tree (sizes the evaluation stack).
     pub csg_max_depth: u32,
+    /// Top-level CSG trees: up to `cpu::CSG_DEFER_MAX` of them are evaluated after the BVH
+    /// traversal rather than inside it (as `cpu::World` does; DESIGN.md "Software adapters").
+    pub csg_trees: u32,
     pub pigment_uniform: bool,
     pub pigment_checkered: bool,
     pub pigment_image: bool,
@@ -73,6 +76,7 @@ impl FeatureSet {
                 Shape::Csg(_) => {
                     f.csg = true;
                     f.bvh = true;
+                    f.csg_trees += 1;
                     f.csg_max_intervals = f.csg_max_intervals.max(crate::cpu::csg::max_intervals(shape) as u32);
                     f.csg_max_depth = f.csg_max_depth.max(shape.csg_depth() as u32);
                 }

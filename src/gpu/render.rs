@@ -16,8 +16,9 @@ use crate::image::HdrImage;
 use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` is not one).
-const MODULES: [(&str, &str); 22] = [
+const MODULES: [(&str, &str); 23] = [
     ("shaders/pass.wgsl", include_str!("../../shaders/pass.wgsl")),
+    ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
     ("shaders/random.wgsl", include_str!("../../shaders/random.wgsl")),
@@ -110,12 +111,16 @@ fn constants_module(features: &FeatureSet) -> String {
          const CSG_NODE_BIT: u32 = 0x{:08X}u;\n\
          const CSG_MAX_INTERVALS: u32 = {}u;\n\
          const CSG_MAX_DEPTH: u32 = {}u;\n\
-         const CSG_POOL_SIZE: u32 = {}u;\n",
+         const CSG_POOL_SIZE: u32 = {}u;\n\
+         const CSG_DEFER: bool = {};\n\
+         const CSG_DEFER_SLOTS: u32 = {}u;\n",
         crate::accel::MAX_DEPTH + 1,
         super::layout::CSG_NODE_BIT,
         intervals,
         depth,
         (2 * depth + 2) * intervals,
+        features.csg_trees as usize <= crate::cpu::CSG_DEFER_MAX,
+        features.csg_trees.clamp(1, crate::cpu::CSG_DEFER_MAX as u32),
     )
 }
 
@@ -196,7 +201,8 @@ impl GpuRenderer {
         let key = f
             .assembly_features()
             .with(&format!("csg_max_intervals={}", f.csg_max_intervals))
-            .with(&format!("csg_max_depth={}", f.csg_max_depth));
+            .with(&format!("csg_max_depth={}", f.csg_max_depth))
+            .with(&format!("csg_trees={}", f.csg_trees.min(crate::cpu::CSG_DEFER_MAX as u32 + 1)));
         let kernel = self.kernels.get_or_build(&key, ENTRY_POINT, || {
             let assembled = assemble(f)?;
             check_binding_limits(gpu, &assembled)?;
@@ -441,6 +447,44 @@ mod tests {
         let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
         for bad in ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool"] {
             assert!(!globals.iter().any(|g| g == bad), "{bad} bound: {globals:?}");
+        }
+    }
+
+    /// `shaders/angles.wgsl` against f64 atan2 on the device: every octant, both signed
+    /// zeros, tiny and huge magnitudes, and the polar angle near the poles.
+    #[test]
+    fn precise_atan2_on_the_device_is_within_2e_7_rad_plus_an_ulp() {
+        let Some(gpu) = crate::gpu::gpu_for_tests("precise_atan2") else { return };
+        let mut rng = Pcg32::new(5, 7);
+        let mut inputs: Vec<[f32; 2]> =
+            vec![[0.0, 1.0], [1.0, 0.0], [0.0, -1.0], [-1.0, 0.0], [1.0, 1.0], [-1e-30, -1.0]];
+        inputs.extend([[0.0, 0.0], [0.0, -0.0], [3e-39, 1.0], [1e30, -1e30], [1.0, 1e-7]]);
+        for _ in 0..4096 {
+            let scale = 10f32.powf(rng.next_f32() * 8.0 - 4.0);
+            inputs.push([(rng.next_f32() * 2.0 - 1.0) * scale, (rng.next_f32() * 2.0 - 1.0) * scale]);
+        }
+        let src = format!(
+            "{}\n{}\n@group(0) @binding(0) var<storage, read_write> io: array<vec2<f32>>;\n\
+             @compute @workgroup_size(64)\n\
+             fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{\n\
+                 if (gid.x < arrayLength(&io)) {{ let p = io[gid.x]; io[gid.x] = vec2<f32>(atan2_precise(p.x, p.y), 0.0); }}\n\
+             }}",
+            "const PI: f32 = 3.14159265358979;",
+            include_str!("../../shaders/angles.wgsl")
+        );
+        let kernel = gpu.compute_kernel("angles test", &src, "main").unwrap();
+        let buffer = gpu.storage_buffer("io", &inputs).unwrap();
+        let group = kernel.bind_group(&gpu, 0, &[&buffer]).unwrap();
+        gpu.dispatch(&kernel, &[&group], [(inputs.len() as u32).div_ceil(64), 1, 1]).unwrap();
+        let out: Vec<[f32; 2]> = gpu.read_buffer(&buffer, inputs.len()).unwrap();
+        for (&[y, x], &[a, _]) in inputs.iter().zip(&out) {
+            let want = f64::from(y).atan2(f64::from(x));
+            // Zero vectors: the sign of y is dropped (documented); only |atan2| matters.
+            let want = if y == 0.0 && x == 0.0 { want.abs() } else { want };
+            // The fit's 1.1e-7, π's rounding in f32, and one ulp of the f32 result.
+            let ulp = f64::from((want.abs() as f32).max(f32::MIN_POSITIVE)) * f64::from(f32::EPSILON);
+            let err = (f64::from(a) - want).abs();
+            assert!(err < 2e-7 + ulp, "atan2({y:e}, {x:e}) = {a} on the device, {want} in f64 (error {err:e})");
         }
     }
 }
