@@ -10,6 +10,9 @@
 const CSG_SLOTS: u32 = 2u * CSG_MAX_DEPTH + 2u;
 const CSG_SCRATCH: u32 = CSG_SLOTS - 1u;
 const NO_SURFACE: u32 = 0xFFFFFFFFu;
+// Pieces no longer than CSG_SLIVER relative to their ends are dropped (csg::SLIVER, which
+// is 256 f64 ulps; this is 256 f32 ulps, 2⁻¹⁵).
+const CSG_SLIVER: f32 = 3.0517578125e-5;
 
 // One end of an interval: the ray parameter and the surface bounding the solid there
 // (a shape index, or NO_SURFACE at an open end); `flip` marks carved surfaces.
@@ -87,7 +90,13 @@ fn csg_merge(slot: u32) {
     csg_len[slot] = out;
 }
 
-// a := pairwise intersection of a and b, pieces of positive length (csg::intersect).
+// Whether the piece [a, b] is longer than a sliver (csg::solid). Open ends are ±OPEN,
+// finite, so one formula covers them.
+fn csg_solid(a: f32, b: f32) -> bool {
+    return b - a > CSG_SLIVER * max(abs(a), abs(b));
+}
+
+// a := pairwise intersection of a and b, pieces longer than a sliver (csg::intersect).
 fn csg_intersect(a: u32, b: u32) {
     csg_len[CSG_SCRATCH] = 0u;
     for (var i = 0u; i < csg_len[a]; i++) {
@@ -102,7 +111,7 @@ fn csg_intersect(a: u32, b: u32) {
             if (y.exit.t < x.exit.t) {
                 exit = y.exit;
             }
-            if (enter.t < exit.t) {
+            if (csg_solid(enter.t, exit.t)) {
                 csg_push(CSG_SCRATCH, Interval(enter, exit));
             }
         }
@@ -133,13 +142,13 @@ fn csg_subtract(a: u32, cut: u32) {
             if (y.enter.t >= x.exit.t) {
                 break;
             }
-            if (y.enter.t > start.t) {
+            if (csg_solid(start.t, y.enter.t)) {
                 csg_push(CSG_SCRATCH, Interval(start, flipped(y.enter)));
             }
             open = y.exit.t < x.exit.t;
             start = flipped(y.exit);
         }
-        if (open && start.t < x.exit.t) {
+        if (open && csg_solid(start.t, x.exit.t)) {
             csg_push(CSG_SCRATCH, Interval(start, x.exit));
         }
     }

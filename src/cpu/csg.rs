@@ -15,8 +15,9 @@
 //! - **DIFF** subtracts the merged union of the second and later children from each
 //!   interval of the first; ends produced by a subtracted child get their normal flipped.
 //!
-//! INTERSECT and DIFF are regularised: pieces of zero length are dropped, so a subtracted
-//! solid whose face coincides with a face of the first child leaves no sliver behind. The
+//! INTERSECT and DIFF are regularised: pieces no longer than [`SLIVER`] relative to their
+//! ends' magnitude are dropped, so a subtracted solid whose face coincides with a face of
+//! the first child, exactly or only up to rounding, leaves no sliver behind. The
 //! closest hit is the smallest end with a surface inside (tmin, tmax); its normal comes
 //! from the leaf that produced it, with the leaf's material.
 
@@ -26,6 +27,21 @@ use crate::scene::{Csg, CsgOp, MaterialId, Shape, Transform};
 
 /// Marks an open end of an interval (±∞, no surface).
 pub const NO_SURFACE: u32 = u32::MAX;
+
+/// Pieces of INTERSECT and DIFF with `exit.t − enter.t ≤ SLIVER · max(|enter.t|, |exit.t|)`
+/// are dropped. Faces that coincide only up to rounding (a cutter turned by 90°, where
+/// cos 90° = 6e-17) cross the ray a few ulps apart, and the piece between them is no
+/// solid but a sliver that would show as a carved surface. 2⁻⁴⁴ is 256 ulps of the larger
+/// end, far above the rounding of the roots and slab crossings and far below any
+/// intended thickness. shaders/csg.wgsl uses 2⁻¹⁵, 256 f32 ulps.
+pub const SLIVER: f64 = 1.0 / 17_592_186_044_416.0; // 2⁻⁴⁴
+
+/// Whether the piece [a, b] is longer than a sliver. An infinite end (open interval) keeps
+/// any piece with a < b.
+fn solid(a: f64, b: f64) -> bool {
+    let m = a.abs().max(b.abs());
+    b - a > SLIVER * m || (a < b && m.is_infinite())
+}
 
 /// One end of an interval: the ray parameter and the surface that bounds the solid there.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,14 +216,14 @@ fn merge(mut list: Vec<Interval>) -> Vec<Interval> {
     out
 }
 
-/// Pairwise intersection, keeping pieces of positive length.
+/// Pairwise intersection, keeping pieces longer than a sliver.
 fn intersect(a: &[Interval], b: &[Interval]) -> Vec<Interval> {
     let mut out = Vec::new();
     for x in a {
         for y in b {
             let enter = if y.enter.t > x.enter.t { y.enter } else { x.enter };
             let exit = if y.exit.t < x.exit.t { y.exit } else { x.exit };
-            if enter.t < exit.t {
+            if solid(enter.t, exit.t) {
                 out.push(Interval { enter, exit });
             }
         }
@@ -216,8 +232,8 @@ fn intersect(a: &[Interval], b: &[Interval]) -> Vec<Interval> {
     out
 }
 
-/// Each interval of `a` minus the disjoint sorted `cut`, keeping pieces of positive length;
-/// the ends contributed by `cut` are carved surfaces (flipped normals).
+/// Each interval of `a` minus the disjoint sorted `cut`, keeping pieces longer than a
+/// sliver; the ends contributed by `cut` are carved surfaces (flipped normals).
 fn subtract(a: &[Interval], cut: &[Interval]) -> Vec<Interval> {
     let mut out = Vec::new();
     for x in a {
@@ -231,13 +247,13 @@ fn subtract(a: &[Interval], cut: &[Interval]) -> Vec<Interval> {
             if y.enter.t >= x.exit.t {
                 break;
             }
-            if y.enter.t > s.t {
+            if solid(s.t, y.enter.t) {
                 out.push(Interval { enter: s, exit: y.enter.flipped() });
             }
             start = (y.exit.t < x.exit.t).then(|| y.exit.flipped());
         }
         if let Some(s) = start {
-            if s.t < x.exit.t {
+            if solid(s.t, x.exit.t) {
                 out.push(Interval { enter: s, exit: x.exit });
             }
         }
@@ -322,6 +338,26 @@ mod tests {
         let d = subtract(&[iv(1.0, 2.0, 0)], &[iv(0.0, 1.0, 1), iv(2.0, 3.0, 2)]);
         assert_eq!(ts(&d), vec![(1.0, 2.0)]);
         assert_eq!((d[0].enter.leaf, d[0].exit.leaf, d[0].enter.flip), (0, 0, false));
+    }
+
+    #[test]
+    fn slivers_from_rounding_are_dropped() {
+        // A cutter whose faces match the first operand's only up to rounding: the pieces
+        // left at either end are a few ulps long and vanish; the same sizes relative to
+        // larger ends too.
+        for scale in [1.0, 1e-6, 1e8] {
+            let (a, b) = (2.0 * scale, 4.0 * scale);
+            let eps = 4.0 * f64::EPSILON * scale;
+            let d = subtract(&[iv(a, b, 0)], &[iv(a + eps, 3.0 * scale, 1)]);
+            assert_eq!(ts(&d), vec![(3.0 * scale, b)], "{scale}");
+            assert!(subtract(&[iv(a, b, 0)], &[iv(a + eps, b - eps, 1)]).is_empty(), "{scale}");
+            assert!(intersect(&[iv(a, 3.0 * scale, 0)], &[iv(3.0 * scale - eps, b, 1)]).is_empty(), "{scale}");
+        }
+        // A thin but real piece (1e-9 relative) stays; so do open ends.
+        assert_eq!(subtract(&[iv(2.0, 4.0, 0)], &[iv(2.0 + 2e-9, 4.0, 1)]).len(), 1);
+        let open = End { t: f64::NEG_INFINITY, leaf: NO_SURFACE, face: 0, flip: false };
+        assert_eq!(ts(&subtract(&[Interval { enter: open, exit: e(1.0, 0) }], &[iv(0.0, 0.5, 1)])).len(), 2);
+        assert!(solid(f64::NEG_INFINITY, f64::INFINITY) && !solid(1.0, 1.0) && !solid(0.0, 0.0));
     }
 
     #[test]
