@@ -49,7 +49,7 @@ fn point_light_at(i: u32, hit: Hit) -> PointLightSample {
     let to_light = light.position.xyz - hit.point;
     let dist = length(to_light);
     let l = to_light / dist;
-    let origin = offset_origin(hit.point, hit.normal, l);
+    let origin = offset_origin(hit.point, hit.scale, hit.normal, l);
     // The shadow ray stops just short of the light (t < 1, exclusive).
     if (dist <= 0.0 || occluded(Ray(origin, light.position.xyz - origin, 0.0, 1.0))) {
         return PointLightSample(l, vec3<f32>(0.0));

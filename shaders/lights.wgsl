@@ -4,6 +4,8 @@
 
 struct LightPoint {
     point: vec3<f32>,
+    // Error scale of `point` (offset::error_scale).
+    scale: f32,
     normal: vec3<f32>,
     object_point: vec3<f32>,
     pdf: f32,
@@ -59,7 +61,7 @@ fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>
     let area_obj = select(6.0, 2.0 * TAU, s.kind == 0u);
     let to_light = y - x;
     let dist2 = dot(to_light, to_light);
-    let cos_light = abs(dot(normalize(n_world), to_light)) / sqrt(dist2);
+    let cos_light = abs(dot(normalize_or(n_world, vec3<f32>(0.0)), to_light)) / sqrt(dist2);
     if (!(cos_light > 0.0) || !(dist2 > 0.0)) {
         return 0.0;
     }
@@ -113,8 +115,11 @@ fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
     }
     let normal = normalize(e * sin_alpha - w * cos_alpha);
     let point = c + r * normal;
+    // point = c + r·normal, so its terms are |c| and r·|normal|.
+    let t = abs(c) + abs(r * normal);
+    let scale = max(t.x, max(t.y, t.z));
     let s = shapes[light.shape];
-    return LightPoint(point, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max));
+    return LightPoint(point, scale, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max));
 }
 
 // AreaLight::sample.
@@ -135,7 +140,8 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     }
     let y = affine_point(s.to_world, p_obj);
     let pdf = light_area_pdf(light, x, y, n_obj);
-    return LightPoint(y, normalize(affine_normal(s.to_object, n_obj)), p_obj, pdf);
+    let scale = affine_error_scale(s.to_world, p_obj);
+    return LightPoint(y, scale, normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0)), p_obj, pdf);
 }
 
 // AreaLight::pdf: density of light_sample producing y from x.

@@ -80,6 +80,7 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, xi0: f32, xi1: f32, 
     var is_area = false;
     var y = vec3<f32>(0.0);
     var ny = vec3<f32>(0.0);
+    var sy = 0.0;
 // #if AREA_LIGHTS
     if (choice < settings.area_light_count) {
         let light = area_lights[choice];
@@ -95,6 +96,7 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, xi0: f32, xi1: f32, 
         is_area = true;
         y = lp.point;
         ny = lp.normal;
+        sy = lp.scale;
     }
 // #endif
     if (!is_area) {
@@ -110,10 +112,10 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, xi0: f32, xi1: f32, 
     if (all(f == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
-    let o = offset_origin(hit.point, hit.normal, dir);
+    let o = offset_origin(hit.point, hit.scale, hit.normal, dir);
     var shadow = Ray(o, dir, 0.0, OPEN);
     if (is_area) {
-        let e = offset_origin(y, ny, hit.point - y);
+        let e = offset_origin(y, sy, ny, hit.point - y);
         shadow = Ray(o, e - o, 0.0, 1.0);
     }
     if (occluded(shadow)) {
@@ -181,7 +183,7 @@ fn radiance_path(camera_ray: Ray, pixel: u32, sample: u32) -> vec3<f32> {
             break;
         }
         prev = Previous(hit.point, hit.object, s.delta, s.pdf);
-        ray = Ray(offset_origin(hit.point, hit.normal, s.dir), s.dir, 0.0, OPEN);
+        ray = Ray(offset_origin(hit.point, hit.scale, hit.normal, s.dir), s.dir, 0.0, OPEN);
     }
     return radiance;
 }

@@ -1,4 +1,7 @@
 // #requires layout
+// #if SHADING
+// #requires rescale
+// #endif
 // Rays, crossings and hits in f32: mirrors src/cpu/{ray,hit}.rs and the Span/Crossing
 // types of src/cpu/shapes. Coordinates are relative to the camera (DESIGN.md "GPU renderer").
 
@@ -44,6 +47,8 @@ struct SurfacePoint {
 struct Hit {
     t: f32,
     point: vec3<f32>,
+    // Error scale of `point` (offset::error_scale): what spawned rays offset by.
+    scale: f32,
     // Unit normal facing the incoming ray.
     normal: vec3<f32>,
     front_face: bool,
@@ -63,6 +68,16 @@ fn affine_vector(a: Affine, v: vec3<f32>) -> vec3<f32> {
 
 // #if SHADING
 // #if GEOMETRY
+// offset::error_scale: the largest over the coordinates of Σⱼ |aᵢⱼ·pⱼ| + |tᵢ|, the size of
+// the terms the point affine_point(a, p) is computed from.
+fn affine_error_scale(a: Affine, p: vec3<f32>) -> f32 {
+    let q = abs(p);
+    let x = dot(abs(a.r0.xyz), q) + abs(a.r0.w);
+    let y = dot(abs(a.r1.xyz), q) + abs(a.r1.w);
+    let z = dot(abs(a.r2.xyz), q) + abs(a.r2.w);
+    return max(x, max(y, z));
+}
+
 // Normal out of object space with the inverse transpose: the transpose of the
 // world-to-object linear part.
 fn affine_normal(to_object: Affine, n: vec3<f32>) -> vec3<f32> {
@@ -70,7 +85,12 @@ fn affine_normal(to_object: Affine, n: vec3<f32>) -> vec3<f32> {
 }
 // #endif
 
-fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+// v/|v|, or `fallback` for zero; rescaled by a power of two first (ray::normalize_scaled)
+// so that the normal of a shape scaled by 1e30 (length 1e-30, squared 0 in f32) keeps
+// its direction.
+fn normalize_or(v_in: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let a = abs(v_in);
+    let v = v_in * pow2_rescale(max(a.x, max(a.y, a.z)));
     let l2 = dot(v, v);
     if (l2 > 0.0) {
         return v * inverseSqrt(l2);

@@ -105,7 +105,8 @@ fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> 
     let outward = select(n, -n, flip);
     let front_face = dot(outward, ray.dir) < 0.0;
     let normal = select(-outward, outward, front_face);
-    return Hit(c.t, point, normal, front_face, sp.uv, s.material, object);
+    let scale = affine_error_scale(s.to_world, sp.point);
+    return Hit(c.t, point, scale, normal, front_face, sp.uv, s.material, object);
 }
 // #endif
 // #endif

@@ -480,12 +480,12 @@ fn spawned_rays_do_not_rehit_their_surface() {
                 if out.dot(outward) < 0.0 {
                     out = -out;
                 }
-                let o = offset_origin(h.point, h.normal, out);
+                let o = offset_origin(h.point, h.scale, h.normal, out);
                 let again = w.intersect(&ray(o, out));
                 assert!(again.is_none(), "{kind:?} {t:?}: re-hit {again:?} from {h:?}");
                 // Shadow ray to a point outside: not occluded.
                 let light = h.point + out * 5.0 * size;
-                let o2 = offset_origin(light, -out, -out);
+                let o2 = offset_origin(light, light.abs().max_element(), -out, -out);
                 assert!(!w.occluded(&Ray::new(o, o2 - o, 0.0, 1.0)), "{kind:?}: self-shadow");
                 // Going in (solid shapes): the next hit is the far side, not this surface.
                 if kind == ShapeKind::Sphere {
@@ -493,7 +493,7 @@ fn spawned_rays_do_not_rehit_their_surface() {
                     if inward.dot(outward) > -0.2 {
                         inward = (inward - outward * (inward.dot(outward) + 0.5)).normalize();
                     }
-                    let o = offset_origin(h.point, h.normal, inward);
+                    let o = offset_origin(h.point, h.scale, h.normal, inward);
                     let far = w.intersect(&ray(o, inward)).expect("the far side");
                     assert!(far.t > 1e-6 * size, "{t:?}: re-hit at t = {}", far.t);
                     assert!(!far.front_face);

@@ -22,9 +22,6 @@ fn scene_scaled_by_1e_minus_4_renders_like_the_unit_scene_on_the_cpu() {
 }
 
 #[test]
-#[ignore = "bug: shaders/offset.wgsl offsets coordinates below 1/32 by an absolute 2^-16 (Wächter-Binder's f32 \
-            constants assume unit-sized scenes); in a 1e-4 scene every camera-relative coordinate is below 1/32, so \
-            spawned rays jump 15% of the scene's unit and ~9% of pixels differ from the unit scene"]
 fn scene_scaled_by_1e_minus_4_renders_like_the_unit_scene_on_the_gpu() {
     run("scaled_down", cases::scaled_down);
 }
@@ -134,10 +131,6 @@ fn csg_diff_with_coincident_faces_has_no_speckles() {
 }
 
 #[test]
-#[ignore = "bug: src/cpu/csg.rs subtract (and its port in shaders/csg.wgsl) keeps DIFF pieces of any positive \
-            length; when the cutter's face coincides with the first operand's only up to rounding (cutter turned \
-            90° about z), a sliver of ~1e-16 survives and shows as a carved surface: 2 speckles in 1024 pixels \
-            on the CPU (0 on lavapipe, by luck of f32 rounding)"]
 fn csg_diff_with_faces_coincident_up_to_rounding_has_no_speckles() {
     run("csg_coincident_sides_rotated", |gpu| cases::csg_coincident_sides(gpu, true));
 }
@@ -168,17 +161,11 @@ fn script_scale_1e30_on_the_cpu() {
 }
 
 #[test]
-#[ignore = "bug: shaders/quadratic.wgsl sphere_roots returns a miss when a = |d_obj|² underflows f32 (0 or \
-            subnormal): a sphere scaled by more than ~1e19 is invisible on the GPU (the camera inside a 1e30 sphere \
-            sees the sky)"]
 fn script_scale_1e30_on_the_gpu() {
     run("extreme_script_scales_1e30", |gpu| cases::extreme_script_scales(gpu, "1e30"));
 }
 
 #[test]
-#[ignore = "bug: src/cpu/shapes/quadratic.rs (like shaders/quadratic.wgsl in f32) returns a miss when \
-            a = |d_obj|² underflows f64 to 0: a sphere scaled by more than ~1e162 loads but is invisible on both \
-            renderers (the camera inside a 1e300 sphere sees the sky)"]
 fn script_scale_1e300() {
     run("extreme_script_scales_1e300", |gpu| cases::extreme_script_scales(gpu, "1e300"));
 }

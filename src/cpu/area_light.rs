@@ -18,6 +18,8 @@ use glam::{DMat3, DVec3};
 use crate::color::Color;
 use crate::scene::{MaterialId, Pigment, Scene, Shape, ShapeKind, Transform};
 
+use super::normalize_scaled;
+use super::offset::error_scale;
 use super::warp::{cone_one_minus_cos, uniform_cone, uniform_cone_pdf, uniform_sphere};
 
 /// One area light, with what sampling needs precomputed.
@@ -39,6 +41,8 @@ pub struct AreaLight {
 pub struct LightPoint {
     /// World point on the light.
     pub point: DVec3,
+    /// Error scale of `point` (`offset::error_scale`), for offsetting the shadow ray's end.
+    pub scale: f64,
     /// Unit geometric normal of the light there (outward in object space).
     pub normal: DVec3,
     /// Object-space point (for the emitted pigment's uv).
@@ -80,7 +84,9 @@ impl AreaLight {
         match self.uses_cone(x, x_shape) {
             Some((c, r, d)) => {
                 let (point, normal, pdf) = sample_cone(c, r, d, x, xi0, xi1);
-                LightPoint { point, normal, object_point: self.transform.inverse().point(point), pdf }
+                // point = c + r·normal, so its terms are |c| and r·|normal|.
+                let scale = (c.abs() + (r * normal).abs()).max_element();
+                LightPoint { point, scale, normal, object_point: self.transform.inverse().point(point), pdf }
             }
             None => self.sample_area(x, xi0, xi1),
         }
@@ -126,7 +132,13 @@ impl AreaLight {
         };
         let y = self.transform.point(p_obj);
         let pdf = self.area_pdf_solid_angle(x, y, n_obj);
-        LightPoint { point: y, normal: self.transform.normal(n_obj).normalize(), object_point: p_obj, pdf }
+        LightPoint {
+            point: y,
+            scale: error_scale(&self.transform.matrix(), p_obj),
+            normal: normalize_scaled(self.transform.normal(n_obj)),
+            object_point: p_obj,
+            pdf,
+        }
     }
 
     /// Area density (object-uniform, mapped by the transform) converted to solid angle at x.
@@ -136,7 +148,7 @@ impl AreaLight {
         let area_obj = if self.kind == ShapeKind::Sphere { 4.0 * PI } else { 6.0 };
         let to_light = y - x;
         let dist2 = to_light.length_squared();
-        let cos_light = n_world.normalize().dot(to_light).abs() / dist2.sqrt();
+        let cos_light = normalize_scaled(n_world).dot(to_light).abs() / dist2.sqrt();
         if cos_light <= 0.0 || dist2 <= 0.0 {
             return 0.0;
         }

@@ -30,22 +30,32 @@ impl Context<'_> {
         self.world.intersect(ray)
     }
 
-    /// True when nothing blocks the segment from surface point `x` (geometric normal `nx`)
-    /// to `y`. With `ny` (y on a surface) both ends are offset off their surfaces and the
-    /// ray stops at the offset end (DESIGN.md); a point light's `y` is used as is.
-    pub fn segment_clear(&self, x: DVec3, nx: DVec3, y: DVec3, ny: Option<DVec3>, counters: &mut Counters) -> bool {
-        let o = offset_origin(x, nx, y - x);
+    /// True when nothing blocks the segment from surface point `x` (error scale `sx`,
+    /// geometric normal `nx`) to `y`. With `ny` = (normal, error scale) of `y` on a surface
+    /// both ends are offset off their surfaces and the ray stops at the offset end
+    /// (DESIGN.md); a point light's `y` is used as is.
+    pub fn segment_clear(
+        &self,
+        x: DVec3,
+        sx: f64,
+        nx: DVec3,
+        y: DVec3,
+        ny: Option<(DVec3, f64)>,
+        counters: &mut Counters,
+    ) -> bool {
+        let o = offset_origin(x, sx, nx, y - x);
         let e = match ny {
-            Some(n) => offset_origin(y, n, x - y),
+            Some((n, sy)) => offset_origin(y, sy, n, x - y),
             None => y,
         };
         counters.rays += 1;
         !self.world.occluded(&Ray::new(o, e - o, 0.0, 1.0))
     }
 
-    /// True when nothing blocks the ray from surface point `x` toward infinity along `dir`.
-    pub fn direction_clear(&self, x: DVec3, nx: DVec3, dir: DVec3, counters: &mut Counters) -> bool {
+    /// True when nothing blocks the ray from surface point `x` (error scale `sx`) toward
+    /// infinity along `dir`.
+    pub fn direction_clear(&self, x: DVec3, sx: f64, nx: DVec3, dir: DVec3, counters: &mut Counters) -> bool {
         counters.rays += 1;
-        !self.world.occluded(&Ray::new(offset_origin(x, nx, dir), dir, 0.0, f64::INFINITY))
+        !self.world.occluded(&Ray::new(offset_origin(x, sx, nx, dir), dir, 0.0, f64::INFINITY))
     }
 }

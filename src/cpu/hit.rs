@@ -12,6 +12,8 @@ pub struct Hit {
     /// World-space point (computed from the object-space hit, not `origin + t·dir`, for
     /// accuracy).
     pub point: DVec3,
+    /// Error scale of `point` (`offset::error_scale`): what spawned rays offset by.
+    pub scale: f64,
     /// Unit shading normal, facing the incoming ray (`normal · dir ≤ 0`).
     pub normal: DVec3,
     /// True when the ray arrived from the outside of the surface (before flipping).

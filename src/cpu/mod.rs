@@ -10,16 +10,16 @@
 
 pub mod csg;
 mod hit;
-mod offset;
+pub mod offset;
 mod onb;
-mod ray;
+pub(crate) mod ray;
 pub mod shapes;
 mod world;
 
 pub use hit::Hit;
 pub use offset::offset_origin;
 pub use onb::onb;
-pub use ray::Ray;
+pub use ray::{normalize_scaled, pow2_rescale, Ray};
 pub use world::{World, CSG_DEFER_MAX};
 
 // Shading: BSDFs, lights, integrators and the render loop.

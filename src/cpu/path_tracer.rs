@@ -76,7 +76,7 @@ pub fn path_radiance(
             break;
         }
         prev = Previous { point: hit.point, shape: hit.shape, delta: s.delta, pdf: s.pdf };
-        ray = Ray::new(offset_origin(hit.point, hit.normal, s.dir), s.dir, 0.0, f64::INFINITY);
+        ray = Ray::new(offset_origin(hit.point, hit.scale, hit.normal, s.dir), s.dir, 0.0, f64::INFINITY);
     }
     radiance
 }
@@ -142,8 +142,9 @@ struct LightSample {
     radiance: Color,
     /// Solid-angle density, including the probability of choosing the light.
     pdf: f64,
-    /// The light point and its normal (area lights); `None` for the environment.
-    end: Option<(DVec3, DVec3)>,
+    /// The light point, its normal and error scale (area lights); `None` for the
+    /// environment.
+    end: Option<(DVec3, DVec3, f64)>,
 }
 
 /// Next-event estimation at a non-delta vertex: one light (area or environment) chosen
@@ -164,8 +165,8 @@ fn sample_light(
         return Color::BLACK;
     }
     let clear = match ls.end {
-        Some((y, ny)) => ctx.segment_clear(hit.point, hit.normal, y, Some(ny), counters),
-        None => ctx.direction_clear(hit.point, hit.normal, ls.dir, counters),
+        Some((y, ny, sy)) => ctx.segment_clear(hit.point, hit.scale, hit.normal, y, Some((ny, sy)), counters),
+        None => ctx.direction_clear(hit.point, hit.scale, hit.normal, ls.dir, counters),
     };
     if !clear {
         return Color::BLACK;
@@ -187,7 +188,12 @@ fn choose_and_sample_light(ctx: &Context, hit: &Hit, xi: &VertexDraws) -> Option
                 return None;
             }
             let radiance = light.emission(ctx.scene, &lp);
-            Some(LightSample { dir: to / dist, radiance, pdf: select * lp.pdf, end: Some((lp.point, lp.normal)) })
+            Some(LightSample {
+                dir: to / dist,
+                radiance,
+                pdf: select * lp.pdf,
+                end: Some((lp.point, lp.normal, lp.scale)),
+            })
         }
         LightChoice::Env => {
             let env = ctx.lights.env.as_ref()?;

@@ -26,7 +26,7 @@ pub fn point_light_factor(
     if cos <= 0.0 {
         return None;
     }
-    if !ctx.segment_clear(hit.point, hit.normal, light.position, None, counters) {
+    if !ctx.segment_clear(hit.point, hit.scale, hit.normal, light.position, None, counters) {
         return None;
     }
     Some((dir, cos * light.falloff(dist)))

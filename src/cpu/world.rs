@@ -179,6 +179,7 @@ impl World {
         Some(Hit {
             t: found.t(),
             point: s.point,
+            scale: s.scale,
             normal: s.normal,
             front_face: s.front_face,
             uv: s.uv,

@@ -57,6 +57,13 @@ pub enum PackError {
     TooMany { what: &'static str, count: usize, limit: usize },
     #[error("invalid scene: {0}")]
     Scene(#[from] crate::scene::SceneError),
+    /// f32 cannot hold the shape's placement: rounding its transform would give ±∞ and a
+    /// meaningless render, so the GPU refuses the scene (the CPU renders it in f64).
+    #[error(
+        "shape {shape} ({kind:?}): its transform reaches {magnitude:e} in the camera frame, beyond f32's range \
+         (±3.4e38) that the GPU computes in"
+    )]
+    OutOfRange { shape: usize, kind: ShapeKind, magnitude: f64 },
 }
 
 /// The camera's position in the world: where the packed frame's origin goes. For a
@@ -157,11 +164,12 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     for (i, s) in shifted.iter().enumerate() {
         object_ref[i] = match s {
             Shape::Primitive(prim) => {
+                check_range(i, prim.kind, &prim.transform)?;
                 p.shapes.push(packed_shape(prim.kind, &prim.transform, prim.material.0, area_of_shape[i]));
                 count_u32("shapes", p.shapes.len())? - 1
             }
             Shape::Csg(_) => {
-                let node = pack_csg(s, &Transform::IDENTITY, &mut p, &mut csg_children)?;
+                let node = pack_csg(i, s, &Transform::IDENTITY, &mut p, &mut csg_children)?;
                 node | layout::CSG_NODE_BIT
             }
         };
@@ -275,6 +283,18 @@ fn shifted_shape(s: &Shape, shift: &Transform) -> Shape {
     }
 }
 
+/// Refuses a shape (top-level index `shape`) whose camera-frame object-to-world transform
+/// has an entry beyond f32's range. A shape too *small* for f32 (its inverse overflows) is
+/// kept: its rays become non-finite in object space and miss, as they would at the
+/// resolution f32 has for any coordinate it could be seen from.
+fn check_range(shape: usize, kind: ShapeKind, to_world: &Transform) -> Result<(), PackError> {
+    let magnitude = to_world.matrix().to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if magnitude > f64::from(f32::MAX) {
+        return Err(PackError::OutOfRange { shape, kind, magnitude });
+    }
+    Ok(())
+}
+
 fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32) -> layout::Shape {
     let kind = match kind {
         ShapeKind::Sphere => layout::shape_kind::SPHERE,
@@ -295,6 +315,7 @@ fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32
 /// Packs CSG tree `s` (placed by `parent`) depth-first; returns its node index. The
 /// children's references are collected in `children` and appended to `indices` later.
 fn pack_csg(
+    top: usize,
     s: &Shape,
     parent: &Transform,
     p: &mut PackedScene,
@@ -319,10 +340,12 @@ fn pack_csg(
     for ch in &c.children {
         refs.push(match ch {
             Shape::Primitive(prim) => {
-                p.shapes.push(packed_shape(prim.kind, &(t * prim.transform), prim.material.0, NONE));
+                let to_world = t * prim.transform;
+                check_range(top, prim.kind, &to_world)?;
+                p.shapes.push(packed_shape(prim.kind, &to_world, prim.material.0, NONE));
                 count_u32("shapes", p.shapes.len())? - 1
             }
-            Shape::Csg(_) => pack_csg(ch, &t, p, children)? | layout::CSG_NODE_BIT,
+            Shape::Csg(_) => pack_csg(top, ch, &t, p, children)? | layout::CSG_NODE_BIT,
         });
     }
     count_u32("CSG nodes", p.csg_nodes.len())?;
@@ -501,5 +524,18 @@ mod tests {
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
         assert!(err.to_string().contains("CSG interval slots"), "{err}");
+    }
+
+    #[test]
+    fn a_shape_beyond_f32_range_is_a_clear_error() {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        b.sphere(Transform::scaling(DVec3::splat(1e30)), m).sphere(Transform::scaling(DVec3::splat(1e-300)), m);
+        assert!(pack(&b.build().unwrap(), None).is_ok(), "1e30 fits f32; 1e-300 is kept (and never hit)");
+        let huge = Transform::scaling(DVec3::splat(1e300));
+        b.shape(Shape::csg(CsgOp::Unite, vec![sphere_at(0.0, m), Shape::primitive(ShapeKind::Cube, huge, m)], huge));
+        let err = pack(&b.build().unwrap(), None).unwrap_err();
+        assert!(matches!(err, PackError::OutOfRange { shape: 2, kind: ShapeKind::Sphere, .. }), "{err}");
+        assert!(err.to_string().contains("beyond f32's range"), "{err}");
     }
 }

@@ -16,7 +16,7 @@ use crate::image::HdrImage;
 use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` is not one).
-const MODULES: [(&str, &str); 23] = [
+const MODULES: [(&str, &str); 24] = [
     ("shaders/pass.wgsl", include_str!("../../shaders/pass.wgsl")),
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
@@ -33,6 +33,7 @@ const MODULES: [(&str, &str); 23] = [
     ("shaders/world.wgsl", include_str!("../../shaders/world.wgsl")),
     ("shaders/camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     ("shaders/offset.wgsl", include_str!("../../shaders/offset.wgsl")),
+    ("shaders/rescale.wgsl", include_str!("../../shaders/rescale.wgsl")),
     ("shaders/onb.wgsl", include_str!("../../shaders/onb.wgsl")),
     ("shaders/textures.wgsl", include_str!("../../shaders/textures.wgsl")),
     ("shaders/pigment.wgsl", include_str!("../../shaders/pigment.wgsl")),

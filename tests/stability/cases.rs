@@ -1252,6 +1252,21 @@ USING Camera.Perspective() Image(8, 8) Renderer.PathTracer(.n 2, .max_depth 3)
     );
     let scene = load_str(&src, "extreme.sl", std::path::Path::new("."), &LoadOptions::default())
         .expect("finite, invertible scales load");
+    // f32 cannot hold a transform beyond ±3.4e38: the GPU must refuse such a scene clearly
+    // (`lumen render --device auto` then renders it on the CPU) rather than render garbage.
+    let beyond_f32 = big.parse::<f64>().unwrap() > f64::from(f32::MAX);
+    let mut note = String::new();
+    let gpu = match gpu {
+        Some(g) if beyond_f32 => {
+            let err = gpu_render(g, &scene, &GpuRenderOptions::fixed_passes(None, 4))
+                .expect_err("the GPU must refuse a shape beyond f32's range");
+            let msg = err.to_string();
+            assert!(msg.contains("shape 1 (Sphere)") && msg.contains("beyond f32's range"), "{msg}");
+            note = "GPU refuses the scene: shape 1 (Sphere) beyond f32's range".into();
+            None
+        }
+        g => g,
+    };
     let (cpu, gpu_img) = render_both(gpu, &scene, None);
     let max = |img: &HdrImage| img.pixels().iter().map(|p| f64::from(p.r.max(p.g).max(p.b))).fold(0.0, f64::max);
     let mut agree = Agreement::default();
@@ -1266,7 +1281,7 @@ USING Camera.Perspective() Image(8, 8) Renderer.PathTracer(.n 2, .max_depth 3)
         gpu: gpu_img.as_ref().map(max),
         gpu_agrees_with_cpu: agree.0,
         min_agreement: 1.0,
-        note: String::new(),
+        note,
     }
 }
 

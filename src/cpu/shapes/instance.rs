@@ -3,7 +3,8 @@
 use glam::{DVec2, DVec3};
 
 use super::{span, surface, Crossing, Span};
-use crate::cpu::Ray;
+use crate::cpu::offset::error_scale;
+use crate::cpu::{normalize_scaled, Ray};
 use crate::scene::{MaterialId, ShapeKind, Transform};
 
 /// A unit primitive with its full object-to-world transformation (for CSG leaves, the
@@ -19,6 +20,8 @@ pub struct Instance {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfaceHit {
     pub point: DVec3,
+    /// Error scale of `point` (`offset::error_scale`).
+    pub scale: f64,
     /// Unit normal with `normal · dir ≤ 0`.
     pub normal: DVec3,
     /// The outward normal faced the ray (`outward · dir < 0`).
@@ -52,10 +55,11 @@ impl Instance {
         let (o, d) = self.local_ray(ray);
         let s = surface(self.kind, o + c.t * d, c.face);
         let point = self.to_world.point(s.point);
-        let n = self.to_world.normal(s.normal).normalize_or_zero();
+        let scale = error_scale(&self.to_world.matrix(), s.point);
+        let n = normalize_scaled(self.to_world.normal(s.normal));
         let outward = if flip { -n } else { n };
         let front_face = outward.dot(ray.dir) < 0.0;
         let normal = if front_face { outward } else { -outward };
-        SurfaceHit { point, normal, front_face, uv: s.uv }
+        SurfaceHit { point, scale, normal, front_face, uv: s.uv }
     }
 }

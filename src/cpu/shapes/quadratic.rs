@@ -2,6 +2,8 @@
 
 use glam::DVec3;
 
+use crate::cpu::ray::pow2_rescale;
+
 /// Parameters `t0 ≤ t1` where the line `f + t·d` meets the sphere |x| = r (centre at the
 /// origin), or `None` if it misses. `d` need not be normalised.
 ///
@@ -11,9 +13,18 @@ use glam::DVec3;
 /// the vector `f − (b'/a)·d` is the line's closest approach to the centre, so Δ keeps its
 /// precision when the sphere is tiny or far away, where `b'² − ac` would cancel.
 /// Used by the sphere (3-D) and by the cylinder's side (with z components zeroed).
+///
+/// `d` is first rescaled by a power of two (exact) so that its largest component lies in
+/// [1, 2): a shape scaled by 1e300 has |d_obj| ≈ 1e-300, whose square underflows to 0,
+/// and one scaled by 1e-300 has |d_obj|² = ∞. Only the direction is rescaled, so the roots
+/// come out in units of the rescaled direction and are multiplied back by the same power
+/// of two; in range, every step scales exactly and the result is bit for bit what the
+/// unscaled formulas give.
 pub fn sphere_roots(f: DVec3, d: DVec3, r2: f64) -> Option<(f64, f64)> {
+    let s = pow2_rescale(d.abs().max_element());
+    let d = d * s;
     let a = d.length_squared();
-    if a == 0.0 {
+    if a == 0.0 || !a.is_finite() {
         return None;
     }
     let b = f.dot(d);
@@ -30,6 +41,7 @@ pub fn sphere_roots(f: DVec3, d: DVec3, r2: f64) -> Option<(f64, f64)> {
     } else {
         (q / a, c / q)
     };
+    let (t0, t1) = (t0 * s, t1 * s);
     Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
@@ -56,5 +68,24 @@ mod tests {
         let half = (r * r - 0.25e-6f64).sqrt();
         assert!((t0 - (1e4 - half)).abs() < 1e-11, "{t0}");
         assert!((t1 - (1e4 + half)).abs() < 1e-11, "{t1}");
+    }
+
+    #[test]
+    fn extreme_direction_lengths_keep_their_roots() {
+        // From the centre of spheres scaled by 1e300 and 1e-300: |d_obj|² under- or
+        // overflows f64, the roots ±1/|d| do not.
+        for len in [1e-300, 1e-170, 1e170, 1e300] {
+            let (t0, t1) = sphere_roots(DVec3::ZERO, DVec3::new(0.0, len, 0.0), 1.0).unwrap();
+            assert!((t0 + 1.0 / len).abs() <= 1e-15 / len && (t1 - 1.0 / len).abs() <= 1e-15 / len, "{len}: {t0} {t1}");
+        }
+        // A subnormal direction still finds the sphere (whose far root 1e310 overflows).
+        let (t0, t1) = sphere_roots(DVec3::ZERO, DVec3::new(1e-310, 0.0, 0.0), 1.0).unwrap();
+        assert_eq!((t0, t1), (f64::NEG_INFINITY, f64::INFINITY));
+        // In range the rescaling is exact: the same bits as d itself would give.
+        let f = DVec3::new(-3.1, 0.2, 0.7);
+        let d = DVec3::new(0.3, -0.01, 0.02);
+        let (t0, t1) = sphere_roots(f, d, 1.0).unwrap();
+        let (u0, u1) = sphere_roots(f, d * 1024.0, 1.0).unwrap();
+        assert_eq!((t0, t1), (u0 * 1024.0, u1 * 1024.0));
     }
 }
