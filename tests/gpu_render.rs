@@ -78,6 +78,72 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
     }
 }
 
+/// `shaders/offset.wgsl` is scale-aware like `cpu::offset_origin`: a surface point of a
+/// scene scaled by 2⁻¹³ (≈ 1.2e-4), with its error scale, moves by exactly 2⁻¹³ times the
+/// unit point's offset in every coordinate, near zero or not; a near-zero coordinate moves
+/// by 2⁻¹⁶ times the error scale (the f32 constant).
+#[test]
+fn gpu_offsets_are_proportional_to_the_error_scale() {
+    let Some(gpu) = gpu_for_tests("gpu_offsets_are_proportional_to_the_error_scale") else { return };
+    let src = format!(
+        "{}\n{}\n{}\n{}\n
+@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (i >= arrayLength(&out)) {{ return; }}
+    let p = input[2u * i];
+    let n = input[2u * i + 1u].xyz;
+    out[i] = vec4<f32>(offset_origin(p.xyz, p.w, n, n), 0.0);
+}}",
+        include_str!("../shaders/layout.wgsl"),
+        include_str!("../shaders/rescale.wgsl"),
+        include_str!("../shaders/ray.wgsl"),
+        include_str!("../shaders/offset.wgsl"),
+    );
+    let kernel = gpu.compute_kernel("offset_test.wgsl", &src, "main").unwrap();
+    let k = 2f32.powi(-13);
+    // (point, error scale), normal: coordinates far from and near zero relative to the scale.
+    let points = [
+        ([3.0f32, 0.01, -0.002], 3.5f32, [0.3f32, 1.0, -0.2]),
+        ([-5.0, 2.0, 0.0], 6.0, [-1.0, 0.2, 0.4]),
+        ([0.5, -0.7, 0.05], 1.5, [0.0, 0.0, 1.0]),
+    ];
+    let mut input: Vec<[f32; 4]> = Vec::new();
+    for scale in [1.0, k] {
+        for (p, s, n) in points {
+            input.push([p[0] * scale, p[1] * scale, p[2] * scale, s * scale]);
+            input.push([n[0], n[1], n[2], 0.0]);
+        }
+    }
+    let count = input.len() / 2;
+    let ib = gpu.storage_buffer("input", &input).unwrap();
+    let ob = gpu.storage_buffer_zeroed("out", (count * 16) as u64).unwrap();
+    let group = kernel.bind_group(&gpu, 0, &[&ib, &ob]).unwrap();
+    gpu.dispatch(&kernel, &[&group], kernel.workgroups_for([count as u32, 1, 1])).unwrap();
+    let got: Vec<[f32; 4]> = gpu.read_buffer(&ob, count).unwrap();
+    for (i, (p, s, n)) in points.iter().enumerate() {
+        let (unit, small) = (got[i], got[i + points.len()]);
+        for a in 0..3 {
+            let (d_unit, d_small) = (unit[a] - p[a], small[a] - p[a] * k);
+            assert_eq!(d_small, d_unit * k, "point {i} axis {a}: {unit:?} vs {small:?}");
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if p[a].abs() < s / 32.0 {
+                // 2⁻¹⁶ of the error scale times the unit normal's component.
+                let want = 2f32.powi(-16) * s * n[a] / len;
+                // (Within the rounding of p + offset, one ulp of the coordinate.)
+                let tol = 2.0 * f32::EPSILON * (p[a].abs() + want.abs()) + 1e-12;
+                assert!((d_unit - want).abs() <= tol, "point {i} axis {a}: {d_unit} vs {want}");
+            } else {
+                // 256 ulps of the coordinate (times the normal's component), far below the scale.
+                assert!(d_unit.abs() <= 256.0 * f32::EPSILON * p[a].abs(), "point {i} axis {a}: {d_unit}");
+            }
+            assert!(d_unit * n[a] >= 0.0, "point {i} axis {a}: moved against the normal");
+        }
+    }
+}
+
 use glam::DVec3;
 use lumen::color::Color;
 use lumen::cpu::{Progress, RenderOptions};
@@ -652,4 +718,42 @@ fn non_finite_estimates_are_counted_and_dropped() {
         let expected = 0.25 * (1.0 - m.r);
         assert_eq!((p.r, p.g, p.b), (expected, expected, expected));
     }
+}
+
+/// A scene beyond f32's range (a sphere scaled by 1e300 around the camera): `lumen render
+/// --device gpu` fails naming the shape, `--device auto` warns and renders it on the CPU
+/// (black: the camera is inside a non-emitting sphere under a white sky).
+#[test]
+fn a_scene_beyond_f32_falls_back_to_the_cpu_under_device_auto() {
+    if gpu_for_tests("a_scene_beyond_f32_falls_back_to_the_cpu_under_device_auto").is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("huge.sl"),
+        "SET grey Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.5, 0.5, 0.5>)))
+SPAWN Shape.Sphere(.material grey, .transformation SCALE 1e300)
+USING Camera.Perspective() Image(4, 4) Renderer.PathTracer(.n 1, .max_depth 3) Tracer()
+      Environment.Uniform(.color <1, 1, 1>)
+",
+    )
+    .unwrap();
+    let run = |device: &str, out: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_lumen"))
+            .current_dir(dir.path())
+            .args(["render", "huge.sl", "--device", device, "-o", out])
+            .output()
+            .unwrap()
+    };
+    let gpu = run("gpu", "gpu.pfm");
+    let stderr = String::from_utf8_lossy(&gpu.stderr);
+    assert!(!gpu.status.success() && stderr.contains("shape 0 (Sphere)"), "{stderr}");
+    assert!(stderr.contains("beyond f32's range"), "{stderr}");
+    assert!(!dir.path().join("gpu.pfm").exists());
+    let auto = run("auto", "auto.pfm");
+    let stderr = String::from_utf8_lossy(&auto.stderr);
+    assert!(auto.status.success(), "{stderr}");
+    assert!(stderr.contains("beyond f32's range") && stderr.contains("on the CPU"), "{stderr}");
+    let img = lumen::image::read_image(&dir.path().join("auto.pfm")).unwrap();
+    assert!(img.pixels().iter().all(|p| p.r == 0.0 && p.g == 0.0 && p.b == 0.0));
 }
