@@ -177,3 +177,22 @@ fn a_path_cut_even_alone_is_counted() {
         assert!(out.image.pixels().iter().all(|p| (f64::from(p.g) / expected - 1.0).abs() < 2e-6));
     }
 }
+
+/// The stability suite's case (docs/STABILITY.md): inside an emitting cube, 256 paths of
+/// depth 50 per camera sample, every path exactly Σ_(k≤50) 0.5ᵏ. With a limiter the pass
+/// is resumed (the plain kernel summed only the first 129 paths on lavapipe).
+#[test]
+fn the_256_path_furnace_is_resumed_where_the_driver_has_a_limiter() {
+    let Some(mut gpu) = gpu_for_tests("the_256_path_furnace") else { return };
+    gpu.loop_limiter = true;
+    let mut b = SceneBuilder::new(4, 4);
+    let m = emissive(&mut b, 0.5, 1.0);
+    b.cube(Transform::scaling(DVec3::splat(5.0)), m).renderer(pt(256, 50, false));
+    let scene = b.build().unwrap();
+    let out = gpu_render(&gpu, &scene, 1, 0);
+    println!("{} dispatches for 1 pass", out.dispatches);
+    let expected = 2.0 * (1.0 - 0.5f64.powi(51));
+    assert!(out.image.pixels().iter().all(|p| (f64::from(p.g) / expected - 1.0).abs() < 2e-6));
+    assert_eq!(out.loop_limited_paths, 0);
+    assert_eq!(driver_has_limiter(&gpu), out.dispatches > 1, "resumed exactly when the driver has a limiter");
+}
