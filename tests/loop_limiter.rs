@@ -196,3 +196,36 @@ fn the_256_path_furnace_is_resumed_where_the_driver_has_a_limiter() {
     assert_eq!(out.loop_limited_paths, 0);
     assert_eq!(driver_has_limiter(&gpu), out.dispatches > 1, "resumed exactly when the driver has a limiter");
 }
+
+/// `lumen render` says how many paths the limiter cut even alone (here all 2×2 pixels × 2
+/// paths of the camera inside 1,000 concentric emitting spheres at depth 60).
+#[test]
+fn lumen_render_warns_about_paths_cut_even_alone() {
+    let Some(gpu) = gpu_for_tests("lumen_render_warns") else { return };
+    if !driver_has_limiter(&gpu) {
+        println!("skipped lumen_render_warns: {} has no loop limiter", gpu.description());
+        return;
+    }
+    let mut script = String::from(
+        "SET\n    m Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.5, 0.5, 0.5>)), \
+         .emitted_radiance Pigment.Uniform(<1, 1, 1>))\nSPAWN\n",
+    );
+    for k in 0..1000 {
+        script += &format!("    Shape.Sphere(.material m, .transformation SCALE {})\n", 10.0 + f64::from(k) / 1000.0);
+    }
+    script += "USING\n    Camera.Perspective()\n    Image(2, 2)\n    \
+               Renderer.PathTracer(.n 2, .max_depth 60, .roulette_depth 1000)\n    Tracer(.samples_per_side 1)\n";
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("shells.sl");
+    std::fs::write(&path, script).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lumen"))
+        .args(["render", "--device", "gpu", "-o"])
+        .arg(dir.path().join("shells.pfm"))
+        .arg(&path)
+        .env("LUMEN_LOOP_LIMITER", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("warning: 8 paths ran longer than this driver's loop limiter allows"), "{stderr}");
+}
