@@ -229,3 +229,19 @@ fn lumen_render_warns_about_paths_cut_even_alone() {
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("warning: 8 paths ran longer than this driver's loop limiter allows"), "{stderr}");
 }
+
+/// Ctrl-C (the cancel flag) is honoured between the dispatches of a resumed pass: the
+/// unfinished round is dropped, as between passes.
+#[test]
+fn cancel_stops_a_resumed_pass_between_dispatches() {
+    let Some(mut gpu) = gpu_for_tests("cancel_between_dispatches") else { return };
+    gpu.loop_limiter = true;
+    let scene = mixed_scene(pt(3, 5, true));
+    let mut opts = GpuRenderOptions::fixed_passes(Some(4), 4);
+    opts.passes.path_budget = 1;
+    opts.passes.cancel = Some(std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true)));
+    let out = render(&gpu, &scene, &opts).unwrap();
+    assert_eq!(out.stop, lumen::gpu::StopReason::Interrupted);
+    assert_eq!((out.spp_done, out.dispatches), (0, 1));
+    assert!(out.image.pixels().iter().all(|p| p.r == 0.0 && p.g == 0.0 && p.b == 0.0));
+}

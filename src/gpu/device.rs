@@ -300,7 +300,9 @@ impl Gpu {
         let mut gpu = Gpu { device, queue, adapter_info, limits, loop_limiter: false, sink };
         gpu.loop_limiter = match loop_limiter_override() {
             Some(forced) => forced,
-            None => probe_loop_limiter(&gpu)? < LOOP_LIMITER_PROBE_TRIPS,
+            // A probe that cannot run says nothing: assume a limiter, since resumable kernels
+            // are correct on every driver (only a little slower).
+            None => probe_loop_limiter(&gpu).map_or(true, |count| count < LOOP_LIMITER_PROBE_TRIPS),
         };
         Ok(gpu)
     }

@@ -24,5 +24,8 @@ pub use device::{
     LOOP_LIMITER_ENV, LOOP_LIMITER_PROBE_TRIPS,
 };
 pub use kernel_cache::KernelCache;
-pub use passes::{ctrlc_flag, run_progressive, Accumulated, PassOptions, PassUniform, StopReason, NO_SOLO, PASS_WGSL};
+pub use passes::{
+    ctrlc_flag, run_progressive, Accumulated, PassOptions, PassUniform, StopReason, MAX_RESUMABLE_PATHS_PER_PASS,
+    NO_SOLO, PASS_WGSL,
+};
 pub use test_support::{gpu_for_tests, gpu_required, REQUIRE_GPU_ENV};

@@ -56,6 +56,10 @@ pub struct PassUniform {
     pub _pad: [u32; 2],
 }
 
+/// Most paths one resumable pass can count (28 bits of `pass_state`'s progress word):
+/// samples per pass × paths per sample must stay below it.
+pub const MAX_RESUMABLE_PATHS_PER_PASS: u32 = RESUME_PROGRESS;
+
 /// [`PassUniform::solo_pixel`] when every pixel of the tile runs.
 pub const NO_SOLO: u32 = u32::MAX;
 
@@ -225,6 +229,7 @@ pub fn run_progressive(
         let j1 = j0 + spp_per_pass.min(total_spp - done);
         let mut worst_per_sample = 0.0f64;
         let mut round_per_sample = 0.0f64;
+        let limited_before_round = pass.loop_limited_paths;
         for &tile in &tiles {
             let params = PassUniform {
                 tile_origin: [tile.x, tile.y],
@@ -245,6 +250,7 @@ pub fn run_progressive(
             progress.inc(u64::from(j1 - j0) * tile.pixel_count() as u64);
             if !complete || opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst)) {
                 acc.discard_round();
+                pass.loop_limited_paths = limited_before_round; // not in the image
                 stop = StopReason::Interrupted;
                 break 'rounds;
             }

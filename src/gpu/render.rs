@@ -244,6 +244,14 @@ fn render_packed(
 ) -> Result<GpuRenderOutput, GpuError> {
     let buffers = SceneBuffers::upload(gpu, kernel, packed)?;
     let group = kernel.bind_group(gpu, 1, &buffers.refs())?;
+    let paths_per_pass = u64::from(packed.settings.paths_per_sample.max(1)) * u64::from(opts.passes.max_spp_per_pass);
+    if gpu.loop_limiter && paths_per_pass > u64::from(super::MAX_RESUMABLE_PATHS_PER_PASS) {
+        return Err(GpuError::Validation(format!(
+            "{paths_per_pass} paths per pass (paths per sample × max samples per pass) exceed the {} a resumable \
+             pass can count",
+            super::MAX_RESUMABLE_PATHS_PER_PASS
+        )));
+    }
     let acc = run_progressive(gpu, kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
     let nan: Vec<u32> = gpu.read_buffer(&buffers.buffers[buffers.nan_count], 1)?;
     Ok(GpuRenderOutput {
