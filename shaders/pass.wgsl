@@ -10,6 +10,10 @@ struct PassParams {
     image_size: vec2<u32>,   // image width, height in pixels
     sample_begin: u32,       // first camera sample index j0 of this pass
     sample_end: u32,         // one past the last camera sample index j1
+    // Resumable kernels only (shaders/resume.wgsl); others ignore them:
+    solo_pixel: u32,         // the one tile pixel (row * tile width + column) to run, or all: 0xFFFFFFFF
+    path_budget: u32,        // at most this many paths per invocation per dispatch (0: no bound)
+    _pad: vec2<u32>,
 }
 
 @group(0) @binding(0) var<uniform> pass_params: PassParams;

@@ -97,10 +97,6 @@ fn many_paths_per_camera_sample_on_the_cpu() {
 }
 
 #[test]
-#[ignore = "bug: lavapipe (Mesa llvmpipe's loop limiter, LP_MAX_TGSI_LOOP_ITERATIONS) ends every loop once an \
-            invocation has run 65,535 loop iterations in total, all loops together; the render kernel does not bound \
-            its work per invocation, so paths after ~6,580 traversals in a pass return 0 (closed-cube furnace, \
-            n = 256, depth 50: 1.008 instead of 2.000)"]
 fn many_paths_per_camera_sample_on_the_gpu() {
     run("many_paths_per_sample", cases::many_paths_per_sample);
 }

@@ -12,6 +12,13 @@ use thiserror::Error;
 /// Environment variable that selects an adapter when no `--adapter` is given.
 pub const ADAPTER_ENV: &str = "LUMEN_ADAPTER";
 
+/// Environment variable that overrides the loop-limiter probe: `1` renders as if the
+/// driver had one (path-granular, resumable passes), `0` as if not (for testing both).
+pub const LOOP_LIMITER_ENV: &str = "LUMEN_LOOP_LIMITER";
+
+/// Iterations the probe kernel asks for: more than llvmpipe's 65,535.
+pub const LOOP_LIMITER_PROBE_TRIPS: u32 = 70_000;
+
 /// Everything that can go wrong on the GPU side, as values rather than panics.
 #[derive(Debug, Error)]
 pub enum GpuError {
@@ -232,6 +239,12 @@ pub struct Gpu {
     /// The limits the device was opened with: the adapter's own, not wgpu's defaults, so
     /// that large scenes (big storage buffers) fit wherever the hardware allows.
     pub limits: wgpu::Limits,
+    /// Whether the driver silently ends long-running loops (Mesa llvmpipe under lavapipe
+    /// stops every loop of an invocation after 65,535 iterations in total): measured by
+    /// [`probe_loop_limiter`] when the device opens, or forced by `LUMEN_LOOP_LIMITER=0|1`.
+    /// The renderer then assembles resumable kernels (docs/DESIGN.md, "Loop limiter and
+    /// path-granular passes"); public so tests can render both ways on one device.
+    pub loop_limiter: bool,
     sink: Arc<Mutex<ErrorSink>>,
 }
 
@@ -284,7 +297,14 @@ impl Gpu {
                 sink.errors.push(GpuError::DeviceLost(format!("{reason:?}: {message}")));
             }
         });
-        Ok(Gpu { device, queue, adapter_info, limits, sink })
+        let mut gpu = Gpu { device, queue, adapter_info, limits, loop_limiter: false, sink };
+        gpu.loop_limiter = match loop_limiter_override() {
+            Some(forced) => forced,
+            // A probe that cannot run says nothing: assume a limiter, since resumable kernels
+            // are correct on every driver (only a little slower).
+            None => probe_loop_limiter(&gpu).map_or(true, |count| count < LOOP_LIMITER_PROBE_TRIPS),
+        };
+        Ok(gpu)
     }
 
     /// This device's adapter, as `lumen devices` would print it.
@@ -337,9 +357,49 @@ impl Gpu {
     }
 }
 
+/// `LUMEN_LOOP_LIMITER`: `Some(true)` for 1, `Some(false)` for 0, else `None` (probe).
+fn loop_limiter_override() -> Option<bool> {
+    match std::env::var(LOOP_LIMITER_ENV).ok()?.trim() {
+        "1" | "true" | "yes" => Some(true),
+        "0" | "false" | "no" => Some(false),
+        _ => None,
+    }
+}
+
+/// Runs `shaders/loop_limiter.wgsl`: one invocation counts a loop of
+/// [`LOOP_LIMITER_PROBE_TRIPS`] iterations and returns how far it got (65,535 on llvmpipe,
+/// all of them on a GPU without a limiter). A few milliseconds, once per device.
+pub fn probe_loop_limiter(gpu: &Gpu) -> Result<u32, GpuError> {
+    let src = include_str!("../../shaders/loop_limiter.wgsl");
+    let kernel = gpu.compute_kernel("shaders/loop_limiter.wgsl", src, "main")?;
+    let buffer = gpu.storage_buffer("loop limiter probe", &[LOOP_LIMITER_PROBE_TRIPS, 0])?;
+    let group = kernel.bind_group(gpu, 0, &[&buffer])?;
+    gpu.dispatch(&kernel, &[&group], [1, 1, 1])?;
+    Ok(gpu.read_buffer::<u32>(&buffer, 2)?[1])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The probe sees llvmpipe's limiter (65,535 iterations, all loops of an invocation
+    /// together) and no limiter anywhere else it has run; `Gpu::loop_limiter` follows it
+    /// unless `LUMEN_LOOP_LIMITER` forces a value.
+    #[test]
+    fn the_probe_detects_llvmpipes_loop_limiter() {
+        let Some(gpu) = crate::gpu::gpu_for_tests("loop_limiter_probe") else { return };
+        let count = probe_loop_limiter(&gpu).unwrap();
+        let llvmpipe = gpu.adapter_info.name.to_lowercase().contains("llvmpipe");
+        if llvmpipe {
+            assert_eq!(count, 65_535, "{}", gpu.description());
+        } else {
+            println!("{}: the probe counted {count} of {LOOP_LIMITER_PROBE_TRIPS}", gpu.description());
+        }
+        match loop_limiter_override() {
+            Some(forced) => assert_eq!(gpu.loop_limiter, forced),
+            None => assert_eq!(gpu.loop_limiter, count < LOOP_LIMITER_PROBE_TRIPS),
+        }
+    }
 
     #[test]
     fn cli_choice_overrides_environment_and_blank_means_none() {

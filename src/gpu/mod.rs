@@ -19,7 +19,13 @@ mod test_support;
 pub use accumulate::{Accumulator, Tile};
 pub use assemble::{preprocess, AssembleError, Assembled, FeatureSet, Preprocessed, ShaderLibrary, SourceLine};
 pub use compute::{validate_wgsl, BindingKind, ComputeKernel, ValidatedModule, MIN_BUFFER_BYTES};
-pub use device::{list_adapters, select_adapter, AdapterChoice, AdapterDescription, Gpu, GpuError, ADAPTER_ENV};
+pub use device::{
+    list_adapters, probe_loop_limiter, select_adapter, AdapterChoice, AdapterDescription, Gpu, GpuError, ADAPTER_ENV,
+    LOOP_LIMITER_ENV, LOOP_LIMITER_PROBE_TRIPS,
+};
 pub use kernel_cache::KernelCache;
-pub use passes::{ctrlc_flag, run_progressive, Accumulated, PassOptions, PassUniform, StopReason, PASS_WGSL};
+pub use passes::{
+    ctrlc_flag, run_progressive, Accumulated, PassOptions, PassUniform, StopReason, MAX_RESUMABLE_PATHS_PER_PASS,
+    NO_SOLO, PASS_WGSL,
+};
 pub use test_support::{gpu_for_tests, gpu_required, REQUIRE_GPU_ENV};

@@ -15,6 +15,12 @@
 //!   overwriting (the buffer is reused by every pass);
 //! - a sample's value depends only on (pixel, j) and the scene, never on the pass split.
 //!
+//! Resumable kernels (`shaders/resume.wgsl`, assembled when the driver has a loop limiter)
+//! also declare `@group(0) @binding(2) var<storage, read_write> pass_state:
+//! array<vec4<u32>>`; a pass over them is repeated on its tile until every pixel reports
+//! done, with single-pixel ("solo") dispatches for paths cut by the limiter (docs/DESIGN.md,
+//! "Loop limiter and path-granular passes").
+//!
 //! Uniform sample counts: passes are grouped in *rounds*, one sample range over every tile.
 //! Stopping conditions are checked between rounds (time limit) or abandon the unfinished
 //! round (Ctrl-C), so every pixel of the result has exactly `spp_done` samples.
@@ -34,7 +40,7 @@ use crate::image::HdrImage;
 /// WGSL declarations of the kernel contract (prepend to, or assemble with, a pass kernel).
 pub const PASS_WGSL: &str = include_str!("../../shaders/pass.wgsl");
 
-/// The per-pass uniform: `PassParams` in `shaders/pass.wgsl` (32 bytes, same layout).
+/// The per-pass uniform: `PassParams` in `shaders/pass.wgsl` (48 bytes, same layout).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct PassUniform {
@@ -43,7 +49,25 @@ pub struct PassUniform {
     pub image_size: [u32; 2],
     pub sample_begin: u32,
     pub sample_end: u32,
+    /// Resumable kernels: the only tile pixel to run ([`NO_SOLO`]: all of them).
+    pub solo_pixel: u32,
+    /// Resumable kernels: at most this many paths per invocation per dispatch (0: no bound).
+    pub path_budget: u32,
+    pub _pad: [u32; 2],
 }
+
+/// Most paths one resumable pass can count (28 bits of `pass_state`'s progress word):
+/// samples per pass × paths per sample must stay below it.
+pub const MAX_RESUMABLE_PATHS_PER_PASS: u32 = RESUME_PROGRESS;
+
+/// [`PassUniform::solo_pixel`] when every pixel of the tile runs.
+pub const NO_SOLO: u32 = u32::MAX;
+
+// Flags in the `.w` word of `pass_state` (`shaders/resume.wgsl`).
+const RESUME_DONE: u32 = 0x1000_0000;
+const RESUME_NEEDS_SOLO: u32 = 0x2000_0000;
+const RESUME_LIMITED: u32 = 0x4000_0000;
+const RESUME_PROGRESS: u32 = 0x0FFF_FFFF;
 
 /// How passes are sized and when rendering stops.
 #[derive(Debug, Clone)]
@@ -67,6 +91,10 @@ pub struct PassOptions {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Show a progress bar on stderr (hidden anyway when stderr is not a terminal).
     pub progress: bool,
+    /// Resumable kernels only: at most this many paths per pixel per dispatch (0: as many
+    /// as the driver's loop limiter allows). The sums do not depend on it; tests use small
+    /// budgets to force many resumptions.
+    pub path_budget: u32,
 }
 
 impl Default for PassOptions {
@@ -79,6 +107,7 @@ impl Default for PassOptions {
             time_limit: None,
             cancel: None,
             progress: false,
+            path_budget: 0,
         }
     }
 }
@@ -103,12 +132,17 @@ pub struct Accumulated {
     pub sums: Vec<[f64; 3]>,
     /// Samples per pixel, the same for every pixel.
     pub spp_done: u32,
-    /// Passes (dispatches) run, including those of a dropped round.
+    /// Passes run (one per tile and round), including those of a dropped round.
     pub passes: u32,
     pub seconds: f64,
     pub stop: StopReason,
     /// Pixel-pass sums dropped as NaN/infinite (should be 0; a kernel bug otherwise).
     pub nonfinite: u64,
+    /// Dispatches run: `passes` unless the kernel is resumable and passes were resumed.
+    pub dispatches: u64,
+    /// Resumable kernels: paths that the driver's loop limiter cut even when run alone
+    /// (counted as 0; the image is then not exact, and `lumen render` warns).
+    pub loop_limited_paths: u64,
 }
 
 /// Renders `total_spp` samples per pixel of a `width × height` image with `kernel`, whose
@@ -162,10 +196,26 @@ pub fn run_progressive(
             mapped_at_creation: false,
         })
     })?;
-    let group0 = kernel.bind_group(gpu, 0, &[&uniform, &output])?;
+    let resumable = is_resumable(kernel);
+    let state = if resumable { Some(gpu.storage_buffer_zeroed("pass state", out_bytes)?) } else { None };
+    let group0 = match &state {
+        Some(state) => kernel.bind_group(gpu, 0, &[&uniform, &output, state])?,
+        None => kernel.bind_group(gpu, 0, &[&uniform, &output])?,
+    };
     let mut groups: Vec<&wgpu::BindGroup> = vec![&group0];
     groups.extend_from_slice(scene_groups);
-    let pass = PassRunner { gpu, kernel, groups, uniform: &uniform, output: &output, staging: &staging };
+    let mut pass = PassRunner {
+        gpu,
+        kernel,
+        groups,
+        uniform: &uniform,
+        output: &output,
+        state: state.as_ref(),
+        staging: &staging,
+        cancel: opts.cancel.as_deref(),
+        dispatches: 0,
+        loop_limited_paths: 0,
+    };
 
     let progress = progress_bar(opts.progress, u64::from(total_spp) * u64::from(width) * u64::from(height));
     let mut acc = Accumulator::new(width, height);
@@ -179,6 +229,7 @@ pub fn run_progressive(
         let j1 = j0 + spp_per_pass.min(total_spp - done);
         let mut worst_per_sample = 0.0f64;
         let mut round_per_sample = 0.0f64;
+        let limited_before_round = pass.loop_limited_paths;
         for &tile in &tiles {
             let params = PassUniform {
                 tile_origin: [tile.x, tile.y],
@@ -186,16 +237,20 @@ pub fn run_progressive(
                 image_size: [width, height],
                 sample_begin: j0,
                 sample_end: j1,
+                solo_pixel: NO_SOLO,
+                path_budget: opts.path_budget,
+                _pad: [0; 2],
             };
             let t = Instant::now();
-            pass.run(&params, tile, &mut acc)?;
+            let complete = pass.run(&params, tile, &mut acc)?;
             let per_sample = t.elapsed().as_secs_f64() / f64::from(j1 - j0);
             worst_per_sample = worst_per_sample.max(per_sample);
             round_per_sample += per_sample;
             passes += 1;
             progress.inc(u64::from(j1 - j0) * tile.pixel_count() as u64);
-            if opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst)) {
+            if !complete || opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst)) {
                 acc.discard_round();
+                pass.loop_limited_paths = limited_before_round; // not in the image
                 stop = StopReason::Interrupted;
                 break 'rounds;
             }
@@ -240,6 +295,8 @@ pub fn run_progressive(
         seconds: start.elapsed().as_secs_f64(),
         stop,
         nonfinite: acc.nonfinite(),
+        dispatches: pass.dispatches,
+        loop_limited_paths: pass.loop_limited_paths,
     })
 }
 
@@ -279,13 +336,20 @@ fn next_tile_size(current: u32, spp_used: u32, worst_seconds_per_sample: f64, ta
 /// Smallest tile [`next_tile_size`] shrinks to (1,024 invocations still fill a small GPU).
 const MIN_TILE_SIZE: u32 = 32;
 
+/// Whether `kernel` declares the resume state of `shaders/resume.wgsl` (group 0, binding 2).
+fn is_resumable(kernel: &ComputeKernel) -> bool {
+    kernel.bindings.first().is_some_and(|g| g.len() == 3)
+}
+
 fn check_contract(kernel: &ComputeKernel, scene_groups: usize) -> Result<(), GpuError> {
-    let want = [(0, BindingKind::Uniform), (1, BindingKind::Storage { read_only: false })];
+    let rw = BindingKind::Storage { read_only: false };
+    let want = [(0, BindingKind::Uniform), (1, rw), (2, rw)];
     let got = kernel.bindings.first().map(Vec::as_slice).unwrap_or(&[]);
-    if got != want {
+    if got != &want[..2] && got != want {
         return Err(GpuError::Validation(format!(
             "kernel {:?} breaks the pass contract: @group(0) must be exactly binding 0 = var<uniform> PassParams \
-             and binding 1 = var<storage, read_write> array<vec4<f32>> (see shaders/pass.wgsl); it declares {got:?}",
+             and binding 1 = var<storage, read_write> array<vec4<f32>> (see shaders/pass.wgsl), plus binding 2 = \
+             var<storage, read_write> array<vec4<u32>> if resumable (shaders/resume.wgsl); it declares {got:?}",
             kernel.label
         )));
     }
@@ -307,23 +371,104 @@ struct PassRunner<'a> {
     groups: Vec<&'a wgpu::BindGroup>,
     uniform: &'a wgpu::Buffer,
     output: &'a wgpu::Buffer,
+    /// The resume state, for resumable kernels.
+    state: Option<&'a wgpu::Buffer>,
+    /// Holds one tile's `output` or `state` (both 16 bytes per pixel).
     staging: &'a wgpu::Buffer,
+    cancel: Option<&'a AtomicBool>,
+    dispatches: u64,
+    loop_limited_paths: u64,
 }
 
 impl PassRunner<'_> {
-    /// One submission: dispatch over `tile`, copy its sums out, wait, add them to `acc`.
-    fn run(&self, params: &PassUniform, tile: Tile, acc: &mut Accumulator) -> Result<(), GpuError> {
+    /// One pass over `tile`: its sums are added to `acc` (one dispatch, or for a resumable
+    /// kernel as many as it takes). Returns whether the pass completed: a resumable pass
+    /// stops early, adding nothing, when the cancel flag is set between its dispatches.
+    fn run(&mut self, params: &PassUniform, tile: Tile, acc: &mut Accumulator) -> Result<bool, GpuError> {
+        let pixels = tile.pixel_count();
+        if let Some(state) = self.state {
+            self.gpu.scoped(|| {
+                let mut encoder =
+                    self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("reset") });
+                encoder.clear_buffer(state, 0, Some(pixels as u64 * 16));
+                self.gpu.queue.submit([encoder.finish()]);
+            })?;
+            if !self.resume_until_done(params, tile, state)? {
+                return Ok(false);
+            }
+            let sums: Vec<[f32; 4]> = self.submit(None, tile, self.output, 0..pixels)?;
+            acc.add_tile(tile, &sums);
+        } else {
+            let sums: Vec<[f32; 4]> = self.submit(Some(params), tile, self.output, 0..pixels)?;
+            acc.add_tile(tile, &sums);
+        }
+        Ok(true)
+    }
+
+    /// Dispatches a resumable pass over `tile` until every pixel reports done, running
+    /// each path that was cut with a fresh limiter alone ("solo") in a dispatch of its own.
+    /// Returns false if cancelled first.
+    fn resume_until_done(&mut self, params: &PassUniform, tile: Tile, state: &wgpu::Buffer) -> Result<bool, GpuError> {
+        let pixels = tile.pixel_count();
+        let mut last: Option<Vec<[u32; 4]>> = None;
+        loop {
+            let all = PassUniform { solo_pixel: NO_SOLO, ..*params };
+            let words: Vec<[u32; 4]> = self.submit(Some(&all), tile, state, 0..pixels)?;
+            if words.iter().all(|w| w[3] & RESUME_DONE != 0) {
+                return Ok(true);
+            }
+            // Every dispatch sums at least one more path or asks for a solo run; anything
+            // else would loop forever.
+            let progressed = last.as_ref().is_none_or(|l| l.iter().zip(&words).any(|(a, b)| a[3] != b[3]));
+            if !progressed {
+                return Err(GpuError::Internal(format!(
+                    "resumable pass over tile {tile:?} made no progress (kernel {:?})",
+                    self.kernel.label
+                )));
+            }
+            for (k, w) in words.iter().enumerate() {
+                if w[3] & RESUME_NEEDS_SOLO != 0 {
+                    let solo = PassUniform { solo_pixel: k as u32, ..*params };
+                    let after: Vec<[u32; 4]> = self.submit(Some(&solo), tile, state, k..k + 1)?;
+                    debug_assert_eq!(after[0][3] & RESUME_PROGRESS, (w[3] & RESUME_PROGRESS) + 1);
+                    if after[0][3] & RESUME_LIMITED != 0 {
+                        self.loop_limited_paths += 1;
+                    }
+                }
+            }
+            if self.cancel.is_some_and(|c| c.load(Ordering::SeqCst)) {
+                return Ok(false);
+            }
+            last = Some(words);
+        }
+    }
+
+    /// One submission: a dispatch over `tile` with `params` (none: only the copy), then the
+    /// 16-byte elements `range` of `source` copied out and read back.
+    fn submit<T: Pod>(
+        &mut self,
+        params: Option<&PassUniform>,
+        tile: Tile,
+        source: &wgpu::Buffer,
+        range: std::ops::Range<usize>,
+    ) -> Result<Vec<T>, GpuError> {
         let gpu = self.gpu;
-        let bytes = tile.pixel_count() as u64 * 16;
+        let offset = range.start as u64 * 16;
+        let bytes = range.len() as u64 * 16;
         let workgroups = self.kernel.workgroups_for([tile.width, tile.height, 1]);
         gpu.scoped(|| {
-            gpu.queue.write_buffer(self.uniform, 0, bytemuck::bytes_of(params));
             let mut encoder =
                 gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("pass") });
-            self.kernel.encode(&mut encoder, &self.groups, workgroups);
-            encoder.copy_buffer_to_buffer(self.output, 0, self.staging, 0, bytes);
+            if let Some(params) = params {
+                gpu.queue.write_buffer(self.uniform, 0, bytemuck::bytes_of(params));
+                self.kernel.encode(&mut encoder, &self.groups, workgroups);
+            }
+            encoder.copy_buffer_to_buffer(source, offset, self.staging, 0, bytes);
             gpu.queue.submit([encoder.finish()]);
         })?;
+        if params.is_some() {
+            self.dispatches += 1;
+        }
         let (tx, rx) = std::sync::mpsc::channel();
         self.staging.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
             let _ = tx.send(r);
@@ -332,13 +477,12 @@ impl PassRunner<'_> {
         rx.recv()
             .map_err(|_| GpuError::Readback("map callback never ran".into()))?
             .map_err(|e| GpuError::Readback(e.to_string()))?;
-        {
+        let out = {
             let view = self.staging.get_mapped_range(0..bytes).map_err(|e| GpuError::Readback(e.to_string()))?;
-            let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&view);
-            acc.add_tile(tile, &sums);
-        }
+            bytemuck::pod_collect_to_vec(&view)
+        };
         self.staging.unmap();
-        Ok(())
+        Ok(out)
     }
 }
 
@@ -382,14 +526,15 @@ mod tests {
 
     #[test]
     fn uniform_layout_matches_wgsl() {
-        assert_eq!(std::mem::size_of::<PassUniform>(), 32);
+        assert_eq!(std::mem::size_of::<PassUniform>(), 48);
         let v = validate_pass_wgsl();
         let ty = v.module.types.iter().find(|(_, t)| t.name.as_deref() == Some("PassParams")).unwrap().1;
         let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("PassParams is not a struct") };
-        assert_eq!(*span, 32);
+        assert_eq!(*span, 48);
         let offsets: Vec<(String, u32)> = members.iter().map(|m| (m.name.clone().unwrap(), m.offset)).collect();
-        let names = ["tile_origin", "tile_size", "image_size", "sample_begin", "sample_end"];
-        let rust = [0, 8, 16, 24, 28];
+        let names =
+            ["tile_origin", "tile_size", "image_size", "sample_begin", "sample_end", "solo_pixel", "path_budget"];
+        let rust = [0, 8, 16, 24, 28, 32, 36];
         for ((name, off), (want_name, want_off)) in offsets.iter().zip(names.iter().zip(rust)) {
             assert_eq!((name.as_str(), *off), (*want_name, want_off));
         }

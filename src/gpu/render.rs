@@ -42,7 +42,8 @@ const MODULES: [(&str, &str); 24] = [
     ("shaders/integrators.wgsl", include_str!("../../shaders/integrators.wgsl")),
     ("shaders/render.wgsl", include_str!("../../shaders/render.wgsl")),
 ];
-const EXTRA_MODULES: [(&str, &str); 3] = [
+const EXTRA_MODULES: [(&str, &str); 4] = [
+    ("shaders/resume.wgsl", include_str!("../../shaders/resume.wgsl")),
     ("shaders/lights.wgsl", include_str!("../../shaders/lights.wgsl")),
     ("shaders/path_tracer.wgsl", include_str!("../../shaders/path_tracer.wgsl")),
     ("shaders/env_light.wgsl", include_str!("../../shaders/env_light.wgsl")),
@@ -90,11 +91,21 @@ pub struct GpuRenderOutput {
     pub stop: StopReason,
     /// Features the kernel was specialised for.
     pub features: FeatureSet,
+    /// Paths the driver's loop limiter cut even when run alone (counted as 0, so the
+    /// image is not exact; see docs/DESIGN.md, "Loop limiter and path-granular passes").
+    pub loop_limited_paths: u64,
+    /// Kernel dispatches: one per pass, more when resumable passes were resumed.
+    pub dispatches: u64,
 }
+
+/// The assembly feature of resumable, path-granular kernels (`shaders/resume.wgsl`), used
+/// when [`Gpu::loop_limiter`] is set.
+pub const LOOP_LIMITER: &str = "LOOP_LIMITER";
 
 /// All modules, in a library that knows every feature name.
 pub fn shader_library() -> ShaderLibrary {
-    let mut lib = ShaderLibrary::new(&FeatureSet::ALL_NAMES);
+    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().copied().chain([LOOP_LIMITER]).collect();
+    let mut lib = ShaderLibrary::new(&names);
     for (file, src) in MODULES.iter().chain(EXTRA_MODULES.iter()) {
         lib.add(file, src).unwrap_or_else(|e| panic!("built-in shader {file} is malformed: {e}"));
     }
@@ -127,12 +138,21 @@ fn constants_module(features: &FeatureSet) -> String {
 
 /// The render kernel assembled for `features` (validated with naga).
 pub fn assemble(features: &FeatureSet) -> Result<Assembled, GpuError> {
+    assemble_for(features, false)
+}
+
+/// The render kernel for `features`, resumable when `loop_limiter` (for drivers with a
+/// loop limiter, [`Gpu::loop_limiter`]).
+pub fn assemble_for(features: &FeatureSet, loop_limiter: bool) -> Result<Assembled, GpuError> {
     let mut lib = shader_library();
     lib.add("<generated constants>", &format!("// #provides constants\n{}", constants_module(features)))
         .map_err(|e| GpuError::Validation(e.to_string()))?;
-    let assembled = lib
-        .assemble(&["render"], &features.assembly_features())
-        .map_err(|e| GpuError::Validation(format!("shader assembly: {e}")))?;
+    let mut names = features.assembly_features();
+    if loop_limiter {
+        names.insert(LOOP_LIMITER);
+    }
+    let assembled =
+        lib.assemble(&["render"], &names).map_err(|e| GpuError::Validation(format!("shader assembly: {e}")))?;
     assembled.validate()?;
     Ok(assembled)
 }
@@ -199,13 +219,15 @@ impl GpuRenderer {
         let packed = pack(scene, opts.spp).map_err(pack_error)?;
         let f = &packed.features;
         // The cache key: the assembly features plus the generated constants.
+        let limiter = gpu.loop_limiter;
         let key = f
             .assembly_features()
+            .with(&format!("loop_limiter={limiter}"))
             .with(&format!("csg_max_intervals={}", f.csg_max_intervals))
             .with(&format!("csg_max_depth={}", f.csg_max_depth))
             .with(&format!("csg_trees={}", f.csg_trees.min(crate::cpu::CSG_DEFER_MAX as u32 + 1)));
         let kernel = self.kernels.get_or_build(&key, ENTRY_POINT, || {
-            let assembled = assemble(f)?;
+            let assembled = assemble_for(f, limiter)?;
             check_binding_limits(gpu, &assembled)?;
             gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)
         })?;
@@ -223,6 +245,14 @@ fn render_packed(
 ) -> Result<GpuRenderOutput, GpuError> {
     let buffers = SceneBuffers::upload(gpu, kernel, packed)?;
     let group = kernel.bind_group(gpu, 1, &buffers.refs())?;
+    let paths_per_pass = u64::from(packed.settings.paths_per_sample.max(1)) * u64::from(opts.passes.max_spp_per_pass);
+    if gpu.loop_limiter && paths_per_pass > u64::from(super::MAX_RESUMABLE_PATHS_PER_PASS) {
+        return Err(GpuError::Validation(format!(
+            "{paths_per_pass} paths per pass (paths per sample × max samples per pass) exceed the {} a resumable \
+             pass can count",
+            super::MAX_RESUMABLE_PATHS_PER_PASS
+        )));
+    }
     let acc = run_progressive(gpu, kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
     let nan: Vec<u32> = gpu.read_buffer(&buffers.buffers[buffers.nan_count], 1)?;
     Ok(GpuRenderOutput {
@@ -233,6 +263,8 @@ fn render_packed(
         non_finite_samples: u64::from(nan[0]) + acc.nonfinite,
         stop: acc.stop,
         features: packed.features,
+        loop_limited_paths: acc.loop_limited_paths,
+        dispatches: acc.dispatches,
     })
 }
 
@@ -347,7 +379,11 @@ mod tests {
     /// Asserts the assembled kernel holds nothing the features do not need: every function
     /// is reachable from the entry point and every global (buffer or private array) is used.
     fn assert_minimal(features: &FeatureSet) -> naga::Module {
-        let assembled = assemble(features).unwrap_or_else(|e| panic!("{features:?}: {e}"));
+        assert_minimal_with(features, false)
+    }
+
+    fn assert_minimal_with(features: &FeatureSet, loop_limiter: bool) -> naga::Module {
+        let assembled = assemble_for(features, loop_limiter).unwrap_or_else(|e| panic!("{features:?}: {e}"));
         let v = assembled.validate().unwrap();
         let all = function_names(&v.module);
         let reachable = reachable_functions(&v.module);
@@ -429,6 +465,20 @@ mod tests {
             }
         }
         assert_eq!(count, 96);
+    }
+
+    /// Resumable kernels (docs/DESIGN.md, "Loop limiter and path-granular passes") for every
+    /// renderer: valid, minimal, with the resume state; the plain kernels have none of it.
+    #[test]
+    fn resumable_kernels_assemble_to_minimal_valid_wgsl() {
+        let mut rng = Pcg32::new(7, 9);
+        for renderer in [RendererKind::OnOff, RendererKind::Flat, RendererKind::PointLight, RendererKind::PathTracer] {
+            let f = random_features(&mut rng, renderer, EnvKind::Uniform);
+            let has_state =
+                |m: &naga::Module| m.global_variables.iter().any(|(_, g)| g.name.as_deref() == Some("pass_state"));
+            assert!(has_state(&assert_minimal_with(&f, true)), "{f:?}");
+            assert!(!has_state(&assert_minimal_with(&f, false)), "{f:?}");
+        }
     }
 
     #[test]
