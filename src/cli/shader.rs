@@ -9,7 +9,7 @@ use clap::Args;
 
 use super::script_args::ScriptArgs;
 use crate::gpu::features::FeatureSet;
-use crate::gpu::render::assemble;
+use crate::gpu::render::{assemble_for, LOOP_LIMITER};
 use crate::image::write_atomically;
 
 /// Arguments of `lumen shader`.
@@ -20,6 +20,11 @@ pub struct ShaderArgs {
     /// Write the WGSL to this file instead of standard output.
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
+    /// Print the resumable variant that `lumen render` uses on drivers with a loop limiter
+    /// such as lavapipe (docs/DESIGN.md, "Loop limiter and path-granular passes").
+    /// Without it: the kernel for every other GPU.
+    #[arg(long)]
+    pub loop_limiter: bool,
     #[command(flatten)]
     pub script: ScriptArgs,
 }
@@ -28,11 +33,16 @@ pub struct ShaderArgs {
 pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     let scene = args.script.load(&args.scene)?;
     let features = FeatureSet::of(&scene);
-    let assembled = assemble(&features).map_err(|e| anyhow!("cannot assemble the kernel: {e}"))?;
+    let assembled =
+        assemble_for(&features, args.loop_limiter).map_err(|e| anyhow!("cannot assemble the kernel: {e}"))?;
+    let mut names = features.names();
+    if args.loop_limiter {
+        names.push(LOOP_LIMITER);
+    }
     let text = format!(
         "// lumen render kernel for {}\n// features: {}\n{}",
         args.scene.display(),
-        features.names().join(" "),
+        names.join(" "),
         assembled.source
     );
     match &args.output {
