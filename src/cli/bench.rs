@@ -14,12 +14,12 @@ use glam::DVec3;
 use super::gpu_args::AdapterArgs;
 use super::render::{resize, MAX_SPP};
 use crate::analysis::{
-    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, open_devices, peak_memory_bytes,
-    Device, Measurement, OpenDevice,
+    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, measure_with, open_devices,
+    peak_memory_bytes, Device, Measurement, OpenDevice,
 };
 use crate::color::Color;
 use crate::cpu::World;
-use crate::gpu::features::{FeatureSet, RendererKind};
+use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_INTERVALS};
 use crate::gpu::render::{assemble, ENTRY_POINT};
 use crate::gpu::Gpu;
 use crate::sampling::Pcg32;
@@ -28,10 +28,6 @@ use crate::scenelang::{load_file, LoadOptions};
 
 /// Object counts of the scaling study (cut at `--max-spheres`).
 pub const SPHERE_COUNTS: [u32; 6] = [1, 10, 100, 1_000, 10_000, 100_000];
-/// CSG bounds compiled into the full-featured kernel (a general kernel must be sized for
-/// the worst scene it accepts; these cover every example scene).
-pub const FULL_CSG_MAX_INTERVALS: u32 = 16;
-pub const FULL_CSG_MAX_DEPTH: u32 = 8;
 
 /// Arguments of `lumen bench`.
 #[derive(Debug, Args)]
@@ -272,8 +268,13 @@ struct Differential {
 
 impl Differential {
     fn run(d: &OpenDevice, scene: &Scene, spp: u32) -> anyhow::Result<Self> {
-        let one = measure(d, scene, 1, false).map_err(|e| anyhow!("{e}"))?;
-        let more = measure(d, scene, 1 + spp, true).map_err(|e| anyhow!("{e}"))?;
+        Self::run_with(d, scene, spp, None)
+    }
+
+    /// [`Self::run`] with a GPU kernel override (`GpuRenderOptions::features`).
+    fn run_with(d: &OpenDevice, scene: &Scene, spp: u32, kernel: Option<FeatureSet>) -> anyhow::Result<Self> {
+        let one = measure_with(d, scene, 1, false, kernel).map_err(|e| anyhow!("{e}"))?;
+        let more = measure_with(d, scene, 1 + spp, true, kernel).map_err(|e| anyhow!("{e}"))?;
         Ok(Self {
             extra_samples: more.samples.saturating_sub(one.samples) as f64,
             extra_seconds: more.seconds - one.seconds,
@@ -350,35 +351,6 @@ fn growth_line(d: Device, ns: &[f64], ts: &[f64]) -> String {
     }
 }
 
-/// The kernel for every scene of the same renderer and environment kind: all shapes, CSG,
-/// pigments, BRDFs and lights compiled in. (Renderer and environment kinds are exclusive
-/// choices in [`FeatureSet`], so they stay the scene's.)
-pub fn full_features(spec: &FeatureSet) -> FeatureSet {
-    let path = spec.renderer == RendererKind::PathTracer;
-    FeatureSet {
-        sphere: true,
-        plane: true,
-        cube: true,
-        cylinder: true,
-        csg: true,
-        csg_max_intervals: spec.csg_max_intervals.max(FULL_CSG_MAX_INTERVALS),
-        csg_max_depth: spec.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
-        csg_trees: spec.csg_trees,
-        pigment_uniform: true,
-        pigment_checkered: true,
-        pigment_image: true,
-        diffuse: true,
-        specular: true,
-        dielectric: true,
-        point_lights: true,
-        area_lights: path,
-        environment: spec.environment,
-        renderer: spec.renderer,
-        bvh: true,
-        nee: path,
-    }
-}
-
 /// WGSL size and pipeline creation time (naga validation + driver compile) of a kernel.
 fn kernel_cost(gpu: &Gpu, features: &FeatureSet) -> anyhow::Result<(usize, usize, f64)> {
     let source = assemble(features).map_err(|e| anyhow!("{e}"))?.source;
@@ -404,13 +376,14 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
     let mut rows = Vec::new();
     for (name, scene) in &scenes {
         let spec = FeatureSet::of(scene);
-        eprintln!("{name}: kernels ...");
-        let rate = Differential::run(device, scene, plan.spp)
-            .with_context(|| format!("{name} on the GPU"))?
-            .per_sample()
-            .map_or("n/a (timing noise)".into(), |t| si(1.0 / t));
-        for (kind, f) in [("specialised", spec), ("full-featured", full_features(&spec))] {
+        for (kind, f) in [("specialised", spec), ("full-featured", spec.full_for())] {
+            eprintln!("{name}: {kind} kernel ...");
             let (bytes, lines, secs) = kernel_cost(gpu, &f).with_context(|| format!("{name}: {kind} kernel"))?;
+            // The same differential method for both kernels; the override only swaps the kernel.
+            let rate = Differential::run_with(device, scene, plan.spp, Some(f))
+                .with_context(|| format!("{name} on the GPU, {kind} kernel"))?
+                .per_sample()
+                .map_or("n/a (timing noise)".into(), |t| si(1.0 / t));
             rows.push(vec![
                 name.clone(),
                 kind.into(),
@@ -418,14 +391,15 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
                 bytes.to_string(),
                 lines.to_string(),
                 format_seconds(secs),
-                if kind == "specialised" { rate.clone() } else { "n/a (gpu::render has no feature override)".into() },
+                rate,
             ]);
         }
     }
     Ok(format!(
         "### Specialised vs full-featured GPU kernel\n\nfeatures = number of `// #if` feature flags on; full-featured = \
          every shape, CSG ({FULL_CSG_MAX_INTERVALS} intervals, depth {FULL_CSG_MAX_DEPTH}), pigment, BRDF and light \
-         kind, with the scene's renderer and environment kind. Pipeline creation = naga validation + \
+         kind and every environment, with the scene's renderer (`FeatureSet::full_for`). samples/s as in the scene \
+         table, each kernel rendering the same scene. Pipeline creation = naga validation + \
          `create_compute_pipeline` until the device is idle.\n\n{}",
         markdown_table(&headers, &rows)
     ))
@@ -454,11 +428,11 @@ mod tests {
     fn full_features_contain_the_specialised_ones() {
         let s = spheres_scene(3, 4, 4);
         let spec = FeatureSet::of(&s);
-        let full = full_features(&spec);
+        let full = spec.full_for();
         let (a, b) = (spec.names(), full.names());
         assert!(a.iter().all(|n| b.contains(n)), "{a:?} ⊄ {b:?}");
         assert!(b.len() > a.len() && b.contains(&"CSG") && b.contains(&"DIELECTRIC"));
-        assert_eq!((full.renderer, full.environment), (spec.renderer, spec.environment));
+        assert!(full.covers(&spec) && !spec.covers(&full));
         // Both assemble to valid WGSL, the full one larger.
         let (sa, sb) = (assemble(&spec).unwrap().source, assemble(&full).unwrap().source);
         assert!(sb.len() > sa.len());

@@ -50,6 +50,17 @@ pub struct PackedScene {
 /// evaluation needs (2·depth + 2) lists of `csg::max_intervals` entries.
 pub const MAX_CSG_POOL: usize = 8192;
 
+/// `data`, or one zeroed element when it is empty: what is bound for a buffer the kernel
+/// declares but the scene does not fill (wgpu requires a binding to hold at least one
+/// element of the shader's array type; the kernel never reads it, its counts being 0).
+pub fn at_least_one<T: bytemuck::Pod>(data: &[T]) -> std::borrow::Cow<'_, [T]> {
+    if data.is_empty() {
+        std::borrow::Cow::Owned(vec![<T as bytemuck::Zeroable>::zeroed()])
+    } else {
+        std::borrow::Cow::Borrowed(data)
+    }
+}
+
 /// Why a scene cannot be packed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PackError {
