@@ -20,10 +20,11 @@ use crate::analysis::{
 use crate::color::Color;
 use crate::cpu::World;
 use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_INTERVALS};
-use crate::gpu::render::{assemble, ENTRY_POINT};
+use crate::gpu::pack::pack;
+use crate::gpu::render::{assemble, GpuRenderOptions, ENTRY_POINT};
 use crate::gpu::Gpu;
 use crate::sampling::Pcg32;
-use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Transform};
+use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Shape, ShapeKind, Transform};
 use crate::scenelang::{load_file, LoadOptions};
 
 /// Object counts of the scaling study (cut at `--max-spheres`).
@@ -154,7 +155,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if args.shaders {
         report.push('\n');
         match devices.iter().find(|d| d.kind() == Device::Gpu) {
-            Some(gpu) => report.push_str(&shaders_table(gpu, &files, &plan)?),
+            Some(gpu) => {
+                report.push_str(&shaders_table(gpu, &files, &plan)?);
+                report.push('\n');
+                report.push_str(&bvh_or_list_table(gpu, &files, &plan)?);
+            }
             None => report.push_str("Shader comparison skipped: no GPU device.\n"),
         }
     }
@@ -401,6 +406,87 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
          kind and every environment, with the scene's renderer (`FeatureSet::full_for`). samples/s as in the scene \
          table, each kernel rendering the same scene. Pipeline creation = naga validation + \
          `create_compute_pipeline` until the device is idle.\n\n{}",
+        markdown_table(&headers, &rows)
+    ))
+}
+
+/// Object counts of the BVH-or-list study: "a handful of shapes" and a little beyond.
+pub const LIST_COUNTS: [u32; 6] = [2, 4, 8, 16, 32, 64];
+/// Most finite top-level objects an example scene may have to enter the BVH-or-list study.
+const LIST_MAX_OBJECTS: usize = 64;
+
+/// Samples per second of `scene` on the GPU with the packed BVH, or (`flat`) with the BVH
+/// flattened to one leaf, i.e. a plain object list ([`PackedScene::flatten_bvh`]); the
+/// difference of a 1-spp and a (1 + spp)-spp render, as in the scene table. `None`: noise.
+fn packed_rate(device: &OpenDevice, scene: &Scene, spp: u32, flat: bool) -> anyhow::Result<Option<f64>> {
+    let OpenDevice::Gpu { gpu, renderer } = device else { bail!("the BVH-or-list study needs a GPU device") };
+    let time = |spp: u32| -> anyhow::Result<(f64, u32)> {
+        let mut packed = pack(scene, Some(spp)).map_err(|e| anyhow!("{e}"))?;
+        if flat {
+            packed.flatten_bvh();
+        }
+        let opts = GpuRenderOptions { spp: Some(spp), ..GpuRenderOptions::default() };
+        let start = Instant::now();
+        let out = renderer.borrow_mut().render_packed(gpu, scene, &packed, &opts).map_err(|e| anyhow!("{e}"))?;
+        Ok((start.elapsed().as_secs_f64(), out.spp_done))
+    };
+    let (t1, s1) = time(1)?;
+    let (t2, s2) = time(1 + spp)?;
+    let samples = (f64::from(scene.width) * f64::from(scene.height))
+        * f64::from(s2.saturating_sub(s1))
+        * crate::cpu::paths_per_sample(scene) as f64;
+    Ok((t2 > t1 && samples > 0.0).then(|| samples / (t2 - t1)))
+}
+
+/// Finite (BVH) objects of a scene: top-level shapes other than planes.
+fn finite_objects(scene: &Scene) -> usize {
+    scene.shapes.iter().filter(|s| !matches!(s, Shape::Primitive(p) if p.kind == ShapeKind::Plane)).count()
+}
+
+/// Issue 6: "BVH or not (a handful of shapes may be faster without it — measure and
+/// decide)". Each scene is timed with its BVH and with the BVH flattened to one leaf, the
+/// two alternating `ROUNDS` times; the best rate of each is kept (other processes on a
+/// shared machine only ever slow a render down).
+fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow::Result<String> {
+    const ROUNDS: usize = 3;
+    let (w, h) = (96, 72);
+    let spp = 4 * plan.spp;
+    let mut scenes: Vec<(String, Scene)> =
+        LIST_COUNTS.iter().map(|&n| (format!("{n} spheres (generated)"), spheres_scene(n, w, h))).collect();
+    for file in files {
+        match load_scene(file, w) {
+            Ok(s) if finite_objects(&s) <= LIST_MAX_OBJECTS => scenes.push((name_of(file), s)),
+            Ok(_) => {}
+            Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),
+        }
+    }
+    let headers = ["scene", "finite objects", "BVH nodes", "samples/s with BVH", "samples/s as a list", "list / BVH"];
+    let mut rows = Vec::new();
+    for (name, scene) in &scenes {
+        eprintln!("{name}: BVH or list ...");
+        let nodes = pack(scene, Some(1)).map_err(|e| anyhow!("{e}"))?.bvh_nodes.len();
+        let (mut bvh, mut list) = (0.0f64, 0.0f64);
+        for _ in 0..ROUNDS {
+            bvh = bvh.max(packed_rate(device, scene, spp, false)?.unwrap_or(0.0));
+            list = list.max(packed_rate(device, scene, spp, true)?.unwrap_or(0.0));
+        }
+        let ok = |r: f64| if r > 0.0 { si(r) } else { "n/a (timing noise)".into() };
+        rows.push(vec![
+            name.clone(),
+            finite_objects(scene).to_string(),
+            nodes.to_string(),
+            ok(bvh),
+            ok(list),
+            if bvh > 0.0 && list > 0.0 { format!("{:.2}", list / bvh) } else { "n/a".into() },
+        ]);
+    }
+    Ok(format!(
+        "### BVH or a plain object list
+
+{w}×{h} px (example scenes at width {w}), {} + 1 spp, the scene's own \
+         kernel; *as a list* = the BVH flattened to one leaf holding every finite object (one box test, then \
+         every object), so only the traversal differs. Best of {ROUNDS} alternating runs each.\n\n{}",
+        spp,
         markdown_table(&headers, &rows)
     ))
 }

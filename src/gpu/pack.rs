@@ -46,6 +46,18 @@ pub struct PackedScene {
     pub origin: DVec3,
 }
 
+impl PackedScene {
+    /// Replaces the BVH by one leaf holding every finite object, so the kernel tests them all
+    /// in turn: a plain object list behind one box test (for `lumen bench`'s BVH-or-list
+    /// measurement; the leaf loop takes any count).
+    pub fn flatten_bvh(&mut self) {
+        if let Some(root) = self.bvh_nodes.first().copied() {
+            self.bvh_nodes = vec![BvhNode { left_or_first: 0, count: self.settings.plane_offset, ..root }];
+            self.settings.bvh_node_count = 1;
+        }
+    }
+}
+
 /// Most CSG intervals one GPU invocation may hold in private memory (32 bytes each): the
 /// evaluation needs (2·depth + 2) lists of `csg::max_intervals` entries.
 pub const MAX_CSG_POOL: usize = 8192;

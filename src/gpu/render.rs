@@ -200,6 +200,29 @@ impl GpuRenderer {
     pub fn render(&mut self, gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
         let start = Instant::now();
         let packed = pack(scene, opts.spp).map_err(pack_error)?;
+        self.render_from(gpu, scene, &packed, opts, start)
+    }
+
+    /// Renders `packed`, which [`pack`] made from `scene` with `opts.spp` (and a benchmark may
+    /// have altered, e.g. [`PackedScene::flatten_bvh`]).
+    pub fn render_packed(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        packed: &PackedScene,
+        opts: &GpuRenderOptions,
+    ) -> Result<GpuRenderOutput, GpuError> {
+        self.render_from(gpu, scene, packed, opts, Instant::now())
+    }
+
+    fn render_from(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        packed: &PackedScene,
+        opts: &GpuRenderOptions,
+        start: Instant,
+    ) -> Result<GpuRenderOutput, GpuError> {
         let f = &kernel_features(&packed.features, opts.features)?;
         // The cache key: the assembly features plus the generated constants.
         let key = f
@@ -212,7 +235,7 @@ impl GpuRenderer {
             check_binding_limits(gpu, &assembled)?;
             gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)
         })?;
-        let mut out = render_packed(gpu, &kernel, scene, &packed, opts, start)?;
+        let mut out = render_packed(gpu, &kernel, scene, packed, opts, start)?;
         out.features = *f;
         Ok(out)
     }
