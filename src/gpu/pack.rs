@@ -525,4 +525,23 @@ mod tests {
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
         assert!(err.to_string().contains("CSG interval slots"), "{err}");
     }
+
+    #[test]
+    fn a_flattened_bvh_is_one_leaf_over_every_finite_object_and_padding_keeps_bindings_nonempty() {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        for i in 0..9 {
+            b.shape(sphere_at(f64::from(i) * 3.0, m));
+        }
+        b.plane(Transform::IDENTITY, m);
+        let mut p = pack(&b.build().unwrap(), None).unwrap();
+        let root = p.bvh_nodes[0];
+        assert!(p.bvh_nodes.len() > 1 && p.settings.plane_offset == 9);
+        p.flatten_bvh();
+        assert_eq!(p.bvh_nodes, vec![BvhNode { left_or_first: 0, count: 9, ..root }]);
+        assert_eq!((p.settings.bvh_node_count, p.settings.plane_count), (1, 1));
+        // Padding: empty data becomes one zeroed element, other data is untouched.
+        assert_eq!(at_least_one::<layout::PointLight>(&p.point_lights).len(), 1);
+        assert_eq!(at_least_one(&p.indices).as_ref(), p.indices.as_slice());
+    }
 }
