@@ -31,11 +31,13 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 // #endif
 
-// Emitted radiance at the hit, MIS-weighted when NEE could also have sampled it.
+// Emitted radiance at the hit, MIS-weighted when NEE could also have sampled it. NEE code
+// compiled in still obeys settings.nee (as cpu::path_tracer does), so a full-featured
+// kernel renders a scene without NEE correctly.
 fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
     let le = pigment_color(m.emitted, hit.uv);
 // #if AREA_LIGHTS
-    if (all(le == vec3<f32>(0.0)) || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
+    if (all(le == vec3<f32>(0.0)) || settings.nee == 0u || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
         return le;
     }
     let i = shapes[hit.object].light;
@@ -56,7 +58,7 @@ fn pt_escaped(prev: Previous, dir: vec3<f32>) -> vec3<f32> {
     }
     let le = escape_radiance(dir);
 // #if NEE
-    if (prev.delta) {
+    if (settings.nee == 0u || prev.delta) {
         return le;
     }
     return le * power_heuristic(prev.pdf, light_selection_pdf() * env_pdf(dir));
@@ -163,7 +165,9 @@ fn radiance_path(camera_ray: Ray, pixel: u32, sample: u32) -> vec3<f32> {
             radiance += beta * direct;
 // #endif
 // #if NEE
-            radiance += beta * pt_sample_light(hit, m, color, xi[0], xi[1], xi[2]);
+            if (settings.nee != 0u) {
+                radiance += beta * pt_sample_light(hit, m, color, xi[0], xi[1], xi[2]);
+            }
 // #endif
         }
         let d = normalize(ray.dir);

@@ -119,6 +119,17 @@ impl Measurement {
 /// }
 /// ```
 pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> Result<Measurement, GpuError> {
+    measure_with(device, scene, spp, progress, None)
+}
+
+/// [`measure`] with a GPU kernel override (`GpuRenderOptions::features`; the CPU ignores it).
+pub fn measure_with(
+    device: &OpenDevice,
+    scene: &Scene,
+    spp: u32,
+    progress: bool,
+    kernel: Option<crate::gpu::features::FeatureSet>,
+) -> Result<Measurement, GpuError> {
     match device {
         OpenDevice::Cpu => {
             let bar = if progress { Progress::Bar } else { Progress::Hidden };
@@ -133,7 +144,11 @@ pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> 
             })
         }
         OpenDevice::Gpu { gpu, renderer } => {
-            let opts = GpuRenderOptions { spp: Some(spp), passes: PassOptions { progress, ..PassOptions::default() } };
+            let opts = GpuRenderOptions {
+                spp: Some(spp),
+                passes: PassOptions { progress, ..PassOptions::default() },
+                features: kernel,
+            };
             let out = renderer.borrow_mut().render(gpu, scene, &opts)?;
             let pixels = u64::from(scene.width) * u64::from(scene.height);
             Ok(Measurement {

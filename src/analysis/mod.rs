@@ -29,7 +29,7 @@ mod plot;
 mod table;
 
 pub use line_fit::{fit_line, fit_loglog, tail_flattens, LineFit};
-pub use measure::{measure, open_devices, Device, Measurement, OpenDevice};
+pub use measure::{measure, measure_with, open_devices, Device, Measurement, OpenDevice};
 pub use memory::{format_bytes, peak_memory_bytes};
 pub use metrics::{mse, rel_mse, rmse, ErrorMetrics, REL_MSE_EPSILON};
 pub use plot::{plot_loglog, Plot, Series};

@@ -14,24 +14,21 @@ use glam::DVec3;
 use super::gpu_args::AdapterArgs;
 use super::render::{resize, MAX_SPP};
 use crate::analysis::{
-    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, open_devices, peak_memory_bytes,
-    Device, Measurement, OpenDevice,
+    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, measure_with, open_devices,
+    peak_memory_bytes, Device, Measurement, OpenDevice,
 };
 use crate::color::Color;
 use crate::cpu::World;
-use crate::gpu::features::{FeatureSet, RendererKind};
-use crate::gpu::render::{assemble, ENTRY_POINT};
+use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_INTERVALS};
+use crate::gpu::pack::pack;
+use crate::gpu::render::{assemble, GpuRenderOptions, ENTRY_POINT};
 use crate::gpu::Gpu;
 use crate::sampling::Pcg32;
-use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Transform};
+use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Shape, ShapeKind, Transform};
 use crate::scenelang::{load_file, LoadOptions};
 
 /// Object counts of the scaling study (cut at `--max-spheres`).
 pub const SPHERE_COUNTS: [u32; 6] = [1, 10, 100, 1_000, 10_000, 100_000];
-/// CSG bounds compiled into the full-featured kernel (a general kernel must be sized for
-/// the worst scene it accepts; these cover every example scene).
-pub const FULL_CSG_MAX_INTERVALS: u32 = 16;
-pub const FULL_CSG_MAX_DEPTH: u32 = 8;
 
 /// Arguments of `lumen bench`.
 #[derive(Debug, Args)]
@@ -158,7 +155,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if args.shaders {
         report.push('\n');
         match devices.iter().find(|d| d.kind() == Device::Gpu) {
-            Some(gpu) => report.push_str(&shaders_table(gpu, &files, &plan)?),
+            Some(gpu) => {
+                report.push_str(&shaders_table(gpu, &files, &plan)?);
+                report.push('\n');
+                report.push_str(&bvh_or_list_table(gpu, &files, &plan)?);
+            }
             None => report.push_str("Shader comparison skipped: no GPU device.\n"),
         }
     }
@@ -272,8 +273,18 @@ struct Differential {
 
 impl Differential {
     fn run(d: &OpenDevice, scene: &Scene, spp: u32) -> anyhow::Result<Self> {
-        let one = measure(d, scene, 1, false).map_err(|e| anyhow!("{e}"))?;
-        let more = measure(d, scene, 1 + spp, true).map_err(|e| anyhow!("{e}"))?;
+        Self::run_with(d, scene, spp, None)
+    }
+
+    /// [`Self::run`] with a GPU kernel override (`GpuRenderOptions::features`).
+    /// On the GPU a first 1-spp render is thrown away: it compiles (and caches) the kernel,
+    /// which would otherwise be inside the 1-spp time and make the difference too small.
+    fn run_with(d: &OpenDevice, scene: &Scene, spp: u32, kernel: Option<FeatureSet>) -> anyhow::Result<Self> {
+        if d.kind() == Device::Gpu {
+            measure_with(d, scene, 1, false, kernel).map_err(|e| anyhow!("{e}"))?;
+        }
+        let one = measure_with(d, scene, 1, false, kernel).map_err(|e| anyhow!("{e}"))?;
+        let more = measure_with(d, scene, 1 + spp, true, kernel).map_err(|e| anyhow!("{e}"))?;
         Ok(Self {
             extra_samples: more.samples.saturating_sub(one.samples) as f64,
             extra_seconds: more.seconds - one.seconds,
@@ -350,35 +361,6 @@ fn growth_line(d: Device, ns: &[f64], ts: &[f64]) -> String {
     }
 }
 
-/// The kernel for every scene of the same renderer and environment kind: all shapes, CSG,
-/// pigments, BRDFs and lights compiled in. (Renderer and environment kinds are exclusive
-/// choices in [`FeatureSet`], so they stay the scene's.)
-pub fn full_features(spec: &FeatureSet) -> FeatureSet {
-    let path = spec.renderer == RendererKind::PathTracer;
-    FeatureSet {
-        sphere: true,
-        plane: true,
-        cube: true,
-        cylinder: true,
-        csg: true,
-        csg_max_intervals: spec.csg_max_intervals.max(FULL_CSG_MAX_INTERVALS),
-        csg_max_depth: spec.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
-        csg_trees: spec.csg_trees,
-        pigment_uniform: true,
-        pigment_checkered: true,
-        pigment_image: true,
-        diffuse: true,
-        specular: true,
-        dielectric: true,
-        point_lights: true,
-        area_lights: path,
-        environment: spec.environment,
-        renderer: spec.renderer,
-        bvh: true,
-        nee: path,
-    }
-}
-
 /// WGSL size and pipeline creation time (naga validation + driver compile) of a kernel.
 fn kernel_cost(gpu: &Gpu, features: &FeatureSet) -> anyhow::Result<(usize, usize, f64)> {
     let source = assemble(features).map_err(|e| anyhow!("{e}"))?.source;
@@ -404,13 +386,14 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
     let mut rows = Vec::new();
     for (name, scene) in &scenes {
         let spec = FeatureSet::of(scene);
-        eprintln!("{name}: kernels ...");
-        let rate = Differential::run(device, scene, plan.spp)
-            .with_context(|| format!("{name} on the GPU"))?
-            .per_sample()
-            .map_or("n/a (timing noise)".into(), |t| si(1.0 / t));
-        for (kind, f) in [("specialised", spec), ("full-featured", full_features(&spec))] {
+        for (kind, f) in [("specialised", spec), ("full-featured", spec.full_for())] {
+            eprintln!("{name}: {kind} kernel ...");
             let (bytes, lines, secs) = kernel_cost(gpu, &f).with_context(|| format!("{name}: {kind} kernel"))?;
+            // The same differential method for both kernels; the override only swaps the kernel.
+            let rate = Differential::run_with(device, scene, plan.spp, Some(f))
+                .with_context(|| format!("{name} on the GPU, {kind} kernel"))?
+                .per_sample()
+                .map_or("n/a (timing noise)".into(), |t| si(1.0 / t));
             rows.push(vec![
                 name.clone(),
                 kind.into(),
@@ -418,15 +401,99 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
                 bytes.to_string(),
                 lines.to_string(),
                 format_seconds(secs),
-                if kind == "specialised" { rate.clone() } else { "n/a (gpu::render has no feature override)".into() },
+                rate,
             ]);
         }
     }
     Ok(format!(
         "### Specialised vs full-featured GPU kernel\n\nfeatures = number of `// #if` feature flags on; full-featured = \
          every shape, CSG ({FULL_CSG_MAX_INTERVALS} intervals, depth {FULL_CSG_MAX_DEPTH}), pigment, BRDF and light \
-         kind, with the scene's renderer and environment kind. Pipeline creation = naga validation + \
+         kind and every environment, with the scene's renderer (`FeatureSet::full_for`). samples/s as in the scene \
+         table (after a throw-away render that compiles the kernel), each kernel rendering the same scene. Pipeline creation = naga validation + \
          `create_compute_pipeline` until the device is idle.\n\n{}",
+        markdown_table(&headers, &rows)
+    ))
+}
+
+/// Object counts of the BVH-or-list study: "a handful of shapes" and a little beyond.
+pub const LIST_COUNTS: [u32; 6] = [2, 4, 8, 16, 32, 64];
+/// Most finite top-level objects an example scene may have to enter the BVH-or-list study.
+const LIST_MAX_OBJECTS: usize = 16;
+
+/// Samples per second of `scene` on the GPU with the packed BVH, or (`flat`) with the BVH
+/// flattened to one leaf, i.e. a plain object list ([`PackedScene::flatten_bvh`]); the
+/// difference of a 1-spp and a (1 + spp)-spp render, as in the scene table. `None`: noise.
+fn packed_rate(device: &OpenDevice, scene: &Scene, spp: u32, flat: bool) -> anyhow::Result<Option<f64>> {
+    let OpenDevice::Gpu { gpu, renderer } = device else { bail!("the BVH-or-list study needs a GPU device") };
+    let time = |spp: u32| -> anyhow::Result<(f64, u32)> {
+        let mut packed = pack(scene, Some(spp)).map_err(|e| anyhow!("{e}"))?;
+        if flat {
+            packed.flatten_bvh();
+        }
+        let opts = GpuRenderOptions { spp: Some(spp), ..GpuRenderOptions::default() };
+        let start = Instant::now();
+        let out = renderer.borrow_mut().render_packed(gpu, scene, &packed, &opts).map_err(|e| anyhow!("{e}"))?;
+        Ok((start.elapsed().as_secs_f64(), out.spp_done))
+    };
+    let (t1, s1) = time(1)?;
+    let (t2, s2) = time(1 + spp)?;
+    let samples = (f64::from(scene.width) * f64::from(scene.height))
+        * f64::from(s2.saturating_sub(s1))
+        * crate::cpu::paths_per_sample(scene) as f64;
+    Ok((t2 > t1 && samples > 0.0).then(|| samples / (t2 - t1)))
+}
+
+/// Finite (BVH) objects of a scene: top-level shapes other than planes.
+fn finite_objects(scene: &Scene) -> usize {
+    scene.shapes.iter().filter(|s| !matches!(s, Shape::Primitive(p) if p.kind == ShapeKind::Plane)).count()
+}
+
+/// Issue 6: "BVH or not (a handful of shapes may be faster without it — measure and
+/// decide)". Each scene is timed with its BVH and with the BVH flattened to one leaf, the
+/// two alternating `ROUNDS` times; the best rate of each is kept (other processes on a
+/// shared machine only ever slow a render down).
+fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow::Result<String> {
+    const ROUNDS: usize = 2;
+    let (w, h) = (96, 72);
+    let spp = 2 * plan.spp;
+    let mut scenes: Vec<(String, Scene)> =
+        LIST_COUNTS.iter().map(|&n| (format!("{n} spheres (generated)"), spheres_scene(n, w, h))).collect();
+    for file in files {
+        match load_scene(file, w) {
+            Ok(s) if finite_objects(&s) <= LIST_MAX_OBJECTS => scenes.push((name_of(file), s)),
+            Ok(_) => {}
+            Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),
+        }
+    }
+    let headers = ["scene", "finite objects", "BVH nodes", "samples/s with BVH", "samples/s as a list", "list / BVH"];
+    let mut rows = Vec::new();
+    for (name, scene) in &scenes {
+        eprintln!("{name}: BVH or list ...");
+        let nodes = pack(scene, Some(1)).map_err(|e| anyhow!("{e}"))?.bvh_nodes.len();
+        let (mut bvh, mut list) = (0.0f64, 0.0f64);
+        // Compiles the kernel (the same for both: only the buffers differ) outside the timings.
+        packed_rate(device, scene, 1, false)?;
+        for _ in 0..ROUNDS {
+            bvh = bvh.max(packed_rate(device, scene, spp, false)?.unwrap_or(0.0));
+            list = list.max(packed_rate(device, scene, spp, true)?.unwrap_or(0.0));
+        }
+        let ok = |r: f64| if r > 0.0 { si(r) } else { "n/a (timing noise)".into() };
+        rows.push(vec![
+            name.clone(),
+            finite_objects(scene).to_string(),
+            nodes.to_string(),
+            ok(bvh),
+            ok(list),
+            if bvh > 0.0 && list > 0.0 { format!("{:.2}", list / bvh) } else { "n/a".into() },
+        ]);
+    }
+    Ok(format!(
+        "### BVH or a plain object list
+
+{w}×{h} px (example scenes at width {w}), {} + 1 spp, the scene's own \
+         kernel; *as a list* = the BVH flattened to one leaf holding every finite object (one box test, then \
+         every object), so only the traversal differs. Kernel compiled beforehand; best of {ROUNDS} alternating runs each.\n\n{}",
+        spp,
         markdown_table(&headers, &rows)
     ))
 }
@@ -454,11 +521,11 @@ mod tests {
     fn full_features_contain_the_specialised_ones() {
         let s = spheres_scene(3, 4, 4);
         let spec = FeatureSet::of(&s);
-        let full = full_features(&spec);
+        let full = spec.full_for();
         let (a, b) = (spec.names(), full.names());
         assert!(a.iter().all(|n| b.contains(n)), "{a:?} ⊄ {b:?}");
         assert!(b.len() > a.len() && b.contains(&"CSG") && b.contains(&"DIELECTRIC"));
-        assert_eq!((full.renderer, full.environment), (spec.renderer, spec.environment));
+        assert!(full.covers(&spec) && !spec.covers(&full));
         // Both assemble to valid WGSL, the full one larger.
         let (sa, sb) = (assemble(&spec).unwrap().source, assemble(&full).unwrap().source);
         assert!(sb.len() > sa.len());

@@ -6,6 +6,12 @@
 
 use crate::scene::{Brdf, Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
 
+/// CSG bounds compiled into a full-featured kernel ([`FeatureSet::full_for`]): a general
+/// kernel is sized for the worst scene it accepts; these cover every example scene, and a
+/// scene with larger bounds raises them.
+pub const FULL_CSG_MAX_INTERVALS: u32 = 16;
+pub const FULL_CSG_MAX_DEPTH: u32 = 8;
+
 /// Environment kinds, for specialisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EnvKind {
@@ -15,6 +21,20 @@ pub enum EnvKind {
     Uniform,
     Gradient,
     Image,
+    /// Any of the above, chosen at run time by the packed `environment.kind` (the shaders
+    /// already branch on it): what a full-featured kernel compiles, so one kernel per
+    /// renderer serves every environment.
+    All,
+}
+
+impl EnvKind {
+    /// Whether a kernel compiled for `self` renders a scene whose environment is `scene`.
+    /// Background and Uniform share one code path (the packer stores a uniform environment
+    /// of the background colour).
+    pub fn covers(self, scene: EnvKind) -> bool {
+        use EnvKind::*;
+        self == scene || self == All || matches!((self, scene), (Background, Uniform) | (Uniform, Background))
+    }
 }
 
 /// Integrator kinds, for specialisation.
@@ -150,7 +170,84 @@ impl FeatureSet {
 
     /// True when some texel buffer is read (image pigments or an image environment).
     pub fn textures(&self) -> bool {
-        self.pigment_image || self.environment == EnvKind::Image
+        self.pigment_image || self.env_image()
+    }
+
+    fn env_image(&self) -> bool {
+        matches!(self.environment, EnvKind::Image | EnvKind::All)
+    }
+
+    /// The full-featured kernel for scenes like this one: every shape, CSG (with bounds of
+    /// at least [`FULL_CSG_MAX_INTERVALS`] and [`FULL_CSG_MAX_DEPTH`]), pigment, BRDF and
+    /// light kind and every environment ([`EnvKind::All`]), for this set's renderer.
+    ///
+    /// Two things stay the scene's, because they select an algorithm rather than add code:
+    /// the renderer (one integrator per kernel; four full kernels in all) and whether CSG
+    /// trees are deferred past the BVH traversal (the CPU reference decides that from the
+    /// tree count, `cpu::CSG_DEFER_MAX`; a deferring full kernel gets every deferral slot).
+    /// Run-time switches (`settings.nee`, light counts, `environment.kind`, pigment and
+    /// shape kinds) choose among the compiled paths, so the result is the scene's image.
+    pub fn full_for(&self) -> FeatureSet {
+        let shading = self.shading();
+        let path = self.renderer == RendererKind::PathTracer;
+        let scatters = matches!(self.renderer, RendererKind::PathTracer | RendererKind::PointLight);
+        let pigments = self.renderer != RendererKind::OnOff;
+        let defer_max = crate::cpu::CSG_DEFER_MAX as u32;
+        FeatureSet {
+            sphere: true,
+            plane: true,
+            cube: true,
+            cylinder: true,
+            csg: true,
+            csg_max_intervals: self.csg_max_intervals.max(FULL_CSG_MAX_INTERVALS),
+            csg_max_depth: self.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
+            csg_trees: if self.csg_trees > defer_max { self.csg_trees } else { defer_max },
+            pigment_uniform: pigments,
+            pigment_checkered: pigments,
+            pigment_image: pigments,
+            diffuse: scatters,
+            specular: path,
+            dielectric: path,
+            point_lights: scatters,
+            area_lights: path,
+            environment: if shading { EnvKind::All } else { EnvKind::Background },
+            renderer: self.renderer,
+            bvh: true,
+            nee: path,
+        }
+    }
+
+    /// Whether a kernel compiled for `self` renders every scene whose features are `scene`
+    /// exactly as `scene`'s own kernel does: every feature on, CSG bounds at least as large,
+    /// the same renderer and CSG deferral mode, and an environment that covers the scene's.
+    pub fn covers(&self, scene: &FeatureSet) -> bool {
+        self.missing_for(scene).is_empty()
+    }
+
+    /// What `self` lacks to cover `scene` (see [`Self::covers`]), in words; empty when it covers.
+    pub fn missing_for(&self, scene: &FeatureSet) -> Vec<String> {
+        let mut missing: Vec<String> =
+            scene.names().into_iter().filter(|n| !self.names().contains(n)).map(|n| format!("feature {n}")).collect();
+        if self.renderer != scene.renderer {
+            missing.push(format!("renderer {:?} (kernel: {:?})", scene.renderer, self.renderer));
+        }
+        if scene.shading() && !self.environment.covers(scene.environment) {
+            missing.push(format!("environment {:?} (kernel: {:?})", scene.environment, self.environment));
+        }
+        if scene.csg {
+            if self.csg_max_intervals < scene.csg_max_intervals || self.csg_max_depth < scene.csg_max_depth {
+                missing.push(format!(
+                    "CSG bounds {} intervals, depth {} (kernel: {}, {})",
+                    scene.csg_max_intervals, scene.csg_max_depth, self.csg_max_intervals, self.csg_max_depth
+                ));
+            }
+            let defer_max = crate::cpu::CSG_DEFER_MAX as u32;
+            let (kernel_defers, scene_defers) = (self.csg_trees <= defer_max, scene.csg_trees <= defer_max);
+            if kernel_defers != scene_defers || (kernel_defers && self.csg_trees < scene.csg_trees) {
+                missing.push(format!("{} top-level CSG trees (kernel: {})", scene.csg_trees, self.csg_trees));
+            }
+        }
+        missing
     }
 
     /// True when escaping rays see the environment (every renderer but OnOff).
@@ -221,9 +318,12 @@ impl FeatureSet {
             (self.point_lights, "POINT_LIGHTS"),
             (self.area_lights, "AREA_LIGHTS"),
             (self.nee, "NEE"),
-            (matches!(self.environment, EnvKind::Uniform | EnvKind::Background) && self.shading(), "ENV_UNIFORM"),
-            (self.environment == EnvKind::Gradient, "ENV_GRADIENT"),
-            (self.environment == EnvKind::Image, "ENV_IMAGE"),
+            (
+                matches!(self.environment, EnvKind::Uniform | EnvKind::Background | EnvKind::All) && self.shading(),
+                "ENV_UNIFORM",
+            ),
+            (matches!(self.environment, EnvKind::Gradient | EnvKind::All), "ENV_GRADIENT"),
+            (self.env_image(), "ENV_IMAGE"),
             (self.renderer == RendererKind::OnOff, "ONOFF"),
             (self.renderer == RendererKind::Flat, "FLAT"),
             (self.renderer == RendererKind::PointLight, "POINTLIGHT"),
@@ -298,5 +398,66 @@ mod tests {
         b.renderer(Renderer::PathTracer(PathTracerSettings { nee: false, ..Default::default() }));
         let f = FeatureSet::of(&b.build().unwrap());
         assert!(!f.nee && f.point_lights);
+    }
+
+    #[test]
+    fn the_full_kernel_covers_every_scene_of_its_renderer_and_assembles() {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        b.sphere(Transform::IDENTITY, m);
+        let spheres = FeatureSet::of(&b.build().unwrap());
+        for r in [
+            Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
+            Renderer::Flat { background: Color::BLACK },
+            Renderer::PointLight { background: Color::BLACK, ambient: Color::BLACK },
+            Renderer::PathTracer(PathTracerSettings::default()),
+        ] {
+            b.renderer(r);
+            let spec = FeatureSet::of(&b.build().unwrap());
+            let renderer = spec.renderer;
+            let full = spec.full_for();
+            assert!(full.covers(&spec) && !spec.covers(&full), "{renderer:?}");
+            // The same kernel for every scene of the renderer: it does not depend on the scene.
+            assert_eq!(full, FeatureSet { renderer, ..FeatureSet::default() }.full_for());
+            assert_eq!(full.environment == EnvKind::All, renderer != RendererKind::OnOff);
+            let source = crate::gpu::render::assemble(&full).unwrap_or_else(|e| panic!("{renderer:?}: {e}")).source;
+            for env in ["fn escape_radiance", "environment.kind == 2u", "environment.kind == 3u"] {
+                assert_eq!(source.contains(env), renderer != RendererKind::OnOff, "{renderer:?}: {env}");
+            }
+            let other = if renderer == RendererKind::Flat { RendererKind::OnOff } else { RendererKind::Flat };
+            assert!(!full.covers(&FeatureSet { renderer: other, ..spheres }));
+        }
+        // Environments: All covers each; Background and Uniform share their code path.
+        for e in [EnvKind::Background, EnvKind::Uniform, EnvKind::Gradient, EnvKind::Image, EnvKind::All] {
+            assert!(EnvKind::All.covers(e) && e.covers(e));
+            assert_eq!(e.covers(EnvKind::All), e == EnvKind::All);
+        }
+        assert!(EnvKind::Uniform.covers(EnvKind::Background) && !EnvKind::Gradient.covers(EnvKind::Image));
+        let gradient = FeatureSet { environment: EnvKind::Gradient, ..spheres };
+        assert_eq!(
+            spheres.missing_for(&gradient),
+            vec!["feature ENV_GRADIENT", "environment Gradient (kernel: Background)"]
+                .into_iter()
+                .map(String::from)
+                .collect::<Vec<_>>()
+        );
+
+        // CSG: larger bounds are raised, and the deferral mode (chosen from the tree count,
+        // as the CPU reference chooses it) is kept: a deferring kernel cannot take a scene
+        // with more trees than its slots, nor a non-deferring one a scene the CPU defers.
+        let max = crate::cpu::CSG_DEFER_MAX as u32;
+        let csg = |trees, intervals| FeatureSet {
+            csg: true,
+            csg_trees: trees,
+            csg_max_intervals: intervals,
+            csg_max_depth: 1,
+            ..spheres
+        };
+        let full = csg(2, 40).full_for();
+        assert_eq!((full.csg_trees, full.csg_max_intervals, full.csg_max_depth), (max, 40, FULL_CSG_MAX_DEPTH));
+        assert!(full.covers(&csg(max, 40)) && !full.covers(&csg(max + 1, 2)) && !full.covers(&csg(1, 41)));
+        let many = csg(max + 5, 2).full_for();
+        assert_eq!(many.csg_trees, max + 5);
+        assert!(many.covers(&csg(max + 100, 2)) && !many.covers(&csg(1, 2)));
     }
 }

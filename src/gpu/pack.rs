@@ -46,9 +46,32 @@ pub struct PackedScene {
     pub origin: DVec3,
 }
 
+impl PackedScene {
+    /// Replaces the BVH by one leaf holding every finite object, so the kernel tests them all
+    /// in turn: a plain object list behind one box test (for `lumen bench`'s BVH-or-list
+    /// measurement; the leaf loop takes any count).
+    pub fn flatten_bvh(&mut self) {
+        if let Some(root) = self.bvh_nodes.first().copied() {
+            self.bvh_nodes = vec![BvhNode { left_or_first: 0, count: self.settings.plane_offset, ..root }];
+            self.settings.bvh_node_count = 1;
+        }
+    }
+}
+
 /// Most CSG intervals one GPU invocation may hold in private memory (32 bytes each): the
 /// evaluation needs (2·depth + 2) lists of `csg::max_intervals` entries.
 pub const MAX_CSG_POOL: usize = 8192;
+
+/// `data`, or one zeroed element when it is empty: what is bound for a buffer the kernel
+/// declares but the scene does not fill (wgpu requires a binding to hold at least one
+/// element of the shader's array type; the kernel never reads it, its counts being 0).
+pub fn at_least_one<T: bytemuck::Pod>(data: &[T]) -> std::borrow::Cow<'_, [T]> {
+    if data.is_empty() {
+        std::borrow::Cow::Owned(vec![<T as bytemuck::Zeroable>::zeroed()])
+    } else {
+        std::borrow::Cow::Borrowed(data)
+    }
+}
 
 /// Why a scene cannot be packed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -537,5 +560,24 @@ mod tests {
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::OutOfRange { shape: 2, kind: ShapeKind::Sphere, .. }), "{err}");
         assert!(err.to_string().contains("beyond f32's range"), "{err}");
+    }
+
+    #[test]
+    fn a_flattened_bvh_is_one_leaf_over_every_finite_object_and_padding_keeps_bindings_nonempty() {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        for i in 0..9 {
+            b.shape(sphere_at(f64::from(i) * 3.0, m));
+        }
+        b.plane(Transform::IDENTITY, m);
+        let mut p = pack(&b.build().unwrap(), None).unwrap();
+        let root = p.bvh_nodes[0];
+        assert!(p.bvh_nodes.len() > 1 && p.settings.plane_offset == 9);
+        p.flatten_bvh();
+        assert_eq!(p.bvh_nodes, vec![BvhNode { left_or_first: 0, count: 9, ..root }]);
+        assert_eq!((p.settings.bvh_node_count, p.settings.plane_count), (1, 1));
+        // Padding: empty data becomes one zeroed element, other data is untouched.
+        assert_eq!(at_least_one::<layout::PointLight>(&p.point_lights).len(), 1);
+        assert_eq!(at_least_one(&p.indices).as_ref(), p.indices.as_slice());
     }
 }

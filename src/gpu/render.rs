@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use super::features::FeatureSet;
-use super::pack::{pack, PackedScene};
+use super::pack::{at_least_one, pack, PackedScene};
 use super::{
     run_progressive, Assembled, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary, StopReason,
 };
@@ -60,6 +60,10 @@ pub struct GpuRenderOptions {
     pub spp: Option<u32>,
     /// Pass sizing, time limit, cancellation and progress display.
     pub passes: PassOptions,
+    /// The kernel to compile instead of the scene's own (`None`): it must cover the scene's
+    /// features ([`FeatureSet::covers`]), e.g. [`FeatureSet::full_for`], else the render is
+    /// refused. For benchmarks and tests of specialisation; the image is the same.
+    pub features: Option<FeatureSet>,
 }
 
 impl GpuRenderOptions {
@@ -72,7 +76,7 @@ impl GpuRenderOptions {
             target_pass_seconds: f64::MAX,
             ..PassOptions::default()
         };
-        Self { spp, passes }
+        Self { spp, passes, features: None }
     }
 }
 
@@ -89,7 +93,7 @@ pub struct GpuRenderOutput {
     /// Path (or camera-sample) estimates that were NaN or infinite, written as 0.
     pub non_finite_samples: u64,
     pub stop: StopReason,
-    /// Features the kernel was specialised for.
+    /// Features the kernel was compiled for (the scene's, or the override).
     pub features: FeatureSet,
     /// Paths the driver's loop limiter cut even when run alone (counted as 0, so the
     /// image is not exact; see docs/DESIGN.md, "Loop limiter and path-granular passes").
@@ -217,7 +221,30 @@ impl GpuRenderer {
     pub fn render(&mut self, gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
         let start = Instant::now();
         let packed = pack(scene, opts.spp).map_err(pack_error)?;
-        let f = &packed.features;
+        self.render_from(gpu, scene, &packed, opts, start)
+    }
+
+    /// Renders `packed`, which [`pack`] made from `scene` with `opts.spp` (and a benchmark may
+    /// have altered, e.g. [`PackedScene::flatten_bvh`]).
+    pub fn render_packed(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        packed: &PackedScene,
+        opts: &GpuRenderOptions,
+    ) -> Result<GpuRenderOutput, GpuError> {
+        self.render_from(gpu, scene, packed, opts, Instant::now())
+    }
+
+    fn render_from(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        packed: &PackedScene,
+        opts: &GpuRenderOptions,
+        start: Instant,
+    ) -> Result<GpuRenderOutput, GpuError> {
+        let f = &kernel_features(&packed.features, opts.features)?;
         // The cache key: the assembly features plus the generated constants.
         let limiter = gpu.loop_limiter;
         let key = f
@@ -231,8 +258,24 @@ impl GpuRenderer {
             check_binding_limits(gpu, &assembled)?;
             gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)
         })?;
-        render_packed(gpu, &kernel, scene, &packed, opts, start)
+        let mut out = render_packed(gpu, &kernel, scene, packed, opts, start)?;
+        out.features = *f;
+        Ok(out)
     }
+}
+
+/// The scene's features, or the override when it covers them (a clear error otherwise:
+/// a kernel lacking a feature would silently render the scene wrong).
+fn kernel_features(scene: &FeatureSet, kernel: Option<FeatureSet>) -> Result<FeatureSet, GpuError> {
+    let Some(kernel) = kernel else { return Ok(*scene) };
+    let missing = kernel.missing_for(scene);
+    if !missing.is_empty() {
+        return Err(GpuError::Validation(format!(
+            "the kernel feature override does not cover this scene; it lacks: {}",
+            missing.join(", ")
+        )));
+    }
+    Ok(kernel)
 }
 
 fn render_packed(
@@ -287,7 +330,9 @@ fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError
 const NAN_COUNT_BINDING: u32 = 2;
 
 /// The uploaded scene: a buffer for each binding the kernel declares (buffers a kernel
-/// does not read, such as texels in an OnOff render, are never uploaded).
+/// does not read, such as texels in an OnOff render, are never uploaded). A full-featured
+/// kernel declares buffers the scene leaves empty: those get one zeroed element, since a
+/// binding must hold at least one element of its array type (it is never read: counts are 0).
 struct SceneBuffers {
     /// In the kernel's binding order.
     buffers: Vec<wgpu::Buffer>,
@@ -307,16 +352,16 @@ impl SceneBuffers {
                     nan_count = Some(buffers.len());
                     gpu.storage_buffer("nan_count", &[0u32])?
                 }
-                3 => gpu.storage_buffer("shapes", &p.shapes)?,
-                4 => gpu.storage_buffer("indices", &p.indices)?,
-                5 => gpu.storage_buffer("bvh_nodes", &p.bvh_nodes)?,
-                6 => gpu.storage_buffer("csg_nodes", &p.csg_nodes)?,
-                7 => gpu.storage_buffer("materials", &p.materials)?,
-                8 => gpu.storage_buffer("pigments", &p.pigments)?,
+                3 => gpu.storage_buffer("shapes", &at_least_one(&p.shapes))?,
+                4 => gpu.storage_buffer("indices", &at_least_one(&p.indices))?,
+                5 => gpu.storage_buffer("bvh_nodes", &at_least_one(&p.bvh_nodes))?,
+                6 => gpu.storage_buffer("csg_nodes", &at_least_one(&p.csg_nodes))?,
+                7 => gpu.storage_buffer("materials", &at_least_one(&p.materials))?,
+                8 => gpu.storage_buffer("pigments", &at_least_one(&p.pigments))?,
                 9 => gpu.uniform_buffer("environment", &p.environment)?,
-                10 => gpu.storage_buffer("floats (texels and environment tables)", &p.floats)?,
-                11 => gpu.storage_buffer("point_lights", &p.point_lights)?,
-                12 => gpu.storage_buffer("area_lights", &p.area_lights)?,
+                10 => gpu.storage_buffer("floats (texels and environment tables)", &at_least_one(&p.floats))?,
+                11 => gpu.storage_buffer("point_lights", &at_least_one(&p.point_lights))?,
+                12 => gpu.storage_buffer("area_lights", &at_least_one(&p.area_lights))?,
                 b => {
                     return Err(GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})")))
                 }
