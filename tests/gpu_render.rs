@@ -2,6 +2,8 @@
 //! renders against the CPU reference and analytic answers. Every GPU test skips itself
 //! without an adapter (and fails instead with LUMEN_REQUIRE_GPU=1).
 
+mod common;
+
 use lumen::gpu::gpu_for_tests;
 use lumen::sampling::{stream, CAMERA_BOUNCE};
 use lumen::scene::PcgSeed;
@@ -261,17 +263,8 @@ fn path_traced_scene(nee: bool, env: Option<Environment>) -> Scene {
         Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
         Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
     ));
-    let glass = b.material(Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 },
-        Pigment::Uniform(Color::BLACK),
-    ));
-    let mirror = b.material(Material::new(
-        Brdf::Specular {
-            pigment: Pigment::Uniform(Color::gray(0.8)),
-            threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD,
-        },
-        Pigment::Uniform(Color::BLACK),
-    ));
+    let glass = common::glass(&mut b);
+    let mirror = common::mirror(&mut b);
     b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white)
         .cube(Transform::translation(DVec3::new(6.0, 0.0, 0.0)) * Transform::scaling(DVec3::new(0.2, 6.0, 4.0)), green)
         .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.6)) * Transform::scaling(DVec3::splat(0.4)), lamp)
@@ -658,23 +651,8 @@ fn far_from_the_origin_the_gpu_still_matches_the_cpu() {
 #[test]
 fn example_scenes_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("example_scenes_match_the_cpu") else { return };
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut files: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "sl"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 5, "{files:?}");
-    for path in files {
-        let mut scene = lumen::scenelang::load_file(&path, &lumen::scenelang::LoadOptions::default())
-            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let aspect = f64::from(scene.width) / f64::from(scene.height);
-        scene.width = 24;
-        scene.height = ((24.0 / aspect).round() as u32).clamp(1, 32);
-        if let Renderer::PathTracer(p) = &mut scene.renderer {
-            p.n = 1;
-        }
+    for path in common::example_scene_files() {
+        let scene = common::thumbnail(&path, 24, 32);
         println!("{}: {}×{}, {}", path.display(), scene.width, scene.height, scene.renderer.name());
         // glass.sl sends 10-bounce paths through curved glass toward a small, very bright
         // lamp: the f32 and f64 directions, equal to ~1e-7, drift apart through each lens

@@ -4,6 +4,8 @@
 //! kernel override that lacks a feature the scene needs is refused. Skips without a GPU
 //! adapter (fails instead with LUMEN_REQUIRE_GPU=1).
 
+mod common;
+
 use lumen::color::Color;
 use lumen::gpu::features::{EnvKind, FeatureSet};
 use lumen::gpu::gpu_for_tests;
@@ -12,27 +14,9 @@ use lumen::gpu::Gpu;
 use lumen::scene::{CsgOp, Environment, Renderer, Scene, SceneBuilder, Shape, ShapeKind, Transform};
 
 fn example_scenes() -> Vec<(String, Scene)> {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut files: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "sl"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 5, "{files:?}");
-    files
+    common::example_scene_files()
         .into_iter()
-        .map(|path| {
-            let mut scene = lumen::scenelang::load_file(&path, &lumen::scenelang::LoadOptions::default())
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            let aspect = f64::from(scene.width) / f64::from(scene.height);
-            scene.width = 16;
-            scene.height = ((16.0 / aspect).round() as u32).clamp(1, 24);
-            if let Renderer::PathTracer(p) = &mut scene.renderer {
-                p.n = 1;
-            }
-            (path.file_name().unwrap().to_string_lossy().into_owned(), scene)
-        })
+        .map(|path| (path.file_name().unwrap().to_string_lossy().into_owned(), common::thumbnail(&path, 16, 24)))
         .collect()
 }
 

@@ -3,19 +3,15 @@
 //! do, paths that the limiter cuts are re-run on a fresh limiter, and a path that is cut
 //! even alone is counted, never silently wrong.
 
+mod common;
+
+use common::emissive;
 use glam::DVec3;
 use lumen::color::Color;
 use lumen::cpu::{Progress, RenderOptions};
 use lumen::gpu::render::{render, GpuRenderOptions, GpuRenderOutput};
 use lumen::gpu::{gpu_for_tests, probe_loop_limiter, Gpu, LOOP_LIMITER_PROBE_TRIPS};
 use lumen::scene::*;
-
-fn emissive(b: &mut SceneBuilder, rho: f64, le: f64) -> MaterialId {
-    b.material(Material::new(
-        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) },
-        Pigment::Uniform(Color::gray(le)),
-    ))
-}
 
 fn pt(n: u32, max_depth: u32, nee: bool) -> Renderer {
     Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth: 1000, nee, ..Default::default() })
@@ -70,17 +66,8 @@ fn mixed_scene(renderer: Renderer) -> Scene {
         Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
         Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
     ));
-    let glass = b.material(Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 },
-        Pigment::Uniform(Color::BLACK),
-    ));
-    let mirror = b.material(Material::new(
-        Brdf::Specular {
-            pigment: Pigment::Uniform(Color::gray(0.8)),
-            threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD,
-        },
-        Pigment::Uniform(Color::BLACK),
-    ));
+    let glass = common::glass(&mut b);
+    let mirror = common::mirror(&mut b);
     b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white)
         .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.6)) * Transform::scaling(DVec3::splat(0.4)), lamp)
         .cube(Transform::translation(DVec3::new(4.5, -1.5, 1.5)) * Transform::scaling(DVec3::new(0.6, 0.3, 0.2)), warm)
