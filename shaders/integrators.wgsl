@@ -38,7 +38,8 @@ fn radiance_flat(ray: Ray) -> vec3<f32> {
 
 // #if POINT_LIGHTS
 // Direct light from point light i at a surface point: the light's colour times its falloff
-// f(d) and the unit direction to it, or zero when occluded.
+// f(d) and the unit direction to it, or zero when the light is behind the surface or
+// occluded (the shadow ray is traced only when needed, as cpu::point_light_factor does).
 struct PointLightSample {
     l: vec3<f32>,
     radiance: vec3<f32>,
@@ -51,7 +52,7 @@ fn point_light_at(i: u32, hit: Hit) -> PointLightSample {
     let l = to_light / dist;
     let origin = offset_origin(hit.point, hit.scale, hit.normal, l);
     // The shadow ray stops just short of the light (t < 1, exclusive).
-    if (dist <= 0.0 || occluded(Ray(origin, light.position.xyz - origin, 0.0, 1.0))) {
+    if (dist <= 0.0 || dot(hit.normal, l) <= 0.0 || occluded(Ray(origin, light.position.xyz - origin, 0.0, 1.0))) {
         return PointLightSample(l, vec3<f32>(0.0));
     }
     var falloff = 1.0;

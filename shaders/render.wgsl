@@ -5,6 +5,9 @@
 // #if LOOP_LIMITER
 // #requires resume
 // #endif
+// #if COUNT_RAYS
+// #requires ray_count
+// #endif
 // The render kernel: one invocation per pixel of the pass's tile sums the estimates of
 // camera samples [sample_begin, sample_end) (the pass contract of shaders/pass.wgsl). With
 // LOOP_LIMITER the pass is resumable and path-granular (shaders/resume.wgsl); the sums and
@@ -61,6 +64,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         sum += value;
     }
+// #if COUNT_RAYS
+    flush_ray_count();
+// #endif
     pass_write(gid, sum);
 }
 // #endif
@@ -125,9 +131,17 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let j = pass_params.sample_begin + done / n;
         let i = done % n;
+// #if COUNT_RAYS
+        let rays_before = rays_traced;
+// #endif
         var value = path_estimate(px.x, px.y, pixel, j, i);
         if (loop_limiter_fired()) {
             // The limiter ended some loop of this path: its value is unreliable.
+            if (ran != 0u || !solo) {
+// #if COUNT_RAYS
+                rays_traced = rays_before; // the path runs again: count its rays then
+// #endif
+            }
             if (ran != 0u) {
                 break; // the next dispatch starts with it, on a fresh limiter
             }
@@ -161,6 +175,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         flags |= RESUME_DONE;
     }
     pass_state[k] = vec4<u32>(bitcast<vec3<u32>>(sample_sum), done | flags);
+// #if COUNT_RAYS
+    flush_ray_count();
+// #endif
     pass_write(gid, pass_sum);
 }
 // #endif

@@ -1,4 +1,7 @@
 // #requires shapes constants
+// #if COUNT_RAYS
+// #requires ray_count
+// #endif
 // #if CSG
 // #requires csg
 // #endif
@@ -63,6 +66,9 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 // The closest candidate along the ray (t = OPEN when nothing is hit); with `any_hit` it
 // returns as soon as something is found (occlusion queries).
 fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
+// #if COUNT_RAYS
+    rays_traced += 1u;
+// #endif
     var ray = ray_in;
     var best = no_candidate();
 // #if CSG

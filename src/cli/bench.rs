@@ -219,7 +219,10 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
         for d in devices {
             eprintln!("{name} on {} ...", d.kind());
             let size = format!("{}×{}", scene.width, scene.height);
-            match Differential::run(d, &scene, plan.spp) {
+            match Differential::run(d, &scene, plan.spp).and_then(|mut diff| {
+                diff.count_gpu_rays(d, &scene, plan.spp)?;
+                Ok(diff)
+            }) {
                 Ok(diff) => {
                     let rate = diff.per_sample().map(|t| 1.0 / t);
                     rows.push(vec![
@@ -229,10 +232,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                         diff.more.spp.to_string(),
                         format!("{:.3}", diff.more.seconds),
                         rate.map_or("n/a (timing noise)".into(), si),
-                        match (d.kind(), diff.rays_per_second()) {
-                            (Device::Gpu, _) => "n/a (not counted)".into(),
-                            (_, r) => r.map_or("n/a (timing noise)".into(), si),
-                        },
+                        diff.rays_per_second().map_or("n/a (timing noise)".into(), si),
                         format_bytes(peak_memory_bytes()),
                     ]);
                 }
@@ -256,7 +256,8 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
     format!(
         "### Scenes\n\nEach scene is rendered at 1 spp and at 1 + {} spp; seconds = the second render's wall time, \
              samples/s and rays/s = the extra samples (rays) over the extra time, which leaves out fixed costs (BVH \
-             build, packing, kernel creation). Peak memory = VmHWM of the process so far.\n\n{}",
+             build, packing, kernel creation); the GPU's rays are counted afterwards by its ray-counting kernel on the \
+             same samples (exact: the plain kernel traces the same rays). Peak memory = VmHWM of the process so far.\n\n{}",
         plan.spp,
         markdown_table(&headers, &rows)
     )
@@ -281,16 +282,29 @@ impl Differential {
     /// which would otherwise be inside the 1-spp time and make the difference too small.
     fn run_with(d: &OpenDevice, scene: &Scene, spp: u32, kernel: Option<FeatureSet>) -> anyhow::Result<Self> {
         if d.kind() == Device::Gpu {
-            measure_with(d, scene, 1, false, kernel).map_err(|e| anyhow!("{e}"))?;
+            measure_with(d, scene, 1, false, kernel, false).map_err(|e| anyhow!("{e}"))?;
         }
-        let one = measure_with(d, scene, 1, false, kernel).map_err(|e| anyhow!("{e}"))?;
-        let more = measure_with(d, scene, 1 + spp, true, kernel).map_err(|e| anyhow!("{e}"))?;
+        let one = measure_with(d, scene, 1, false, kernel, false).map_err(|e| anyhow!("{e}"))?;
+        let more = measure_with(d, scene, 1 + spp, true, kernel, false).map_err(|e| anyhow!("{e}"))?;
         Ok(Self {
             extra_samples: more.samples.saturating_sub(one.samples) as f64,
             extra_seconds: more.seconds - one.seconds,
             extra_rays: one.rays.zip(more.rays).map(|(a, b)| b.saturating_sub(a) as f64),
             more,
         })
+    }
+
+    /// The GPU's extra rays, from the ray-counting kernel variant run on the same samples
+    /// after the timed renders (which use the plain kernel, so counting costs them nothing):
+    /// both kernels trace exactly the same rays, so the count is exact. The CPU counts anyway.
+    fn count_gpu_rays(&mut self, d: &OpenDevice, scene: &Scene, spp: u32) -> anyhow::Result<()> {
+        if d.kind() == Device::Gpu {
+            let rays = |s: u32| -> anyhow::Result<Option<u64>> {
+                Ok(measure_with(d, scene, s, false, None, true).map_err(|e| anyhow!("{e}"))?.rays)
+            };
+            self.extra_rays = rays(1)?.zip(rays(1 + spp)?).map(|(a, b)| b.saturating_sub(a) as f64);
+        }
+        Ok(())
     }
 
     /// Seconds per radiance sample, `None` when timing noise swamped the difference.

@@ -244,7 +244,7 @@ fn render_on_gpu(
     args: &RenderArgs,
     scene: &Scene,
 ) -> Result<Rendered, GpuError> {
-    let opts = GpuRenderOptions { spp: args.spp, passes: args.gpu.pass_options(), features: None };
+    let opts = GpuRenderOptions { spp: args.spp, passes: args.gpu.pass_options(), ..GpuRenderOptions::default() };
     let out = renderer.render(gpu, scene, &opts)?;
     let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
     eprintln!(

@@ -9,7 +9,7 @@ use clap::Args;
 
 use super::script_args::ScriptArgs;
 use crate::gpu::features::FeatureSet;
-use crate::gpu::render::{assemble_for, LOOP_LIMITER};
+use crate::gpu::render::{assemble_for, KernelVariant};
 use crate::image::write_atomically;
 
 /// Arguments of `lumen shader`.
@@ -33,12 +33,10 @@ pub struct ShaderArgs {
 pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     let scene = args.script.load(&args.scene)?;
     let features = FeatureSet::of(&scene);
-    let assembled =
-        assemble_for(&features, args.loop_limiter).map_err(|e| anyhow!("cannot assemble the kernel: {e}"))?;
+    let variant = KernelVariant { loop_limiter: args.loop_limiter, ..KernelVariant::default() };
+    let assembled = assemble_for(&features, variant).map_err(|e| anyhow!("cannot assemble the kernel: {e}"))?;
     let mut names = features.names();
-    if args.loop_limiter {
-        names.push(LOOP_LIMITER);
-    }
+    names.extend(variant.names());
     let text = format!(
         "// lumen render kernel for {}\n// features: {}\n{}",
         args.scene.display(),

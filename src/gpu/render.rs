@@ -42,8 +42,9 @@ const MODULES: [(&str, &str); 24] = [
     ("shaders/integrators.wgsl", include_str!("../../shaders/integrators.wgsl")),
     ("shaders/render.wgsl", include_str!("../../shaders/render.wgsl")),
 ];
-const EXTRA_MODULES: [(&str, &str); 4] = [
+const EXTRA_MODULES: [(&str, &str); 5] = [
     ("shaders/resume.wgsl", include_str!("../../shaders/resume.wgsl")),
+    ("shaders/ray_count.wgsl", include_str!("../../shaders/ray_count.wgsl")),
     ("shaders/lights.wgsl", include_str!("../../shaders/lights.wgsl")),
     ("shaders/path_tracer.wgsl", include_str!("../../shaders/path_tracer.wgsl")),
     ("shaders/env_light.wgsl", include_str!("../../shaders/env_light.wgsl")),
@@ -64,6 +65,9 @@ pub struct GpuRenderOptions {
     /// features ([`FeatureSet::covers`]), e.g. [`FeatureSet::full_for`], else the render is
     /// refused. For benchmarks and tests of specialisation; the image is the same.
     pub features: Option<FeatureSet>,
+    /// Count closest-hit and shadow rays on the GPU ([`GpuRenderOutput::rays`]), as the CPU
+    /// reference always does; a kernel variant with one atomic add per invocation and pass.
+    pub count_rays: bool,
 }
 
 impl GpuRenderOptions {
@@ -76,7 +80,7 @@ impl GpuRenderOptions {
             target_pass_seconds: f64::MAX,
             ..PassOptions::default()
         };
-        Self { spp, passes, features: None }
+        Self { spp, passes, ..Self::default() }
     }
 }
 
@@ -100,15 +104,40 @@ pub struct GpuRenderOutput {
     pub loop_limited_paths: u64,
     /// Kernel dispatches: one per pass, more when resumable passes were resumed.
     pub dispatches: u64,
+    /// Closest-hit and shadow rays traced, when [`GpuRenderOptions::count_rays`] asked (the
+    /// same count as the CPU reference's `RenderStats::rays` for the same samples).
+    pub rays: Option<u64>,
 }
 
 /// The assembly feature of resumable, path-granular kernels (`shaders/resume.wgsl`), used
 /// when [`Gpu::loop_limiter`] is set.
 pub const LOOP_LIMITER: &str = "LOOP_LIMITER";
 
+/// The assembly feature of kernels that count rays (`shaders/ray_count.wgsl`).
+pub const COUNT_RAYS: &str = "COUNT_RAYS";
+
+/// Variants of a scene's kernel chosen by the device or the caller, not by the scene.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct KernelVariant {
+    /// Resumable, path-granular passes ([`LOOP_LIMITER`]), for drivers with a loop limiter.
+    pub loop_limiter: bool,
+    /// Ray counting ([`COUNT_RAYS`]).
+    pub count_rays: bool,
+}
+
+impl KernelVariant {
+    /// The assembly feature names this variant adds to the scene's.
+    pub fn names(&self) -> Vec<&'static str> {
+        [(self.loop_limiter, LOOP_LIMITER), (self.count_rays, COUNT_RAYS)]
+            .into_iter()
+            .filter_map(|(on, name)| on.then_some(name))
+            .collect()
+    }
+}
+
 /// All modules, in a library that knows every feature name.
 pub fn shader_library() -> ShaderLibrary {
-    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().copied().chain([LOOP_LIMITER]).collect();
+    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().copied().chain([LOOP_LIMITER, COUNT_RAYS]).collect();
     let mut lib = ShaderLibrary::new(&names);
     for (file, src) in MODULES.iter().chain(EXTRA_MODULES.iter()) {
         lib.add(file, src).unwrap_or_else(|e| panic!("built-in shader {file} is malformed: {e}"));
@@ -142,18 +171,17 @@ fn constants_module(features: &FeatureSet) -> String {
 
 /// The render kernel assembled for `features` (validated with naga).
 pub fn assemble(features: &FeatureSet) -> Result<Assembled, GpuError> {
-    assemble_for(features, false)
+    assemble_for(features, KernelVariant::default())
 }
 
-/// The render kernel for `features`, resumable when `loop_limiter` (for drivers with a
-/// loop limiter, [`Gpu::loop_limiter`]).
-pub fn assemble_for(features: &FeatureSet, loop_limiter: bool) -> Result<Assembled, GpuError> {
+/// The render kernel for `features` in the given variant.
+pub fn assemble_for(features: &FeatureSet, variant: KernelVariant) -> Result<Assembled, GpuError> {
     let mut lib = shader_library();
     lib.add("<generated constants>", &format!("// #provides constants\n{}", constants_module(features)))
         .map_err(|e| GpuError::Validation(e.to_string()))?;
     let mut names = features.assembly_features();
-    if loop_limiter {
-        names.insert(LOOP_LIMITER);
+    for name in variant.names() {
+        names.insert(name);
     }
     let assembled =
         lib.assemble(&["render"], &names).map_err(|e| GpuError::Validation(format!("shader assembly: {e}")))?;
@@ -246,15 +274,15 @@ impl GpuRenderer {
     ) -> Result<GpuRenderOutput, GpuError> {
         let f = &kernel_features(&packed.features, opts.features)?;
         // The cache key: the assembly features plus the generated constants.
-        let limiter = gpu.loop_limiter;
+        let variant = KernelVariant { loop_limiter: gpu.loop_limiter, count_rays: opts.count_rays };
         let key = f
             .assembly_features()
-            .with(&format!("loop_limiter={limiter}"))
+            .with(&format!("{variant:?}"))
             .with(&format!("csg_max_intervals={}", f.csg_max_intervals))
             .with(&format!("csg_max_depth={}", f.csg_max_depth))
             .with(&format!("csg_trees={}", f.csg_trees.min(crate::cpu::CSG_DEFER_MAX as u32 + 1)));
         let kernel = self.kernels.get_or_build(&key, ENTRY_POINT, || {
-            let assembled = assemble_for(f, limiter)?;
+            let assembled = assemble_for(f, variant)?;
             check_binding_limits(gpu, &assembled)?;
             gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)
         })?;
@@ -298,6 +326,13 @@ fn render_packed(
     }
     let acc = run_progressive(gpu, kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
     let nan: Vec<u32> = gpu.read_buffer(&buffers.buffers[buffers.nan_count], 1)?;
+    let rays = match buffers.ray_count {
+        Some(k) => {
+            let words: Vec<u32> = gpu.read_buffer(&buffers.buffers[k], 2)?;
+            Some(u64::from(words[0]) | (u64::from(words[1]) << 32))
+        }
+        None => None,
+    };
     Ok(GpuRenderOutput {
         image: acc.image,
         spp_done: acc.spp_done,
@@ -308,6 +343,7 @@ fn render_packed(
         features: packed.features,
         loop_limited_paths: acc.loop_limited_paths,
         dispatches: acc.dispatches,
+        rays,
     })
 }
 
@@ -328,6 +364,8 @@ fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError
 
 /// Binding number of the NaN/∞ counter in `shaders/bindings.wgsl`.
 const NAN_COUNT_BINDING: u32 = 2;
+/// Binding number of the ray counter in `shaders/ray_count.wgsl`.
+const RAY_COUNT_BINDING: u32 = 13;
 
 /// The uploaded scene: a buffer for each binding the kernel declares (buffers a kernel
 /// does not read, such as texels in an OnOff render, are never uploaded). A full-featured
@@ -337,6 +375,8 @@ struct SceneBuffers {
     /// In the kernel's binding order.
     buffers: Vec<wgpu::Buffer>,
     nan_count: usize,
+    /// The ray counter, in kernels that count rays.
+    ray_count: Option<usize>,
 }
 
 impl SceneBuffers {
@@ -344,6 +384,7 @@ impl SceneBuffers {
         let declared = kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]);
         let mut buffers = Vec::with_capacity(declared.len());
         let mut nan_count = None;
+        let mut ray_count = None;
         for &(binding, _) in declared {
             buffers.push(match binding {
                 0 => gpu.uniform_buffer("settings", &p.settings)?,
@@ -362,6 +403,10 @@ impl SceneBuffers {
                 10 => gpu.storage_buffer("floats (texels and environment tables)", &at_least_one(&p.floats))?,
                 11 => gpu.storage_buffer("point_lights", &at_least_one(&p.point_lights))?,
                 12 => gpu.storage_buffer("area_lights", &at_least_one(&p.area_lights))?,
+                RAY_COUNT_BINDING => {
+                    ray_count = Some(buffers.len());
+                    gpu.storage_buffer("ray_count", &[0u32; 2])?
+                }
                 b => {
                     return Err(GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})")))
                 }
@@ -369,7 +414,7 @@ impl SceneBuffers {
         }
         let nan_count =
             nan_count.ok_or_else(|| GpuError::Validation("render kernel does not declare the NaN counter".into()))?;
-        Ok(Self { buffers, nan_count })
+        Ok(Self { buffers, nan_count, ray_count })
     }
 
     fn refs(&self) -> Vec<&wgpu::Buffer> {
@@ -424,11 +469,11 @@ mod tests {
     /// Asserts the assembled kernel holds nothing the features do not need: every function
     /// is reachable from the entry point and every global (buffer or private array) is used.
     fn assert_minimal(features: &FeatureSet) -> naga::Module {
-        assert_minimal_with(features, false)
+        assert_minimal_with(features, KernelVariant::default())
     }
 
-    fn assert_minimal_with(features: &FeatureSet, loop_limiter: bool) -> naga::Module {
-        let assembled = assemble_for(features, loop_limiter).unwrap_or_else(|e| panic!("{features:?}: {e}"));
+    fn assert_minimal_with(features: &FeatureSet, variant: KernelVariant) -> naga::Module {
+        let assembled = assemble_for(features, variant).unwrap_or_else(|e| panic!("{features:?}: {e}"));
         let v = assembled.validate().unwrap();
         let all = function_names(&v.module);
         let reachable = reachable_functions(&v.module);
@@ -512,17 +557,22 @@ mod tests {
         assert_eq!(count, 96);
     }
 
-    /// Resumable kernels (docs/DESIGN.md, "Loop limiter and path-granular passes") for every
-    /// renderer: valid, minimal, with the resume state; the plain kernels have none of it.
+    /// Kernel variants (resumable passes, docs/DESIGN.md "Loop limiter and path-granular
+    /// passes"; ray counting) for every renderer, alone and together: valid, minimal, with
+    /// their own globals; the plain kernels have none of them.
     #[test]
-    fn resumable_kernels_assemble_to_minimal_valid_wgsl() {
+    fn kernel_variants_assemble_to_minimal_valid_wgsl() {
         let mut rng = Pcg32::new(7, 9);
         for renderer in [RendererKind::OnOff, RendererKind::Flat, RendererKind::PointLight, RendererKind::PathTracer] {
             let f = random_features(&mut rng, renderer, EnvKind::Uniform);
-            let has_state =
-                |m: &naga::Module| m.global_variables.iter().any(|(_, g)| g.name.as_deref() == Some("pass_state"));
-            assert!(has_state(&assert_minimal_with(&f, true)), "{f:?}");
-            assert!(!has_state(&assert_minimal_with(&f, false)), "{f:?}");
+            for loop_limiter in [false, true] {
+                for count_rays in [false, true] {
+                    let m = assert_minimal_with(&f, KernelVariant { loop_limiter, count_rays });
+                    let has = |name: &str| m.global_variables.iter().any(|(_, g)| g.name.as_deref() == Some(name));
+                    assert_eq!(has("pass_state"), loop_limiter, "{f:?}");
+                    assert_eq!(has("ray_count") && has("rays_traced"), count_rays, "{f:?}");
+                }
+            }
         }
     }
 
