@@ -496,6 +496,40 @@ mod cli {
         assert_eq!(gpu.get(4, 4), lumen::color::Rgb32::new(0.25, 0.5, 2.0));
     }
 
+    /// Compiled pipelines persist across runs in `$LUMEN_PIPELINE_CACHE` (one file per
+    /// adapter and driver) where the device supports wgpu's pipeline cache (Vulkan), the
+    /// next run reads it back and renders the same image, and `LUMEN_PIPELINE_CACHE=0`
+    /// writes nothing (not even to `$XDG_CACHE_HOME`).
+    #[test]
+    fn pipeline_cache_persists_across_runs_and_can_be_disabled() {
+        let Some(gpu) = lumen::gpu::gpu_for_tests("cli_pipeline_cache") else { return };
+        let supported = gpu.device.features().contains(wgpu::Features::PIPELINE_CACHE);
+        let dir = tempfile::tempdir().unwrap();
+        let (cache, xdg) = (dir.path().join("cache"), dir.path().join("xdg"));
+        // `cache`: the value of LUMEN_PIPELINE_CACHE, or unset.
+        let render = |out: &str, cache: Option<&Path>| {
+            std::fs::write(dir.path().join("tiny.sl"), SCRIPT).unwrap();
+            let mut cmd = Command::new(env!("CARGO_BIN_EXE_lumen"));
+            cmd.current_dir(dir.path()).env_remove("LUMEN_PIPELINE_CACHE").env("XDG_CACHE_HOME", &xdg);
+            if let Some(c) = cache {
+                cmd.env("LUMEN_PIPELINE_CACHE", c);
+            }
+            let o = cmd.args(["render", "tiny.sl", "--device", "gpu", "--width", "8", "-o", out]).output().unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            lumen::image::read_image(&dir.path().join(out)).unwrap()
+        };
+        let files = |d: &Path| std::fs::read_dir(d).map(|r| r.count()).unwrap_or(0);
+        let first = render("a.pfm", Some(&cache));
+        assert_eq!(files(&cache), usize::from(supported), "one cache file iff the device supports it");
+        let second = render("b.pfm", Some(&cache));
+        assert_eq!(first.pixels(), second.pixels());
+        render("c.pfm", Some(Path::new("0")));
+        assert_eq!(files(&xdg.join("lumen")), 0, "disabled, yet written");
+        // Unset, it defaults to $XDG_CACHE_HOME/lumen.
+        render("d.pfm", None);
+        assert_eq!(files(&xdg.join("lumen")), usize::from(supported));
+    }
+
     /// `lumen shader` prints a kernel specialised to the script; `lumen check` its features.
     #[test]
     fn shader_and_check_show_the_specialised_kernel() {

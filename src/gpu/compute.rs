@@ -212,8 +212,13 @@ impl Gpu {
                 module: &shader,
                 entry_point: Some(entry),
                 compilation_options: wgpu::PipelineCompilationOptions::default(),
-                cache: None,
+                cache: self.pipeline_cache.as_ref().map(|c| &c.cache),
             });
+            // Persist the new binaries now (a later crash keeps them); a failure only costs
+            // compile time in a later run.
+            if let Some(cache) = &self.pipeline_cache {
+                let _ = cache.save();
+            }
             ComputeKernel { label: label.into(), pipeline, layouts, bindings, workgroup_size }
         })
     }

@@ -245,6 +245,9 @@ pub struct Gpu {
     /// The renderer then assembles resumable kernels (docs/DESIGN.md, "Loop limiter and
     /// path-granular passes"); public so tests can render both ways on one device.
     pub loop_limiter: bool,
+    /// Driver pipeline binaries kept across runs, where wgpu supports it (Vulkan); see
+    /// `src/gpu/pipeline_cache.rs`.
+    pub(crate) pipeline_cache: Option<super::pipeline_cache::DiskPipelineCache>,
     sink: Arc<Mutex<ErrorSink>>,
 }
 
@@ -276,7 +279,8 @@ impl Gpu {
         let limits = adapter.limits();
         let desc = wgpu::DeviceDescriptor {
             label: Some("lumen"),
-            required_features: wgpu::Features::empty(),
+            // Only to keep compiled pipelines across runs, where the adapter offers it.
+            required_features: adapter.features() & wgpu::Features::PIPELINE_CACHE,
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -297,7 +301,9 @@ impl Gpu {
                 sink.errors.push(GpuError::DeviceLost(format!("{reason:?}: {message}")));
             }
         });
-        let mut gpu = Gpu { device, queue, adapter_info, limits, loop_limiter: false, sink };
+        let pipeline_cache = super::pipeline_cache::cache_dir_from_env()
+            .and_then(|dir| super::pipeline_cache::DiskPipelineCache::open(&device, &adapter_info, &dir));
+        let mut gpu = Gpu { device, queue, adapter_info, limits, loop_limiter: false, pipeline_cache, sink };
         gpu.loop_limiter = match loop_limiter_override() {
             Some(forced) => forced,
             // A probe that cannot run says nothing: assume a limiter, since resumable kernels
@@ -305,6 +311,12 @@ impl Gpu {
             None => probe_loop_limiter(&gpu).map_or(true, |count| count < LOOP_LIMITER_PROBE_TRIPS),
         };
         Ok(gpu)
+    }
+
+    /// The file that keeps this device's compiled pipelines across runs, if any (see
+    /// `LUMEN_PIPELINE_CACHE` in the README).
+    pub fn pipeline_cache_file(&self) -> Option<&std::path::Path> {
+        self.pipeline_cache.as_ref().map(|c| c.path())
     }
 
     /// This device's adapter, as `lumen devices` would print it.

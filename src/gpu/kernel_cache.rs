@@ -4,11 +4,8 @@
 //! re-renders ask for the same ones again, and compiling a path tracer takes long (seconds
 //! on lavapipe), so kernels are kept in a map.
 //!
-//! wgpu's `PipelineCache` (driver pipeline binaries saved across runs) is not used: it is
-//! Vulkan-only behind `Features::PIPELINE_CACHE`, its creation is `unsafe` (data must come
-//! from the same adapter and driver, checked only by a key we would have to store), and it
-//! needs an on-disk cache directory with invalidation. The in-run map gives the benefit
-//! that matters (no recompilation within a run) without any of that.
+//! Across runs, the driver's compiled binaries are kept by wgpu's `PipelineCache` where it
+//! is supported (`src/gpu/pipeline_cache.rs`); this map only spares recompiling within a run.
 
 use std::collections::HashMap;
 use std::sync::Arc;

@@ -13,6 +13,7 @@ mod kernel_cache;
 pub mod layout;
 pub mod pack;
 mod passes;
+pub mod pipeline_cache;
 pub mod render;
 mod test_support;
 
