@@ -52,8 +52,8 @@ pub struct BenchArgs {
     /// Largest sphere count of the scaling study (0 skips it).
     #[arg(long)]
     pub max_spheres: Option<u32>,
-    /// Also compare the scene-specialised GPU kernel with a full-featured one: WGSL size and
-    /// pipeline creation time.
+    /// Also compare the scene-specialised GPU kernel with a full-featured one (WGSL size,
+    /// pipeline creation time, samples/s), and the BVH with a plain object list.
     #[arg(long)]
     pub shaders: bool,
     /// Also write the Markdown report to this file.
