@@ -255,24 +255,10 @@ fn path_traced_scene(nee: bool, env: Option<Environment>) -> Scene {
     let mut b = SceneBuilder::new(20, 15);
     let white = b.diffuse(Color::gray(0.7));
     let green = b.diffuse(Color::new(0.2, 0.6, 0.2));
-    let lamp = b.material(Material::new(
-        Brdf::Diffuse { pigment: Pigment::Uniform(Color::BLACK) },
-        Pigment::Uniform(Color::gray(4.0)),
-    ));
-    let warm = b.material(Material::new(
-        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
-        Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
-    ));
-    let glass = common::glass(&mut b);
-    let mirror = common::mirror(&mut b);
     b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white)
-        .cube(Transform::translation(DVec3::new(6.0, 0.0, 0.0)) * Transform::scaling(DVec3::new(0.2, 6.0, 4.0)), green)
-        .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.6)) * Transform::scaling(DVec3::splat(0.4)), lamp)
-        .cube(Transform::translation(DVec3::new(4.5, -1.5, 1.5)) * Transform::scaling(DVec3::new(0.6, 0.3, 0.2)), warm)
-        .sphere(Transform::translation(DVec3::new(3.5, -0.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), glass)
-        .sphere(Transform::translation(DVec3::new(4.5, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), mirror)
-        .point_light(PointLight { position: DVec3::new(2.0, 0.0, 2.5), color: Color::gray(0.5), linear_radius: 1.0 })
-        .camera(Camera { aspect_ratio: 20.0 / 15.0, ..Camera::default() })
+        .cube(Transform::translation(DVec3::new(6.0, 0.0, 0.0)) * Transform::scaling(DVec3::new(0.2, 6.0, 4.0)), green);
+    common::add_lit_props(&mut b);
+    b.camera(Camera { aspect_ratio: 20.0 / 15.0, ..Camera::default() })
         .renderer(Renderer::PathTracer(PathTracerSettings {
             background: Color::new(0.1, 0.1, 0.2),
             n: 2,

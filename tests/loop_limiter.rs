@@ -61,20 +61,9 @@ fn agreement(a: &lumen::image::HdrImage, b: &lumen::image::HdrImage) -> f64 {
 fn mixed_scene(renderer: Renderer) -> Scene {
     let mut b = SceneBuilder::new(12, 9);
     let white = b.diffuse(Color::gray(0.7));
-    let lamp = emissive(&mut b, 0.0, 4.0);
-    let warm = b.material(Material::new(
-        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
-        Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
-    ));
-    let glass = common::glass(&mut b);
-    let mirror = common::mirror(&mut b);
-    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white)
-        .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.6)) * Transform::scaling(DVec3::splat(0.4)), lamp)
-        .cube(Transform::translation(DVec3::new(4.5, -1.5, 1.5)) * Transform::scaling(DVec3::new(0.6, 0.3, 0.2)), warm)
-        .sphere(Transform::translation(DVec3::new(3.5, -0.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), glass)
-        .sphere(Transform::translation(DVec3::new(4.5, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), mirror)
-        .point_light(PointLight { position: DVec3::new(2.0, 0.0, 2.5), color: Color::gray(0.5), linear_radius: 1.0 })
-        .camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() })
+    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white);
+    common::add_lit_props(&mut b);
+    b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() })
         .environment(Environment::Uniform(Color::new(0.1, 0.1, 0.2)))
         .renderer(renderer);
     b.build().unwrap()

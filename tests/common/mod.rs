@@ -4,8 +4,12 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::DVec3;
 use lumen::color::Color;
-use lumen::scene::{Brdf, Material, MaterialId, Pigment, Renderer, Scene, SceneBuilder, DEFAULT_THRESHOLD_ANGLE_RAD};
+use lumen::scene::{
+    Brdf, Material, MaterialId, Pigment, PointLight, Renderer, Scene, SceneBuilder, Transform,
+    DEFAULT_THRESHOLD_ANGLE_RAD,
+};
 
 /// Every `.sl` script in `scenes/`, sorted by name.
 pub fn example_scene_files() -> Vec<PathBuf> {
@@ -59,4 +63,21 @@ pub fn mirror(b: &mut SceneBuilder) -> MaterialId {
         },
         Pigment::Uniform(Color::BLACK),
     ))
+}
+
+/// Adds what GPU-vs-CPU path tests light and bounce off, in front of a camera at the origin
+/// looking along +x: an emitting sphere (cone-sampled area light), a warm emitting cube
+/// (area-sampled), a glass and a mirror sphere, and a point light.
+pub fn add_lit_props(b: &mut SceneBuilder) {
+    let lamp = emissive(b, 0.0, 4.0);
+    let warm = b.material(Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(0.5)) },
+        Pigment::Uniform(Color::new(2.0, 1.0, 0.5)),
+    ));
+    let (glass, mirror) = (glass(b), mirror(b));
+    b.sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.6)) * Transform::scaling(DVec3::splat(0.4)), lamp)
+        .cube(Transform::translation(DVec3::new(4.5, -1.5, 1.5)) * Transform::scaling(DVec3::new(0.6, 0.3, 0.2)), warm)
+        .sphere(Transform::translation(DVec3::new(3.5, -0.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), glass)
+        .sphere(Transform::translation(DVec3::new(4.5, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), mirror)
+        .point_light(PointLight { position: DVec3::new(2.0, 0.0, 2.5), color: Color::gray(0.5), linear_radius: 1.0 });
 }
