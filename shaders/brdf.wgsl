@@ -123,6 +123,7 @@ fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<
 // #endif
 
 // #if NEE
+// #if DIFFUSE
 // bsdf::pdf_bsdf.
 fn pdf_bsdf(m: Material, n: vec3<f32>, l: vec3<f32>) -> f32 {
     if (m.brdf == 0u) {
@@ -130,4 +131,5 @@ fn pdf_bsdf(m: Material, n: vec3<f32>, l: vec3<f32>) -> f32 {
     }
     return 0.0;
 }
+// #endif
 // #endif

@@ -9,6 +9,7 @@ const CUBE_FACE_SIGN_U = array<f32, 6>(-1.0, 1.0, 1.0, 1.0, 1.0, -1.0);
 const CUBE_FACE_AXIS_V = array<u32, 6>(1u, 1u, 2u, 2u, 1u, 1u);
 const CUBE_FACE_SIGN_V = array<f32, 6>(1.0, 1.0, -1.0, 1.0, 1.0, 1.0);
 
+// #if SPANS
 fn cube_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     var enter = Crossing(-OPEN, 0u);
     var exit = Crossing(OPEN, 0u);
@@ -42,6 +43,7 @@ fn cube_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     }
     return no_span();
 }
+// #endif
 
 // #if SHADING
 fn cube_surface(p: vec3<f32>, face_in: u32) -> SurfacePoint {

@@ -1,10 +1,14 @@
-// #requires ray quadratic
+// #requires ray
+// #if SPANS
+// #requires quadratic
+// #endif
 // #if SHADING
 // #requires angles
 // #endif
 // Unit cylinder (axis z, radius 0.5, z ∈ [−0.5, 0.5], capped): mirrors
 // src/cpu/shapes/cylinder.rs. Faces: 0 side, 1 bottom cap, 2 top cap.
 
+// #if SPANS
 fn cylinder_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     let fxy = vec3<f32>(o.x, o.y, 0.0);
     let dxy = vec3<f32>(d.x, d.y, 0.0);
@@ -47,6 +51,7 @@ fn cylinder_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     }
     return no_span();
 }
+// #endif
 
 // #if SHADING
 fn cylinder_surface(p: vec3<f32>, face: u32) -> SurfacePoint {

@@ -12,6 +12,7 @@ fn dist1d_pdf_cell(base: u32, n: u32, i: u32) -> f32 {
     return 1.0;
 }
 
+// #if STAGE_SHADE
 fn dist1d_find_cell(base: u32, n: u32, u: f32) -> u32 {
     let cdf = base + 1u + n;
     var lo = 0u;
@@ -26,7 +27,9 @@ fn dist1d_find_cell(base: u32, n: u32, u: f32) -> u32 {
     }
     return lo;
 }
+// #endif
 
+// #if STAGE_SHADE
 // Distribution1D::sample: (x, pdf, cell).
 fn dist1d_sample(base: u32, n: u32, u: f32) -> vec3<f32> {
     let cell = dist1d_find_cell(base, n, u);
@@ -42,6 +45,7 @@ fn dist1d_sample(base: u32, n: u32, u: f32) -> vec3<f32> {
     let x = max(min((f32(cell) + du) / nf, upper), f32(cell) / nf);
     return vec3<f32>(x, dist1d_pdf_cell(base, n, cell), f32(cell));
 }
+// #endif
 
 fn env_row_base(row: u32) -> u32 {
     let w = environment.tex_width;
@@ -49,6 +53,7 @@ fn env_row_base(row: u32) -> u32 {
     return environment.dist_offset + 2u * h + 2u + row * (2u * w + 2u);
 }
 
+// #if STAGE_ESCAPE
 // Distribution2D::pdf.
 fn env_dist_pdf(u: f32, v: f32) -> f32 {
     let w = environment.tex_width;
@@ -57,7 +62,9 @@ fn env_dist_pdf(u: f32, v: f32) -> f32 {
     let col = min(u32(max(u * f32(w), 0.0)), w - 1u);
     return dist1d_pdf_cell(environment.dist_offset, h, row) * dist1d_pdf_cell(env_row_base(row), w, col);
 }
+// #endif
 
+// #if STAGE_SHADE
 // env_light::equirect_dir.
 fn equirect_dir(u: f32, v: f32, rotation_rad: f32) -> vec3<f32> {
     let phi = TAU * u + rotation_rad;
@@ -65,6 +72,7 @@ fn equirect_dir(u: f32, v: f32, rotation_rad: f32) -> vec3<f32> {
     let s = sin(theta);
     return vec3<f32>(s * cos(phi), s * sin(phi), cos(theta));
 }
+// #endif
 
 fn env_image_pdf(pdf_uv: f32, v: f32) -> f32 {
     let sin_theta = sin(PI * v);
@@ -75,6 +83,7 @@ fn env_image_pdf(pdf_uv: f32, v: f32) -> f32 {
 }
 // #endif
 
+// #if STAGE_SHADE
 // EnvLight::sample: a unit direction toward the environment (xyz) and its density (w).
 fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
 // #if ENV_IMAGE
@@ -87,7 +96,9 @@ fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
 // #endif
     return vec4<f32>(uniform_sphere(xi0, xi1), UNIFORM_SPHERE_PDF);
 }
+// #endif
 
+// #if STAGE_ESCAPE
 // EnvLight::pdf for a unit direction.
 fn env_pdf(dir: vec3<f32>) -> f32 {
 // #if ENV_IMAGE
@@ -98,3 +109,4 @@ fn env_pdf(dir: vec3<f32>) -> f32 {
 // #endif
     return UNIFORM_SPHERE_PDF;
 }
+// #endif

@@ -1,4 +1,10 @@
-// #requires bindings ray onb shapes pigment
+// #requires bindings ray
+// #if AREA_LIGHTS
+// #requires shapes
+// #endif
+// #if DIFFUSE
+// #requires onb pigment
+// #endif
 // Area lights for next-event estimation: mirrors cpu::area_light and cpu::warp (cone and
 // sphere warps). Positions are in the camera frame.
 
@@ -13,6 +19,7 @@ struct LightPoint {
 
 const UNIFORM_SPHERE_PDF: f32 = 0.0795774715459477;
 
+// #if DIFFUSE
 // warp::uniform_sphere.
 fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
     let z = 1.0 - 2.0 * xi0;
@@ -20,6 +27,7 @@ fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
     let phi = TAU * xi1;
     return vec3<f32>(r * cos(phi), r * sin(phi), z);
 }
+// #endif
 
 // #if AREA_LIGHTS
 // warp::cone_one_minus_cos: 1 − cos θmax without cancellation.
@@ -68,6 +76,7 @@ fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>
     return dist2 / (cos_light * area_obj * jacobian);
 }
 
+// #if DIFFUSE
 // area_light::sample_cube_surface.
 fn sample_cube_surface(xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
     let f = min(floor(xi0 * 6.0), 5.0);
@@ -87,7 +96,9 @@ fn sample_cube_surface(xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
         }
     }
 }
+// #endif
 
+// #if DIFFUSE
 // area_light::sample_cone: a point on the sphere's visible cap, uniform in the cone of
 // directions it subtends from x.
 fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
@@ -121,7 +132,9 @@ fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
     let s = shapes[light.shape];
     return LightPoint(point, scale, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max));
 }
+// #endif
 
+// #if DIFFUSE
 // AreaLight::sample.
 fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32) -> LightPoint {
     if (light_uses_cone(light, x, x_object)) {
@@ -143,6 +156,7 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     let scale = affine_error_scale(s.to_world, p_obj);
     return LightPoint(y, scale, normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0)), p_obj, pdf);
 }
+// #endif
 
 // AreaLight::pdf: density of light_sample producing y from x.
 fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>) -> f32 {
@@ -154,6 +168,7 @@ fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>) -> f32
     return light_area_pdf(light, x, y, light_object_normal(s.kind, p_obj));
 }
 
+// #if DIFFUSE
 // AreaLight::emission at a sampled point.
 fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
     let s = shapes[light.shape];
@@ -173,6 +188,7 @@ fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
     let uv = primitive_surface(s.kind, lp.object_point, face).uv;
     return pigment_color(m.emitted, uv);
 }
+// #endif
 // #endif
 
 // Lights NEE chooses from: area lights, then the environment (cpu::lights::Lights).

@@ -1,6 +1,7 @@
 // #requires ray
 // Unit plane z = 0 (the half-space z ≤ 0 in CSG): mirrors src/cpu/shapes/plane.rs.
 
+// #if SPANS
 fn plane_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     if (d.z == 0.0) {
         if (o.z <= 0.0) {
@@ -14,6 +15,7 @@ fn plane_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     }
     return Span(Crossing(t, 0u), Crossing(OPEN, 0u), true);
 }
+// #endif
 
 // #if SHADING
 fn plane_frac(x: f32) -> f32 {

@@ -31,7 +31,7 @@ struct Span {
     valid: bool,
 }
 
-// #if GEOMETRY
+// #if SPANS
 fn no_span() -> Span {
     return Span(Crossing(OPEN, 0u), Crossing(-OPEN, 0u), false);
 }
@@ -58,6 +58,7 @@ struct Hit {
     object: u32,
 }
 
+// #if AFFINE
 fn affine_point(a: Affine, p: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(a.r0.xyz, p) + a.r0.w, dot(a.r1.xyz, p) + a.r1.w, dot(a.r2.xyz, p) + a.r2.w);
 }
@@ -65,6 +66,7 @@ fn affine_point(a: Affine, p: vec3<f32>) -> vec3<f32> {
 fn affine_vector(a: Affine, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(a.r0.xyz, v), dot(a.r1.xyz, v), dot(a.r2.xyz, v));
 }
+// #endif
 
 // #if SHADING
 // #if GEOMETRY

@@ -15,6 +15,7 @@
 // space without normalising its direction, so t means the same point in both spaces.
 
 // #if GEOMETRY
+// #if SPANS
 fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
     switch kind {
 // #if SPHERE
@@ -49,6 +50,9 @@ fn shape_span(i: u32, ray: Ray) -> Span {
     return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
 }
 
+// #endif
+
+// #if TRAVERSE
 // The first finite crossing of shape `i` with t in the open range (tmin, tmax); t = OPEN
 // when there is none.
 fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
@@ -63,6 +67,7 @@ fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
     }
     return Crossing(OPEN, 0u);
 }
+// #endif
 
 // #if SHADING
 fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
@@ -120,6 +125,8 @@ struct Candidate {
     object: u32,
 }
 
+// #if !STAGE_SHADE
 fn no_candidate() -> Candidate {
     return Candidate(Crossing(OPEN, 0u), 0u, false, 0u);
 }
+// #endif

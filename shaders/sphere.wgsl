@@ -1,9 +1,13 @@
-// #requires ray quadratic
+// #requires ray
+// #if SPANS
+// #requires quadratic
+// #endif
 // #if SHADING
 // #requires angles
 // #endif
 // Unit sphere (radius 1 at the origin): mirrors src/cpu/shapes/sphere.rs.
 
+// #if SPANS
 fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     let r = sphere_roots(o, d, 1.0);
     if (r.z == 0.0) {
@@ -11,6 +15,7 @@ fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     }
     return Span(Crossing(r.x, 0u), Crossing(r.y, 0u), true);
 }
+// #endif
 
 // #if SHADING
 // atan2(y, x)/2π wrapped to [0, 1).

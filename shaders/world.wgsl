@@ -1,13 +1,13 @@
 // #requires shapes constants
-// #if COUNT_RAYS
-// #requires ray_count
-// #endif
 // #if CSG
+// #if !CSG_QUEUE
 // #requires csg
+// #endif
 // #endif
 // Closest hit and occlusion over the scene: the flattened BVH of finite objects (the
 // same 32-byte nodes the CPU traverses) plus the list of infinite planes tested by every
-// ray. Mirrors cpu::World.
+// ray. Mirrors cpu::World. With CSG_QUEUE (the wavefront's closest-hit stage) the CSG trees
+// a traversal meets are only recorded in `deferred`; the CSG stage evaluates them.
 
 // #if GEOMETRY
 // The first crossing of object reference `r` inside (tmin, tmax). With CSG_DEFER the
@@ -16,9 +16,11 @@
 // SIMD software GPUs (DESIGN.md, "Software adapters").
 fn object_first(r: u32, ray: Ray) -> Candidate {
 // #if CSG
+// #if !CSG_QUEUE
     if (!CSG_DEFER && (r & CSG_NODE_BIT) != 0u) {
         return csg_first(r & ~CSG_NODE_BIT, ray, r);
     }
+// #endif
 // #endif
     return Candidate(shape_first_crossing(r, ray), r, false, r);
 }
@@ -31,12 +33,14 @@ struct Deferred {
     count: u32,
 }
 
+var<private> deferred: Deferred;
+
 // Whether `r` is a CSG tree to evaluate later; if so it is recorded (the scene has at most
 // CSG_DEFER_SLOTS trees, each met at most once per traversal).
-fn defer_csg(deferred: ptr<function, Deferred>, r: u32) -> bool {
-    if (CSG_DEFER && (r & CSG_NODE_BIT) != 0u && (*deferred).count < CSG_DEFER_SLOTS) {
-        (*deferred).refs[(*deferred).count] = r;
-        (*deferred).count++;
+fn defer_csg(r: u32) -> bool {
+    if (CSG_DEFER && (r & CSG_NODE_BIT) != 0u && deferred.count < CSG_DEFER_SLOTS) {
+        deferred.refs[deferred.count] = r;
+        deferred.count++;
         return true;
     }
     return false;
@@ -63,22 +67,20 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 }
 // #endif
 
-// The closest candidate along the ray (t = OPEN when nothing is hit); with `any_hit` it
+// The closest candidate along the ray among planes and BVH leaves (t = OPEN when nothing
+// is hit), CSG trees met being recorded in `deferred` (when CSG_DEFER); with `any_hit` it
 // returns as soon as something is found (occlusion queries).
-fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
-// #if COUNT_RAYS
-    rays_traced += 1u;
-// #endif
+fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     var ray = ray_in;
     var best = no_candidate();
 // #if CSG
-    var deferred: Deferred;
+    deferred.count = 0u;
 // #endif
 // #if PLANE
     for (var i = 0u; i < settings.plane_count; i++) {
         let r = indices[settings.plane_offset + i];
 // #if CSG
-        if (defer_csg(&deferred, r)) {
+        if (defer_csg(r)) {
             continue;
         }
 // #endif
@@ -107,7 +109,7 @@ fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
             for (var k = 0u; k < node.count; k++) {
                 let r = indices[node.left_or_first + k];
 // #if CSG
-                if (defer_csg(&deferred, r)) {
+                if (defer_csg(r)) {
                     continue;
                 }
 // #endif
@@ -156,8 +158,17 @@ fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
         }
     }
 // #endif
+    return best;
+}
+
 // #if CSG
-    // The only call of csg_first when CSG_DEFER: once per query, outside the loops.
+// #if !CSG_QUEUE
+// The deferred CSG trees against the best candidate so far: the only call of csg_first
+// when CSG_DEFER, once per query, outside the traversal loops.
+fn evaluate_deferred(ray_in: Ray, best_in: Candidate, any_hit: bool) -> Candidate {
+    var ray = ray_in;
+    var best = best_in;
+    ray.tmax = min(ray.tmax, best.c.t);
     for (var k = 0u; k < deferred.count; k++) {
         let r = deferred.refs[k];
         let cand = csg_first(r & ~CSG_NODE_BIT, ray, r);
@@ -169,11 +180,36 @@ fn world_first(ray_in: Ray, any_hit: bool) -> Candidate {
             }
         }
     }
-// #endif
     return best;
 }
+// #endif
+// #endif
 
-// #if SHADING
+// #if WF_COUNT
+// Queries this invocation made (stages that trace several rays per path count them here
+// and add the total once; the closest-hit stage's rays are counted by queue length).
+var<private> rays_traced: u32;
+// #endif
+
+// #if !CSG_QUEUE
+// The closest candidate along the ray, CSG trees included (t = OPEN when nothing is hit).
+fn world_first(ray: Ray, any_hit: bool) -> Candidate {
+// #if WF_COUNT
+    rays_traced += 1u;
+// #endif
+    let best = traverse(ray, any_hit);
+// #if CSG
+    if (any_hit && best.c.t < OPEN) {
+        return best;
+    }
+    return evaluate_deferred(ray, best, any_hit);
+// #else
+    return best;
+// #endif
+}
+// #endif
+
+// #if FIRST_HIT
 // The closest hit; `hit.t = OPEN` when the ray escapes.
 fn closest_hit(ray: Ray) -> Hit {
     let cand = world_first(ray, false);

@@ -119,19 +119,16 @@ impl Measurement {
 /// }
 /// ```
 pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> Result<Measurement, GpuError> {
-    measure_with(device, scene, spp, progress, None, false)
+    measure_with(device, scene, spp, progress, None)
 }
 
-/// [`measure`] with a GPU kernel override (`GpuRenderOptions::features`) and, with
-/// `count_rays`, the GPU kernel variant that counts rays (the CPU ignores both: it always
-/// counts). Without it a GPU measurement has no ray count.
+/// [`measure`] with a GPU kernel override (`GpuRenderOptions::features`; the CPU ignores it).
 pub fn measure_with(
     device: &OpenDevice,
     scene: &Scene,
     spp: u32,
     progress: bool,
     kernel: Option<crate::gpu::features::FeatureSet>,
-    count_rays: bool,
 ) -> Result<Measurement, GpuError> {
     match device {
         OpenDevice::Cpu => {
@@ -151,7 +148,6 @@ pub fn measure_with(
                 spp: Some(spp),
                 passes: PassOptions { progress, ..PassOptions::default() },
                 features: kernel,
-                count_rays,
             };
             let out = renderer.borrow_mut().render(gpu, scene, &opts)?;
             let pixels = u64::from(scene.width) * u64::from(scene.height);
@@ -160,7 +156,7 @@ pub fn measure_with(
                 spp: out.spp_done,
                 seconds: out.seconds,
                 samples: pixels * u64::from(out.spp_done) * paths_per_sample(scene),
-                rays: out.rays,
+                rays: Some(out.rays),
                 non_finite_samples: out.non_finite_samples,
             })
         }

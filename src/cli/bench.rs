@@ -21,7 +21,7 @@ use crate::color::Color;
 use crate::cpu::World;
 use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_INTERVALS};
 use crate::gpu::pack::pack;
-use crate::gpu::render::{assemble, GpuRenderOptions, ENTRY_POINT};
+use crate::gpu::render::{assemble_stages, GpuRenderOptions};
 use crate::gpu::Gpu;
 use crate::sampling::Pcg32;
 use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Shape, ShapeKind, Transform};
@@ -219,10 +219,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
         for d in devices {
             eprintln!("{name} on {} ...", d.kind());
             let size = format!("{}×{}", scene.width, scene.height);
-            match Differential::run(d, &scene, plan.spp).and_then(|mut diff| {
-                diff.count_gpu_rays(d, &scene, plan.spp)?;
-                Ok(diff)
-            }) {
+            match Differential::run(d, &scene, plan.spp) {
                 Ok(diff) => {
                     let rate = diff.per_sample().map(|t| 1.0 / t);
                     rows.push(vec![
@@ -256,8 +253,8 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
     format!(
         "### Scenes\n\nEach scene is rendered at 1 spp and at 1 + {} spp; seconds = the second render's wall time, \
              samples/s and rays/s = the extra samples (rays) over the extra time, which leaves out fixed costs (BVH \
-             build, packing, kernel creation); the GPU's rays are counted afterwards by its ray-counting kernel on the \
-             same samples (exact: the plain kernel traces the same rays). Peak memory = VmHWM of the process so far.\n\n{}",
+             build, packing, kernel creation); both devices count every closest-hit and shadow ray they trace. \
+             Peak memory = VmHWM of the process so far.\n\n{}",
         plan.spp,
         markdown_table(&headers, &rows)
     )
@@ -282,29 +279,16 @@ impl Differential {
     /// which would otherwise be inside the 1-spp time and make the difference too small.
     fn run_with(d: &OpenDevice, scene: &Scene, spp: u32, kernel: Option<FeatureSet>) -> anyhow::Result<Self> {
         if d.kind() == Device::Gpu {
-            measure_with(d, scene, 1, false, kernel, false).map_err(|e| anyhow!("{e}"))?;
+            measure_with(d, scene, 1, false, kernel).map_err(|e| anyhow!("{e}"))?;
         }
-        let one = measure_with(d, scene, 1, false, kernel, false).map_err(|e| anyhow!("{e}"))?;
-        let more = measure_with(d, scene, 1 + spp, true, kernel, false).map_err(|e| anyhow!("{e}"))?;
+        let one = measure_with(d, scene, 1, false, kernel).map_err(|e| anyhow!("{e}"))?;
+        let more = measure_with(d, scene, 1 + spp, true, kernel).map_err(|e| anyhow!("{e}"))?;
         Ok(Self {
             extra_samples: more.samples.saturating_sub(one.samples) as f64,
             extra_seconds: more.seconds - one.seconds,
             extra_rays: one.rays.zip(more.rays).map(|(a, b)| b.saturating_sub(a) as f64),
             more,
         })
-    }
-
-    /// The GPU's extra rays, from the ray-counting kernel variant run on the same samples
-    /// after the timed renders (which use the plain kernel, so counting costs them nothing):
-    /// both kernels trace exactly the same rays, so the count is exact. The CPU counts anyway.
-    fn count_gpu_rays(&mut self, d: &OpenDevice, scene: &Scene, spp: u32) -> anyhow::Result<()> {
-        if d.kind() == Device::Gpu {
-            let rays = |s: u32| -> anyhow::Result<Option<u64>> {
-                Ok(measure_with(d, scene, s, false, None, true).map_err(|e| anyhow!("{e}"))?.rays)
-            };
-            self.extra_rays = rays(1)?.zip(rays(1 + spp)?).map(|(a, b)| b.saturating_sub(a) as f64);
-        }
-        Ok(())
     }
 
     /// Seconds per radiance sample, `None` when timing noise swamped the difference.
@@ -375,15 +359,20 @@ fn growth_line(d: Device, ns: &[f64], ts: &[f64]) -> String {
     }
 }
 
-/// WGSL size and pipeline creation time (naga validation + driver compile) of a kernel.
+/// WGSL size and pipeline creation time (naga validation + driver compile, one stage after
+/// the other) of the stage kernels.
 fn kernel_cost(gpu: &Gpu, features: &FeatureSet) -> anyhow::Result<(usize, usize, f64)> {
-    let source = assemble(features).map_err(|e| anyhow!("{e}"))?.source;
+    let stages = assemble_stages(features).map_err(|e| anyhow!("{e}"))?;
     let start = Instant::now();
-    let kernel = gpu.compute_kernel("bench kernel", &source, ENTRY_POINT).map_err(|e| anyhow!("{e}"))?;
+    let (mut bytes, mut lines) = (0, 0);
+    for (stage, a) in &stages {
+        let kernel = gpu.compute_kernel("bench kernel", &a.source, stage.entry().1).map_err(|e| anyhow!("{e}"))?;
+        drop(kernel);
+        bytes += a.source.len();
+        lines += a.source.lines().count();
+    }
     gpu.wait_idle().map_err(|e| anyhow!("{e}"))?;
-    let seconds = start.elapsed().as_secs_f64();
-    drop(kernel);
-    Ok((source.len(), source.lines().count(), seconds))
+    Ok((bytes, lines, start.elapsed().as_secs_f64()))
 }
 
 fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow::Result<String> {
@@ -541,8 +530,8 @@ mod tests {
         assert!(b.len() > a.len() && b.contains(&"CSG") && b.contains(&"DIELECTRIC"));
         assert!(full.covers(&spec) && !spec.covers(&full));
         // Both assemble to valid WGSL, the full one larger.
-        let (sa, sb) = (assemble(&spec).unwrap().source, assemble(&full).unwrap().source);
-        assert!(sb.len() > sa.len());
+        let size = |f| -> usize { assemble_stages(f).unwrap().iter().map(|(_, a)| a.source.len()).sum() };
+        assert!(size(&full) > size(&spec));
     }
 
     #[test]

@@ -270,14 +270,6 @@ fn render_on_gpu(
             true
         }
     };
-    if out.loop_limited_paths > 0 {
-        eprintln!(
-            "warning: {} paths ran longer than this driver's loop limiter allows ({} is a software \
-             renderer that ends long loops), even alone, and were counted as black: the image is too dark \
-             where they fell; use another adapter, --device cpu, or a smaller max_depth",
-            out.loop_limited_paths, gpu.adapter_info.name
-        );
-    }
     if out.spp_done == 0 {
         return Err(GpuError::Validation("stopped before any sample was complete; nothing to write".into()));
     }

@@ -1,5 +1,5 @@
-//! `lumen shader SCENE.sl`: prints the WGSL compute kernel lumen assembles for a scene
-//! (only the shader modules and `// #if` blocks the scene's features need).
+//! `lumen shader SCENE.sl`: prints the WGSL compute kernels lumen assembles for a scene, one
+//! per wavefront stage (only the shader modules and `// #if` blocks each stage needs).
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -9,7 +9,7 @@ use clap::Args;
 
 use super::script_args::ScriptArgs;
 use crate::gpu::features::FeatureSet;
-use crate::gpu::render::{assemble_for, KernelVariant};
+use crate::gpu::render::assemble_stages;
 use crate::image::write_atomically;
 
 /// Arguments of `lumen shader`.
@@ -20,11 +20,6 @@ pub struct ShaderArgs {
     /// Write the WGSL to this file instead of standard output.
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
-    /// Print the resumable variant that `lumen render` uses on drivers with a loop limiter
-    /// such as lavapipe (docs/DESIGN.md, "Loop limiter and path-granular passes").
-    /// Without it: the kernel for every other GPU.
-    #[arg(long)]
-    pub loop_limiter: bool,
     #[command(flatten)]
     pub script: ScriptArgs,
 }
@@ -33,16 +28,17 @@ pub struct ShaderArgs {
 pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     let scene = args.script.load(&args.scene)?;
     let features = FeatureSet::of(&scene);
-    let variant = KernelVariant { loop_limiter: args.loop_limiter, ..KernelVariant::default() };
-    let assembled = assemble_for(&features, variant).map_err(|e| anyhow!("cannot assemble the kernel: {e}"))?;
-    let mut names = features.names();
-    names.extend(variant.names());
-    let text = format!(
-        "// lumen render kernel for {}\n// features: {}\n{}",
-        args.scene.display(),
-        names.join(" "),
-        assembled.source
-    );
+    let stages = assemble_stages(&features).map_err(|e| anyhow!("cannot assemble the kernels: {e}"))?;
+    let mut text = format!("// lumen render kernels for {}\n// scene features: {}\n", args.scene.display(), features.names().join(" "));
+    for (stage, a) in &stages {
+        text.push_str(&format!(
+            "\n// ===== stage {} (entry point {}; features: {}) =====\n{}",
+            stage.label(),
+            stage.entry().1,
+            stage.names(&features).join(" "),
+            a.source
+        ));
+    }
     match &args.output {
         Some(path) => {
             write_atomically(path, text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;

@@ -12,10 +12,6 @@ use thiserror::Error;
 /// Environment variable that selects an adapter when no `--adapter` is given.
 pub const ADAPTER_ENV: &str = "LUMEN_ADAPTER";
 
-/// Environment variable that overrides the loop-limiter probe: `1` renders as if the
-/// driver had one (path-granular, resumable passes), `0` as if not (for testing both).
-pub const LOOP_LIMITER_ENV: &str = "LUMEN_LOOP_LIMITER";
-
 /// Iterations the probe kernel asks for: more than llvmpipe's 65,535.
 pub const LOOP_LIMITER_PROBE_TRIPS: u32 = 70_000;
 
@@ -239,12 +235,6 @@ pub struct Gpu {
     /// The limits the device was opened with: the adapter's own, not wgpu's defaults, so
     /// that large scenes (big storage buffers) fit wherever the hardware allows.
     pub limits: wgpu::Limits,
-    /// Whether the driver silently ends long-running loops (Mesa llvmpipe under lavapipe
-    /// stops every loop of an invocation after 65,535 iterations in total): measured by
-    /// [`probe_loop_limiter`] when the device opens, or forced by `LUMEN_LOOP_LIMITER=0|1`.
-    /// The renderer then assembles resumable kernels (docs/DESIGN.md, "Loop limiter and
-    /// path-granular passes"); public so tests can render both ways on one device.
-    pub loop_limiter: bool,
     /// Driver pipeline binaries kept across runs, where wgpu supports it (Vulkan); see
     /// `src/gpu/pipeline_cache.rs`.
     pub(crate) pipeline_cache: Option<super::pipeline_cache::DiskPipelineCache>,
@@ -303,14 +293,7 @@ impl Gpu {
         });
         let pipeline_cache = super::pipeline_cache::cache_dir_from_env()
             .and_then(|dir| super::pipeline_cache::DiskPipelineCache::open(&device, &adapter_info, &dir));
-        let mut gpu = Gpu { device, queue, adapter_info, limits, loop_limiter: false, pipeline_cache, sink };
-        gpu.loop_limiter = match loop_limiter_override() {
-            Some(forced) => forced,
-            // A probe that cannot run says nothing: assume a limiter, since resumable kernels
-            // are correct on every driver (only a little slower).
-            None => probe_loop_limiter(&gpu).map_or(true, |count| count < LOOP_LIMITER_PROBE_TRIPS),
-        };
-        Ok(gpu)
+        Ok(Gpu { device, queue, adapter_info, limits, pipeline_cache, sink })
     }
 
     /// The file that keeps this device's compiled pipelines across runs, if any (see
@@ -369,15 +352,6 @@ impl Gpu {
     }
 }
 
-/// `LUMEN_LOOP_LIMITER`: `Some(true)` for 1, `Some(false)` for 0, else `None` (probe).
-fn loop_limiter_override() -> Option<bool> {
-    match std::env::var(LOOP_LIMITER_ENV).ok()?.trim() {
-        "1" | "true" | "yes" => Some(true),
-        "0" | "false" | "no" => Some(false),
-        _ => None,
-    }
-}
-
 /// Runs `shaders/loop_limiter.wgsl`: one invocation counts a loop of
 /// [`LOOP_LIMITER_PROBE_TRIPS`] iterations and returns how far it got (65,535 on llvmpipe,
 /// all of them on a GPU without a limiter). A few milliseconds, once per device.
@@ -395,8 +369,7 @@ mod tests {
     use super::*;
 
     /// The probe sees llvmpipe's limiter (65,535 iterations, all loops of an invocation
-    /// together) and no limiter anywhere else it has run; `Gpu::loop_limiter` follows it
-    /// unless `LUMEN_LOOP_LIMITER` forces a value.
+    /// together) and no limiter anywhere else it has run.
     #[test]
     fn the_probe_detects_llvmpipes_loop_limiter() {
         let Some(gpu) = crate::gpu::gpu_for_tests("loop_limiter_probe") else { return };
@@ -406,10 +379,6 @@ mod tests {
             assert_eq!(count, 65_535, "{}", gpu.description());
         } else {
             println!("{}: the probe counted {count} of {LOOP_LIMITER_PROBE_TRIPS}", gpu.description());
-        }
-        match loop_limiter_override() {
-            Some(forced) => assert_eq!(gpu.loop_limiter, forced),
-            None => assert_eq!(gpu.loop_limiter, count < LOOP_LIMITER_PROBE_TRIPS),
         }
     }
 

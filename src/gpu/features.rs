@@ -420,7 +420,11 @@ mod tests {
             // The same kernel for every scene of the renderer: it does not depend on the scene.
             assert_eq!(full, FeatureSet { renderer, ..FeatureSet::default() }.full_for());
             assert_eq!(full.environment == EnvKind::All, renderer != RendererKind::OnOff);
-            let source = crate::gpu::render::assemble(&full).unwrap_or_else(|e| panic!("{renderer:?}: {e}")).source;
+            let source: String = crate::gpu::render::assemble_stages(&full)
+                .unwrap_or_else(|e| panic!("{renderer:?}: {e}"))
+                .into_iter()
+                .map(|(_, a)| a.source)
+                .collect();
             for env in ["fn escape_radiance", "environment.kind == 2u", "environment.kind == 3u"] {
                 assert_eq!(source.contains(env), renderer != RendererKind::OnOff, "{renderer:?}: {env}");
             }

@@ -1,8 +1,9 @@
-//! Compiled kernels cached by feature set for the length of a run.
+//! Compiled kernels cached for the length of a run.
 //!
-//! Rendering compiles one kernel per (feature set, entry point); tests and progressive
-//! re-renders ask for the same ones again, and compiling a path tracer takes long (seconds
-//! on lavapipe), so kernels are kept in a map.
+//! Rendering compiles one kernel per stage; tests, animation frames and progressive
+//! re-renders ask for the same ones again, and compiling takes long (seconds on lavapipe),
+//! so kernels are kept by their assembled source and entry point: the source holds every
+//! feature and generated constant, so equal sources are the same kernel.
 //!
 //! Across runs, the driver's compiled binaries are kept by wgpu's `PipelineCache` where it
 //! is supported (`src/gpu/pipeline_cache.rs`); this map only spares recompiling within a run.
@@ -10,14 +11,13 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::assemble::FeatureSet;
 use super::compute::ComputeKernel;
 use super::device::GpuError;
 
-/// Kernels by (feature set, entry point).
+/// Kernels by (WGSL source, entry point).
 #[derive(Debug, Default)]
 pub struct KernelCache {
-    kernels: HashMap<(FeatureSet, String), Arc<ComputeKernel>>,
+    kernels: HashMap<(String, String), Arc<ComputeKernel>>,
 }
 
 impl KernelCache {
@@ -25,21 +25,30 @@ impl KernelCache {
         Self::default()
     }
 
-    /// The cached kernel for (`features`, `entry`), or the one `build` compiles (errors are
-    /// returned and not cached, so a fixed shader can be retried).
+    /// The cached kernel of `entry` in `source`, if compiled before.
+    pub fn get(&self, source: &str, entry: &str) -> Option<Arc<ComputeKernel>> {
+        self.kernels.get(&(source.to_string(), entry.to_string())).cloned()
+    }
+
+    /// Keeps a kernel compiled from `source`; returns the shared handle.
+    pub fn insert(&mut self, source: &str, entry: &str, kernel: ComputeKernel) -> Arc<ComputeKernel> {
+        let kernel = Arc::new(kernel);
+        self.kernels.insert((source.to_string(), entry.to_string()), Arc::clone(&kernel));
+        kernel
+    }
+
+    /// The cached kernel, or the one `build` compiles (errors are returned and not cached,
+    /// so a fixed shader can be retried).
     pub fn get_or_build(
         &mut self,
-        features: &FeatureSet,
+        source: &str,
         entry: &str,
         build: impl FnOnce() -> Result<ComputeKernel, GpuError>,
     ) -> Result<Arc<ComputeKernel>, GpuError> {
-        let key = (features.clone(), entry.to_string());
-        if let Some(k) = self.kernels.get(&key) {
-            return Ok(Arc::clone(k));
+        if let Some(k) = self.get(source, entry) {
+            return Ok(k);
         }
-        let kernel = Arc::new(build()?);
-        self.kernels.insert(key, Arc::clone(&kernel));
-        Ok(kernel)
+        Ok(self.insert(source, entry, build()?))
     }
 
     /// Number of kernels compiled so far.

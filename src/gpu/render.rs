@@ -1,23 +1,24 @@
-//! The GPU renderer: pack the scene, assemble a kernel specialised to it, run progressive
-//! passes, and return the mean image.
+//! The GPU renderer: pack the scene, assemble the wavefront stages specialised to it, run
+//! rounds of batches, and return the mean image.
 //!
-//! The kernel computes exactly what the CPU reference computes (same random streams, same
+//! The kernels compute exactly what the CPU reference computes (same random streams, same
 //! integrator structure, function by function in `shaders/`), in f32 and relative to the
-//! camera; GPU-vs-CPU tests in `tests/gpu_render.rs` hold the two together.
+//! camera; GPU-vs-CPU tests in `tests/gpu_render.rs` hold the two together. The stages,
+//! queues and the determinism rule: [`super::wavefront`] and docs/DESIGN.md.
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
-use super::features::FeatureSet;
+use super::features::{FeatureSet, RendererKind};
 use super::pack::{at_least_one, pack, PackedScene};
-use super::{
-    run_progressive, Assembled, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary, StopReason,
-};
+use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
+use super::{Assembled, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary};
 use crate::image::HdrImage;
 use crate::scene::Scene;
 
-/// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` is not one).
-const MODULES: [(&str, &str); 24] = [
-    ("shaders/pass.wgsl", include_str!("../../shaders/pass.wgsl")),
+/// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
+/// `shaders/loop_limiter.wgsl` are not).
+const MODULES: [(&str, &str); 38] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -40,18 +41,23 @@ const MODULES: [(&str, &str); 24] = [
     ("shaders/environment.wgsl", include_str!("../../shaders/environment.wgsl")),
     ("shaders/brdf.wgsl", include_str!("../../shaders/brdf.wgsl")),
     ("shaders/integrators.wgsl", include_str!("../../shaders/integrators.wgsl")),
-    ("shaders/render.wgsl", include_str!("../../shaders/render.wgsl")),
-];
-const EXTRA_MODULES: [(&str, &str); 5] = [
-    ("shaders/resume.wgsl", include_str!("../../shaders/resume.wgsl")),
-    ("shaders/ray_count.wgsl", include_str!("../../shaders/ray_count.wgsl")),
+    ("shaders/point_lights.wgsl", include_str!("../../shaders/point_lights.wgsl")),
     ("shaders/lights.wgsl", include_str!("../../shaders/lights.wgsl")),
-    ("shaders/path_tracer.wgsl", include_str!("../../shaders/path_tracer.wgsl")),
     ("shaders/env_light.wgsl", include_str!("../../shaders/env_light.wgsl")),
+    ("shaders/mis.wgsl", include_str!("../../shaders/mis.wgsl")),
+    ("shaders/wf_path.wgsl", include_str!("../../shaders/wf_path.wgsl")),
+    ("shaders/wf_counting.wgsl", include_str!("../../shaders/wf_counting.wgsl")),
+    ("shaders/wf_control.wgsl", include_str!("../../shaders/wf_control.wgsl")),
+    ("shaders/wf_camera.wgsl", include_str!("../../shaders/wf_camera.wgsl")),
+    ("shaders/wf_first_hit.wgsl", include_str!("../../shaders/wf_first_hit.wgsl")),
+    ("shaders/wf_classify.wgsl", include_str!("../../shaders/wf_classify.wgsl")),
+    ("shaders/wf_intersect.wgsl", include_str!("../../shaders/wf_intersect.wgsl")),
+    ("shaders/wf_csg.wgsl", include_str!("../../shaders/wf_csg.wgsl")),
+    ("shaders/wf_escape.wgsl", include_str!("../../shaders/wf_escape.wgsl")),
+    ("shaders/wf_shade.wgsl", include_str!("../../shaders/wf_shade.wgsl")),
+    ("shaders/wf_shadow.wgsl", include_str!("../../shaders/wf_shadow.wgsl")),
+    ("shaders/wf_film.wgsl", include_str!("../../shaders/wf_film.wgsl")),
 ];
-
-/// Name of the kernel's entry point in `shaders/render.wgsl`.
-pub const ENTRY_POINT: &str = "render";
 
 /// How to render on the GPU.
 #[derive(Debug, Clone, Default)]
@@ -59,20 +65,17 @@ pub struct GpuRenderOptions {
     /// `--spp`: overrides the tracer's samples per pixel (a perfect square s² means s×s
     /// strata, any other count jitters over the whole pixel).
     pub spp: Option<u32>,
-    /// Pass sizing, time limit, cancellation and progress display.
+    /// Round sizing, batch size, time limit, cancellation and progress display.
     pub passes: PassOptions,
-    /// The kernel to compile instead of the scene's own (`None`): it must cover the scene's
-    /// features ([`FeatureSet::covers`]), e.g. [`FeatureSet::full_for`], else the render is
-    /// refused. For benchmarks and tests of specialisation; the image is the same.
+    /// The kernels to compile instead of the scene's own (`None`): they must cover the
+    /// scene's features ([`FeatureSet::covers`]), e.g. [`FeatureSet::full_for`], else the
+    /// render is refused. For benchmarks and tests of specialisation; the image is the same.
     pub features: Option<FeatureSet>,
-    /// Count closest-hit and shadow rays on the GPU ([`GpuRenderOutput::rays`]), as the CPU
-    /// reference always does; a kernel variant with one atomic add per invocation and pass.
-    pub count_rays: bool,
 }
 
 impl GpuRenderOptions {
-    /// Options whose passes always hold `spp_per_pass` samples: the f32 pass sums, and so the
-    /// image, are then bitwise reproducible (adaptive passes split samples by timing).
+    /// Options whose rounds always hold `spp_per_pass` samples: the f32 film sums, and so the
+    /// image, are then bitwise reproducible (adaptive rounds split samples by timing).
     pub fn fixed_passes(spp: Option<u32>, spp_per_pass: u32) -> Self {
         let passes = PassOptions {
             initial_spp_per_pass: spp_per_pass,
@@ -97,49 +100,22 @@ pub struct GpuRenderOutput {
     /// Path (or camera-sample) estimates that were NaN or infinite, written as 0.
     pub non_finite_samples: u64,
     pub stop: StopReason,
-    /// Features the kernel was compiled for (the scene's, or the override).
+    /// Features the kernels were compiled for (the scene's, or the override).
     pub features: FeatureSet,
-    /// Paths the driver's loop limiter cut even when run alone (counted as 0, so the
-    /// image is not exact; see docs/DESIGN.md, "Loop limiter and path-granular passes").
-    pub loop_limited_paths: u64,
-    /// Kernel dispatches: one per pass, more when resumable passes were resumed.
-    pub dispatches: u64,
-    /// Closest-hit and shadow rays traced, when [`GpuRenderOptions::count_rays`] asked (the
-    /// same count as the CPU reference's `RenderStats::rays` for the same samples).
-    pub rays: Option<u64>,
-}
-
-/// The assembly feature of resumable, path-granular kernels (`shaders/resume.wgsl`), used
-/// when [`Gpu::loop_limiter`] is set.
-pub const LOOP_LIMITER: &str = "LOOP_LIMITER";
-
-/// The assembly feature of kernels that count rays (`shaders/ray_count.wgsl`).
-pub const COUNT_RAYS: &str = "COUNT_RAYS";
-
-/// Variants of a scene's kernel chosen by the device or the caller, not by the scene.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct KernelVariant {
-    /// Resumable, path-granular passes ([`LOOP_LIMITER`]), for drivers with a loop limiter.
-    pub loop_limiter: bool,
-    /// Ray counting ([`COUNT_RAYS`]).
-    pub count_rays: bool,
-}
-
-impl KernelVariant {
-    /// The assembly feature names this variant adds to the scene's.
-    pub fn names(&self) -> Vec<&'static str> {
-        [(self.loop_limiter, LOOP_LIMITER), (self.count_rays, COUNT_RAYS)]
-            .into_iter()
-            .filter_map(|(on, name)| on.then_some(name))
-            .collect()
-    }
+    /// Batches run (each a launch of every stage for a run of whole pixels).
+    pub batches: u64,
+    /// Path slots per batch.
+    pub batch_paths: u32,
+    /// Closest-hit and shadow rays traced (the same count as the CPU reference's
+    /// `RenderStats::rays` for the same samples).
+    pub rays: u64,
 }
 
 /// All modules, in a library that knows every feature name.
 pub fn shader_library() -> ShaderLibrary {
-    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().copied().chain([LOOP_LIMITER, COUNT_RAYS]).collect();
+    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().chain(Stage::NAMES.iter()).copied().collect();
     let mut lib = ShaderLibrary::new(&names);
-    for (file, src) in MODULES.iter().chain(EXTRA_MODULES.iter()) {
+    for (file, src) in &MODULES {
         lib.add(file, src).unwrap_or_else(|e| panic!("built-in shader {file} is malformed: {e}"));
     }
     lib
@@ -151,7 +127,7 @@ fn constants_module(features: &FeatureSet) -> String {
     let intervals = features.csg_max_intervals.max(1);
     let depth = features.csg_max_depth.max(1);
     format!(
-        "// Scene-dependent constants, generated by src/gpu/render.rs.\n\
+        "// #provides constants\n// Scene-dependent constants, generated by src/gpu/render.rs.\n\
          const BVH_STACK_SIZE: u32 = {}u;\n\
          const CSG_NODE_BIT: u32 = 0x{:08X}u;\n\
          const CSG_MAX_INTERVALS: u32 = {}u;\n\
@@ -169,27 +145,38 @@ fn constants_module(features: &FeatureSet) -> String {
     )
 }
 
-/// The render kernel assembled for `features` (validated with naga).
-pub fn assemble(features: &FeatureSet) -> Result<Assembled, GpuError> {
-    assemble_for(features, KernelVariant::default())
-}
-
-/// The render kernel for `features` in the given variant.
-pub fn assemble_for(features: &FeatureSet, variant: KernelVariant) -> Result<Assembled, GpuError> {
+/// The kernel of `stage` for scenes with `features`, assembled and validated with naga.
+pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, GpuError> {
     let mut lib = shader_library();
-    lib.add("<generated constants>", &format!("// #provides constants\n{}", constants_module(features)))
-        .map_err(|e| GpuError::Validation(e.to_string()))?;
-    let mut names = features.assembly_features();
-    for name in variant.names() {
-        names.insert(name);
+    let generated = [
+        ("<generated constants>", constants_module(features)),
+        ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features))),
+    ];
+    for (name, text) in &generated {
+        lib.add(name, text).map_err(|e| GpuError::Validation(e.to_string()))?;
     }
-    let assembled =
-        lib.assemble(&["render"], &names).map_err(|e| GpuError::Validation(format!("shader assembly: {e}")))?;
+    let mut names: Vec<&str> = stage.names(features);
+    if let Stage::Shade(kind) = stage {
+        // The queue this kernel drains is a constant of its own.
+        lib.add("<generated shade queue>", &format!("// #provides shade_queue\nconst SHADE_QUEUE: u32 = {}u;\n", wavefront::queue::shade(kind)))
+            .map_err(|e| GpuError::Validation(e.to_string()))?;
+        names.sort();
+    }
+    let root = stage.entry().0;
+    let roots: Vec<&str> = if matches!(stage, Stage::Shade(_)) { vec!["shade_queue", root] } else { vec![root] };
+    let assembled = lib
+        .assemble(&roots, &names.iter().copied().collect())
+        .map_err(|e| GpuError::Validation(format!("shader assembly of the {} stage: {e}", stage.label())))?;
     assembled.validate()?;
     Ok(assembled)
 }
 
-/// The WGSL of the kernel that renders `scene` (for `lumen shader`).
+/// Every stage kernel that renders scenes with `features`.
+pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>, GpuError> {
+    Stage::for_scene(features).into_iter().map(|s| Ok((s, assemble_stage(features, s)?))).collect()
+}
+
+/// The WGSL of the kernels that render `scene` (for `lumen shader`), stage by stage.
 ///
 /// ```
 /// use lumen::scene::*;
@@ -199,9 +186,17 @@ pub fn assemble_for(features: &FeatureSet, variant: KernelVariant) -> Result<Ass
 /// b.sphere(Transform::IDENTITY, m);
 /// let src = lumen::gpu::render::shader_source(&b.build().unwrap()).unwrap();
 /// assert!(src.contains("fn sphere_span") && !src.contains("fn cylinder_span"));
+/// assert!(src.contains("fn intersect_stage") && !src.contains("fn csg_stage"));
 /// ```
 pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
-    Ok(assemble(&FeatureSet::of(scene))?.source)
+    let mut out = String::new();
+    for (stage, a) in assemble_stages(&FeatureSet::of(scene))? {
+        let (_, entry) = stage.entry();
+        out.push_str(&format!("// ===== stage {} (entry point {entry}) =====\n", stage.label()));
+        out.push_str(&a.source);
+        out.push('\n');
+    }
+    Ok(out)
 }
 
 fn pack_error(e: super::pack::PackError) -> GpuError {
@@ -229,7 +224,7 @@ pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRe
 }
 
 /// Renders several scenes (animation frames, re-renders) compiling each distinct kernel
-/// once: kernels are cached by feature set and scene-dependent constants.
+/// once: kernels are cached by their assembled source and entry point.
 #[derive(Debug, Default)]
 pub struct GpuRenderer {
     kernels: KernelCache,
@@ -264,6 +259,44 @@ impl GpuRenderer {
         self.render_from(gpu, scene, packed, opts, Instant::now())
     }
 
+    /// The compiled kernels of every stage for `features` (the new ones compiled in
+    /// parallel: pipeline creation dominates start-up on software adapters).
+    pub fn stage_kernels(&mut self, gpu: &Gpu, features: &FeatureSet) -> Result<StageKernels, GpuError> {
+        let mut kernels = BTreeMap::new();
+        let mut missing = Vec::new();
+        for (stage, assembled) in assemble_stages(features)? {
+            let entry = stage.entry().1;
+            match self.kernels.get(&assembled.source, entry) {
+                Some(k) => {
+                    kernels.insert(stage, k);
+                }
+                None => missing.push((stage, assembled)),
+            }
+        }
+        let built: Vec<Result<(Stage, String, ComputeKernel), GpuError>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = missing
+                .into_iter()
+                .map(|(stage, assembled)| {
+                    scope.spawn(move || {
+                        check_binding_limits(gpu, &assembled, stage)?;
+                        let label = format!("{} stage (assembled)", stage.label());
+                        let k = gpu.compute_kernel(&label, &assembled.source, stage.entry().1)?;
+                        Ok((stage, assembled.source, k))
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().unwrap_or_else(|_| Err(GpuError::Internal("kernel compilation panicked".into()))))
+                .collect()
+        });
+        for b in built {
+            let (stage, source, kernel) = b?;
+            kernels.insert(stage, self.kernels.insert(&source, stage.entry().1, kernel));
+        }
+        Ok(StageKernels { kernels })
+    }
+
     fn render_from(
         &mut self,
         gpu: &Gpu,
@@ -272,23 +305,38 @@ impl GpuRenderer {
         opts: &GpuRenderOptions,
         start: Instant,
     ) -> Result<GpuRenderOutput, GpuError> {
-        let f = &kernel_features(&packed.features, opts.features)?;
-        // The cache key: the assembly features plus the generated constants.
-        let variant = KernelVariant { loop_limiter: gpu.loop_limiter, count_rays: opts.count_rays };
-        let key = f
-            .assembly_features()
-            .with(&format!("{variant:?}"))
-            .with(&format!("csg_max_intervals={}", f.csg_max_intervals))
-            .with(&format!("csg_max_depth={}", f.csg_max_depth))
-            .with(&format!("csg_trees={}", f.csg_trees.min(crate::cpu::CSG_DEFER_MAX as u32 + 1)));
-        let kernel = self.kernels.get_or_build(&key, ENTRY_POINT, || {
-            let assembled = assemble_for(f, variant)?;
-            check_binding_limits(gpu, &assembled)?;
-            gpu.compute_kernel("render.wgsl (assembled)", &assembled.source, ENTRY_POINT)
-        })?;
-        let mut out = render_packed(gpu, &kernel, scene, packed, opts, start)?;
-        out.features = *f;
-        Ok(out)
+        let f = kernel_features(&packed.features, opts.features)?;
+        let kernels = self.stage_kernels(gpu, &f)?;
+        let buffers = SceneBuffers::upload(gpu, &kernels, packed)?;
+        let s = &packed.settings;
+        let path_tracer = f.renderer == RendererKind::PathTracer;
+        let n = if path_tracer { s.paths_per_sample.max(1) } else { 1 };
+        let shadow_rays = if wavefront::has_shadow_rays(&f) { s.point_light_count + s.nee } else { 0 };
+        let capacity = wavefront::capacity(gpu, scene.width, scene.height, n, shadow_rays, &f, opts.passes.batch_paths);
+        let groups = buffers.groups(gpu, &kernels)?;
+        let mut runner = wavefront::Runner::new(gpu, &kernels, &groups, &f, capacity, shadow_rays, s.max_depth)?;
+        let plan = Plan {
+            width: scene.width,
+            height: scene.height,
+            total_spp: s.spp,
+            paths_per_sample: n,
+            capacity: runner.capacity(),
+            shadow_rays,
+        };
+        let acc = run_rounds(&mut runner, &plan, &opts.passes)?;
+        let counters = runner.counters()?;
+        Ok(GpuRenderOutput {
+            image: acc.image,
+            spp_done: acc.spp_done,
+            spp_requested: s.spp,
+            seconds: start.elapsed().as_secs_f64(),
+            non_finite_samples: counters.non_finite + acc.nonfinite,
+            stop: acc.stop,
+            features: f,
+            batches: acc.batches,
+            batch_paths: runner.capacity(),
+            rays: counters.rays,
+        })
     }
 }
 
@@ -306,49 +354,8 @@ fn kernel_features(scene: &FeatureSet, kernel: Option<FeatureSet>) -> Result<Fea
     Ok(kernel)
 }
 
-fn render_packed(
-    gpu: &Gpu,
-    kernel: &ComputeKernel,
-    scene: &Scene,
-    packed: &PackedScene,
-    opts: &GpuRenderOptions,
-    start: Instant,
-) -> Result<GpuRenderOutput, GpuError> {
-    let buffers = SceneBuffers::upload(gpu, kernel, packed)?;
-    let group = kernel.bind_group(gpu, 1, &buffers.refs())?;
-    let paths_per_pass = u64::from(packed.settings.paths_per_sample.max(1)) * u64::from(opts.passes.max_spp_per_pass);
-    if gpu.loop_limiter && paths_per_pass > u64::from(super::MAX_RESUMABLE_PATHS_PER_PASS) {
-        return Err(GpuError::Validation(format!(
-            "{paths_per_pass} paths per pass (paths per sample × max samples per pass) exceed the {} a resumable \
-             pass can count",
-            super::MAX_RESUMABLE_PATHS_PER_PASS
-        )));
-    }
-    let acc = run_progressive(gpu, kernel, &[&group], scene.width, scene.height, packed.settings.spp, &opts.passes)?;
-    let nan: Vec<u32> = gpu.read_buffer(&buffers.buffers[buffers.nan_count], 1)?;
-    let rays = match buffers.ray_count {
-        Some(k) => {
-            let words: Vec<u32> = gpu.read_buffer(&buffers.buffers[k], 2)?;
-            Some(u64::from(words[0]) | (u64::from(words[1]) << 32))
-        }
-        None => None,
-    };
-    Ok(GpuRenderOutput {
-        image: acc.image,
-        spp_done: acc.spp_done,
-        spp_requested: packed.settings.spp,
-        seconds: start.elapsed().as_secs_f64(),
-        non_finite_samples: u64::from(nan[0]) + acc.nonfinite,
-        stop: acc.stop,
-        features: packed.features,
-        loop_limited_paths: acc.loop_limited_paths,
-        dispatches: acc.dispatches,
-        rays,
-    })
-}
-
-/// A clear error when the kernel needs more storage buffers than the adapter allows.
-fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError> {
+/// A clear error when a kernel needs more storage buffers than the adapter allows.
+fn check_binding_limits(gpu: &Gpu, assembled: &Assembled, stage: Stage) -> Result<(), GpuError> {
     let module = assembled.validate()?.module;
     let storage =
         module.global_variables.iter().filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. })).count()
@@ -356,69 +363,61 @@ fn check_binding_limits(gpu: &Gpu, assembled: &Assembled) -> Result<(), GpuError
     let limit = gpu.limits.max_storage_buffers_per_shader_stage;
     if storage > limit {
         return Err(GpuError::Validation(format!(
-            "this scene's kernel needs {storage} storage buffers; the adapter allows {limit} per shader stage"
+            "this scene's {} kernel needs {storage} storage buffers; the adapter allows {limit} per shader stage",
+            stage.label()
         )));
     }
     Ok(())
 }
 
-/// Binding number of the NaN/∞ counter in `shaders/bindings.wgsl`.
-const NAN_COUNT_BINDING: u32 = 2;
-/// Binding number of the ray counter in `shaders/ray_count.wgsl`.
-const RAY_COUNT_BINDING: u32 = 13;
-
-/// The uploaded scene: a buffer for each binding the kernel declares (buffers a kernel
-/// does not read, such as texels in an OnOff render, are never uploaded). A full-featured
+/// The uploaded scene: a buffer for each group-1 binding some stage declares (buffers no
+/// stage reads, such as texels in an OnOff render, are never uploaded). A full-featured
 /// kernel declares buffers the scene leaves empty: those get one zeroed element, since a
 /// binding must hold at least one element of its array type (it is never read: counts are 0).
 struct SceneBuffers {
-    /// In the kernel's binding order.
-    buffers: Vec<wgpu::Buffer>,
-    nan_count: usize,
-    /// The ray counter, in kernels that count rays.
-    ray_count: Option<usize>,
+    buffers: BTreeMap<u32, wgpu::Buffer>,
 }
 
 impl SceneBuffers {
-    fn upload(gpu: &Gpu, kernel: &ComputeKernel, p: &PackedScene) -> Result<Self, GpuError> {
-        let declared = kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]);
-        let mut buffers = Vec::with_capacity(declared.len());
-        let mut nan_count = None;
-        let mut ray_count = None;
-        for &(binding, _) in declared {
-            buffers.push(match binding {
-                0 => gpu.uniform_buffer("settings", &p.settings)?,
-                1 => gpu.uniform_buffer("camera", &p.camera)?,
-                NAN_COUNT_BINDING => {
-                    nan_count = Some(buffers.len());
-                    gpu.storage_buffer("nan_count", &[0u32])?
+    fn upload(gpu: &Gpu, kernels: &StageKernels, p: &PackedScene) -> Result<Self, GpuError> {
+        let mut buffers = BTreeMap::new();
+        for kernel in kernels.kernels.values() {
+            for &(binding, _) in kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]) {
+                if buffers.contains_key(&binding) {
+                    continue;
                 }
-                3 => gpu.storage_buffer("shapes", &at_least_one(&p.shapes))?,
-                4 => gpu.storage_buffer("indices", &at_least_one(&p.indices))?,
-                5 => gpu.storage_buffer("bvh_nodes", &at_least_one(&p.bvh_nodes))?,
-                6 => gpu.storage_buffer("csg_nodes", &at_least_one(&p.csg_nodes))?,
-                7 => gpu.storage_buffer("materials", &at_least_one(&p.materials))?,
-                8 => gpu.storage_buffer("pigments", &at_least_one(&p.pigments))?,
-                9 => gpu.uniform_buffer("environment", &p.environment)?,
-                10 => gpu.storage_buffer("floats (texels and environment tables)", &at_least_one(&p.floats))?,
-                11 => gpu.storage_buffer("point_lights", &at_least_one(&p.point_lights))?,
-                12 => gpu.storage_buffer("area_lights", &at_least_one(&p.area_lights))?,
-                RAY_COUNT_BINDING => {
-                    ray_count = Some(buffers.len());
-                    gpu.storage_buffer("ray_count", &[0u32; 2])?
-                }
-                b => {
-                    return Err(GpuError::Validation(format!("render kernel declares unknown @group(1) @binding({b})")))
-                }
-            });
+                let buffer = match binding {
+                    0 => gpu.uniform_buffer("settings", &p.settings)?,
+                    1 => gpu.uniform_buffer("camera", &p.camera)?,
+                    3 => gpu.storage_buffer("shapes", &at_least_one(&p.shapes))?,
+                    4 => gpu.storage_buffer("indices", &at_least_one(&p.indices))?,
+                    5 => gpu.storage_buffer("bvh_nodes", &at_least_one(&p.bvh_nodes))?,
+                    6 => gpu.storage_buffer("csg_nodes", &at_least_one(&p.csg_nodes))?,
+                    7 => gpu.storage_buffer("materials", &at_least_one(&p.materials))?,
+                    8 => gpu.storage_buffer("pigments", &at_least_one(&p.pigments))?,
+                    9 => gpu.uniform_buffer("environment", &p.environment)?,
+                    10 => gpu.storage_buffer("floats (texels and environment tables)", &at_least_one(&p.floats))?,
+                    11 => gpu.storage_buffer("point_lights", &at_least_one(&p.point_lights))?,
+                    12 => gpu.storage_buffer("area_lights", &at_least_one(&p.area_lights))?,
+                    b => {
+                        return Err(GpuError::Validation(format!("a stage kernel declares unknown @group(1) @binding({b})")))
+                    }
+                };
+                buffers.insert(binding, buffer);
+            }
         }
-        let nan_count =
-            nan_count.ok_or_else(|| GpuError::Validation("render kernel does not declare the NaN counter".into()))?;
-        Ok(Self { buffers, nan_count, ray_count })
+        Ok(Self { buffers })
     }
 
-    fn refs(&self) -> Vec<&wgpu::Buffer> {
-        self.buffers.iter().collect()
+    /// Each stage's group-1 bind group (none for stages that read no scene buffer).
+    fn groups(&self, gpu: &Gpu, kernels: &StageKernels) -> Result<BTreeMap<Stage, wgpu::BindGroup>, GpuError> {
+        let mut groups = BTreeMap::new();
+        for (&stage, kernel) in &kernels.kernels {
+            let Some(declared) = kernel.bindings.get(1) else { continue };
+            let refs: Vec<&wgpu::Buffer> = declared.iter().map(|(b, _)| &self.buffers[b]).collect();
+            groups.insert(stage, kernel.bind_group(gpu, 1, &refs)?);
+        }
+        Ok(groups)
     }
 }
 
@@ -427,7 +426,7 @@ mod tests {
     use std::collections::BTreeSet;
 
     use super::*;
-    use crate::gpu::features::{EnvKind, RendererKind};
+    use crate::gpu::features::EnvKind;
     use crate::sampling::Pcg32;
 
     /// Names of the functions reachable from the entry point (by naga's call statements).
@@ -466,24 +465,24 @@ mod tests {
         module.functions.iter().map(|(_, f)| f.name.clone().unwrap_or_default()).collect()
     }
 
-    /// Asserts the assembled kernel holds nothing the features do not need: every function
-    /// is reachable from the entry point and every global (buffer or private array) is used.
-    fn assert_minimal(features: &FeatureSet) -> naga::Module {
-        assert_minimal_with(features, KernelVariant::default())
-    }
-
-    fn assert_minimal_with(features: &FeatureSet, variant: KernelVariant) -> naga::Module {
-        let assembled = assemble_for(features, variant).unwrap_or_else(|e| panic!("{features:?}: {e}"));
-        let v = assembled.validate().unwrap();
-        let all = function_names(&v.module);
-        let reachable = reachable_functions(&v.module);
-        let unused: Vec<_> = all.difference(&reachable).collect();
-        assert!(unused.is_empty(), "{features:?}: unused functions {unused:?}");
-        let ep = v.info.get_entry_point(0);
-        for (h, g) in v.module.global_variables.iter() {
-            assert!(!ep[h].is_empty(), "{features:?}: unused global {:?}", g.name);
+    /// Asserts every stage kernel holds nothing its stage does not need: every function is
+    /// reachable from an entry point and every global (buffer or private array) is used by
+    /// one. Returns the modules by stage.
+    fn assert_minimal(features: &FeatureSet) -> Vec<(Stage, naga::Module)> {
+        let mut out = Vec::new();
+        for (stage, assembled) in assemble_stages(features).unwrap_or_else(|e| panic!("{features:?}: {e}")) {
+            let v = assembled.validate().unwrap();
+            let all = function_names(&v.module);
+            let reachable = reachable_functions(&v.module);
+            let unused: Vec<_> = all.difference(&reachable).collect();
+            assert!(unused.is_empty(), "{} stage of {features:?}: unused functions {unused:?}", stage.label());
+            for (h, g) in v.module.global_variables.iter() {
+                let used = (0..v.module.entry_points.len()).any(|i| !v.info.get_entry_point(i)[h].is_empty());
+                assert!(used, "{} stage of {features:?}: unused global {:?}", stage.label(), g.name);
+            }
+            out.push((stage, v.module));
         }
-        v.module
+        out
     }
 
     /// A random feature set respecting the invariants `FeatureSet::of` guarantees.
@@ -557,25 +556,6 @@ mod tests {
         assert_eq!(count, 96);
     }
 
-    /// Kernel variants (resumable passes, docs/DESIGN.md "Loop limiter and path-granular
-    /// passes"; ray counting) for every renderer, alone and together: valid, minimal, with
-    /// their own globals; the plain kernels have none of them.
-    #[test]
-    fn kernel_variants_assemble_to_minimal_valid_wgsl() {
-        let mut rng = Pcg32::new(7, 9);
-        for renderer in [RendererKind::OnOff, RendererKind::Flat, RendererKind::PointLight, RendererKind::PathTracer] {
-            let f = random_features(&mut rng, renderer, EnvKind::Uniform);
-            for loop_limiter in [false, true] {
-                for count_rays in [false, true] {
-                    let m = assert_minimal_with(&f, KernelVariant { loop_limiter, count_rays });
-                    let has = |name: &str| m.global_variables.iter().any(|(_, g)| g.name.as_deref() == Some(name));
-                    assert_eq!(has("pass_state"), loop_limiter, "{f:?}");
-                    assert_eq!(has("ray_count") && has("rays_traced"), count_rays, "{f:?}");
-                }
-            }
-        }
-    }
-
     #[test]
     fn a_spheres_only_kernel_has_no_csg_cylinder_texture_or_dielectric_code() {
         let mut b = crate::scene::SceneBuilder::new(4, 4);
@@ -583,17 +563,29 @@ mod tests {
         b.sphere(crate::scene::Transform::IDENTITY, m);
         let scene = b.build().unwrap();
         let features = FeatureSet::of(&scene);
-        let module = assert_minimal(&features);
-        let names = function_names(&module);
-        assert!(names.contains("sphere_span") && names.contains("radiance_path"), "{names:?}");
-        for bad in ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"]
-        {
-            assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in {names:?}");
+        let modules = assert_minimal(&features);
+        let stages: Vec<Stage> = modules.iter().map(|(s, _)| *s).collect();
+        assert!(!stages.contains(&Stage::Csg) && !stages.contains(&Stage::Shade(crate::gpu::layout::brdf_kind::DIELECTRIC)));
+        let mut all = BTreeSet::new();
+        for (stage, module) in &modules {
+            let names = function_names(module);
+            for bad in ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"]
+            {
+                assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in the {} stage: {names:?}", stage.label());
+            }
+            let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
+            for bad in ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool"] {
+                assert!(!globals.iter().any(|g| g == bad), "{bad} bound in the {} stage: {globals:?}", stage.label());
+            }
+            all.extend(names);
         }
-        let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
-        for bad in ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool"] {
-            assert!(!globals.iter().any(|g| g == bad), "{bad} bound: {globals:?}");
-        }
+        assert!(all.contains("sphere_span") && all.contains("sample_diffuse"), "{all:?}");
+        // The closest-hit stage has no shading code; the shading stage no traversal.
+        let names_of = |s: Stage| function_names(&modules.iter().find(|(x, _)| *x == s).unwrap().1);
+        let intersect = names_of(Stage::Intersect);
+        assert!(intersect.contains("traverse") && !intersect.contains("sample_bsdf") && !intersect.contains("pigment_color"));
+        let shade = names_of(Stage::Shade(crate::gpu::layout::brdf_kind::DIFFUSE));
+        assert!(shade.contains("sample_diffuse") && !shade.contains("traverse") && !shade.contains("sphere_span"));
     }
 
     /// `shaders/angles.wgsl` against f64 atan2 on the device: every octant, both signed

@@ -1,0 +1,15 @@
+// #requires wf_path mis environment
+// Escape stage: rays of this bounce that hit nothing add the environment's radiance,
+// MIS-weighted against NEE (cpu::path_tracer), and their paths end.
+
+@compute @workgroup_size(64)
+fn escape_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let slot = wf_slot(Q_ESCAPE, wf_index(gid, nwg));
+    if (slot == WF_NONE) {
+        return;
+    }
+    let ray = load_ray(slot);
+    let beta = paths[field(F_BETA, slot)];
+    let i = field(F_RADIANCE, slot);
+    paths[i] = vec4<f32>(paths[i].xyz + beta.xyz * pt_escaped(load_previous(slot), normalize(ray.dir)), 0.0);
+}

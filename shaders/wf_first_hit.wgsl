@@ -1,0 +1,25 @@
+// #requires wf_path camera integrators wf_counting
+// The first-hit integrators (OnOff, Flat, PointLight) in one stage: their work per camera
+// sample is one closest-hit query and a few shadow rays, too little to gain from queues.
+// One invocation per camera sample writes its estimate to the path's radiance.
+
+@compute @workgroup_size(64)
+fn first_hit_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let slot = wf_index(gid, nwg);
+    if (slot >= batch.path_count) {
+        return;
+    }
+    let id = path_id(slot);
+    let ray = pixel_ray(id.pixel % settings.width, id.pixel / settings.width, id.j);
+// #if ONOFF
+    let value = radiance_onoff(ray);
+// #endif
+// #if FLAT
+    let value = radiance_flat(ray);
+// #endif
+// #if POINTLIGHT
+    let value = radiance_point_light(ray);
+// #endif
+    paths[field(F_RADIANCE, slot)] = vec4<f32>(value, 0.0);
+    flush_rays_traced();
+}

@@ -1,0 +1,32 @@
+// #requires wf_classify world
+// Closest-hit stage: BVH and planes for every ray of this bounce's ray queue. With
+// CSG_QUEUE, the CSG trees the traversal met are handed to the CSG stage with the best
+// candidate so far, instead of being evaluated here (DESIGN.md "Software adapters": code
+// reachable in this kernel costs every ray on SIMD software GPUs).
+
+@compute @workgroup_size(64)
+fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let bounce = atomicLoad(&control[CTRL_BOUNCE]);
+    let slot = wf_slot(Q_RAY + (bounce & 1u), wf_index(gid, nwg));
+    if (slot == WF_NONE) {
+        return;
+    }
+    let ray = load_ray(slot);
+// #if CSG_QUEUE
+    let best = traverse(ray, false);
+    if (deferred.count > 0u) {
+        let base = slot * (CSG_DEFER_SLOTS + 1u);
+        deferred_refs[base] = deferred.count;
+        for (var k = 0u; k < deferred.count; k++) {
+            deferred_refs[base + 1u + k] = deferred.refs[k];
+        }
+        words[field(W_HIT, slot)] =
+            vec4<u32>(bitcast<u32>(best.c.t), best.shape, best.c.face | select(0u, HIT_FLIP, best.flip), best.object);
+        wf_push(Q_CSG, slot);
+        return;
+    }
+    classify(slot, best);
+// #else
+    classify(slot, world_first(ray, false));
+// #endif
+}

@@ -1,0 +1,73 @@
+// #requires wavefront
+// #if WF_RAY_LOAD
+// #requires ray
+// #endif
+// #if WF_RAY_STORE
+// #requires ray
+// #endif
+// Helpers of the wavefront stages (docs/DESIGN.md "Wavefront renderer"): the invocation
+// index of a launch, queue slots and pushes, path fields and the (pixel, sample) a path
+// slot stands for. Which of them a stage gets is decided by src/gpu/wavefront/stages.rs.
+
+// The invocation's index in a launch of WF_WORKGROUP-wide workgroups on a 2-D grid (grids
+// are at most WF_MAX_GRID workgroups wide; the control kernels size them on the device).
+fn wf_index(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    return gid.y * nwg.x * WF_WORKGROUP + gid.x;
+}
+
+// Index of field `f` of path `slot` in the structure-of-arrays `paths` and `words`.
+fn field(f: u32, slot: u32) -> u32 {
+    return f * batch.capacity + slot;
+}
+
+// #if WF_QUEUED
+// The path slot of queue entry k, or WF_NONE past the queue's end.
+fn wf_slot(q: u32, k: u32) -> u32 {
+    if (k >= atomicLoad(&control[CTRL_COUNT + q])) {
+        return WF_NONE;
+    }
+    return queues[q * batch.capacity + k];
+}
+// #endif
+
+// #if WF_PUSH
+// Appends path `slot` to queue q (each path is in at most one queue of a kind per bounce,
+// so a queue never holds more than batch.capacity entries).
+fn wf_push(q: u32, slot: u32) {
+    let k = atomicAdd(&control[CTRL_COUNT + q], 1u);
+    queues[q * batch.capacity + k] = slot;
+}
+// #endif
+
+// #if WF_RAY_LOAD
+fn load_ray(slot: u32) -> Ray {
+    let o = paths[field(F_RAY_ORIGIN, slot)];
+    let d = paths[field(F_RAY_DIR, slot)];
+    return Ray(o.xyz, d.xyz, o.w, d.w);
+}
+// #endif
+
+// #if WF_RAY_STORE
+fn store_ray(slot: u32, ray: Ray) {
+    paths[field(F_RAY_ORIGIN, slot)] = vec4<f32>(ray.origin, ray.tmin);
+    paths[field(F_RAY_DIR, slot)] = vec4<f32>(ray.dir, ray.tmax);
+}
+// #endif
+
+// #if WF_PATH_ID
+// The pixel (row-major index) and camera sample j of path `slot`, and its index in the
+// stream rule: sample j·n + i for path i of camera sample j (DESIGN.md "Pixel estimate").
+struct PathId {
+    pixel: u32,
+    j: u32,
+    sample: u32,
+}
+
+fn path_id(slot: u32) -> PathId {
+    let n = batch.paths_per_sample;
+    let per_pixel = batch.samples * n;
+    let r = slot % per_pixel;
+    let j = batch.sample_begin + r / n;
+    return PathId(batch.pixel_begin + slot / per_pixel, j, j * n + r % n);
+}
+// #endif

@@ -1,0 +1,196 @@
+// #requires mis random pigment brdf offset constants shapes
+// #if POINT_LIGHTS
+// #requires point_lights
+// #endif
+// #if DIFFUSE
+// #if NEE
+// #requires env_light
+// #endif
+// #endif
+// Shading stage of one BRDF kind (SHADE_QUEUE; src/gpu/wavefront/stages.rs compiles one per
+// kind the scene uses, each with only its BRDF's code): one path vertex of
+// cpu::path_tracer per invocation. Seven draws, emission MIS-weighted against NEE; at
+// diffuse vertices the point lights and NEE become shadow rays with their contribution
+// (traced by the shadow stage, pbrt-v4's deferred scheme); then BSDF sampling, Russian
+// roulette and the next ray.
+
+// path_tracer::roulette_probability.
+fn roulette_probability(color: vec3<f32>) -> f32 {
+    return clamp(1.0 - max(max(color.x, color.y), color.z), 0.05, 1.0);
+}
+
+// Emitted radiance at the hit, MIS-weighted when NEE could also have sampled it (and
+// settings.nee asks for it: see pt_escaped).
+fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
+    let le = pigment_color(m.emitted, hit.uv);
+// #if AREA_LIGHTS
+    if (all(le == vec3<f32>(0.0)) || settings.nee == 0u || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
+        return le;
+    }
+    let i = shapes[hit.object].light;
+    if (i == 0xFFFFFFFFu) {
+        return le;
+    }
+    let nee_pdf = light_selection_pdf() * light_pdf(area_lights[i], prev.point, prev.object, hit.point);
+    return le * power_heuristic(prev.pdf, nee_pdf);
+// #else
+    return le;
+// #endif
+}
+
+// #if SHADOWS
+// Shadow ray k of path `slot` (k < batch.shadow_rays) and what it adds if nothing blocks it.
+fn queue_shadow(slot: u32, k: u32, ray: Ray, value: vec3<f32>) {
+    let i = 3u * (slot * batch.shadow_rays + k);
+    shadow[i] = vec4<f32>(ray.origin, ray.tmin);
+    shadow[i + 1u] = vec4<f32>(ray.dir, ray.tmax);
+    shadow[i + 2u] = vec4<f32>(value, 1.0);
+}
+// #endif
+
+// #if NEE
+// #if SHADOWS
+// Next-event estimation at a diffuse vertex: one light chosen by ξ0, a point by ξ1 ξ2.
+// Returns the shadow ray and its contribution f·Le·cosθ·w/p (valid = false: nothing to
+// trace).
+struct LightRay {
+    ray: Ray,
+    value: vec3<f32>,
+    valid: bool,
+}
+
+fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, xi0: f32, xi1: f32, xi2: f32) -> LightRay {
+    let none = LightRay(Ray(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0), vec3<f32>(0.0), false);
+    let n = light_count();
+    if (n == 0u) {
+        return none;
+    }
+    let select_pdf = light_selection_pdf();
+    let choice = min(u32(xi0 * f32(n)), n - 1u);
+    var dir: vec3<f32>;
+    var radiance: vec3<f32>;
+    var pdf: f32;
+    var is_area = false;
+    var y = vec3<f32>(0.0);
+    var ny = vec3<f32>(0.0);
+    var sy = 0.0;
+// #if AREA_LIGHTS
+    if (choice < settings.area_light_count) {
+        let light = area_lights[choice];
+        let lp = light_sample(light, hit.point, hit.object, xi1, xi2);
+        let to = lp.point - hit.point;
+        let dist = length(to);
+        if (!(lp.pdf > 0.0) || !(dist > 0.0)) {
+            return none;
+        }
+        dir = to / dist;
+        radiance = light_emission(light, lp);
+        pdf = select_pdf * lp.pdf;
+        is_area = true;
+        y = lp.point;
+        ny = lp.normal;
+        sy = lp.scale;
+    }
+// #endif
+    if (!is_area) {
+        let s = env_sample(xi1, xi2);
+        if (!(s.w > 0.0)) {
+            return none;
+        }
+        dir = s.xyz;
+        radiance = escape_radiance(dir);
+        pdf = select_pdf * s.w;
+    }
+    let f = eval_bsdf(m, color, hit.normal, dir);
+    if (all(f == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) {
+        return none;
+    }
+    let o = offset_origin(hit.point, hit.scale, hit.normal, dir);
+    var ray = Ray(o, dir, 0.0, OPEN);
+    if (is_area) {
+        let e = offset_origin(y, sy, ny, hit.point - y);
+        ray = Ray(o, e - o, 0.0, 1.0);
+    }
+    let weight = power_heuristic(pdf, pdf_bsdf(m, hit.normal, dir));
+    return LightRay(ray, f * radiance * (dot(hit.normal, dir) * weight / pdf), true);
+}
+// #endif
+// #endif
+
+@compute @workgroup_size(64)
+fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let slot = wf_slot(SHADE_QUEUE, wf_index(gid, nwg));
+    if (slot == WF_NONE) {
+        return;
+    }
+    let bounce = atomicLoad(&control[CTRL_BOUNCE]);
+    let ray = load_ray(slot);
+    let h = words[field(W_HIT, slot)];
+    let hit = shape_surface_hit(h.y, ray, Crossing(bitcast<f32>(h.x), h.z & ~HIT_FLIP), (h.z & HIT_FLIP) != 0u, h.w);
+    // The seven draws of this vertex, used or not.
+    let id = path_id(slot);
+    var rng = stream(settings.tracer_seed.xy, settings.tracer_seed.zw, id.pixel, id.sample, bounce);
+    var xi: array<f32, 7>;
+    for (var k = 0u; k < 7u; k++) {
+        xi[k] = pcg_next_f32(&rng);
+    }
+    let m = materials[hit.material];
+    let color = pigment_color(m.pigment, hit.uv);
+    let prev = load_previous(slot);
+    var beta = paths[field(F_BETA, slot)].xyz;
+    let ri = field(F_RADIANCE, slot);
+    paths[ri] = vec4<f32>(paths[ri].xyz + beta * pt_emitted(prev, hit, m), 0.0);
+    if (bounce == settings.max_depth) {
+        return;
+    }
+// #if SHADOWS
+    // Diffuse vertex: every point light in front, then NEE, as shadow rays.
+    var shadows = 0u;
+// #if POINT_LIGHTS
+    for (var i = 0u; i < settings.point_light_count; i++) {
+        let s = point_light_sample(i, hit);
+        if (s.lit) {
+            let cos_theta = dot(hit.normal, s.l);
+            queue_shadow(slot, shadows, s.ray, beta * (eval_bsdf(m, color, hit.normal, s.l) * s.radiance * cos_theta));
+            shadows++;
+        }
+    }
+// #endif
+// #if NEE
+    if (settings.nee != 0u) {
+        let lr = pt_sample_light(hit, m, color, xi[0], xi[1], xi[2]);
+        if (lr.valid) {
+            queue_shadow(slot, shadows, lr.ray, beta * lr.value);
+            shadows++;
+        }
+    }
+// #endif
+    if (shadows > 0u) {
+        if (shadows < batch.shadow_rays) {
+            shadow[3u * (slot * batch.shadow_rays + shadows) + 2u] = vec4<f32>(0.0);
+        }
+        wf_push(Q_SHADOW, slot);
+    }
+// #endif
+    let d = normalize(ray.dir);
+    let s = sample_bsdf(m, color, d, hit.normal, hit.front_face, xi[3], xi[4], xi[5]);
+    if (!s.valid) {
+        return;
+    }
+    beta *= s.weight;
+    if (bounce >= settings.roulette_depth) {
+        let q = roulette_probability(color);
+        if (xi[6] <= q) {
+            return;
+        }
+        beta = beta / (1.0 - q);
+    }
+    if (all(beta == vec3<f32>(0.0))) {
+        return;
+    }
+    paths[field(F_BETA, slot)] = vec4<f32>(beta, s.pdf);
+    paths[field(F_PREV, slot)] = vec4<f32>(hit.point, 0.0);
+    words[field(W_PREV, slot)] = vec4<u32>(hit.object, select(0u, 1u, s.delta), 0u, 0u);
+    store_ray(slot, Ray(offset_origin(hit.point, hit.scale, hit.normal, s.dir), s.dir, 0.0, OPEN));
+    wf_push(Q_RAY + ((bounce + 1u) & 1u), slot);
+}

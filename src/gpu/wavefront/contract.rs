@@ -1,0 +1,256 @@
+//! The wavefront renderer's device state, described once, here: the group-0 buffers of
+//! every stage, the words of the control buffer, the queues and the path fields. The WGSL
+//! side (`wavefront` module) is generated from these constants, so the two cannot drift.
+//!
+//! - `batch` (uniform, [`BatchUniform`]): which pixels and camera samples the batch holds.
+//! - `control` (`array<atomic<u32>>`, [`control`]): the bounce, queue lengths, ray and NaN
+//!   counters.
+//! - `queues` (`array<u32>`): queue q holds path slots at `q·capacity ..`.
+//! - `paths` (`array<vec4<f32>>`) and `words` (`array<vec4<u32>>`): structure-of-arrays path
+//!   state, field f of slot s at `f·capacity + s` ([`path_field`], [`word_field`]).
+//! - `shadow` (`array<vec4<f32>>`): per path, `batch.shadow_rays` shadow rays of three vec4 each.
+//! - `deferred_refs` (`array<u32>`): per path, the CSG trees its closest-hit query met.
+//! - `film` (`array<vec4<f32>>`): per pixel of the batch, the sum of its camera samples.
+//! - `args` (`array<u32>`): indirect dispatch arguments, three words per queue, written by
+//!   the control kernels (a separate buffer: a dispatch may not use one buffer both as its
+//!   indirect arguments and as writable storage).
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::layout::brdf_kind;
+
+/// Invocations per workgroup of every queue-driven stage.
+pub const WORKGROUP: u32 = 64;
+/// Widest launch grid, in workgroups (wgpu's default per-dimension limit); longer queues
+/// use a second grid dimension.
+pub const MAX_GRID: u32 = 65_535;
+/// A queue entry past the queue's end.
+pub const NONE: u32 = u32::MAX;
+/// Set in a hit record's face word when the surface's normal is flipped (CSG DIFF).
+pub const HIT_FLIP: u32 = 0x8000_0000;
+
+/// Queues (indices of `control` counters and of `queues` regions).
+pub mod queue {
+    use super::brdf_kind;
+    /// Rays to intersect, by bounce parity: `RAY + (bounce & 1)`.
+    pub const RAY: u32 = 0;
+    /// Rays whose closest-hit query met CSG trees (evaluated by the CSG stage).
+    pub const CSG: u32 = 2;
+    /// Rays that hit nothing.
+    pub const ESCAPE: u32 = 3;
+    /// Paths with shadow rays to trace.
+    pub const SHADOW: u32 = 4;
+    /// Hits to shade, by BRDF kind: `SHADE + Material::brdf`.
+    pub const SHADE: u32 = 5;
+    /// The shading queue of a BRDF kind.
+    pub const fn shade(brdf: u32) -> u32 {
+        SHADE + brdf
+    }
+    /// Number of queues.
+    pub const COUNT: u32 = SHADE + 1 + brdf_kind::DIELECTRIC;
+}
+
+/// Words of the control buffer.
+pub mod control {
+    use super::queue;
+    /// The bounce the stages of the current launch work on.
+    pub const BOUNCE: u32 = 0;
+    /// Queue lengths: `COUNT + q`.
+    pub const COUNT: u32 = 1;
+    /// Closest-hit rays traced (64-bit: low, high word), summed by the `advance` kernel.
+    pub const RAYS: u32 = COUNT + queue::COUNT;
+    /// Shadow rays traced (64-bit), summed by the stages that trace them.
+    pub const SHADOW_RAYS: u32 = RAYS + 2;
+    /// Estimates that were NaN or infinite (written as 0).
+    pub const NAN: u32 = SHADOW_RAYS + 2;
+    /// Words in the buffer.
+    pub const WORDS: u32 = NAN + 1;
+}
+
+/// Fields of `paths` (vec4<f32> each).
+pub mod path_field {
+    /// Ray origin, tmin.
+    pub const RAY_ORIGIN: u32 = 0;
+    /// Ray direction, tmax.
+    pub const RAY_DIR: u32 = 1;
+    /// Throughput β, and the BSDF pdf of the previous vertex.
+    pub const BETA: u32 = 2;
+    /// Radiance gathered so far.
+    pub const RADIANCE: u32 = 3;
+    /// The previous vertex's point.
+    pub const PREV: u32 = 4;
+    pub const COUNT: u32 = 5;
+}
+
+/// Fields of `words` (vec4<u32> each).
+pub mod word_field {
+    /// The closest hit: t (bits), shape, face | HIT_FLIP, top-level object.
+    pub const HIT: u32 = 0;
+    /// The previous vertex's object and whether it scattered by a delta BSDF.
+    pub const PREV: u32 = 1;
+    pub const COUNT: u32 = 2;
+}
+
+/// The per-batch uniform: `Batch` in the generated WGSL.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct BatchUniform {
+    /// First pixel (row-major index) of the batch; a batch holds whole pixels.
+    pub pixel_begin: u32,
+    pub pixel_count: u32,
+    /// Camera samples `[sample_begin, sample_begin + samples)` of the round.
+    pub sample_begin: u32,
+    pub samples: u32,
+    /// Paths per camera sample (n; 1 for the first-hit integrators).
+    pub paths_per_sample: u32,
+    /// `pixel_count · samples · paths_per_sample` path slots in use.
+    pub path_count: u32,
+    /// Slots of every state array and queue.
+    pub capacity: u32,
+    /// Shadow rays a path vertex may queue (point lights + 1 for NEE): the stride of `shadow`.
+    pub shadow_rays: u32,
+}
+
+const BATCH_WGSL: &str = "struct Batch {
+    pixel_begin: u32,
+    pixel_count: u32,
+    sample_begin: u32,
+    samples: u32,
+    paths_per_sample: u32,
+    path_count: u32,
+    capacity: u32,
+    shadow_rays: u32,
+}
+";
+
+/// A buffer of bind group 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum StateBuffer {
+    Batch,
+    Control,
+    Queues,
+    Paths,
+    Words,
+    Shadow,
+    DeferredRefs,
+    Film,
+    Args,
+}
+
+impl StateBuffer {
+    pub const ALL: [StateBuffer; 9] = [
+        StateBuffer::Batch,
+        StateBuffer::Control,
+        StateBuffer::Queues,
+        StateBuffer::Paths,
+        StateBuffer::Words,
+        StateBuffer::Shadow,
+        StateBuffer::DeferredRefs,
+        StateBuffer::Film,
+        StateBuffer::Args,
+    ];
+
+    /// Its binding number in group 0.
+    pub fn binding(self) -> u32 {
+        self as u32
+    }
+
+    /// Its WGSL declaration.
+    fn declaration(self) -> String {
+        let (name, ty) = match self {
+            StateBuffer::Batch => return format!("@group(0) @binding({}) var<uniform> batch: Batch;", self.binding()),
+            StateBuffer::Control => ("control", "array<atomic<u32>>"),
+            StateBuffer::Queues => ("queues", "array<u32>"),
+            StateBuffer::Paths => ("paths", "array<vec4<f32>>"),
+            StateBuffer::Words => ("words", "array<vec4<u32>>"),
+            StateBuffer::Shadow => ("shadow", "array<vec4<f32>>"),
+            StateBuffer::DeferredRefs => ("deferred_refs", "array<u32>"),
+            StateBuffer::Film => ("film", "array<vec4<f32>>"),
+            StateBuffer::Args => ("args", "array<u32>"),
+        };
+        format!("@group(0) @binding({}) var<storage, read_write> {name}: {ty};", self.binding())
+    }
+}
+
+/// The generated `wavefront` module for a stage that binds `buffers`: every constant above,
+/// the `Batch` struct and the declarations of those buffers.
+pub fn wavefront_module(buffers: &[StateBuffer]) -> String {
+    let mut s = String::from(
+        "// #provides wavefront\n// The wavefront state, generated by src/gpu/wavefront/contract.rs.\n",
+    );
+    let consts: [(&str, u32); 22] = [
+        ("WF_WORKGROUP", WORKGROUP),
+        ("WF_MAX_GRID", MAX_GRID),
+        ("WF_NONE", NONE),
+        ("WF_QUEUES", queue::COUNT),
+        ("HIT_FLIP", HIT_FLIP),
+        ("Q_RAY", queue::RAY),
+        ("Q_CSG", queue::CSG),
+        ("Q_ESCAPE", queue::ESCAPE),
+        ("Q_SHADOW", queue::SHADOW),
+        ("Q_SHADE", queue::SHADE),
+        ("CTRL_BOUNCE", control::BOUNCE),
+        ("CTRL_COUNT", control::COUNT),
+        ("CTRL_RAYS", control::RAYS),
+        ("CTRL_SHADOW_RAYS", control::SHADOW_RAYS),
+        ("CTRL_NAN", control::NAN),
+        ("F_RAY_ORIGIN", path_field::RAY_ORIGIN),
+        ("F_RAY_DIR", path_field::RAY_DIR),
+        ("F_BETA", path_field::BETA),
+        ("F_RADIANCE", path_field::RADIANCE),
+        ("F_PREV", path_field::PREV),
+        ("W_HIT", word_field::HIT),
+        ("W_PREV", word_field::PREV),
+    ];
+    for (name, value) in consts {
+        s.push_str(&format!("const {name}: u32 = {value}u;\n"));
+    }
+    s.push_str(BATCH_WGSL);
+    for b in buffers {
+        s.push_str(&b.declaration());
+        s.push('\n');
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batch_struct_matches_rust_and_buffers_have_distinct_bindings() {
+        let src = wavefront_module(&StateBuffer::ALL);
+        let v = crate::gpu::validate_wgsl("wavefront", &src).unwrap();
+        let ty = v.module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Batch")).unwrap().1;
+        let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("Batch is not a struct") };
+        assert_eq!(*span as usize, std::mem::size_of::<BatchUniform>());
+        let rust = [
+            ("pixel_begin", std::mem::offset_of!(BatchUniform, pixel_begin)),
+            ("pixel_count", std::mem::offset_of!(BatchUniform, pixel_count)),
+            ("sample_begin", std::mem::offset_of!(BatchUniform, sample_begin)),
+            ("samples", std::mem::offset_of!(BatchUniform, samples)),
+            ("paths_per_sample", std::mem::offset_of!(BatchUniform, paths_per_sample)),
+            ("path_count", std::mem::offset_of!(BatchUniform, path_count)),
+            ("capacity", std::mem::offset_of!(BatchUniform, capacity)),
+            ("shadow_rays", std::mem::offset_of!(BatchUniform, shadow_rays)),
+        ];
+        for (m, (name, offset)) in members.iter().zip(rust) {
+            assert_eq!((m.name.as_deref(), m.offset as usize), (Some(name), offset));
+        }
+        let mut bindings: Vec<u32> = StateBuffer::ALL.iter().map(|b| b.binding()).collect();
+        bindings.dedup();
+        assert_eq!(bindings.len(), StateBuffer::ALL.len());
+    }
+
+    #[test]
+    fn queues_and_control_words_do_not_overlap() {
+        // One shading queue per BRDF kind, after the fixed queues.
+        for brdf in [brdf_kind::DIFFUSE, brdf_kind::SPECULAR, brdf_kind::DIELECTRIC] {
+            let q = queue::shade(brdf);
+            assert!(q > queue::SHADOW && q < queue::COUNT);
+        }
+        assert_eq!(queue::COUNT, 8);
+        assert!(control::COUNT + queue::COUNT <= control::RAYS);
+        assert!(control::RAYS + 2 <= control::SHADOW_RAYS && control::SHADOW_RAYS + 2 <= control::NAN);
+    }
+}

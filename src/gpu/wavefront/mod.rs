@@ -1,0 +1,446 @@
+//! The wavefront path tracer (docs/DESIGN.md "Wavefront renderer").
+//!
+//! Paths are state in storage buffers, one *slot* per path of a batch; each stage of a path
+//! vertex is its own kernel, launched over a queue of slots with indirect dispatches sized
+//! on the device, so a kernel holds only its own code and runs only for the paths that
+//! need it (the closest-hit query never pays for CSG, glass or NEE code it does not use,
+//! which a SIMD software GPU would otherwise execute masked). Per bounce:
+//!
+//! ```text
+//! intersect ─┬─ (CSG trees met) ─ csg ─┬─ escape
+//!            └──────────────────────────┴─ shade[diffuse | specular | dielectric] ─ shadow ─ advance
+//! ```
+//!
+//! Determinism: a path's state is written only by the stage that holds its slot, so no
+//! two invocations touch it at once and queue order cannot change any value; the film
+//! stage then sums each pixel's paths in a fixed order. Images are bitwise reproducible
+//! for fixed samples per round, whatever the batch size or the order queues fill in.
+
+mod contract;
+mod schedule;
+mod stages;
+
+pub use contract::{queue, wavefront_module, BatchUniform, StateBuffer};
+pub use schedule::{
+    ctrlc_flag, Accumulated, PassOptions, StopReason, MAX_PATHS_PER_PIXEL_PER_ROUND, MAX_SPP_PER_ROUND,
+};
+pub(crate) use schedule::{run_rounds, Plan};
+pub use stages::{csg_queue, has_shadow_rays, Stage};
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use contract::{control, path_field, word_field, MAX_GRID, WORKGROUP};
+use schedule::BatchRunner;
+
+use crate::gpu::compute::ComputeKernel;
+use crate::gpu::device::{Gpu, GpuError};
+use crate::gpu::features::{FeatureSet, RendererKind};
+
+/// The compiled kernel of every stage a scene needs.
+#[derive(Debug, Clone)]
+pub struct StageKernels {
+    pub kernels: BTreeMap<Stage, Arc<ComputeKernel>>,
+}
+
+impl StageKernels {
+    fn get(&self, stage: Stage) -> Result<&ComputeKernel, GpuError> {
+        self.kernels
+            .get(&stage)
+            .map(|k| k.as_ref())
+            .ok_or_else(|| GpuError::Internal(format!("no kernel for the {} stage", stage.label())))
+    }
+}
+
+/// Path slots per batch: `requested` if non-zero, else a default for the device (a software
+/// adapter runs a few SIMD lanes per core and wants its state in cache; a hardware GPU wants
+/// millions of paths in flight), never more than the image's paths per round need, and
+/// within the device's buffer limits.
+pub fn capacity(
+    gpu: &Gpu,
+    width: u32,
+    height: u32,
+    paths_per_sample: u32,
+    shadow_rays: u32,
+    features: &FeatureSet,
+    requested: u32,
+) -> u32 {
+    let default = match gpu.adapter_info.device_type {
+        wgpu::DeviceType::Cpu => 1 << 16,
+        _ => 1 << 21,
+    };
+    let wanted = if requested > 0 { requested } else { default };
+    let image = u64::from(width) * u64::from(height) * u64::from(paths_per_sample) * u64::from(MAX_SPP_PER_ROUND);
+    let mut slots = u64::from(wanted).min(image.max(1)).max(u64::from(paths_per_sample));
+    // The largest per-slot array must fit one binding and one buffer.
+    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    let widest = (16 * u64::from(path_field::COUNT))
+        .max(48 * u64::from(shadow_rays))
+        .max(4 * u64::from(queue::COUNT))
+        .max(if csg_queue(features) { 4 * (crate::cpu::CSG_DEFER_MAX as u64 + 1) } else { 0 });
+    slots = slots.min(limit / widest).max(1);
+    slots.min(u64::from(u32::MAX / 2)) as u32
+}
+
+/// Device counters read at the end of a render.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Counters {
+    pub rays: u64,
+    pub non_finite: u64,
+}
+
+/// Bytes of one element of each state buffer, per slot.
+fn state_bytes(buffer: StateBuffer, shadow_rays: u32) -> u64 {
+    match buffer {
+        StateBuffer::Batch => 0,
+        StateBuffer::Control => 0,
+        StateBuffer::Queues => 4 * u64::from(queue::COUNT),
+        StateBuffer::Paths => 16 * u64::from(path_field::COUNT),
+        StateBuffer::Words => 16 * u64::from(word_field::COUNT),
+        StateBuffer::Shadow => 48 * u64::from(shadow_rays.max(1)),
+        StateBuffer::DeferredRefs => 4 * (crate::cpu::CSG_DEFER_MAX as u64 + 1),
+        StateBuffer::Film => 16,
+        StateBuffer::Args => 0,
+    }
+}
+
+/// The device state of one render and the launches of its batches.
+pub(crate) struct Runner<'a> {
+    gpu: &'a Gpu,
+    kernels: &'a StageKernels,
+    /// Group 0 of each stage; the film stage has one per film buffer.
+    groups0: BTreeMap<(Stage, usize), wgpu::BindGroup>,
+    groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
+    batch: wgpu::Buffer,
+    control: wgpu::Buffer,
+    args: wgpu::Buffer,
+    films: [wgpu::Buffer; 2],
+    staging: [wgpu::Buffer; 2],
+    probe: wgpu::Buffer,
+    capacity: u32,
+    path_tracer: bool,
+    csg: bool,
+    shade: Vec<Stage>,
+    shadow: bool,
+    max_depth: u32,
+}
+
+/// A batch in flight: its film's staging buffer and submission.
+pub(crate) struct Pending {
+    slot: usize,
+    pixels: u32,
+    submission: wgpu::SubmissionIndex,
+}
+
+impl<'a> Runner<'a> {
+    /// Allocates the state for `capacity` slots (halving it while the device refuses the
+    /// memory, down to what one pixel's paths need).
+    pub fn new(
+        gpu: &'a Gpu,
+        kernels: &'a StageKernels,
+        groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
+        features: &FeatureSet,
+        capacity: u32,
+        shadow_rays: u32,
+        max_depth: u32,
+    ) -> Result<Self, GpuError> {
+        let mut capacity = capacity.max(1);
+        loop {
+            match Self::allocate(gpu, kernels, groups1, features, capacity, shadow_rays, max_depth) {
+                Ok(r) => return Ok(r),
+                Err(e @ (GpuError::TooLarge { .. } | GpuError::OutOfMemory(_))) if capacity > 1024 => {
+                    let _ = e;
+                    capacity /= 2;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn allocate(
+        gpu: &'a Gpu,
+        kernels: &'a StageKernels,
+        groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
+        features: &FeatureSet,
+        capacity: u32,
+        shadow_rays: u32,
+        max_depth: u32,
+    ) -> Result<Self, GpuError> {
+        let cap = u64::from(capacity);
+        let storage = |label: &str, buffer: StateBuffer| gpu.storage_buffer_zeroed(label, cap * state_bytes(buffer, shadow_rays));
+        let needs = |b: StateBuffer| kernels.kernels.keys().any(|s| s.buffers(features).contains(&b));
+        let tiny = |label: &str, b: StateBuffer| -> Result<wgpu::Buffer, GpuError> {
+            if needs(b) {
+                storage(label, b)
+            } else {
+                gpu.storage_buffer_zeroed(label, 16)
+            }
+        };
+        let queues = tiny("queues", StateBuffer::Queues)?;
+        let paths = storage("path state", StateBuffer::Paths)?;
+        let words = tiny("path words", StateBuffer::Words)?;
+        let shadow = tiny("shadow rays", StateBuffer::Shadow)?;
+        let deferred = tiny("deferred CSG trees", StateBuffer::DeferredRefs)?;
+        let films = [storage("film 0", StateBuffer::Film)?, storage("film 1", StateBuffer::Film)?];
+        let staging_buffer = |label: &str, bytes: u64| {
+            gpu.scoped(|| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: bytes.max(16),
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            })
+        };
+        let staging = [staging_buffer("film readback 0", cap * 16)?, staging_buffer("film readback 1", cap * 16)?];
+        let probe = staging_buffer("control readback", u64::from(control::WORDS) * 4)?;
+        let batch = gpu.uniform_buffer("batch", &<BatchUniform as bytemuck::Zeroable>::zeroed())?;
+        let control = gpu.scoped(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("control"),
+                size: u64::from(control::WORDS).next_multiple_of(4) * 4,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })?;
+        let args = gpu.scoped(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("indirect dispatch arguments"),
+                size: 12 * u64::from(queue::COUNT),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+                mapped_at_creation: false,
+            })
+        })?;
+        let buffer_of = |b: StateBuffer, film: usize| -> &wgpu::Buffer {
+            match b {
+                StateBuffer::Batch => &batch,
+                StateBuffer::Control => &control,
+                StateBuffer::Queues => &queues,
+                StateBuffer::Paths => &paths,
+                StateBuffer::Words => &words,
+                StateBuffer::Shadow => &shadow,
+                StateBuffer::DeferredRefs => &deferred,
+                StateBuffer::Film => &films[film],
+                StateBuffer::Args => &args,
+            }
+        };
+        let mut groups0 = BTreeMap::new();
+        for (&stage, kernel) in &kernels.kernels {
+            for film in 0..if stage == Stage::Film { 2 } else { 1 } {
+                let refs: Vec<&wgpu::Buffer> = stage.buffers(features).into_iter().map(|b| buffer_of(b, film)).collect();
+                groups0.insert((stage, film), kernel.bind_group(gpu, 0, &refs)?);
+            }
+        }
+        let shade = kernels.kernels.keys().copied().filter(|s| matches!(s, Stage::Shade(_))).collect();
+        Ok(Self {
+            gpu,
+            kernels,
+            groups0,
+            groups1,
+            batch,
+            control,
+            args,
+            films,
+            staging,
+            probe,
+            capacity,
+            path_tracer: features.renderer == RendererKind::PathTracer,
+            csg: kernels.kernels.contains_key(&Stage::Csg),
+            shade,
+            shadow: kernels.kernels.contains_key(&Stage::Shadow),
+            max_depth,
+        })
+    }
+
+    pub fn capacity(&self) -> u32 {
+        self.capacity
+    }
+
+    /// Binds `stage`'s pipeline and groups in `pass`.
+    fn bind(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize) -> Result<(), GpuError> {
+        pass.set_pipeline(&self.kernels.get(stage)?.pipeline);
+        let g0 = self.groups0.get(&(stage, film)).ok_or_else(|| GpuError::Internal(format!("no group 0 for {stage:?}")))?;
+        pass.set_bind_group(0, g0, &[]);
+        if let Some(g1) = self.groups1.get(&stage) {
+            pass.set_bind_group(1, g1, &[]);
+        }
+        Ok(())
+    }
+
+    /// A launch of `stage` over `count` invocations, sized on the host (camera, film).
+    fn direct(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize, count: u32) -> Result<(), GpuError> {
+        self.bind(pass, stage, film)?;
+        let groups = count.div_ceil(WORKGROUP);
+        let x = groups.min(MAX_GRID);
+        pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
+        Ok(())
+    }
+
+    /// A launch of `stage` over queue `q`, sized on the device.
+    fn indirect(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, q: u32) -> Result<(), GpuError> {
+        self.bind(pass, stage, 0)?;
+        pass.dispatch_workgroups_indirect(&self.args, 12 * u64::from(q));
+        Ok(())
+    }
+
+    fn control_kernel(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage) -> Result<(), GpuError> {
+        self.bind(pass, stage, 0)?;
+        pass.dispatch_workgroups(1, 1, 1);
+        Ok(())
+    }
+
+    /// Records one bounce of every path in flight.
+    fn bounce(&self, pass: &mut wgpu::ComputePass<'_>, bounce: u32) -> Result<(), GpuError> {
+        self.indirect(pass, Stage::Intersect, queue::RAY + (bounce & 1))?;
+        self.control_kernel(pass, Stage::DispatchArgs)?;
+        if self.csg {
+            self.indirect(pass, Stage::Csg, queue::CSG)?;
+            self.control_kernel(pass, Stage::DispatchArgs)?;
+        }
+        self.indirect(pass, Stage::Escape, queue::ESCAPE)?;
+        for &stage in &self.shade {
+            if let Stage::Shade(kind) = stage {
+                self.indirect(pass, stage, queue::shade(kind))?;
+            }
+        }
+        if self.shadow {
+            self.control_kernel(pass, Stage::DispatchArgs)?;
+            self.indirect(pass, Stage::Shadow, queue::SHADOW)?;
+        }
+        self.control_kernel(pass, Stage::Advance)
+    }
+
+    /// Submits `record` as one command buffer.
+    fn submit_commands(
+        &self,
+        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), GpuError>,
+    ) -> Result<wgpu::SubmissionIndex, GpuError> {
+        let gpu = self.gpu;
+        let mut result = Ok(());
+        let index = gpu.scoped(|| {
+            let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("batch") });
+            result = record(&mut encoder);
+            gpu.queue.submit([encoder.finish()])
+        })?;
+        result.map(|_| index)
+    }
+
+    /// Rays still to intersect at `bounce` (a read-back: used only to stop deep renders early).
+    fn rays_left(&self, bounce: u32) -> Result<u32, GpuError> {
+        let word = control::COUNT + queue::RAY + (bounce & 1);
+        self.submit_commands(|e| {
+            e.copy_buffer_to_buffer(&self.control, 4 * u64::from(word), &self.probe, 0, 4);
+            Ok(())
+        })?;
+        Ok(self.read(&self.probe, 4)?[0])
+    }
+
+    fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u32>, GpuError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        buffer.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
+            let _ = tx.send(r);
+        });
+        self.gpu.wait_idle()?;
+        rx.recv()
+            .map_err(|_| GpuError::Readback("map callback never ran".into()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let out = {
+            let view = buffer.get_mapped_range(0..bytes).map_err(|e| GpuError::Readback(e.to_string()))?;
+            bytemuck::pod_collect_to_vec(&view)
+        };
+        buffer.unmap();
+        Ok(out)
+    }
+
+    /// The ray and NaN counters (after every batch has been collected).
+    pub fn counters(&self) -> Result<Counters, GpuError> {
+        self.submit_commands(|e| {
+            e.copy_buffer_to_buffer(&self.control, 0, &self.probe, 0, u64::from(control::WORDS) * 4);
+            Ok(())
+        })?;
+        let w = self.read(&self.probe, u64::from(control::WORDS) * 4)?;
+        let word64 = |i: u32| u64::from(w[i as usize]) | (u64::from(w[i as usize + 1]) << 32);
+        Ok(Counters {
+            rays: word64(control::RAYS) + word64(control::SHADOW_RAYS),
+            non_finite: u64::from(w[control::NAN as usize]),
+        })
+    }
+}
+
+impl BatchRunner for Runner<'_> {
+    type Pending = Pending;
+
+    fn submit(&mut self, batch: &BatchUniform, slot: usize) -> Result<Pending, GpuError> {
+        let gpu = self.gpu;
+        gpu.queue.write_buffer(&self.batch, 0, bytemuck::bytes_of(batch));
+        let last = if self.path_tracer {
+            // Bounce 0, every slot queued for the closest-hit stage (the camera stage writes
+            // the queue entries), every other queue empty; the counters stay.
+            let mut words = vec![0u32; (control::COUNT + queue::COUNT) as usize];
+            words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
+            gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
+            self.submit_commands(|e| {
+                let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("camera"), timestamp_writes: None });
+                self.direct(&mut pass, Stage::Camera, 0, batch.path_count)?;
+                self.control_kernel(&mut pass, Stage::DispatchArgs)
+            })?;
+            // One submission per bounce keeps every submission short (OS GPU watchdogs).
+            // Deep renders check every 8 bounces whether any path is left.
+            for b in 0..self.max_depth {
+                self.submit_commands(|e| {
+                    let mut pass =
+                        e.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("bounce"), timestamp_writes: None });
+                    self.bounce(&mut pass, b)
+                })?;
+                if self.max_depth > 16 && b % 8 == 7 && self.rays_left(b + 1)? == 0 {
+                    break;
+                }
+            }
+            Some(self.max_depth)
+        } else {
+            None
+        };
+        let pixels = batch.pixel_count;
+        let submission = self.submit_commands(|e| {
+            {
+                let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("film"), timestamp_writes: None });
+                match last {
+                    // The last bounce (emission and escapes only), then the film.
+                    Some(b) => self.bounce(&mut pass, b)?,
+                    None => self.direct(&mut pass, Stage::FirstHit, 0, batch.path_count)?,
+                }
+                self.direct(&mut pass, Stage::Film, slot, pixels)?;
+            }
+            e.copy_buffer_to_buffer(&self.films[slot], 0, &self.staging[slot], 0, u64::from(pixels) * 16);
+            Ok(())
+        })?;
+        Ok(Pending { slot, pixels, submission })
+    }
+
+    fn collect(&mut self, pending: Pending) -> Result<Vec<[f32; 4]>, GpuError> {
+        let bytes = u64::from(pending.pixels) * 16;
+        let staging = &self.staging[pending.slot];
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
+            let _ = tx.send(r);
+        });
+        self.gpu
+            .device
+            .poll(wgpu::PollType::Wait { submission_index: Some(pending.submission), timeout: None })
+            .map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+        self.gpu.check()?;
+        rx.recv()
+            .map_err(|_| GpuError::Readback("map callback never ran".into()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let out = {
+            let view = staging.get_mapped_range(0..bytes).map_err(|e| GpuError::Readback(e.to_string()))?;
+            bytemuck::pod_collect_to_vec(&view)
+        };
+        staging.unmap();
+        Ok(out)
+    }
+
+    fn drain(&mut self) -> Result<(), GpuError> {
+        self.gpu.wait_idle()
+    }
+}

@@ -1,0 +1,405 @@
+//! The host side of the wavefront renderer: rounds of camera samples over the whole image,
+//! each split into batches of whole pixels that fill the device's path slots.
+//!
+//! - A *round* is camera samples `[j0, j1)` over every pixel. Stopping conditions are
+//!   checked between rounds (time limit) or abandon the unfinished round (Ctrl-C, checked
+//!   between batches), so every pixel of the result has exactly `spp_done` samples.
+//! - A *batch* is a run of whole pixels whose `(j1 − j0)·n` paths each fit the slots; the
+//!   device sums each pixel's paths in f32 (film stage), the host adds the batch's sums into
+//!   the round in f64 ([`Accumulator`]). Pixel values do not depend on how pixels are split
+//!   into batches, so batch size is free to follow the device.
+//! - The host keeps the device busy: batch k + 1 is submitted before batch k's sums are
+//!   read back (two film and staging buffers), and nothing else is read back.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::contract::BatchUniform;
+use crate::gpu::accumulate::Accumulator;
+use crate::gpu::device::GpuError;
+use crate::image::HdrImage;
+
+/// Most camera samples per pixel in one round: the film sums a round's samples in f32, and 64
+/// sums of similar values keep the relative rounding error below 1e-6.
+pub const MAX_SPP_PER_ROUND: u32 = 64;
+
+/// Most paths one film invocation sums (a round's samples × paths per sample): a bound on
+/// any invocation's loop count, far below the 65,535 iterations after which llvmpipe's
+/// loop limiter silently ends loops (docs/DESIGN.md "Wavefront renderer").
+pub const MAX_PATHS_PER_PIXEL_PER_ROUND: u32 = 16_384;
+
+/// How rounds are sized and when rendering stops.
+#[derive(Debug, Clone)]
+pub struct PassOptions {
+    /// Wanted duration of one round; samples per round adapt towards it.
+    pub target_pass_seconds: f64,
+    /// Samples per pixel in the first round (small: the kernels' cost is unknown).
+    pub initial_spp_per_pass: u32,
+    /// Upper bound on samples per round (at most [`MAX_SPP_PER_ROUND`]).
+    pub max_spp_per_pass: u32,
+    /// Stop after the round during which this much time has passed.
+    pub time_limit: Option<Duration>,
+    /// When set (e.g. by Ctrl-C, see [`ctrlc_flag`]), stop after the current batch and drop
+    /// the unfinished round.
+    pub cancel: Option<Arc<AtomicBool>>,
+    /// Show a progress bar on stderr (hidden anyway when stderr is not a terminal).
+    pub progress: bool,
+    /// Path slots in flight per batch (0: from the device, see `wavefront::default_capacity`).
+    pub batch_paths: u32,
+}
+
+impl Default for PassOptions {
+    fn default() -> Self {
+        Self {
+            target_pass_seconds: 0.25,
+            initial_spp_per_pass: 1,
+            max_spp_per_pass: MAX_SPP_PER_ROUND,
+            time_limit: None,
+            cancel: None,
+            progress: false,
+            batch_paths: 0,
+        }
+    }
+}
+
+/// Why rendering returned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// All requested samples were taken.
+    Completed,
+    /// The time limit passed; fewer samples than requested.
+    TimeLimit,
+    /// The cancel flag was set; the unfinished round was dropped.
+    Interrupted,
+}
+
+/// The result of the rounds.
+#[derive(Debug, Clone)]
+pub struct Accumulated {
+    /// Per-pixel mean over `spp_done` samples (black if `spp_done` is 0).
+    pub image: HdrImage,
+    /// Samples per pixel, the same for every pixel.
+    pub spp_done: u32,
+    /// Rounds and batches run, including those of a dropped round.
+    pub rounds: u32,
+    pub batches: u64,
+    pub stop: StopReason,
+    /// Pixel sums dropped as NaN/infinite (should be 0: the film stage already replaces
+    /// non-finite estimates by 0).
+    pub nonfinite: u64,
+}
+
+/// Runs one batch on the device.
+pub(crate) trait BatchRunner {
+    type Pending;
+    /// Submits every launch of `batch`, its film going to double-buffer `slot` (0 or 1).
+    fn submit(&mut self, batch: &BatchUniform, slot: usize) -> Result<Self::Pending, GpuError>;
+    /// Waits for a submitted batch and returns its per-pixel sums.
+    fn collect(&mut self, pending: Self::Pending) -> Result<Vec<[f32; 4]>, GpuError>;
+    /// Waits for everything submitted (before returning early).
+    fn drain(&mut self) -> Result<(), GpuError>;
+}
+
+/// What one render needs to plan its batches.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Plan {
+    pub width: u32,
+    pub height: u32,
+    pub total_spp: u32,
+    pub paths_per_sample: u32,
+    pub capacity: u32,
+    pub shadow_rays: u32,
+}
+
+/// Samples of the next round for a plan, `wanted` at most: no more than the slots hold
+/// for one pixel, nor the film's loop bound.
+fn round_samples(plan: &Plan, wanted: u32) -> u32 {
+    let n = plan.paths_per_sample.max(1);
+    let by_slots = plan.capacity / n;
+    let by_film = MAX_PATHS_PER_PIXEL_PER_ROUND / n;
+    wanted.min(by_slots).min(by_film).max(1)
+}
+
+/// The batches of one round of `samples` camera samples from `j0`.
+pub(crate) fn batches(plan: &Plan, j0: u32, samples: u32) -> Vec<BatchUniform> {
+    let n = plan.paths_per_sample.max(1);
+    let per_pixel = samples * n;
+    let pixels = plan.width * plan.height;
+    let per_batch = (plan.capacity / per_pixel).max(1);
+    (0..pixels)
+        .step_by(per_batch as usize)
+        .map(|p0| {
+            let count = per_batch.min(pixels - p0);
+            BatchUniform {
+                pixel_begin: p0,
+                pixel_count: count,
+                sample_begin: j0,
+                samples,
+                paths_per_sample: n,
+                path_count: count * per_pixel,
+                capacity: plan.capacity,
+                shadow_rays: plan.shadow_rays,
+            }
+        })
+        .collect()
+}
+
+/// Renders `plan.total_spp` samples per pixel in rounds of batches run by `runner`.
+pub(crate) fn run_rounds<R: BatchRunner>(
+    runner: &mut R,
+    plan: &Plan,
+    opts: &PassOptions,
+) -> Result<Accumulated, GpuError> {
+    let Plan { width, height, total_spp, .. } = *plan;
+    if width == 0 || height == 0 || total_spp == 0 {
+        return Err(GpuError::Validation(format!(
+            "render of {width}×{height} pixels at {total_spp} spp: all must be positive"
+        )));
+    }
+    if plan.paths_per_sample > plan.capacity || plan.paths_per_sample > MAX_PATHS_PER_PIXEL_PER_ROUND {
+        return Err(GpuError::Validation(format!(
+            "{} paths per camera sample exceed what one GPU batch sums ({} path slots, at most {} paths per pixel)",
+            plan.paths_per_sample,
+            plan.capacity,
+            MAX_PATHS_PER_PIXEL_PER_ROUND
+        )));
+    }
+    let start = Instant::now();
+    let max_spp = opts.max_spp_per_pass.clamp(1, MAX_SPP_PER_ROUND);
+    let mut acc = Accumulator::new(width, height).map_err(GpuError::Validation)?;
+    let progress = progress_bar(opts.progress, u64::from(total_spp) * u64::from(width) * u64::from(height));
+    let cancelled = || opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst));
+    let mut spp_per_round = opts.initial_spp_per_pass.clamp(1, max_spp);
+    let (mut done, mut rounds, mut batch_count) = (0u32, 0u32, 0u64);
+    let mut stop = StopReason::Completed;
+
+    'rounds: while done < total_spp {
+        let samples = round_samples(plan, spp_per_round.min(total_spp - done));
+        let t = Instant::now();
+        rounds += 1;
+        let mut pending: Option<(R::Pending, BatchUniform)> = None;
+        for (k, batch) in batches(plan, done, samples).iter().enumerate() {
+            let submitted = runner.submit(batch, k % 2)?;
+            batch_count += 1;
+            if let Some((p, b)) = pending.replace((submitted, *batch)) {
+                let sums = runner.collect(p)?;
+                acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
+                progress.inc(u64::from(b.pixel_count) * u64::from(samples));
+            }
+            if cancelled() {
+                runner.drain()?;
+                acc.discard_round();
+                stop = StopReason::Interrupted;
+                break 'rounds;
+            }
+        }
+        if let Some((p, b)) = pending.take() {
+            let sums = runner.collect(p)?;
+            acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
+            progress.inc(u64::from(b.pixel_count) * u64::from(samples));
+        }
+        if cancelled() {
+            acc.discard_round();
+            stop = StopReason::Interrupted;
+            break;
+        }
+        acc.commit_round(samples);
+        done += samples;
+        progress.set_message(format!("{done}/{total_spp} spp, {samples} spp/round"));
+        let per_sample = t.elapsed().as_secs_f64() / f64::from(samples);
+        let remaining = match opts.time_limit {
+            Some(limit) => {
+                let elapsed = start.elapsed();
+                if elapsed >= limit {
+                    if done < total_spp {
+                        stop = StopReason::TimeLimit;
+                    }
+                    break;
+                }
+                Some((limit - elapsed).as_secs_f64())
+            }
+            None => None,
+        };
+        spp_per_round = next_spp_per_pass(samples, per_sample, per_sample, remaining, opts.target_pass_seconds, max_spp);
+    }
+    progress.finish_and_clear();
+    Ok(Accumulated {
+        image: acc.mean_image(),
+        spp_done: acc.spp() as u32,
+        rounds,
+        batches: batch_count,
+        stop,
+        nonfinite: acc.nonfinite(),
+    })
+}
+
+/// Samples for the next round, from the last round's timings (seconds per sample per pixel
+/// of the slowest part and of the whole round; one and the same for whole-image rounds):
+/// a round should take about `target` seconds, growth is at most ×2 per round (timings of
+/// tiny rounds are noisy), and with a time limit the whole round should fit in the time
+/// left (so the limit is overshot by at most a one-sample round).
+pub(crate) fn next_spp_per_pass(
+    current: u32,
+    worst_seconds_per_sample: f64,
+    round_seconds_per_sample: f64,
+    remaining_seconds: Option<f64>,
+    target: f64,
+    max_spp: u32,
+) -> u32 {
+    let by_target = if worst_seconds_per_sample > 0.0 { target / worst_seconds_per_sample } else { f64::INFINITY };
+    let mut spp = by_target.min(f64::from(current.saturating_mul(2)));
+    if let Some(rem) = remaining_seconds {
+        if round_seconds_per_sample > 0.0 {
+            spp = spp.min(rem / round_seconds_per_sample);
+        }
+    }
+    (spp.floor() as u32).clamp(1, max_spp.max(1))
+}
+
+fn progress_bar(enabled: bool, len: u64) -> ProgressBar {
+    if !enabled {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {percent:>3}% {msg}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}
+
+/// A flag set by Ctrl-C, for [`PassOptions::cancel`]. The first Ctrl-C asks the render to
+/// stop after the current batch (keeping the rounds done); a second one exits at once. The
+/// handler is installed once per process; later calls return the same flag.
+pub fn ctrlc_flag() -> Arc<AtomicBool> {
+    static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+    FLAG.get_or_init(|| {
+        let flag = Arc::new(AtomicBool::new(false));
+        let f = Arc::clone(&flag);
+        let installed = ctrlc::set_handler(move || {
+            if f.swap(true, Ordering::SeqCst) {
+                eprintln!("\ninterrupted twice: exiting");
+                std::process::exit(130);
+            }
+            eprintln!("\ninterrupted: finishing the current batch (Ctrl-C again to quit now)");
+        });
+        if let Err(e) = installed {
+            eprintln!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");
+        }
+        flag
+    })
+    .clone()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spp_grows_at_most_twice_and_meets_the_target() {
+        // A round of 1 spp took 1 ms: 25 would meet 25 ms but growth is capped at ×2.
+        assert_eq!(next_spp_per_pass(1, 0.001, 0.004, None, 0.025, 64), 2);
+        assert_eq!(next_spp_per_pass(16, 0.001, 0.004, None, 0.025, 64), 25);
+        // Too slow: shrink, but never below 1.
+        assert_eq!(next_spp_per_pass(8, 0.010, 0.04, None, 0.025, 64), 2);
+        assert_eq!(next_spp_per_pass(8, 1.0, 4.0, None, 0.025, 64), 1);
+        // The f32 bound.
+        assert_eq!(next_spp_per_pass(64, 1e-9, 1e-8, None, 0.025, 64), 64);
+        // Time left for 3 samples per pixel over the whole image.
+        assert_eq!(next_spp_per_pass(32, 1e-4, 0.1, Some(0.35), 0.025, 64), 3);
+    }
+
+    fn plan(width: u32, height: u32, n: u32, capacity: u32) -> Plan {
+        Plan { width, height, total_spp: 64, paths_per_sample: n, capacity, shadow_rays: 1 }
+    }
+
+    #[test]
+    fn batches_hold_whole_pixels_cover_each_once_and_fit_the_slots() {
+        for (w, h, n, cap, samples) in [(1, 1, 1, 1, 1), (7, 5, 3, 64, 4), (300, 200, 1, 65_536, 64), (9, 9, 10, 25, 2)] {
+            let p = plan(w, h, n, cap);
+            let s = round_samples(&p, samples);
+            let mut next = 0;
+            for b in batches(&p, 5, s) {
+                assert_eq!(b.pixel_begin, next, "contiguous");
+                assert!(b.path_count <= cap && b.path_count == b.pixel_count * s * n);
+                assert_eq!((b.sample_begin, b.samples, b.capacity), (5, s, cap));
+                next += b.pixel_count;
+            }
+            assert_eq!(next, w * h);
+        }
+        // Fewer slots than a pixel's paths: the round shrinks to what one pixel fits.
+        assert_eq!(round_samples(&plan(4, 4, 10, 25), 8), 2);
+        assert_eq!(round_samples(&plan(4, 4, 1000, 1 << 20), 64), 16);
+    }
+
+    /// A runner that sums known per-path values the way the film stage does, to check the
+    /// host's bookkeeping (uniform spp, cancellation, time limit) without a device.
+    struct Fake {
+        submitted: Vec<BatchUniform>,
+        cancel_after: Option<(usize, Arc<AtomicBool>)>,
+    }
+
+    impl BatchRunner for Fake {
+        type Pending = BatchUniform;
+        fn submit(&mut self, batch: &BatchUniform, _slot: usize) -> Result<BatchUniform, GpuError> {
+            self.submitted.push(*batch);
+            if let Some((k, flag)) = &self.cancel_after {
+                if self.submitted.len() == *k {
+                    flag.store(true, Ordering::SeqCst);
+                }
+            }
+            Ok(*batch)
+        }
+        fn collect(&mut self, b: BatchUniform) -> Result<Vec<[f32; 4]>, GpuError> {
+            // Sample j of pixel p is worth p + j: the round's sum is exact in f32.
+            Ok((0..b.pixel_count)
+                .map(|i| {
+                    let p = (b.pixel_begin + i) as f32;
+                    let s: f32 = (b.sample_begin..b.sample_begin + b.samples).map(|j| p + j as f32).sum();
+                    [s, 0.0, 0.0, 0.0]
+                })
+                .collect())
+        }
+        fn drain(&mut self) -> Result<(), GpuError> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn rounds_give_every_pixel_the_mean_of_its_samples() {
+        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let p = Plan { total_spp: 10, ..plan(5, 3, 2, 8) };
+        let out = run_rounds(&mut fake, &p, &PassOptions { target_pass_seconds: f64::MAX, ..Default::default() })
+            .unwrap();
+        assert_eq!((out.spp_done, out.stop), (10, StopReason::Completed));
+        for (i, px) in out.image.pixels().iter().enumerate() {
+            assert_eq!(px.r, i as f32 + 4.5, "pixel {i}: mean of p + j over j < 10");
+        }
+    }
+
+    #[test]
+    fn cancel_drops_the_unfinished_round() {
+        let flag = Arc::new(AtomicBool::new(false));
+        // Batches of 4 pixels at 1 spp: the first round has 4 batches; cancel in round 2.
+        let mut fake = Fake { submitted: vec![], cancel_after: Some((6, flag.clone())) };
+        let opts = PassOptions {
+            cancel: Some(flag),
+            initial_spp_per_pass: 1,
+            max_spp_per_pass: 1,
+            ..PassOptions::default()
+        };
+        let out = run_rounds(&mut fake, &plan(4, 4, 1, 4), &opts).unwrap();
+        assert_eq!((out.spp_done, out.stop, out.rounds), (1, StopReason::Interrupted, 2));
+        assert!(out.image.pixels().iter().enumerate().all(|(i, px)| px.r == i as f32));
+    }
+
+    #[test]
+    fn a_time_limit_stops_between_rounds_with_uniform_spp() {
+        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let opts = PassOptions { time_limit: Some(Duration::ZERO), ..PassOptions::default() };
+        let out = run_rounds(&mut fake, &plan(3, 3, 1, 1024), &opts).unwrap();
+        assert_eq!((out.spp_done, out.stop), (1, StopReason::TimeLimit));
+    }
+}

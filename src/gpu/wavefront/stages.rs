@@ -1,0 +1,292 @@
+//! The stages of the wavefront renderer: which kernels a scene gets, and what each holds.
+//!
+//! A stage is one compute kernel assembled from `shaders/` with the scene's feature names
+//! *filtered to what that stage does* (the shading stage of the dielectric kind has no
+//! traversal, CSG or diffuse code; the closest-hit stage has no materials beyond the BRDF
+//! tag it sorts by), plus names that select the shared helpers the stage calls. So every
+//! kernel holds only its own code: the call-graph test below checks that every function and
+//! global of every stage is used, for a covering set of scenes.
+
+use crate::gpu::features::{FeatureSet, RendererKind};
+use crate::gpu::layout::brdf_kind;
+
+use super::contract::StateBuffer;
+
+/// One kernel of the wavefront renderer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Stage {
+    /// Camera rays and path start (path tracer).
+    Camera,
+    /// The whole estimate of OnOff, Flat and PointLight: one closest-hit query and the
+    /// point lights' shadow rays per camera sample.
+    FirstHit,
+    /// Closest hit over the BVH and planes; CSG trees met go to the CSG queue.
+    Intersect,
+    /// Deferred CSG trees of the rays that met some.
+    Csg,
+    /// Rays that hit nothing: environment radiance, MIS-weighted.
+    Escape,
+    /// One path vertex at a surface of one BRDF kind (`Material::brdf`).
+    Shade(u32),
+    /// Shadow rays, any-hit, with their deferred contributions.
+    Shadow,
+    /// Per-pixel sums of the batch's paths in a fixed order.
+    Film,
+    /// Indirect dispatch arguments from queue lengths.
+    DispatchArgs,
+    /// End of a bounce: count rays, empty consumed queues, size the next closest-hit launch.
+    Advance,
+}
+
+impl Stage {
+    /// The kernels that render a scene with features `f`, in no particular order.
+    pub fn for_scene(f: &FeatureSet) -> Vec<Stage> {
+        if f.renderer != RendererKind::PathTracer {
+            return vec![Stage::FirstHit, Stage::Film];
+        }
+        let mut stages = vec![Stage::Camera, Stage::Intersect, Stage::Escape];
+        if csg_queue(f) {
+            stages.push(Stage::Csg);
+        }
+        for (on, kind) in
+            [(f.diffuse, brdf_kind::DIFFUSE), (f.specular, brdf_kind::SPECULAR), (f.dielectric, brdf_kind::DIELECTRIC)]
+        {
+            if on {
+                stages.push(Stage::Shade(kind));
+            }
+        }
+        if has_shadow_rays(f) {
+            stages.push(Stage::Shadow);
+        }
+        stages.extend([Stage::Film, Stage::DispatchArgs, Stage::Advance]);
+        stages
+    }
+
+    /// The root module and entry point.
+    pub fn entry(self) -> (&'static str, &'static str) {
+        match self {
+            Stage::Camera => ("wf_camera", "camera_stage"),
+            Stage::FirstHit => ("wf_first_hit", "first_hit_stage"),
+            Stage::Intersect => ("wf_intersect", "intersect_stage"),
+            Stage::Csg => ("wf_csg", "csg_stage"),
+            Stage::Escape => ("wf_escape", "escape_stage"),
+            Stage::Shade(_) => ("wf_shade", "shade_stage"),
+            Stage::Shadow => ("wf_shadow", "shadow_stage"),
+            Stage::Film => ("wf_film", "film_stage"),
+            Stage::DispatchArgs => ("wf_control", "dispatch_args"),
+            Stage::Advance => ("wf_control", "advance"),
+        }
+    }
+
+    /// The group-0 buffers the stage binds.
+    pub fn buffers(self, f: &FeatureSet) -> Vec<StateBuffer> {
+        use StateBuffer::*;
+        match self {
+            Stage::Camera => vec![Batch, Queues, Paths, Words],
+            Stage::FirstHit => vec![Batch, Control, Paths],
+            Stage::Intersect if csg_queue(f) => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
+            Stage::Intersect if f.bvh || f.plane => vec![Batch, Control, Queues, Paths, Words],
+            // Nothing to hit: every ray escapes and no hit is recorded.
+            Stage::Intersect => vec![Batch, Control, Queues, Paths],
+            Stage::Csg => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
+            Stage::Escape => vec![Batch, Control, Queues, Paths, Words],
+            Stage::Shade(kind) if kind == brdf_kind::DIFFUSE && has_shadow_rays(f) => {
+                vec![Batch, Control, Queues, Paths, Words, Shadow]
+            }
+            Stage::Shade(_) => vec![Batch, Control, Queues, Paths, Words],
+            Stage::Shadow => vec![Batch, Control, Queues, Paths, Shadow],
+            Stage::Film => vec![Batch, Control, Paths, Film],
+            Stage::DispatchArgs | Stage::Advance => vec![Control, Args],
+        }
+    }
+
+    /// The assembly feature names of this stage for a scene with features `f`.
+    pub fn names(self, f: &FeatureSet) -> Vec<&'static str> {
+        let scene = f.names();
+        let keep = |allowed: &[&'static str]| -> Vec<&'static str> {
+            scene.iter().copied().filter(|n| allowed.contains(n)).collect()
+        };
+        const SHAPES: [&str; 5] = ["GEOMETRY", "SPHERE", "PLANE", "CUBE", "CYLINDER"];
+        let mut names: Vec<&'static str> = match self {
+            Stage::Camera => vec!["CAMERA", "WF_RAY_STORE", "WF_PATH_ID"],
+            Stage::FirstHit => {
+                let mut n = scene.clone();
+                n.extend(["CAMERA", "WF_PATH_ID", "WF_COUNT", "TRAVERSE", "SPANS"]);
+                if f.renderer != RendererKind::OnOff {
+                    n.push("FIRST_HIT");
+                }
+                if f.materials() {
+                    n.push("PIGMENTS");
+                }
+                n
+            }
+            Stage::Intersect => {
+                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "MATERIALS"]].concat());
+                n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
+                if csg_queue(f) {
+                    n.push("CSG_QUEUE");
+                }
+                n
+            }
+            Stage::Csg => {
+                let mut n = keep(&[&SHAPES[..], &["CSG", "MATERIALS"]].concat());
+                n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "SPANS"]);
+                n
+            }
+            Stage::Escape => {
+                let mut n = keep(&["SHADING", "ENV_UNIFORM", "ENV_GRADIENT", "ENV_IMAGE", "NEE"]);
+                if n.contains(&"ENV_IMAGE") {
+                    n.push("TEXTURES");
+                }
+                n.extend(["WF_QUEUED", "WF_RAY_LOAD"]);
+                n
+            }
+            Stage::Shade(kind) => {
+                let mut allowed = vec![
+                    "MATERIALS",
+                    "SHADING",
+                    "PIGMENT_UNIFORM",
+                    "PIGMENT_CHECKERED",
+                    "PIGMENT_IMAGE",
+                    "AREA_LIGHTS",
+                    "NEE",
+                ];
+                allowed.extend(SHAPES);
+                match kind {
+                    brdf_kind::DIFFUSE => {
+                        allowed.extend(["DIFFUSE", "POINT_LIGHTS"]);
+                        if f.nee {
+                            allowed.extend(["ENV_UNIFORM", "ENV_GRADIENT", "ENV_IMAGE"]);
+                        }
+                        if has_shadow_rays(f) {
+                            allowed.push("SHADOWS");
+                        }
+                    }
+                    brdf_kind::SPECULAR => allowed.push("SPECULAR"),
+                    _ => allowed.push("DIELECTRIC"),
+                }
+                let mut n = keep(&allowed);
+                if kind != brdf_kind::DIFFUSE && !n.contains(&"AREA_LIGHTS") {
+                    // Only emitters hit after a non-delta vertex need NEE's densities here.
+                    n.retain(|x| *x != "NEE");
+                }
+                if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") {
+                    n.push("TEXTURES");
+                }
+                n.extend(["PIGMENTS", "WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "WF_RAY_STORE", "WF_PATH_ID"]);
+                n
+            }
+            Stage::Shadow => {
+                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH"]].concat());
+                n.extend(["SHADOWS", "WF_QUEUED", "WF_COUNT", "TRAVERSE", "SPANS"]);
+                n
+            }
+            Stage::Film | Stage::DispatchArgs | Stage::Advance => vec![],
+        };
+        if !scene.contains(&"GEOMETRY") {
+            // Nothing to intersect: no spans or traversal helpers to call.
+            names.retain(|n| !["SPANS", "TRAVERSE"].contains(n));
+            if self == Stage::Intersect {
+                names.retain(|n| *n != "MATERIALS");
+            }
+        }
+        // Placed shapes and the camera transform points; nothing else does.
+        let geometry = scene.contains(&"GEOMETRY");
+        if matches!(self, Stage::Camera | Stage::FirstHit)
+            || (geometry && matches!(self, Stage::Intersect | Stage::Csg | Stage::Shade(_) | Stage::Shadow))
+        {
+            names.push("AFFINE");
+        }
+        // The settings uniform, for the stages that read it.
+        let settings = match self {
+            Stage::Camera | Stage::FirstHit | Stage::Shade(_) => true,
+            Stage::Intersect | Stage::Shadow => geometry,
+            Stage::Escape => names.contains(&"NEE"),
+            _ => false,
+        };
+        if settings {
+            names.push("SETTINGS");
+        }
+        // The environment uniform: escaped rays, and NEE (light count, environment samples).
+        let environment = match self {
+            Stage::Escape => true,
+            Stage::FirstHit => scene.contains(&"SHADING"),
+            Stage::Shade(_) => names.contains(&"NEE"),
+            _ => false,
+        };
+        if environment {
+            names.push("ENVIRONMENT");
+        }
+        names.push(self.stage_name());
+        if f.renderer == RendererKind::PathTracer && self != Stage::FirstHit {
+            names.push("PATHTRACER");
+        }
+        names.sort();
+        names.dedup();
+        names
+    }
+
+    fn stage_name(self) -> &'static str {
+        match self {
+            Stage::Camera => "STAGE_CAMERA",
+            Stage::FirstHit => "STAGE_FIRST_HIT",
+            Stage::Intersect => "STAGE_INTERSECT",
+            Stage::Csg => "STAGE_CSG",
+            Stage::Escape => "STAGE_ESCAPE",
+            Stage::Shade(_) => "STAGE_SHADE",
+            Stage::Shadow => "STAGE_SHADOW",
+            Stage::Film => "STAGE_FILM",
+            Stage::DispatchArgs | Stage::Advance => "STAGE_CONTROL",
+        }
+    }
+
+    /// Every name [`Self::names`] may add beyond the scene's.
+    pub const NAMES: [&'static str; 24] = [
+        "AFFINE",
+        "ENVIRONMENT",
+        "SETTINGS",
+        "STAGE_CONTROL",
+        "CAMERA",
+        "FIRST_HIT",
+        "PIGMENTS",
+        "TRAVERSE",
+        "SPANS",
+        "CSG_QUEUE",
+        "WF_QUEUED",
+        "WF_PUSH",
+        "WF_RAY_LOAD",
+        "WF_RAY_STORE",
+        "WF_PATH_ID",
+        "WF_COUNT",
+        "STAGE_CAMERA",
+        "STAGE_FIRST_HIT",
+        "STAGE_INTERSECT",
+        "STAGE_CSG",
+        "STAGE_ESCAPE",
+        "STAGE_SHADE",
+        "STAGE_SHADOW",
+        "STAGE_FILM",
+    ];
+
+    /// A short name for labels and reports.
+    pub fn label(self) -> String {
+        match self {
+            Stage::Shade(k) => format!("shade[{}]", ["diffuse", "specular", "dielectric"].get(k as usize).unwrap_or(&"?")),
+            other => format!("{other:?}").to_lowercase(),
+        }
+    }
+}
+
+/// Whether CSG trees are evaluated in a stage of their own: the scene has CSG and few
+/// enough trees to defer them (`cpu::CSG_DEFER_MAX`, as `cpu::World` decides); otherwise
+/// the traversal evaluates each tree where it meets it.
+pub fn csg_queue(f: &FeatureSet) -> bool {
+    f.csg && f.csg_trees as usize <= crate::cpu::CSG_DEFER_MAX
+}
+
+/// Whether path vertices queue shadow rays (point lights or NEE, at diffuse vertices); how
+/// many per vertex is a run-time value (`BatchUniform::shadow_rays`), so kernel code does
+/// not grow with the number of lights.
+pub fn has_shadow_rays(f: &FeatureSet) -> bool {
+    f.renderer == RendererKind::PathTracer && f.diffuse && (f.point_lights || f.nee)
+}

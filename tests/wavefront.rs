@@ -1,0 +1,148 @@
+//! The wavefront renderer's own guarantees (docs/DESIGN.md "Wavefront renderer"): no
+//! invocation runs long enough for a driver's loop limiter to cut it, so paths that the
+//! old megakernel could not finish in one invocation are exact; images do not depend on
+//! the batch size; Ctrl-C and time limits keep whole rounds.
+
+mod common;
+
+use common::emissive;
+use glam::DVec3;
+use lumen::color::Color;
+use lumen::cpu::{Progress, RenderOptions};
+use lumen::gpu::render::{render, GpuRenderOptions, GpuRenderOutput};
+use lumen::gpu::{gpu_for_tests, probe_loop_limiter, Gpu, StopReason, LOOP_LIMITER_PROBE_TRIPS};
+use lumen::scene::*;
+
+fn pt(n: u32, max_depth: u32, nee: bool) -> Renderer {
+    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth: 1000, nee, ..Default::default() })
+}
+
+/// The camera inside `shells` concentric emitting spheres (ρ 0.5, Le 1, radii 10 to 11):
+/// every path bounces inside the innermost one and is worth exactly Σ_(k≤depth) 0.5ᵏ, while
+/// every traversal visits all the spheres (each bounding box holds the ray's origin), so
+/// a path's loop iterations grow with `shells × depth`.
+fn shells(shells: usize, n: u32, depth: u32) -> Scene {
+    let mut b = SceneBuilder::new(2, 2);
+    let m = emissive(&mut b, 0.5, 1.0);
+    for k in 0..shells {
+        b.sphere(Transform::scaling(DVec3::splat(10.0 + k as f64 / shells as f64)), m);
+    }
+    b.renderer(pt(n, depth, false));
+    b.build().unwrap()
+}
+
+fn gpu_render(gpu: &Gpu, scene: &Scene, spp: u32, batch_paths: u32) -> GpuRenderOutput {
+    let mut opts = GpuRenderOptions::fixed_passes(Some(spp), 4);
+    opts.passes.batch_paths = batch_paths;
+    let out = render(gpu, scene, &opts).unwrap();
+    assert_eq!(out.non_finite_samples, 0);
+    assert_eq!(out.spp_done, spp);
+    out
+}
+
+fn bits(img: &lumen::image::HdrImage) -> Vec<[u32; 3]> {
+    img.pixels().iter().map(|p| [p.r.to_bits(), p.g.to_bits(), p.b.to_bits()]).collect()
+}
+
+/// Share of pixels whose channels agree within 1e-3 relative or 1e-4 absolute.
+fn agreement(a: &lumen::image::HdrImage, b: &lumen::image::HdrImage) -> f64 {
+    let close = |x: f32, y: f32| (x - y).abs() <= 1e-4 || (x - y).abs() <= 1e-3 * x.abs().max(y.abs());
+    let good = a.pixels().iter().zip(b.pixels()).filter(|(p, q)| close(p.r, q.r) && close(p.g, q.g) && close(p.b, q.b));
+    good.count() as f64 / a.pixels().len() as f64
+}
+
+/// Diffuse, glass and mirror surfaces, an emitting sphere and cube (NEE), a point light
+/// and a plane: every stage the path tracer has.
+fn mixed_scene(renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(12, 9);
+    let white = b.diffuse(Color::gray(0.7));
+    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white);
+    common::add_lit_props(&mut b);
+    b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() })
+        .environment(Environment::Uniform(Color::new(0.1, 0.1, 0.2)))
+        .renderer(renderer);
+    b.build().unwrap()
+}
+
+/// Paths of 1,000 shells × 60 bounces (more than 65,535 loop iterations each, which
+/// llvmpipe's limiter cut in the megakernel even when run alone) and 600 × 30 (cut in
+/// company): in the wavefront each invocation runs one query, so every path is exact.
+#[test]
+fn paths_longer_than_the_loop_limiter_are_exact() {
+    let Some(gpu) = gpu_for_tests("paths_longer_than_the_loop_limiter") else { return };
+    let probe = probe_loop_limiter(&gpu).unwrap();
+    println!("{}: loop limiter probe {probe} of {LOOP_LIMITER_PROBE_TRIPS}", gpu.description());
+    for (count, n, depth) in [(600, 4, 30), (1000, 2, 60)] {
+        let scene = shells(count, n, depth);
+        let out = gpu_render(&gpu, &scene, 1, 0);
+        let expected = 2.0 * (1.0 - 0.5f64.powi(depth as i32 + 1));
+        for p in out.image.pixels() {
+            assert!((f64::from(p.g) / expected - 1.0).abs() < 2e-6, "{count} shells, depth {depth}: {p:?}");
+        }
+    }
+}
+
+/// The stability suite's case (docs/STABILITY.md): inside an emitting cube, 256 paths of
+/// depth 50 per camera sample, every path exactly Σ_(k≤50) 0.5ᵏ, in one batch per round
+/// and without any resumption (the megakernel summed only 129 of them on lavapipe).
+#[test]
+fn the_256_path_furnace_is_exact() {
+    let Some(gpu) = gpu_for_tests("the_256_path_furnace") else { return };
+    let mut b = SceneBuilder::new(4, 4);
+    let m = emissive(&mut b, 0.5, 1.0);
+    b.cube(Transform::scaling(DVec3::splat(5.0)), m).renderer(pt(256, 50, false));
+    let scene = b.build().unwrap();
+    let out = gpu_render(&gpu, &scene, 1, 0);
+    let expected = 2.0 * (1.0 - 0.5f64.powi(51));
+    assert!(out.image.pixels().iter().all(|p| (f64::from(p.g) / expected - 1.0).abs() < 2e-6));
+    assert_eq!(out.batches, 1);
+}
+
+/// Whatever the batch size (a few slots, a pixel's worth, many pixels), every renderer
+/// gives bit for bit the same image, and the path tracer's matches the CPU reference.
+#[test]
+fn images_do_not_depend_on_the_batch_size() {
+    let Some(gpu) = gpu_for_tests("images_do_not_depend_on_the_batch_size") else { return };
+    for renderer in [
+        pt(3, 5, true),
+        pt(2, 4, false),
+        Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
+        Renderer::Flat { background: Color::gray(0.2) },
+        Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) },
+    ] {
+        let scene = mixed_scene(renderer);
+        let whole = gpu_render(&gpu, &scene, 4, 0);
+        let name = scene.renderer.name();
+        for batch in [12, 97, 400] {
+            let out = gpu_render(&gpu, &scene, 4, batch);
+            assert!(out.batches > whole.batches, "{name}: batch {batch} ran {} batches of {}", out.batches, out.batch_paths);
+            assert!(bits(&out.image) == bits(&whole.image), "{name}: batches of {batch} slots change the image");
+        }
+        let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(4) }, Progress::Hidden);
+        let agree = agreement(&whole.image, &cpu.image);
+        assert!(agree >= 0.99, "{name}: {:.1}% of pixels agree with the CPU", agree * 100.0);
+    }
+}
+
+/// Ctrl-C (the cancel flag) before the first round ends drops it: nothing is kept.
+#[test]
+fn cancel_drops_the_unfinished_round() {
+    let Some(gpu) = gpu_for_tests("wavefront_cancel") else { return };
+    let scene = mixed_scene(pt(3, 5, true));
+    let mut opts = GpuRenderOptions::fixed_passes(Some(4), 4);
+    opts.passes.cancel = Some(std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true)));
+    let out = render(&gpu, &scene, &opts).unwrap();
+    assert_eq!((out.stop, out.spp_done, out.batches), (StopReason::Interrupted, 0, 1));
+    assert!(out.image.pixels().iter().all(|p| p.r == 0.0 && p.g == 0.0 && p.b == 0.0));
+}
+
+/// A time limit that has passed after the first round keeps exactly that round.
+#[test]
+fn a_time_limit_keeps_whole_rounds() {
+    let Some(gpu) = gpu_for_tests("wavefront_time_limit") else { return };
+    let scene = mixed_scene(pt(1, 3, true));
+    let mut opts = GpuRenderOptions::fixed_passes(Some(64), 3);
+    opts.passes.time_limit = Some(std::time::Duration::ZERO);
+    let out = render(&gpu, &scene, &opts).unwrap();
+    assert_eq!((out.stop, out.spp_done), (StopReason::TimeLimit, 3));
+}
