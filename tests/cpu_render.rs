@@ -542,7 +542,8 @@ mod cli {
         // Stage by stage (the first-hit integrators are one stage and the film).
         let stages: Vec<&str> = wgsl.split("\n// ===== stage ").skip(1).collect();
         assert_eq!(stages.len(), 2, "{wgsl}");
-        let module = naga::front::wgsl::parse_str(stages[0].split_once('\n').unwrap().1).expect("the first stage parses");
+        let module =
+            naga::front::wgsl::parse_str(stages[0].split_once('\n').unwrap().1).expect("the first stage parses");
         let has = |name: &str| module.functions.iter().any(|(_, f)| f.name.as_deref() == Some(name));
         assert!(has("sphere_span") && has("radiance_flat"), "the kernel lacks what the scene needs");
         assert!(!has("cylinder_span") && !has("sample_bsdf"), "the kernel holds what the scene does not use");

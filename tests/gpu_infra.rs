@@ -118,7 +118,9 @@ fn assembled_kernels_run_and_are_cached_by_source() {
     let plain = FeatureSet::new();
     let bright = FeatureSet::new().with("bright");
     // Values alternate 2, 3 with `bright`.
-    for (features, want) in [(&plain, [1.0f32, 1.0]), (&bright, [2.0, 3.0]), (&plain, [1.0, 1.0]), (&bright, [2.0, 3.0])] {
+    for (features, want) in
+        [(&plain, [1.0f32, 1.0]), (&bright, [2.0, 3.0]), (&plain, [1.0, 1.0]), (&bright, [2.0, 3.0])]
+    {
         let source = lib.assemble(&["main"], features).unwrap().source;
         let kernel = cache.get_or_build(&source, "main", || gpu.compute_kernel("main.wgsl", &source, "main")).unwrap();
         let buffer = gpu.storage_buffer("out", &[0f32; 16]).unwrap();

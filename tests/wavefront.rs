@@ -115,7 +115,12 @@ fn images_do_not_depend_on_the_batch_size() {
         let name = scene.renderer.name();
         for batch in [12, 97, 400] {
             let out = gpu_render(&gpu, &scene, 4, batch);
-            assert!(out.batches > whole.batches, "{name}: batch {batch} ran {} batches of {}", out.batches, out.batch_paths);
+            assert!(
+                out.batches > whole.batches,
+                "{name}: batch {batch} ran {} batches of {}",
+                out.batches,
+                out.batch_paths
+            );
             assert!(bits(&out.image) == bits(&whole.image), "{name}: batches of {batch} slots change the image");
         }
         let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(4) }, Progress::Hidden);

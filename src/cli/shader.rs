@@ -29,7 +29,11 @@ pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     let scene = args.script.load(&args.scene)?;
     let features = FeatureSet::of(&scene);
     let stages = assemble_stages(&features).map_err(|e| anyhow!("cannot assemble the kernels: {e}"))?;
-    let mut text = format!("// lumen render kernels for {}\n// scene features: {}\n", args.scene.display(), features.names().join(" "));
+    let mut text = format!(
+        "// lumen render kernels for {}\n// scene features: {}\n",
+        args.scene.display(),
+        features.names().join(" ")
+    );
     for (stage, a) in &stages {
         text.push_str(&format!(
             "\n// ===== stage {} (entry point {}; features: {}) =====\n{}",

@@ -26,5 +26,5 @@ pub use device::{
     LOOP_LIMITER_PROBE_TRIPS,
 };
 pub use kernel_cache::KernelCache;
-pub use wavefront::{ctrlc_flag, PassOptions, StopReason};
 pub use test_support::{gpu_for_tests, gpu_required, REQUIRE_GPU_ENV};
+pub use wavefront::{ctrlc_flag, PassOptions, StopReason};

@@ -158,8 +158,11 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
     let mut names: Vec<&str> = stage.names(features);
     if let Stage::Shade(kind) = stage {
         // The queue this kernel drains is a constant of its own.
-        lib.add("<generated shade queue>", &format!("// #provides shade_queue\nconst SHADE_QUEUE: u32 = {}u;\n", wavefront::queue::shade(kind)))
-            .map_err(|e| GpuError::Validation(e.to_string()))?;
+        lib.add(
+            "<generated shade queue>",
+            &format!("// #provides shade_queue\nconst SHADE_QUEUE: u32 = {}u;\n", wavefront::queue::shade(kind)),
+        )
+        .map_err(|e| GpuError::Validation(e.to_string()))?;
         names.sort();
     }
     let root = stage.entry().0;
@@ -400,7 +403,9 @@ impl SceneBuffers {
                     11 => gpu.storage_buffer("point_lights", &at_least_one(&p.point_lights))?,
                     12 => gpu.storage_buffer("area_lights", &at_least_one(&p.area_lights))?,
                     b => {
-                        return Err(GpuError::Validation(format!("a stage kernel declares unknown @group(1) @binding({b})")))
+                        return Err(GpuError::Validation(format!(
+                            "a stage kernel declares unknown @group(1) @binding({b})"
+                        )))
                     }
                 };
                 buffers.insert(binding, buffer);
@@ -565,11 +570,14 @@ mod tests {
         let features = FeatureSet::of(&scene);
         let modules = assert_minimal(&features);
         let stages: Vec<Stage> = modules.iter().map(|(s, _)| *s).collect();
-        assert!(!stages.contains(&Stage::Csg) && !stages.contains(&Stage::Shade(crate::gpu::layout::brdf_kind::DIELECTRIC)));
+        assert!(
+            !stages.contains(&Stage::Csg) && !stages.contains(&Stage::Shade(crate::gpu::layout::brdf_kind::DIELECTRIC))
+        );
         let mut all = BTreeSet::new();
         for (stage, module) in &modules {
             let names = function_names(module);
-            for bad in ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"]
+            for bad in
+                ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"]
             {
                 assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in the {} stage: {names:?}", stage.label());
             }
@@ -583,7 +591,11 @@ mod tests {
         // The closest-hit stage has no shading code; the shading stage no traversal.
         let names_of = |s: Stage| function_names(&modules.iter().find(|(x, _)| *x == s).unwrap().1);
         let intersect = names_of(Stage::Intersect);
-        assert!(intersect.contains("traverse") && !intersect.contains("sample_bsdf") && !intersect.contains("pigment_color"));
+        assert!(
+            intersect.contains("traverse")
+                && !intersect.contains("sample_bsdf")
+                && !intersect.contains("pigment_color")
+        );
         let shade = names_of(Stage::Shade(crate::gpu::layout::brdf_kind::DIFFUSE));
         assert!(shade.contains("sample_diffuse") && !shade.contains("traverse") && !shade.contains("sphere_span"));
     }

@@ -167,7 +167,8 @@ impl<'a> Runner<'a> {
         max_depth: u32,
     ) -> Result<Self, GpuError> {
         let cap = u64::from(capacity);
-        let storage = |label: &str, buffer: StateBuffer| gpu.storage_buffer_zeroed(label, cap * state_bytes(buffer, shadow_rays));
+        let storage =
+            |label: &str, buffer: StateBuffer| gpu.storage_buffer_zeroed(label, cap * state_bytes(buffer, shadow_rays));
         let needs = |b: StateBuffer| kernels.kernels.keys().any(|s| s.buffers(features).contains(&b));
         let tiny = |label: &str, b: StateBuffer| -> Result<wgpu::Buffer, GpuError> {
             if needs(b) {
@@ -227,7 +228,8 @@ impl<'a> Runner<'a> {
         let mut groups0 = BTreeMap::new();
         for (&stage, kernel) in &kernels.kernels {
             for film in 0..if stage == Stage::Film { 2 } else { 1 } {
-                let refs: Vec<&wgpu::Buffer> = stage.buffers(features).into_iter().map(|b| buffer_of(b, film)).collect();
+                let refs: Vec<&wgpu::Buffer> =
+                    stage.buffers(features).into_iter().map(|b| buffer_of(b, film)).collect();
                 groups0.insert((stage, film), kernel.bind_group(gpu, 0, &refs)?);
             }
         }
@@ -259,7 +261,8 @@ impl<'a> Runner<'a> {
     /// Binds `stage`'s pipeline and groups in `pass`.
     fn bind(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize) -> Result<(), GpuError> {
         pass.set_pipeline(&self.kernels.get(stage)?.pipeline);
-        let g0 = self.groups0.get(&(stage, film)).ok_or_else(|| GpuError::Internal(format!("no group 0 for {stage:?}")))?;
+        let g0 =
+            self.groups0.get(&(stage, film)).ok_or_else(|| GpuError::Internal(format!("no group 0 for {stage:?}")))?;
         pass.set_bind_group(0, g0, &[]);
         if let Some(g1) = self.groups1.get(&stage) {
             pass.set_bind_group(1, g1, &[]);
@@ -318,7 +321,8 @@ impl<'a> Runner<'a> {
         let gpu = self.gpu;
         let mut result = Ok(());
         let index = gpu.scoped(|| {
-            let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("batch") });
+            let mut encoder =
+                gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("batch") });
             result = record(&mut encoder);
             gpu.queue.submit([encoder.finish()])
         })?;
@@ -380,7 +384,8 @@ impl BatchRunner for Runner<'_> {
             words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
             self.submit_commands(|e| {
-                let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("camera"), timestamp_writes: None });
+                let mut pass = e
+                    .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("camera"), timestamp_writes: None });
                 self.direct(&mut pass, Stage::Camera, 0, batch.path_count)?;
                 self.control_kernel(&mut pass, Stage::DispatchArgs)
             })?;
@@ -388,8 +393,10 @@ impl BatchRunner for Runner<'_> {
             // Deep renders check every 8 bounces whether any path is left.
             for b in 0..self.max_depth {
                 self.submit_commands(|e| {
-                    let mut pass =
-                        e.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("bounce"), timestamp_writes: None });
+                    let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("bounce"),
+                        timestamp_writes: None,
+                    });
                     self.bounce(&mut pass, b)
                 })?;
                 if self.max_depth > 16 && b % 8 == 7 && self.rays_left(b + 1)? == 0 {
@@ -403,7 +410,8 @@ impl BatchRunner for Runner<'_> {
         let pixels = batch.pixel_count;
         let submission = self.submit_commands(|e| {
             {
-                let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("film"), timestamp_writes: None });
+                let mut pass =
+                    e.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("film"), timestamp_writes: None });
                 match last {
                     // The last bounce (emission and escapes only), then the film.
                     Some(b) => self.bounce(&mut pass, b)?,

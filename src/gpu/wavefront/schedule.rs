@@ -162,9 +162,7 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     if plan.paths_per_sample > plan.capacity || plan.paths_per_sample > MAX_PATHS_PER_PIXEL_PER_ROUND {
         return Err(GpuError::Validation(format!(
             "{} paths per camera sample exceed what one GPU batch sums ({} path slots, at most {} paths per pixel)",
-            plan.paths_per_sample,
-            plan.capacity,
-            MAX_PATHS_PER_PIXEL_PER_ROUND
+            plan.paths_per_sample, plan.capacity, MAX_PATHS_PER_PIXEL_PER_ROUND
         )));
     }
     let start = Instant::now();
@@ -223,7 +221,8 @@ pub(crate) fn run_rounds<R: BatchRunner>(
             }
             None => None,
         };
-        spp_per_round = next_spp_per_pass(samples, per_sample, per_sample, remaining, opts.target_pass_seconds, max_spp);
+        spp_per_round =
+            next_spp_per_pass(samples, per_sample, per_sample, remaining, opts.target_pass_seconds, max_spp);
     }
     progress.finish_and_clear();
     Ok(Accumulated {
@@ -317,7 +316,8 @@ mod tests {
 
     #[test]
     fn batches_hold_whole_pixels_cover_each_once_and_fit_the_slots() {
-        for (w, h, n, cap, samples) in [(1, 1, 1, 1, 1), (7, 5, 3, 64, 4), (300, 200, 1, 65_536, 64), (9, 9, 10, 25, 2)] {
+        for (w, h, n, cap, samples) in [(1, 1, 1, 1, 1), (7, 5, 3, 64, 4), (300, 200, 1, 65_536, 64), (9, 9, 10, 25, 2)]
+        {
             let p = plan(w, h, n, cap);
             let s = round_samples(&p, samples);
             let mut next = 0;
@@ -371,8 +371,8 @@ mod tests {
     fn rounds_give_every_pixel_the_mean_of_its_samples() {
         let mut fake = Fake { submitted: vec![], cancel_after: None };
         let p = Plan { total_spp: 10, ..plan(5, 3, 2, 8) };
-        let out = run_rounds(&mut fake, &p, &PassOptions { target_pass_seconds: f64::MAX, ..Default::default() })
-            .unwrap();
+        let out =
+            run_rounds(&mut fake, &p, &PassOptions { target_pass_seconds: f64::MAX, ..Default::default() }).unwrap();
         assert_eq!((out.spp_done, out.stop), (10, StopReason::Completed));
         for (i, px) in out.image.pixels().iter().enumerate() {
             assert_eq!(px.r, i as f32 + 4.5, "pixel {i}: mean of p + j over j < 10");
@@ -384,12 +384,8 @@ mod tests {
         let flag = Arc::new(AtomicBool::new(false));
         // Batches of 4 pixels at 1 spp: the first round has 4 batches; cancel in round 2.
         let mut fake = Fake { submitted: vec![], cancel_after: Some((6, flag.clone())) };
-        let opts = PassOptions {
-            cancel: Some(flag),
-            initial_spp_per_pass: 1,
-            max_spp_per_pass: 1,
-            ..PassOptions::default()
-        };
+        let opts =
+            PassOptions { cancel: Some(flag), initial_spp_per_pass: 1, max_spp_per_pass: 1, ..PassOptions::default() };
         let out = run_rounds(&mut fake, &plan(4, 4, 1, 4), &opts).unwrap();
         assert_eq!((out.spp_done, out.stop, out.rounds), (1, StopReason::Interrupted, 2));
         assert!(out.image.pixels().iter().enumerate().all(|(i, px)| px.r == i as f32));

@@ -271,7 +271,9 @@ impl Stage {
     /// A short name for labels and reports.
     pub fn label(self) -> String {
         match self {
-            Stage::Shade(k) => format!("shade[{}]", ["diffuse", "specular", "dielectric"].get(k as usize).unwrap_or(&"?")),
+            Stage::Shade(k) => {
+                format!("shade[{}]", ["diffuse", "specular", "dielectric"].get(k as usize).unwrap_or(&"?"))
+            }
             other => format!("{other:?}").to_lowercase(),
         }
     }
