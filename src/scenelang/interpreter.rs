@@ -551,7 +551,7 @@ impl<'a> Interp<'a> {
     // ----------------------------------------------------------------- the result
 
     /// Checks that every setting was given and assembles the scene.
-    pub fn finish(self) -> Res<Scene> {
+    pub fn finish(mut self) -> Res<Scene> {
         let end = Span::new(self.lx.source.trim_end().len().saturating_sub(1), 1);
         let missing = |what: &str, example: &str| {
             self.err(end, ErrorKind::MissingSetting, format!("the script never sets the {what}"))
@@ -569,15 +569,19 @@ impl<'a> Interp<'a> {
                 .err(*image_span, ErrorKind::BadImageSize, format!("image size {width}×{height} cannot be rendered"))
                 .with_expected(format!("each side from 1 to {MAX_IMAGE_SIDE}")));
         }
-        let mut scene = self.world.builder.build().map_err(|e| {
+        let renderer = renderer.clone();
+        let environment = self.world.environment.take().map(|(e, _)| e);
+        // Moved, not copied: the shapes may be millions of primitives.
+        let builder = std::mem::replace(&mut self.world.builder, SceneBuilder::new(1, 1));
+        let mut scene = builder.into_scene().map_err(|e| {
             self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")).with_expected("a valid scene")
         })?;
         scene.width = width;
         scene.height = height;
         scene.camera = camera;
-        scene.renderer = renderer.clone();
+        scene.renderer = renderer;
         scene.tracer = tracer;
-        scene.environment = self.world.environment.as_ref().map(|(e, _)| e.clone());
+        scene.environment = environment;
         scene.validate().map_err(|e| {
             self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")).with_expected("a valid scene")
         })?;
