@@ -439,7 +439,7 @@ fn max_intervals_bounds_random_trees() {
             for _ in 0..30 {
                 let r = random_ray(&mut rng, 3.0);
                 let n = tree.intervals(&r).len();
-                assert!(n <= bound, "{n} intervals > bound {bound} for {shape:?}");
+                assert!(n as u64 <= bound, "{n} intervals > bound {bound} for {shape:?}");
             }
         }
     }

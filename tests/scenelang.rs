@@ -486,7 +486,7 @@ fn math_errors_and_singular_transformations() {
         ErrorKind::InvalidScene,
         1,
         22,
-        "not affine",
+        "only affine matrices (last row 0 0 0 1) are supported",
     );
     check_err("SET t SCALE 1e-200 * SCALE 1e-200", ErrorKind::InvalidScene, 1, 20, "not finite");
 }
@@ -700,4 +700,148 @@ fn dump_shows_images_by_size_and_values_in_scenelang_syntax() {
     assert!(text.contains("    Cube material #0") && text.contains(&format!("#0 {m}")), "{text}");
     assert!(text.contains("environment: Environment.Image(8×4 pixels, .intensity 1, .rotation 0)"), "{text}");
     assert!(text.len() < 2000, "DUMP must not print pixels:\n{text}");
+}
+
+// ------------------------------------------------------------------ limits and sharing (issue 16)
+
+/// `SET c0 base`, then `SET c{i} OP(c{i-1}, c{i-1})` for i in 1..lines: line i+1 defines a
+/// tree of 2^i copies of `base`.
+fn doubling(op: &str, base: &str, lines: usize) -> String {
+    let mut s = format!("SET c0 {base}\n");
+    for i in 1..lines {
+        s += &format!("SET c{i} {op}(c{}, c{})\n", i - 1, i - 1);
+    }
+    s
+}
+
+#[test]
+fn shared_names_are_refused_where_they_cross_the_primitive_limit() {
+    assert_eq!(MAX_PRIMITIVES, 1 << 21);
+    // The reproducer of issue 16 (a FUSE chain of 23 lines took > 4 GiB): FUSE sums its
+    // children's pieces along a ray, so the interval limit (2^16) is crossed first, by
+    // c17 = 2^17 spheres on line 18; the error points at its FUSE.
+    let e = check_err(&doubling("FUSE", "Shape.Sphere()", 23), ErrorKind::TooLarge, 18, 9, "131072 pieces");
+    assert!(e.to_string().contains("limit of 65536"), "{e}");
+    assert!(e.note().unwrap().contains("the pieces of UNITE and FUSE"), "{e}");
+    // INTERSECT of disjoint pieces stays at one piece, so its chain reaches the primitive
+    // limit: c21 = 2^21 primitives is allowed, c22 on line 23 is not.
+    let e = check_err(
+        &doubling("INTERSECT", "Shape.Sphere()", 23),
+        ErrorKind::TooLarge,
+        23,
+        9,
+        "stands for 4194304 primitives, more than the limit of 2097152",
+    );
+    assert!(e.note().unwrap().contains("once per use"), "{e}");
+    // 64 lines would overflow a 64-bit count: the first crossing is still what is reported.
+    check_err(&doubling("INTERSECT", "Shape.Sphere()", 70), ErrorKind::TooLarge, 23, 9, "4194304 primitives");
+    // A scene of shared names that stays within the limits checks, names used thousands of
+    // times included: each use is a pointer, so this takes no time, while copying c20
+    // (2^20 spheres) per use would need some 10^10 nodes.
+    let mut src = doubling("INTERSECT", "Shape.Sphere()", 21);
+    for i in 0..5000 {
+        src += &format!("SET d{i} UNITE(c20, c0)\n");
+    }
+    let s = with_settings(&src);
+    assert!(s.shapes.is_empty());
+}
+
+#[test]
+fn spawn_refuses_scenes_beyond_the_primitive_limit_before_expanding_them() {
+    // c21 alone is 2^21 primitives, exactly the limit; one more sphere before it crosses it.
+    let src = format!("{}SPAWN Shape.Sphere() c21", doubling("INTERSECT", "Shape.Sphere()", 22));
+    let e = check_err(&src, ErrorKind::TooLarge, 23, 22, "the scene would hold 2097153 primitives");
+    assert!(e.to_string().contains("limit of 2097152"), "{e}");
+    // Within the limit, a spawned shared shape expands to every use of its leaves, with
+    // their material looked up once: 2^10 leaves, one material.
+    let src = doubling("FUSE", "Shape.Sphere(.material Material(Brdf.Diffuse(<0.5, 0.25, 1>)))", 11) + "SPAWN c10";
+    let s = with_settings(&src);
+    assert_eq!((s.shapes.len(), s.materials.len()), (1, 1));
+    assert_eq!(s.shapes[0].csg_depth(), 10);
+    let mut leaves = 0;
+    s.shapes[0].for_each_primitive(&mut |p, _| {
+        assert_eq!(p.material, MaterialId(0));
+        leaves += 1;
+    });
+    assert_eq!(leaves, 1024);
+}
+
+#[test]
+fn csg_depth_is_limited_and_long_chains_are_linear() {
+    assert_eq!(MAX_CSG_DEPTH, 256);
+    // The UNITE chain of issue 16 (4000 lines, each uniting the previous line's shape with a
+    // sphere; memory grew with the square of its length): line i + 1 is depth i, so the
+    // first line past the depth limit is refused, at its UNITE.
+    let chain = |lines: usize| {
+        let mut s = String::from("SET u0 Shape.Sphere()\n");
+        for i in 1..lines {
+            s += &format!("SET u{i} UNITE(u{}, Shape.Sphere())\n", i - 1);
+        }
+        s
+    };
+    let e =
+        check_err(&chain(4000), ErrorKind::TooDeep, 258, 10, "nests CSG 257 levels deep, more than the limit of 256");
+    assert!(e.note().unwrap().contains("UNITE(a, b, c, ...)"), "{e}");
+    // At the limit it loads, spawns and keeps its shape: depth 256, 257 spheres.
+    let s = with_settings(&format!("{}SPAWN u256", chain(257)));
+    assert_eq!(s.shapes[0].csg_depth(), 256);
+    let mut n = 0;
+    s.shapes[0].for_each_primitive(&mut |_, _| n += 1);
+    assert_eq!(n, 257);
+    // The flat spelling of a long union is one level, however wide.
+    let wide = format!("SPAWN UNITE({})", vec!["Shape.Sphere()"; 4000].join(", "));
+    let s = with_settings(&wide);
+    assert_eq!((s.shapes[0].csg_depth(), s.shapes[0].csg_node_count()), (1, 1));
+}
+
+#[test]
+fn csg_interval_bounds_are_checked_not_overflowed() {
+    assert_eq!(MAX_CSG_INTERVALS, 1 << 16);
+    // Issue 16, item 6: an INTERSECT of k two-sphere UNITEs may cross a ray in 2^k pieces
+    // (each UNITE's two intervals overlap); 2^32 used to be computed unchecked, and 64
+    // overflowed.
+    let intersect =
+        |k: usize| format!("SET p UNITE(Shape.Sphere(), Shape.Sphere())\nSET x INTERSECT({})", vec!["p"; k].join(", "));
+    let e =
+        check_err(&intersect(32), ErrorKind::TooLarge, 2, 7, "up to 4294967296 pieces, more than the limit of 65536");
+    assert!(e.note().unwrap().starts_with("INTERSECT and DIFF multiply the pieces of a UNITE"), "{e}");
+    check_err(&intersect(64), ErrorKind::TooLarge, 2, 7, "up to 18446744073709551615 or more pieces");
+    check_err(&intersect(17), ErrorKind::TooLarge, 2, 7, "up to 131072 pieces");
+    // 2^16 is the limit itself and loads.
+    with_settings(&intersect(16));
+}
+
+#[test]
+fn a_colour_where_a_pigment_goes_is_a_uniform_pigment() {
+    let s = with_settings(
+        "SPAWN Shape.Sphere(.material Material(.brdf Brdf.Dielectric(.pigment <1, 1, 1>)))
+               Shape.Cube(.material Material(Brdf.Diffuse(<0.5, 0.25, 0>), <2, 3, 4>))",
+    );
+    let glass = Material::new(
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::new(1.0, 1.0, 1.0)), ior: 1.5 },
+        Pigment::Uniform(Color::BLACK),
+    );
+    assert_eq!(material(&s, 0), &glass);
+    let lamp = Material::new(
+        Brdf::Diffuse { pigment: Pigment::Uniform(Color::new(0.5, 0.25, 0.0)) },
+        Pigment::Uniform(Color::new(2.0, 3.0, 4.0)),
+    );
+    assert_eq!(material(&s, 1), &lamp);
+    // Only where a pigment is expected: a colour is still no number.
+    check_err("SET b Brdf.Dielectric(.ior <1, 1, 1>)", ErrorKind::WrongType, 1, 28, "must be a number");
+}
+
+#[test]
+fn loading_is_linear_in_the_number_of_names() {
+    // Issue 16, item 4: each SET recorded its origin by rescanning the source from the
+    // start, so 40 000 names took 10 s. A million names (14 MB) would take hours that way;
+    // the redefinition at the end must also name the right line of the first one.
+    let n = 1_000_000;
+    let mut src = String::with_capacity(16 * n);
+    for i in 0..n {
+        src += &format!("SET n{i} {i}\n");
+    }
+    src += "SET n999998 1";
+    let e = check_err(&src, ErrorKind::RedefinedName, n + 1, 5, "`n999998` is already defined");
+    assert_eq!(e.note(), Some("`n999998` was defined at t.sl:999999:5"));
 }

@@ -104,4 +104,10 @@ impl SceneBuilder {
         self.scene.validate()?;
         Ok(self.scene.clone())
     }
+
+    /// [`Self::build`] without the copy, for a builder that is done.
+    pub fn into_scene(self) -> Result<Scene, SceneError> {
+        self.scene.validate()?;
+        Ok(self.scene)
+    }
 }

@@ -25,7 +25,7 @@ pub use light::PointLight;
 pub use material::{Material, MaterialId};
 pub use pigment::{ImageFilter, Pigment};
 pub use settings::{PathTracerSettings, PcgSeed, Renderer, Tracer};
-pub use shape::{Csg, CsgOp, Primitive, Shape, ShapeKind};
+pub use shape::{Csg, CsgOp, Primitive, Shape, ShapeKind, MAX_CSG_DEPTH, MAX_CSG_INTERVALS, MAX_PRIMITIVES};
 pub use transform::Transform;
 
 /// Largest image side lumen accepts; larger sizes are input errors, not allocations.
@@ -38,7 +38,7 @@ pub enum SceneError {
     SingularTransform,
     #[error("transformation has a non-finite entry (NaN or infinity)")]
     NonFiniteTransform,
-    #[error("transformation is not affine (last row must be 0 0 0 1)")]
+    #[error("transformation is not affine: only affine matrices (last row 0 0 0 1) are supported")]
     NotAffine,
     #[error("image size {0}×{1} is invalid (each side must be 1..={MAX_IMAGE_SIDE})")]
     BadImageSize(u32, u32),

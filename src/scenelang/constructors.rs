@@ -8,13 +8,14 @@ use glam::DVec3;
 
 use super::error::{did_you_mean, ErrorKind, SceneLangError, Span};
 use super::interpreter::Interp;
-use super::lexer::{Lexer, Tok, TypeName};
-use super::value::{ImageValue, ShapeValue, Ty, Value};
+use super::lexer::{Lexer, Tok};
+use super::value::{ImageValue, ShapeNode, ShapeValue, Ty, Value, PER_USE};
 use crate::color::Color;
 use crate::image::HdrImage;
 use crate::scene::{
     Brdf, Camera, CsgOp, Environment, ImageFilter, Material, PathTracerSettings, PcgSeed, Pigment, PointLight,
-    Projection, Renderer, SceneError, ShapeKind, Tracer, Transform, DEFAULT_THRESHOLD_ANGLE_RAD, MAX_IMAGE_SIDE,
+    Projection, Renderer, SceneError, ShapeKind, Tracer, Transform, DEFAULT_THRESHOLD_ANGLE_RAD, MAX_CSG_DEPTH,
+    MAX_CSG_INTERVALS, MAX_IMAGE_SIDE, MAX_PRIMITIVES,
 };
 
 type Res<T> = Result<T, SceneLangError>;
@@ -82,7 +83,7 @@ impl Args {
     }
 }
 
-fn subtype_error(lx: &Lexer<'_>, ty: TypeName, span: Span, found: &str, valid: &[&str]) -> SceneLangError {
+fn subtype_error(lx: &Lexer<'_>, ty: Ty, span: Span, found: &str, valid: &[&str]) -> SceneLangError {
     let mut e =
         lx.error(span, ErrorKind::UnknownKeyword, format!("unknown kind `{found}` of {}", ty.name())).with_expected(
             format!("one of {}", valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")),
@@ -154,6 +155,11 @@ impl Interp<'_> {
             };
             let (v, s) = self.value()?;
             let param = &params[index];
+            // Extension: a colour where a pigment is expected is that uniform pigment.
+            let v = match v {
+                Value::Color(c) if param.ty == Ty::Pigment => Value::Pigment(Pigment::Uniform(c)),
+                v => v,
+            };
             if v.ty() != param.ty {
                 return Err(self
                     .err(
@@ -166,22 +172,15 @@ impl Interp<'_> {
                             v.ty().article()
                         ),
                     )
-                    .with_expected(param.ty.article()));
+                    .with_expected(if param.ty == Ty::Pigment {
+                        "a Pigment (or a colour `<r, g, b>`, short for Pigment.Uniform)".to_string()
+                    } else {
+                        param.ty.article()
+                    }));
             }
             args.vals[index] = Some((v, s));
-            let t = self.lx.next()?;
-            match t.tok {
-                Tok::Sym(',') => {}
-                Tok::Sym(')') => return Ok(args),
-                other => {
-                    return Err(self
-                        .err(
-                            t.span,
-                            ErrorKind::Syntax,
-                            format!("expected `,` or `)` in {ctor}, found {}", other.describe()),
-                        )
-                        .with_expected("`,` or `)`"))
-                }
+            if !self.separator(',', Some(')'), &format!(" in {ctor}"), "`,` or `)`")? {
+                return Ok(args);
             }
         }
     }
@@ -220,8 +219,13 @@ impl Interp<'_> {
     /// transformations whose matrix or inverse overflowed.
     pub(super) fn checked(&self, t: Result<Transform, SceneError>, span: Span) -> Res<Transform> {
         let t = t.map_err(|e| {
-            self.err(span, ErrorKind::InvalidScene, format!("invalid transformation: {e}"))
-                .with_expected("an invertible affine transformation (no zero scale factors)")
+            let expected = match e {
+                // Raytracer.jl takes any invertible 4×4 matrix; lumen's shapes and bounds
+                // assume affine ones.
+                SceneError::NotAffine => "an affine matrix: last row 0 0 0 1 (projective matrices are not supported)",
+                _ => "an invertible affine transformation (no zero scale factors)",
+            };
+            self.err(span, ErrorKind::InvalidScene, format!("invalid transformation: {e}")).with_expected(expected)
         })?;
         if !(t.matrix().is_finite() && t.inverse_matrix().is_finite()) {
             return Err(self
@@ -273,19 +277,8 @@ impl Interp<'_> {
                 }
             };
             t = self.checked(Ok(t * r), k.span.to(ds))?;
-            let sep = self.lx.next()?;
-            match sep.tok {
-                Tok::Sym('*') => {}
-                Tok::Sym(')') => break,
-                other => {
-                    return Err(self
-                        .err(
-                            sep.span,
-                            ErrorKind::Syntax,
-                            format!("expected `*` or `)` in ROTATE, found {}", other.describe()),
-                        )
-                        .with_expected("`*` between rotations, `)` after the last"))
-                }
+            if !self.separator('*', Some(')'), " in ROTATE", "`*` between rotations, `)` after the last")? {
+                break;
             }
         }
         Ok(Value::Transformation(t))
@@ -293,7 +286,10 @@ impl Interp<'_> {
 
     /// `UNITE(a, b, ..., .transformation T)` (the trailing keyword is lumen's way to place a
     /// CSG node; it applies after the children's own transformations).
-    pub(super) fn csg(&mut self, op: CsgOp) -> Res<Value> {
+    ///
+    /// The node is refused, at its own span, where it crosses a limit of the tree it stands
+    /// for (see [`Self::check_size`]); nothing is expanded here, children are shared.
+    pub(super) fn csg(&mut self, op: CsgOp, start: Span) -> Res<Value> {
         let name = op.keyword();
         self.expect_sym('(', &format!("after {name}"))?;
         let mut children = Vec::new();
@@ -337,19 +333,8 @@ impl Interp<'_> {
                     .with_expected("a Shape"));
             };
             children.push((shape, s));
-            let sep = self.lx.next()?;
-            match sep.tok {
-                Tok::Sym(',') => {}
-                Tok::Sym(')') => break,
-                other => {
-                    return Err(self
-                        .err(
-                            sep.span,
-                            ErrorKind::Syntax,
-                            format!("expected `,` or `)` in {name}, found {}", other.describe()),
-                        )
-                        .with_expected("`,` or `)`"))
-                }
+            if !self.separator(',', Some(')'), &format!(" in {name}"), "`,` or `)`")? {
+                break;
             }
         }
         if children.len() < 2 {
@@ -358,11 +343,59 @@ impl Interp<'_> {
                 .err(span, ErrorKind::BadArguments, format!("{name} needs at least two shapes, got {}", children.len()))
                 .with_expected("two or more shapes"));
         }
-        Ok(Value::Shape(ShapeValue::Csg { op, children: children.into_iter().map(|c| c.0).collect(), transform }))
+        let shape = ShapeValue::csg(op, children.into_iter().map(|c| c.0).collect(), transform);
+        self.check_size(&shape, start.to(Span::new(self.lx.last_end, 0)))?;
+        Ok(Value::Shape(shape))
+    }
+
+    /// Refuses a CSG node whose tree exceeds [`MAX_PRIMITIVES`], [`MAX_CSG_DEPTH`] or
+    /// [`MAX_CSG_INTERVALS`]; its children were checked when they were made, so the first
+    /// node to cross a limit is the one reported.
+    fn check_size(&self, shape: &ShapeValue, span: Span) -> Res<()> {
+        let size = shape.size();
+        let name = match shape.node() {
+            ShapeNode::Csg { op, .. } => op.keyword(),
+            ShapeNode::Primitive { .. } => return Ok(()),
+        };
+        if size.depth > MAX_CSG_DEPTH {
+            let msg =
+                format!("this {name} nests CSG {} levels deep, more than the limit of {MAX_CSG_DEPTH}", size.depth);
+            return Err(self
+                .err(span, ErrorKind::TooDeep, msg)
+                .with_expected(format!("CSG trees at most {MAX_CSG_DEPTH} levels deep"))
+                .with_note("a CSG node of many shapes, UNITE(a, b, c, ...), is one level"));
+        }
+        if size.primitives > MAX_PRIMITIVES {
+            let msg = format!(
+                "this {name} stands for {} primitives, more than the limit of {MAX_PRIMITIVES}",
+                size.primitives
+            );
+            return Err(self
+                .err(span, ErrorKind::TooLarge, msg)
+                .with_expected(format!("at most {MAX_PRIMITIVES} primitives in a scene"))
+                .with_note(PER_USE));
+        }
+        if size.intervals.n > MAX_CSG_INTERVALS {
+            // The bound saturates at u64::MAX rather than overflowing.
+            let n = size.intervals.n;
+            let n = if n == u64::MAX { format!("{n} or more") } else { n.to_string() };
+            let msg =
+                format!("this {name} may cross a ray in up to {n} pieces, more than the limit of {MAX_CSG_INTERVALS}");
+            let note = if size.intervals.overlap && matches!(name, "INTERSECT" | "DIFF") {
+                "INTERSECT and DIFF multiply the pieces of a UNITE (a FUSE's pieces do not overlap and only add up)"
+            } else {
+                "the pieces of UNITE and FUSE (and of INTERSECT and DIFF of FUSEs) add up: shapes spawned one by one need no CSG"
+            };
+            return Err(self
+                .err(span, ErrorKind::TooLarge, msg)
+                .with_expected(format!("CSG trees of at most {MAX_CSG_INTERVALS} intervals along a ray"))
+                .with_note(format!("{note}; {PER_USE}")));
+        }
+        Ok(())
     }
 
     /// Reads the `.Kind` after a type word.
-    fn subtype(&mut self, ty: TypeName, valid: &[&'static str]) -> Res<&'static str> {
+    fn subtype(&mut self, ty: Ty, valid: &[&'static str]) -> Res<&'static str> {
         let t = self.lx.next()?;
         match &t.tok {
             Tok::Keyword(k) => match valid.iter().find(|v| **v == k) {
@@ -382,27 +415,27 @@ impl Interp<'_> {
         }
     }
 
-    pub(super) fn constructor(&mut self, ty: TypeName) -> Res<Value> {
+    pub(super) fn constructor(&mut self, ty: Ty) -> Res<Value> {
         use Ty as T;
         Ok(match ty {
-            TypeName::Color => {
+            Ty::Color => {
                 let a = self.args("Color", &[p("R", T::Number), p("G", T::Number), p("B", T::Number)])?;
                 Value::Color(Color::new(a.num(0, 0.0), a.num(1, 0.0), a.num(2, 0.0)))
             }
-            TypeName::Point => {
+            Ty::Point => {
                 let a = self.args("Point", &[p("X", T::Number), p("Y", T::Number), p("Z", T::Number)])?;
                 Value::Point(DVec3::new(a.num(0, 0.0), a.num(1, 0.0), a.num(2, 0.0)))
             }
-            TypeName::List => {
+            Ty::List => {
                 self.expect_sym('(', "after List")?;
                 Value::List(self.number_list(')')?)
             }
-            TypeName::Transformation => {
+            Ty::Transformation => {
                 let a = self.args("Transformation", &[p("matrix", T::List)])?;
                 let Some((Value::List(l), ls)) = &a.vals[0] else {
                     return Ok(Value::Transformation(Transform::IDENTITY));
                 };
-                let Ok(rows) = <[f64; 16]>::try_from(l.as_slice()) else {
+                let Ok(rows) = <[f64; 16]>::try_from(&l[..]) else {
                     return Err(self
                         .err(
                             *ls,
@@ -413,8 +446,8 @@ impl Interp<'_> {
                 };
                 Value::Transformation(self.checked(Transform::from_rows(rows), *ls)?)
             }
-            TypeName::Image => self.image_constructor()?,
-            TypeName::Pigment => {
+            Ty::Image => self.image_constructor()?,
+            Ty::Pigment => {
                 let kind = self.subtype(ty, &["Uniform", "Checkered", "Image"])?;
                 Value::Pigment(match kind {
                     "Uniform" => {
@@ -447,7 +480,7 @@ impl Interp<'_> {
                     }
                 })
             }
-            TypeName::Brdf => {
+            Ty::Brdf => {
                 let kind = self.subtype(ty, &["Diffuse", "Specular", "Dielectric"])?;
                 Value::Brdf(match kind {
                     "Diffuse" => {
@@ -467,7 +500,7 @@ impl Interp<'_> {
                     }
                 })
             }
-            TypeName::Material => {
+            Ty::Material => {
                 let mut a = self.args("Material", &[p("brdf", T::Brdf), p("emitted_radiance", T::Pigment)])?;
                 let brdf = match a.take(0) {
                     Some((Value::Brdf(b), _)) => b,
@@ -479,7 +512,7 @@ impl Interp<'_> {
                 };
                 Value::Material(Material::new(brdf, emitted))
             }
-            TypeName::Shape => {
+            Ty::Shape => {
                 let kind = self.subtype(ty, &["Sphere", "Plane", "Cube", "Cylinder"])?;
                 let kind = match kind {
                     "Sphere" => ShapeKind::Sphere,
@@ -494,9 +527,9 @@ impl Interp<'_> {
                     Some((Value::Material(m), _)) => m,
                     _ => Material::default(),
                 };
-                Value::Shape(ShapeValue::Primitive { kind, transform, material })
+                Value::Shape(ShapeValue::primitive(kind, transform, material))
             }
-            TypeName::Light => {
+            Ty::Light => {
                 let a = self
                     .args("Light", &[p("position", T::Point), p("color", T::Color), p("linear_radius", T::Number)])?;
                 let linear_radius = self.positive(&a, 2, "linear_radius", 0.0, true)?;
@@ -506,13 +539,13 @@ impl Interp<'_> {
                     linear_radius,
                 })
             }
-            TypeName::Pcg => {
+            Ty::Pcg => {
                 let a = self.args("Pcg", &[p("state", T::Number), p("inc", T::Number)])?;
                 let state = self.int(&a, 0, "state", 42, 0, 1 << 53)?;
                 let inc = self.int(&a, 1, "inc", 54, 0, 1 << 53)?;
                 Value::Pcg(PcgSeed { state, inc })
             }
-            TypeName::Camera => {
+            Ty::Camera => {
                 let kind = self.subtype(ty, &["Perspective", "Orthogonal"])?;
                 if kind == "Perspective" {
                     let a = self.args(
@@ -543,7 +576,7 @@ impl Interp<'_> {
                     })
                 }
             }
-            TypeName::Renderer => {
+            Ty::Renderer => {
                 let kind = self.subtype(ty, &["OnOff", "Flat", "PointLight", "PathTracer"])?;
                 Value::Renderer(match kind {
                     "OnOff" => {
@@ -591,12 +624,12 @@ impl Interp<'_> {
                     }
                 })
             }
-            TypeName::Tracer => {
+            Ty::Tracer => {
                 let a = self.args("Tracer", &[p("samples_per_side", T::Number), p("rng", T::Pcg)])?;
                 let samples_per_side = self.int(&a, 0, "samples_per_side", 0, 0, 1024)? as u32;
                 Value::Tracer(Tracer { samples_per_side, rng: a.pcg(1) })
             }
-            TypeName::Environment => {
+            Ty::Environment => {
                 let kind = self.subtype(ty, &["Uniform", "Gradient", "Image"])?;
                 Value::Environment(match kind {
                     "Uniform" => Environment::Uniform(
@@ -623,6 +656,16 @@ impl Interp<'_> {
                         Environment::Image { image: self.pixels(a.take(0))?, intensity, rotation_deg }
                     }
                 })
+            }
+            // Not type words: the lexer never yields them as `Tok::Type`.
+            Ty::Number | Ty::Str => {
+                return Err(self
+                    .err(
+                        Span::new(self.lx.last_end, 0),
+                        ErrorKind::Syntax,
+                        format!("{} has no constructor", ty.article()),
+                    )
+                    .with_expected("a constructor such as `Color(...)`"))
             }
         })
     }

@@ -3,7 +3,7 @@
 use std::fmt::Write;
 
 use super::interpreter::{Vars, World};
-use super::value::{ImageValue, ShapeValue, Value};
+use super::value::{ImageValue, ShapeNode, ShapeValue, Value};
 use crate::color::Color;
 use crate::scene::{Brdf, Material, Pigment, Shape, Transform};
 
@@ -76,17 +76,23 @@ pub fn describe(v: &Value) -> String {
     }
 }
 
+/// Largest CSG tree DUMP writes out in full; names shared many times stand for trees far
+/// larger than their script (FUSE(a, a) doubles each line), so bigger ones are summarised.
+const MAX_DUMPED_PRIMITIVES: u64 = 64;
+
 fn shape_value(s: &ShapeValue) -> String {
-    match s {
-        ShapeValue::Primitive { kind, transform: t, material: m } => {
+    match s.node() {
+        ShapeNode::Primitive { kind, transform: t, material: m } => {
             format!("Shape.{kind:?}(.material {}, .transformation {})", material(m), transform(t))
         }
-        ShapeValue::Csg { op, children, transform: t } => format!(
-            "{}({}, .transformation {})",
-            op.keyword(),
-            children.iter().map(shape_value).collect::<Vec<_>>().join(", "),
-            transform(t)
-        ),
+        ShapeNode::Csg { op, children, transform: t, size } => {
+            let inner = if size.primitives > MAX_DUMPED_PRIMITIVES {
+                format!("<{} shapes: {} primitives, depth {}>", children.len(), size.primitives, size.depth)
+            } else {
+                children.iter().map(shape_value).collect::<Vec<_>>().join(", ")
+            };
+            format!("{}({inner}, .transformation {})", op.keyword(), transform(t))
+        }
     }
 }
 

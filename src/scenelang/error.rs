@@ -44,8 +44,13 @@ pub enum ErrorKind {
     BadImageSize,
     /// The scene model refused the value (singular transformation, …).
     InvalidScene,
-    /// Nesting deeper than the interpreter allows (protects the stack).
+    /// Nesting deeper than the interpreter allows (protects the stack), or a CSG tree
+    /// deeper than [`crate::scene::MAX_CSG_DEPTH`].
     TooDeep,
+    /// A shape that would expand beyond lumen's limits: more primitives than
+    /// [`crate::scene::MAX_PRIMITIVES`] or longer interval lists than
+    /// [`crate::scene::MAX_CSG_INTERVALS`].
+    TooLarge,
     /// The script file could not be read, or DUMP could not write.
     Io,
 }
@@ -100,13 +105,36 @@ impl Span {
     }
 }
 
-/// 1-based (line, column) of byte `offset` in `source`, columns counted in characters.
+/// Where each line of a source starts, so that a byte offset becomes (line, column) by a
+/// binary search plus a scan of one line: loading records the origin of every `SET`, and
+/// rescanning the source from its start each time made loading quadratic.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LineIndex {
+    /// Byte offset of the start of each line; `starts[0] == 0`.
+    starts: Vec<usize>,
+}
+
+impl LineIndex {
+    pub fn new(source: &str) -> Self {
+        let starts = std::iter::once(0).chain(source.match_indices('\n').map(|(i, _)| i + 1)).collect();
+        Self { starts }
+    }
+
+    /// 1-based (line, column) of byte `offset` in `source` (the text this index was built
+    /// from), columns counted in characters.
+    pub fn line_col(&self, source: &str, offset: usize) -> (usize, usize) {
+        let offset = floor_char_boundary(source, offset.min(source.len()));
+        // The last line start at or before `offset`.
+        let line = self.starts.partition_point(|&s| s <= offset);
+        let line_start = self.starts[line - 1];
+        (line, source[line_start..offset].chars().count() + 1)
+    }
+}
+
+/// 1-based (line, column) of byte `offset` in `source`, for a single lookup (it reads the
+/// whole source; keep a [`LineIndex`] for many).
 pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
-    let offset = floor_char_boundary(source, offset.min(source.len()));
-    let before = &source[..offset];
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    (line, source[line_start..offset].chars().count() + 1)
+    LineIndex::new(source).line_col(source, offset)
 }
 
 fn floor_char_boundary(s: &str, mut i: usize) -> usize {
@@ -242,6 +270,22 @@ mod tests {
         assert_eq!(line_col("é x", 3), (1, 3));
         let e = SceneLangError::at("abc", "f", Span::new(99, 4), ErrorKind::Syntax, "m");
         assert_eq!((e.line, e.col), (1, 4));
+    }
+
+    #[test]
+    fn the_line_index_finds_lines_by_search() {
+        let src = "ab\n\nçd\nlast";
+        let idx = LineIndex::new(src);
+        assert_eq!(idx.starts, vec![0, 3, 4, 8]);
+        let expect = [(0, (1, 1)), (2, (1, 3)), (3, (2, 1)), (4, (3, 1)), (6, (3, 2)), (7, (3, 3)), (8, (4, 1))];
+        for (offset, lc) in expect {
+            assert_eq!(idx.line_col(src, offset), lc, "offset {offset}");
+            assert_eq!(line_col(src, offset), lc, "offset {offset}");
+        }
+        // Inside a two-byte character: the column of that character; past the end: clamped.
+        assert_eq!(idx.line_col(src, 5), (3, 1));
+        assert_eq!(idx.line_col(src, 99), (4, 5));
+        assert_eq!(LineIndex::new("").line_col("", 0), (1, 1));
     }
 
     #[test]

@@ -4,16 +4,20 @@
 use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::DVec3;
 
 use super::dump;
-use super::error::{did_you_mean, line_col, ErrorKind, SceneLangError, Span};
+use super::error::{did_you_mean, ErrorKind, SceneLangError, Span};
 use super::lexer::{Command, Lexer, Tok, Token};
 use super::math::{self, Lookup, MathValue};
-use super::value::{ImageValue, ShapeValue, Value};
+use super::value::{ImageValue, ShapeNode, ShapeValue, Value, PER_USE};
 use crate::color::Color;
-use crate::scene::{Camera, CsgOp, Environment, Renderer, Scene, SceneBuilder, Shape, Tracer, MAX_IMAGE_SIDE};
+use crate::scene::{
+    Camera, CsgOp, Environment, MaterialId, Renderer, Scene, SceneBuilder, Shape, Tracer, MAX_IMAGE_SIDE,
+    MAX_PRIMITIVES,
+};
 
 type Res<T> = Result<T, SceneLangError>;
 
@@ -36,6 +40,8 @@ pub type Vars = HashMap<String, Var>;
 /// Everything `USING` and `SPAWN` have set so far.
 pub struct World {
     pub builder: SceneBuilder,
+    /// Primitives spawned so far, CSG leaves counted once per use (at most [`MAX_PRIMITIVES`]).
+    pub primitives: u64,
     pub camera: Option<(Camera, Span)>,
     pub image: Option<(ImageValue, Span)>,
     pub renderer: Option<(Renderer, Span)>,
@@ -47,6 +53,7 @@ impl World {
     fn new() -> Self {
         Self {
             builder: SceneBuilder::new(1, 1),
+            primitives: 0,
             camera: None,
             image: None,
             renderer: None,
@@ -83,12 +90,34 @@ impl<'a> Interp<'a> {
     }
 
     fn origin(&self, span: Span) -> String {
-        let (l, c) = line_col(self.lx.source, span.start);
+        let (l, c) = self.lx.line_col(span.start);
         format!("{}:{l}:{c}", self.lx.file)
     }
 
     pub(super) fn peek(&mut self) -> Res<Token> {
         self.lx.peek().cloned()
+    }
+
+    /// Reads what follows an item of a list: `true` after `sep` (another item follows),
+    /// `false` after `close` (`None`: the end of the text). `place` completes the message
+    /// "expected `,` or `)`…"; `expected` says what would do.
+    pub(super) fn separator(&mut self, sep: char, close: Option<char>, place: &str, expected: &str) -> Res<bool> {
+        let t = self.lx.next()?;
+        match t.tok {
+            Tok::Sym(c) if c == sep => Ok(true),
+            Tok::Sym(c) if Some(c) == close => Ok(false),
+            Tok::Eof if close.is_none() => Ok(false),
+            other => {
+                let close = close.map_or("the end".to_string(), |c| format!("`{c}`"));
+                Err(self
+                    .err(
+                        t.span,
+                        ErrorKind::Syntax,
+                        format!("expected `{sep}` or {close}{place}, found {}", other.describe()),
+                    )
+                    .with_expected(expected))
+            }
+        }
     }
 
     pub(super) fn expect_sym(&mut self, c: char, what: &str) -> Res<Span> {
@@ -210,7 +239,23 @@ impl<'a> Interp<'a> {
             let (v, span) = self.value()?;
             match v {
                 Value::Shape(s) => {
-                    let shape = self.place_shape(s);
+                    // Checked before expanding: a shape of shared names may stand for far
+                    // more primitives than memory holds.
+                    let total = self.world.primitives.saturating_add(s.size().primitives);
+                    if total > MAX_PRIMITIVES {
+                        return Err(self
+                            .err(
+                                span,
+                                ErrorKind::TooLarge,
+                                format!(
+                                    "the scene would hold {total} primitives, more than the limit of {MAX_PRIMITIVES}"
+                                ),
+                            )
+                            .with_expected(format!("at most {MAX_PRIMITIVES} primitives in all"))
+                            .with_note(PER_USE));
+                    }
+                    self.world.primitives = total;
+                    let shape = self.place_shape(&s, &mut HashMap::new());
                     self.world.builder.shape(shape);
                 }
                 Value::Light(l) => {
@@ -238,16 +283,19 @@ impl<'a> Interp<'a> {
         Ok(())
     }
 
-    /// Turns a script shape into a model shape, registering its materials.
-    fn place_shape(&mut self, s: ShapeValue) -> Shape {
-        match s {
-            ShapeValue::Primitive { kind, transform, material } => {
-                let id = self.world.builder.material(material);
-                Shape::primitive(kind, transform, id)
+    /// Expands a script shape into a model shape, registering its materials. `materials`
+    /// remembers the id of each shared primitive, so that a leaf used a million times is
+    /// looked up among the scene's materials once.
+    fn place_shape(&mut self, s: &ShapeValue, materials: &mut HashMap<*const ShapeNode, MaterialId>) -> Shape {
+        match s.node() {
+            ShapeNode::Primitive { kind, transform, material } => {
+                let builder = &mut self.world.builder;
+                let id = *materials.entry(s.key()).or_insert_with(|| builder.material(material.clone()));
+                Shape::primitive(*kind, *transform, id)
             }
-            ShapeValue::Csg { op, children, transform } => {
-                let children = children.into_iter().map(|c| self.place_shape(c)).collect();
-                Shape::csg(op, children, transform)
+            ShapeNode::Csg { op, children, transform, .. } => {
+                let children = children.iter().map(|c| self.place_shape(c, materials)).collect();
+                Shape::csg(*op, children, *transform)
             }
         }
     }
@@ -404,10 +452,10 @@ impl<'a> Interp<'a> {
                     Command::Scale => self.scale(t.span)?,
                     Command::Translate => self.translate(t.span)?,
                     Command::Rotate => self.rotate()?,
-                    Command::Unite => self.csg(CsgOp::Unite)?,
-                    Command::Intersect => self.csg(CsgOp::Intersect)?,
-                    Command::Diff => self.csg(CsgOp::Diff)?,
-                    Command::Fuse => self.csg(CsgOp::Fuse)?,
+                    Command::Unite => self.csg(CsgOp::Unite, t.span)?,
+                    Command::Intersect => self.csg(CsgOp::Intersect, t.span)?,
+                    Command::Diff => self.csg(CsgOp::Diff, t.span)?,
+                    Command::Fuse => self.csg(CsgOp::Fuse, t.span)?,
                     Command::Load => {
                         let (v, s) = self.value()?;
                         let Value::Str(path) = v else {
@@ -492,30 +540,18 @@ impl<'a> Interp<'a> {
         Ok(out)
     }
 
-    pub(super) fn number_list(&mut self, close: char) -> Res<Vec<f64>> {
+    pub(super) fn number_list(&mut self, close: char) -> Res<Arc<[f64]>> {
         let mut out = vec![self.number("a list element")?.0];
-        loop {
-            let t = self.lx.next()?;
-            match t.tok {
-                Tok::Sym(',') => out.push(self.number("a list element")?.0),
-                Tok::Sym(c) if c == close => return Ok(out),
-                other => {
-                    return Err(self
-                        .err(
-                            t.span,
-                            ErrorKind::Syntax,
-                            format!("expected `,` or `{close}` in a list, found {}", other.describe()),
-                        )
-                        .with_expected(format!("`,` or `{close}`")))
-                }
-            }
+        while self.separator(',', Some(close), " in a list", &format!("`,` or `{close}`"))? {
+            out.push(self.number("a list element")?.0);
         }
+        Ok(out.into())
     }
 
     // ----------------------------------------------------------------- the result
 
     /// Checks that every setting was given and assembles the scene.
-    pub fn finish(self) -> Res<Scene> {
+    pub fn finish(mut self) -> Res<Scene> {
         let end = Span::new(self.lx.source.trim_end().len().saturating_sub(1), 1);
         let missing = |what: &str, example: &str| {
             self.err(end, ErrorKind::MissingSetting, format!("the script never sets the {what}"))
@@ -533,15 +569,19 @@ impl<'a> Interp<'a> {
                 .err(*image_span, ErrorKind::BadImageSize, format!("image size {width}×{height} cannot be rendered"))
                 .with_expected(format!("each side from 1 to {MAX_IMAGE_SIDE}")));
         }
-        let mut scene = self.world.builder.build().map_err(|e| {
+        let renderer = renderer.clone();
+        let environment = self.world.environment.take().map(|(e, _)| e);
+        // Moved, not copied: the shapes may be millions of primitives.
+        let builder = std::mem::replace(&mut self.world.builder, SceneBuilder::new(1, 1));
+        let mut scene = builder.into_scene().map_err(|e| {
             self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")).with_expected("a valid scene")
         })?;
         scene.width = width;
         scene.height = height;
         scene.camera = camera;
-        scene.renderer = renderer.clone();
+        scene.renderer = renderer;
         scene.tracer = tracer;
-        scene.environment = self.world.environment.as_ref().map(|(e, _)| e.clone());
+        scene.environment = environment;
         scene.validate().map_err(|e| {
             self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")).with_expected("a valid scene")
         })?;
@@ -562,19 +602,8 @@ impl<'a> Interp<'a> {
             };
             let (value, _) = self.value()?;
             self.vars.insert(name, Var { value, origin: "--vars".into(), from_cli: true });
-            let sep = self.lx.next()?;
-            match sep.tok {
-                Tok::Sym(',') => {}
-                Tok::Eof => return Ok(()),
-                other => {
-                    return Err(self
-                        .err(
-                            sep.span,
-                            ErrorKind::Syntax,
-                            format!("expected `,` or the end, found {}", other.describe()),
-                        )
-                        .with_expected("`,` between `name value` pairs"))
-                }
+            if !self.separator(',', None, "", "`,` between `name value` pairs")? {
+                return Ok(());
             }
         }
     }

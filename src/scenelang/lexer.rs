@@ -1,6 +1,7 @@
 //! SceneLang tokens, read lazily so that the first error in file order is the one reported.
 
-use super::error::{did_you_mean, ErrorKind, SceneLangError, Span};
+use super::error::{did_you_mean, ErrorKind, LineIndex, SceneLangError, Span};
+use super::value::Ty;
 
 /// The fixed list of commands (all-uppercase words).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -43,53 +44,11 @@ impl Command {
     }
 }
 
-/// The fixed list of type words.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TypeName {
-    Color,
-    Point,
-    List,
-    Transformation,
-    Image,
-    Pigment,
-    Brdf,
-    Material,
-    Shape,
-    Light,
-    Pcg,
-    Camera,
-    Renderer,
-    Tracer,
-    Environment,
-}
-
-impl TypeName {
-    pub const ALL: [(&'static str, TypeName); 15] = [
-        ("Color", TypeName::Color),
-        ("Point", TypeName::Point),
-        ("List", TypeName::List),
-        ("Transformation", TypeName::Transformation),
-        ("Image", TypeName::Image),
-        ("Pigment", TypeName::Pigment),
-        ("Brdf", TypeName::Brdf),
-        ("Material", TypeName::Material),
-        ("Shape", TypeName::Shape),
-        ("Light", TypeName::Light),
-        ("Pcg", TypeName::Pcg),
-        ("Camera", TypeName::Camera),
-        ("Renderer", TypeName::Renderer),
-        ("Tracer", TypeName::Tracer),
-        ("Environment", TypeName::Environment),
-    ];
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(_, c)| *c == self).map_or("?", |(n, _)| n)
-    }
-}
-
 #[derive(Debug, Clone, PartialEq)]
 pub enum Tok {
     Command(Command),
-    Type(TypeName),
+    /// A type word: one of [`Ty::WORDS`].
+    Type(Ty),
     /// A word right after a dot (the dot is part of the token's span).
     Keyword(String),
     Ident(String),
@@ -136,6 +95,8 @@ pub struct Lexer<'a> {
     peeked: Option<Token>,
     /// End of the last token taken with [`Lexer::next`] (for "missing after" spans).
     pub last_end: usize,
+    /// Built once, so that naming the line of any token costs a binary search.
+    lines: LineIndex,
 }
 
 fn is_word_char(c: char) -> bool {
@@ -144,11 +105,16 @@ fn is_word_char(c: char) -> bool {
 
 impl<'a> Lexer<'a> {
     pub fn new(source: &'a str, file: &'a str) -> Self {
-        Self { source, file, pos: 0, peeked: None, last_end: 0 }
+        Self { source, file, pos: 0, peeked: None, last_end: 0, lines: LineIndex::new(source) }
     }
 
     pub fn error(&self, span: Span, kind: ErrorKind, msg: impl Into<String>) -> SceneLangError {
         SceneLangError::at(self.source, self.file, span, kind, msg)
+    }
+
+    /// 1-based (line, column) of byte `offset` of the source.
+    pub fn line_col(&self, offset: usize) -> (usize, usize) {
+        self.lines.line_col(self.source, offset)
     }
 
     pub fn peek(&mut self) -> Result<&Token, SceneLangError> {
@@ -382,13 +348,13 @@ impl<'a> Lexer<'a> {
                 }
             }
         } else {
-            match TypeName::ALL.iter().find(|(n, _)| *n == w) {
-                Some((_, t)) => Tok::Type(*t),
+            match Ty::from_word(w) {
+                Some(t) => Tok::Type(t),
                 None => {
-                    let mut e = self.error(span, ErrorKind::UnknownType, format!("unknown type `{w}`")).with_expected(
-                        format!("one of {}", TypeName::ALL.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(" ")),
-                    );
-                    if let Some(s) = did_you_mean(w, TypeName::ALL.iter().map(|(n, _)| *n)) {
+                    let mut e = self
+                        .error(span, ErrorKind::UnknownType, format!("unknown type `{w}`"))
+                        .with_expected(format!("one of {}", Ty::WORDS.map(Ty::name).join(" ")));
+                    if let Some(s) = did_you_mean(w, Ty::WORDS.map(Ty::name)) {
                         e = e.with_note(format!("did you mean `{s}`?"));
                     }
                     return Err(e);
@@ -444,12 +410,17 @@ mod tests {
             vec![
                 Tok::Command(Command::Set),
                 Tok::Ident("x_1".into()),
-                Tok::Type(TypeName::Pigment),
+                Tok::Type(Ty::Pigment),
                 Tok::Keyword("Uniform".into()),
                 Tok::Str("a\"b".into()),
                 Tok::Math { text: "1 + 2".into(), content_start: 36 },
             ]
         );
+        let words = Ty::WORDS.map(Ty::name).join(" ");
+        assert_eq!(toks(&words).unwrap(), Ty::WORDS.map(Tok::Type).to_vec());
+        let e = toks("Strin").unwrap_err();
+        assert_eq!(e.kind, ErrorKind::UnknownType);
+        assert!(e.expected().unwrap().starts_with("one of Color Point List Transformation"), "{e}");
         assert_eq!(toks("DROP").unwrap_err().kind, ErrorKind::UnknownCommand);
         assert_eq!(toks("PIgment").unwrap_err().kind, ErrorKind::UnknownType);
         assert_eq!(toks("\"abc").unwrap_err().kind, ErrorKind::UnterminatedString);

@@ -32,7 +32,12 @@
 //! - `Environment.Uniform(.color <1,1,1>)`, `Environment.Gradient(.zenith <1,1,1>,
 //!   .horizon <1,1,1>, .nadir <0,0,0>)`, `Environment.Image(.image Image(1, 1), .intensity 1,
 //!   .rotation 0)` (degrees about z);
-//! - `Transformation([...])` reads its 16 numbers row by row;
+//! - a colour where a pigment is expected is short for `Pigment.Uniform` of it;
+//! - `Transformation([...])` reads its 16 numbers row by row, and only affine matrices
+//!   (last row 0 0 0 1) are supported (Raytracer.jl takes any invertible one);
+//! - names share their values, and scripts whose shapes expand beyond
+//!   [`crate::scene::MAX_PRIMITIVES`], [`crate::scene::MAX_CSG_DEPTH`] or
+//!   [`crate::scene::MAX_CSG_INTERVALS`] are refused where they cross the limit;
 //! - `ROTATE(.X a * .Z b)` is the product `ROTATE(.X a) * ROTATE(.Z b)`: the rightmost
 //!   rotation acts on points first, like any `*` chain;
 //! - math expressions also know `pi`, `TIME`, `sqrt` and `abs`;

@@ -5,6 +5,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::color::Color;
+use crate::cpu::csg::IntervalBound;
 use crate::image::HdrImage;
 use crate::scene::{
     Brdf, Camera, CsgOp, Environment, Material, PcgSeed, Pigment, PointLight, Renderer, ShapeKind, Tracer, Transform,
@@ -29,10 +30,82 @@ impl ImageValue {
 
 /// A shape as a script holds it: materials inline (they become [`crate::scene::MaterialId`]s
 /// when the shape is spawned).
-#[derive(Debug, Clone, PartialEq)]
-pub enum ShapeValue {
+///
+/// Shared, not copied: `SET b FUSE(a, a)` points at `a` twice, so a chain of such names
+/// costs memory linear in its length although the tree it stands for doubles each line.
+/// Each node caches the size of the tree it expands to, so that limits are checked where a
+/// script crosses them, before anything is expanded.
+#[derive(Debug, Clone)]
+pub struct ShapeValue(Arc<ShapeNode>);
+
+#[derive(Debug)]
+pub enum ShapeNode {
     Primitive { kind: ShapeKind, transform: Transform, material: Material },
-    Csg { op: CsgOp, children: Vec<ShapeValue>, transform: Transform },
+    Csg { op: CsgOp, children: Vec<ShapeValue>, transform: Transform, size: TreeSize },
+}
+
+/// How limit errors explain the count of primitives.
+pub const PER_USE: &str = "a CSG leaf counts once per use: FUSE(a, a) holds the primitives of `a` twice";
+
+/// What a shape expands to: primitives (counted once per use), CSG depth and the bound on
+/// its interval lists.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TreeSize {
+    pub primitives: u64,
+    pub depth: usize,
+    pub intervals: IntervalBound,
+}
+
+impl ShapeValue {
+    pub fn primitive(kind: ShapeKind, transform: Transform, material: Material) -> Self {
+        Self(Arc::new(ShapeNode::Primitive { kind, transform, material }))
+    }
+
+    /// A CSG node; its size comes from its children's in O(number of children).
+    pub fn csg(op: CsgOp, children: Vec<ShapeValue>, transform: Transform) -> Self {
+        let sizes: Vec<TreeSize> = children.iter().map(ShapeValue::size).collect();
+        let bounds: Vec<IntervalBound> = sizes.iter().map(|s| s.intervals).collect();
+        let size = TreeSize {
+            primitives: sizes.iter().fold(0u64, |n, s| n.saturating_add(s.primitives)),
+            depth: 1 + sizes.iter().map(|s| s.depth).max().unwrap_or(0),
+            intervals: IntervalBound::combine(op, &bounds),
+        };
+        Self(Arc::new(ShapeNode::Csg { op, children, transform, size }))
+    }
+
+    pub fn node(&self) -> &ShapeNode {
+        &self.0
+    }
+
+    /// Identifies the shared node (two uses of one name give the same key).
+    pub fn key(&self) -> *const ShapeNode {
+        Arc::as_ptr(&self.0)
+    }
+
+    pub fn size(&self) -> TreeSize {
+        match &*self.0 {
+            ShapeNode::Primitive { .. } => TreeSize { primitives: 1, depth: 0, intervals: IntervalBound::LEAF },
+            ShapeNode::Csg { size, .. } => *size,
+        }
+    }
+}
+
+impl PartialEq for ShapeValue {
+    /// Shared nodes are equal without walking them (a walk of a doubled chain is exponential).
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+            || match (&*self.0, &*other.0) {
+                (
+                    ShapeNode::Primitive { kind: k1, transform: t1, material: m1 },
+                    ShapeNode::Primitive { kind: k2, transform: t2, material: m2 },
+                ) => k1 == k2 && t1 == t2 && m1 == m2,
+                (
+                    ShapeNode::Csg { op: o1, children: c1, transform: t1, .. },
+                    ShapeNode::Csg { op: o2, children: c2, transform: t2, .. },
+                ) => o1 == o2 && t1 == t2 && c1 == c2,
+                _ => false,
+            }
+    }
 }
 
 /// Every SceneLang value.
@@ -42,7 +115,8 @@ pub enum Value {
     Str(String),
     Color(Color),
     Point(DVec3),
-    List(Vec<f64>),
+    /// Shared like shapes: a long list used many times is not copied each time.
+    List(Arc<[f64]>),
     Transformation(Transform),
     Image(ImageValue),
     Pigment(Pigment),
@@ -57,7 +131,8 @@ pub enum Value {
     Environment(Environment),
 }
 
-/// The type of a [`Value`], as messages name it.
+/// The type of a [`Value`], as messages name it; the capitalised ones are also the type
+/// words a script writes (`Color`, `Shape.Sphere`, …), see [`Ty::WORDS`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Ty {
     Number,
@@ -80,6 +155,30 @@ pub enum Ty {
 }
 
 impl Ty {
+    /// The types a script can name with a word (every type but number and string).
+    pub const WORDS: [Ty; 15] = [
+        Ty::Color,
+        Ty::Point,
+        Ty::List,
+        Ty::Transformation,
+        Ty::Image,
+        Ty::Pigment,
+        Ty::Brdf,
+        Ty::Material,
+        Ty::Shape,
+        Ty::Light,
+        Ty::Pcg,
+        Ty::Camera,
+        Ty::Renderer,
+        Ty::Tracer,
+        Ty::Environment,
+    ];
+
+    /// The type word `w` names, if any.
+    pub fn from_word(w: &str) -> Option<Ty> {
+        Self::WORDS.into_iter().find(|t| t.name() == w)
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Ty::Number => "number",
@@ -132,6 +231,53 @@ impl Value {
             Value::Renderer(_) => Ty::Renderer,
             Value::Tracer(_) => Ty::Tracer,
             Value::Environment(_) => Ty::Environment,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sphere() -> ShapeValue {
+        ShapeValue::primitive(ShapeKind::Sphere, Transform::IDENTITY, Material::default())
+    }
+
+    #[test]
+    fn shared_nodes_count_their_uses_without_copying() {
+        // FUSE(c, c) doubled 70 times: the count saturates instead of overflowing, while the
+        // value is 71 nodes (each child is the same shared node).
+        let mut c = sphere();
+        for i in 1..=70u32 {
+            c = ShapeValue::csg(CsgOp::Fuse, vec![c.clone(), c], Transform::IDENTITY);
+            let size = c.size();
+            assert_eq!(size.depth, i as usize);
+            let expect = 1u64.checked_shl(i).unwrap_or(u64::MAX);
+            assert_eq!((size.primitives, size.intervals.n), (expect, expect), "{i}");
+            let ShapeNode::Csg { children, .. } = c.node() else { panic!("not a CSG node") };
+            assert_eq!(children[0].key(), children[1].key());
+        }
+        assert_eq!(c, c.clone());
+        // Equal trees built apart still compare equal.
+        let a = ShapeValue::csg(CsgOp::Unite, vec![sphere(), sphere()], Transform::IDENTITY);
+        let b = ShapeValue::csg(CsgOp::Unite, vec![sphere(), sphere()], Transform::IDENTITY);
+        assert_ne!(a.key(), b.key());
+        assert_eq!(a, b);
+        assert_ne!(a, ShapeValue::csg(CsgOp::Fuse, vec![sphere(), sphere()], Transform::IDENTITY));
+        // A UNITE's pieces may overlap, so an INTERSECT of two of them multiplies: 2·2.
+        let x = ShapeValue::csg(CsgOp::Intersect, vec![a.clone(), a], Transform::IDENTITY);
+        assert_eq!(x.size(), TreeSize { primitives: 4, depth: 2, intervals: IntervalBound { n: 4, overlap: true } });
+    }
+
+    #[test]
+    fn every_type_word_names_itself() {
+        for t in Ty::WORDS {
+            assert_eq!(Ty::from_word(t.name()), Some(t));
+        }
+        assert_eq!(Ty::WORDS.len(), 15);
+        // Numbers and strings have no type word.
+        for w in ["Number", "number", "Str", "string", "String"] {
+            assert_eq!(Ty::from_word(w), None, "{w}");
         }
     }
 }
