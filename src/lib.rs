@@ -16,3 +16,4 @@ pub mod image;
 pub mod sampling;
 pub mod scene;
 pub mod scenelang;
+pub mod stop;

@@ -164,13 +164,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         }
     }
     report.push_str(&format!("\nPeak resident memory of the whole run: {}\n", format_bytes(peak_memory_bytes())));
-    println!("{report}");
+    // The file first: it is written even when nobody reads standard output.
     if let Some(path) = &args.output {
         crate::image::write_atomically(path, report.as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }
-    Ok(())
+    Ok(super::output::print(format_args!("{report}\n"))?)
 }
 
 fn load_scene(path: &Path, width: u32) -> anyhow::Result<Scene> {

@@ -199,8 +199,9 @@ fn write_results(
 ) -> anyhow::Result<()> {
     let dir = &args.output;
     let slopes = slope_lines(table);
+    let mut out = super::output::Lines::default();
     for l in &slopes {
-        println!("{l}");
+        out.line(l);
     }
     let csv = dir.join("converge.csv");
     crate::image::write_atomically(&csv, table.to_csv().as_bytes())
@@ -233,5 +234,6 @@ fn write_results(
     let png = dir.join("converge.png");
     plot.write_png(&png, 800, 560).with_context(|| format!("cannot write {}", png.display()))?;
     eprintln!("wrote {}, {} and {}", csv.display(), md_path.display(), png.display());
-    Ok(())
+    // Last: the files are written even when nobody reads standard output.
+    Ok(out.print()?)
 }

@@ -26,7 +26,7 @@
 //! round (Ctrl-C), so every pixel of the result has exactly `spp_done` samples.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use bytemuck::{Pod, Zeroable};
@@ -112,16 +112,8 @@ impl Default for PassOptions {
     }
 }
 
-/// Why [`run_progressive`] returned.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StopReason {
-    /// All requested samples were taken.
-    Completed,
-    /// The time limit passed; fewer samples than requested.
-    TimeLimit,
-    /// The cancel flag was set; the unfinished round was dropped.
-    Interrupted,
-}
+// Shared with the CPU renderer (moved to `crate::stop`).
+pub use crate::stop::StopReason;
 
 /// The result of a progressive render.
 #[derive(Debug, Clone)]
@@ -497,28 +489,8 @@ fn progress_bar(enabled: bool, len: u64) -> ProgressBar {
     bar
 }
 
-/// A flag set by Ctrl-C, for [`PassOptions::cancel`]. The first Ctrl-C asks the render to
-/// stop after the current pass (keeping what is done); a second one exits at once. The
-/// handler is installed once per process; later calls return the same flag.
-pub fn ctrlc_flag() -> Arc<AtomicBool> {
-    static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
-    FLAG.get_or_init(|| {
-        let flag = Arc::new(AtomicBool::new(false));
-        let f = Arc::clone(&flag);
-        let installed = ctrlc::set_handler(move || {
-            if f.swap(true, Ordering::SeqCst) {
-                eprintln!("\ninterrupted twice: exiting");
-                std::process::exit(130);
-            }
-            eprintln!("\ninterrupted: finishing the current pass (Ctrl-C again to quit now)");
-        });
-        if let Err(e) = installed {
-            eprintln!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");
-        }
-        flag
-    })
-    .clone()
-}
+// Shared with the CPU renderer (moved to `crate::stop`).
+pub use crate::stop::ctrlc_flag;
 
 #[cfg(test)]
 mod tests {
