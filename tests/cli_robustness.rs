@@ -116,3 +116,53 @@ fn no_runtime_dir_noise_on_a_headless_machine() {
     let o = lumen(dir.path()).arg("devices").env("XDG_RUNTIME_DIR", "relative").output().unwrap();
     assert!(!stderr(&o).contains("XDG_RUNTIME_DIR"), "{}", stderr(&o));
 }
+
+/// `lumen render` under a 4 GiB address-space limit (`ulimit -v`, as the reproducer).
+fn render_limited_to_4_gib(dir: &Path, args: &str) -> Output {
+    let bin = env!("CARGO_BIN_EXE_lumen");
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v 4194304 && exec '{bin}' render {args}"))
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn an_image_too_large_for_memory_is_refused_with_the_amount() {
+    let dir = scene_dir();
+    std::fs::write(
+        dir.path().join("huge.sl"),
+        "USING Camera.Perspective() Image(32768, 32768) Renderer.Flat() Tracer()\n",
+    )
+    .unwrap();
+    let cases = [
+        ("tiny.sl --device cpu --width 16384 --height 16384 --spp 1 -o big.png", "15.00 GiB"),
+        ("huge.sl --device cpu -o big.png", "60.00 GiB"),
+    ];
+    for (args, needed) in cases {
+        let o = render_limited_to_4_gib(dir.path(), args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(needed), "{args}: {err}");
+        assert!(!err.contains("panicked") && !err.contains("memory allocation"), "{args}: {err}");
+        assert!(!dir.path().join("big.png").exists(), "{args} left an output file");
+    }
+}
+
+#[test]
+fn the_cpu_renderer_honours_the_time_limit() {
+    let dir = scene_dir();
+    // A zero limit has passed after the first round (1 sample per pixel), on any machine.
+    let o = lumen(dir.path())
+        .args(["render", "tiny.sl", "--device", "cpu", "--spp", "1000000", "--time-limit", "0", "-o", "t.pfm"])
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains(": 1 of 1000000 samples per pixel, 48 samples,"), "{err}");
+    assert!(err.contains("note: stopped at the time limit with 1 samples per pixel"), "{err}");
+    assert!(!err.contains("warning: --time-limit"), "{err}");
+    let img = lumen::image::read_image(&dir.path().join("t.pfm")).unwrap();
+    assert_eq!((img.width(), img.height()), (8, 6));
+}

@@ -28,8 +28,11 @@ pub fn run(args: DevicesArgs) -> anyhow::Result<()> {
     let selected = select_adapter(&adapters, &choice);
     for (i, a) in adapters.iter().enumerate() {
         let mark = if selected.as_ref().ok() == Some(&i) { "  (selected)" } else { "" };
-        out.line(format_args!("{i}: {}{mark}", a.name))
-            .line(format_args!("   backend: {}, type: {}", a.backend, a.device_type_name()));
+        out.line(format_args!("{i}: {}{mark}", a.name)).line(format_args!(
+            "   backend: {}, type: {}",
+            a.backend,
+            a.device_type_name()
+        ));
         if !a.driver.is_empty() || !a.driver_info.is_empty() {
             out.line(format_args!("   driver: {}", [a.driver.trim(), a.driver_info.trim()].join(" ").trim()));
         }
