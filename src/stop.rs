@@ -31,7 +31,7 @@ pub fn ctrlc_flag() -> Arc<AtomicBool> {
                 eprintln!("\ninterrupted twice: exiting");
                 std::process::exit(130);
             }
-            eprintln!("\ninterrupted: finishing the current pass (Ctrl-C again to quit now)");
+            eprintln!("\ninterrupted: keeping the completed rounds (Ctrl-C again to quit now)");
         });
         if let Err(e) = installed {
             eprintln!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");

@@ -5,19 +5,8 @@ use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-const SCENE: &str = "\
-SET
-    sky   Material(Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)), Pigment.Uniform(<1, 0.95, 0.9>))
-    red   Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.7, 0.2, 0.2>)))
-SPAWN
-    Shape.Sphere(sky, SCALE 20)
-    Shape.Sphere(red, TRANSLATE(.X 2))
-USING
-    Camera.Perspective(.aspect_ratio 1.3333333, .screen_distance 1, .transformation TRANSLATE(.X -1))
-    Renderer.PathTracer(.n 1, .max_depth 2)
-    Image(8, 6)
-    Tracer(.samples_per_side 1)
-";
+mod common;
+use common::TINY_SKY_SL as SCENE;
 
 /// A directory holding `tiny.sl`.
 fn scene_dir() -> tempfile::TempDir {
@@ -160,9 +149,9 @@ fn the_cpu_renderer_honours_the_time_limit() {
         .unwrap();
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
-    assert!(err.contains(": 1 of 1000000 samples per pixel, 48 samples,"), "{err}");
+    assert!(err.contains(": 1 of 1000000 samples per pixel, 768 samples,"), "{err}");
     assert!(err.contains("note: stopped at the time limit with 1 samples per pixel"), "{err}");
     assert!(!err.contains("warning: --time-limit"), "{err}");
     let img = lumen::image::read_image(&dir.path().join("t.pfm")).unwrap();
-    assert_eq!((img.width(), img.height()), (8, 6));
+    assert_eq!((img.width(), img.height()), (32, 24));
 }

@@ -47,7 +47,7 @@ impl HdrImage {
     /// assert!(HdrImage::try_new(1 << 31, 1 << 31).is_err());
     /// ```
     pub fn try_new(width: usize, height: usize) -> Result<Self, OutOfMemory> {
-        let n = width.checked_mul(height).unwrap_or(usize::MAX);
+        let n = width.saturating_mul(height);
         let bytes = (n as u64).saturating_mul(std::mem::size_of::<Rgb32>() as u64);
         let pixels = try_filled(n, Rgb32::BLACK, &format!("a {width}×{height} image"), bytes)?;
         Ok(Self { width, height, pixels })
