@@ -1,4 +1,5 @@
-//! Fallible allocation of buffers whose size comes from input (image sizes, sample counts).
+//! This process's memory: what it may use, its peak, and fallible allocation of buffers
+//! whose size comes from input (image sizes, sample counts).
 //!
 //! Rust aborts the process when an ordinary allocation fails, so a large `Image(w, h)` or
 //! `--width/--height` could end a run with "memory allocation failed" and nothing else.
@@ -6,8 +7,6 @@
 //! every input-sized buffer with [`try_filled`], so running out is an error that says how
 //! much was needed. The estimate catches known limits at once; the fallible allocations
 //! catch the rest (other processes, limits we cannot see).
-
-use crate::analysis::format_bytes;
 
 /// A buffer could not be had.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -67,14 +66,37 @@ pub fn memory_limit() -> Option<(u64, &'static str)> {
     candidates.into_iter().filter_map(|(v, why)| v.map(|v| (v, why))).min_by_key(|&(v, _)| v)
 }
 
+/// The value of a `Name:   1234 kB` line of a /proc file, in bytes.
+fn kb_field(text: &str, name: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(name))?;
+    let mut words = line[name.len()..].split_whitespace();
+    let value: u64 = words.next()?.parse().ok()?;
+    match words.next() {
+        Some("kB") => value.checked_mul(1024),
+        _ => None,
+    }
+}
+
 /// MemTotal + SwapTotal of /proc/meminfo.
 fn parse_meminfo(text: &str) -> Option<u64> {
-    let field = |name: &str| -> Option<u64> {
-        let line = text.lines().find(|l| l.starts_with(name))?;
-        let kb: u64 = line[name.len()..].split_whitespace().next()?.parse().ok()?;
-        kb.checked_mul(1024)
-    };
-    Some(field("MemTotal:")?.saturating_add(field("SwapTotal:").unwrap_or(0)))
+    Some(kb_field(text, "MemTotal:")?.saturating_add(kb_field(text, "SwapTotal:").unwrap_or(0)))
+}
+
+/// The process's peak resident set size (VmHWM in /proc/self/status), on Linux; `None`
+/// elsewhere or when it cannot be read.
+pub fn peak_memory_bytes() -> Option<u64> {
+    kb_field(&std::fs::read_to_string("/proc/self/status").ok()?, "VmHWM:")
+}
+
+/// Bytes in binary units, or "n/a".
+pub fn format_bytes(bytes: Option<u64>) -> String {
+    match bytes {
+        None => "n/a".to_string(),
+        Some(b) if b >= 1 << 30 => format!("{:.2} GiB", b as f64 / (1u64 << 30) as f64),
+        Some(b) if b >= 1 << 20 => format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64),
+        Some(b) if b >= 1 << 10 => format!("{:.1} KiB", b as f64 / 1024.0),
+        Some(b) => format!("{b} B"),
+    }
 }
 
 /// The soft limit of "Max address space" in /proc/self/limits (`None` if unlimited).
@@ -86,6 +108,29 @@ fn parse_address_space_limit(text: &str) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parses_vm_hwm() {
+        let s = "Name:\tlumen\nVmPeak:\t  999 kB\nVmHWM:\t    2048 kB\nVmRSS:\t 1 kB\n";
+        assert_eq!(kb_field(s, "VmHWM:"), Some(2048 * 1024));
+        assert_eq!(kb_field("VmRSS: 5 kB\n", "VmHWM:"), None);
+        assert_eq!(kb_field("VmHWM: x kB\n", "VmHWM:"), None);
+        assert_eq!(kb_field("VmHWM: 5 MB\n", "VmHWM:"), None);
+    }
+
+    #[test]
+    fn formats_bytes() {
+        assert_eq!(format_bytes(None), "n/a");
+        assert_eq!(format_bytes(Some(512)), "512 B");
+        assert_eq!(format_bytes(Some(3 << 20)), "3.0 MiB");
+        assert_eq!(format_bytes(Some(3 << 30)), "3.00 GiB");
+    }
+
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn this_process_has_a_peak() {
+        assert!(peak_memory_bytes().unwrap() > 0);
+    }
 
     #[test]
     fn meminfo_sums_ram_and_swap() {
