@@ -4,21 +4,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-const SCENE: &str = "\
-SET
-    sky   Material(Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)), Pigment.Uniform(<1, 0.95, 0.9>))
-    red   Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.7, 0.2, 0.2>)))
-    floor Material(.brdf Brdf.Diffuse(Pigment.Checkered(4, <0.6, 0.6, 0.6>, <0.2, 0.2, 0.2>)))
-SPAWN
-    Shape.Sphere(sky, SCALE 20)
-    Shape.Plane(floor, TRANSLATE(.Z -1))
-    Shape.Sphere(red, TRANSLATE(.X 2))
-USING
-    Camera.Perspective(.aspect_ratio 1.3333333, .screen_distance 1, .transformation TRANSLATE(.X -1))
-    Renderer.PathTracer(.n 1, .max_depth 3)
-    Image(32, 24)
-    Tracer(.samples_per_side 1)
-";
+mod common;
+use common::TINY_SKY_SL as SCENE;
 
 fn lumen(dir: &Path, args: &[&str]) -> Output {
     let scene = dir.join("tiny.sl");

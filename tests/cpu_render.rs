@@ -610,3 +610,114 @@ mod cli {
         assert!(!out.status.success());
     }
 }
+
+/// Rounds of samples (issue 16, item 5): time limits and cancellation keep the same number
+/// of samples in every pixel, and the split into rounds never changes an image.
+mod rounds {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    use lumen::cpu::{add_samples, context::Context, lights::Lights, render_limited, Limits, World};
+    use lumen::stop::StopReason;
+
+    use super::*;
+
+    /// A path-traced furnace with 2 paths per sample: every sample's value differs.
+    fn scene() -> Scene {
+        let mut s = furnace(0.7, 1.0, pt(2, 6, 2, true));
+        s.width = 12;
+        s.height = 10;
+        s
+    }
+
+    fn limited(scene: &Scene, spp: u32, limits: Limits) -> RenderOutput {
+        render_limited(scene, &RenderOptions { spp: Some(spp) }, &limits, Progress::Hidden).unwrap()
+    }
+
+    fn bits(img: &HdrImage) -> Vec<[u32; 3]> {
+        img.pixels().iter().map(|p| [p.r.to_bits(), p.g.to_bits(), p.b.to_bits()]).collect()
+    }
+
+    /// The mean of samples `0..spp` of every pixel (of the scene's `total`-sample layout),
+    /// summed in one go.
+    fn one_pass_mean(scene: &Scene, total: u32, spp: u32) -> HdrImage {
+        let (world, lights) = (World::new(scene), Lights::new(scene));
+        let ctx = Context { scene, world: &world, lights: &lights };
+        let layout = lumen::cpu::pixel_samples::PixelSamples::new(&scene.tracer, Some(total));
+        let n = f64::from(spp) * lumen::cpu::paths_per_sample(scene) as f64;
+        HdrImage::from_fn(scene.width as usize, scene.height as usize, |c, r| {
+            let mut sum = Color::BLACK;
+            add_samples(&ctx, layout, c as u32, r as u32, 0..spp, &mut sum, &mut Default::default(), &mut 0);
+            (sum / n).into()
+        })
+    }
+
+    #[test]
+    fn splitting_into_rounds_does_not_change_a_bit() {
+        let s = scene();
+        let whole = limited(&s, 9, Limits { round_spp: Some(9), ..Limits::default() });
+        assert_eq!((whole.stats.rounds, whole.stats.spp, whole.stats.stop), (1, 9, StopReason::Completed));
+        assert_eq!(bits(&whole.image), bits(&one_pass_mean(&s, 9, 9)));
+        assert_eq!(whole.image, render(&s, &RenderOptions { spp: Some(9) }, Progress::Hidden).image);
+        for round in [1, 2, 4] {
+            let split = limited(&s, 9, Limits { round_spp: Some(round), ..Limits::default() });
+            assert_eq!(split.stats.rounds, 9u32.div_ceil(round));
+            assert_eq!(bits(&split.image), bits(&whole.image), "rounds of {round} spp");
+            assert_eq!((split.stats.rays, split.stats.samples), (whole.stats.rays, whole.stats.samples));
+        }
+    }
+
+    #[test]
+    fn a_time_limit_stops_between_rounds_with_uniform_spp() {
+        let s = scene();
+        // A zero limit has passed after the first round, whatever the machine's speed.
+        for (round, want) in [(None, 1), (Some(3), 3)] {
+            let limits = Limits { time_limit: Some(Duration::ZERO), round_spp: round, ..Limits::default() };
+            let out = limited(&s, 9, limits);
+            assert_eq!((out.stats.stop, out.stats.spp, out.stats.spp_requested), (StopReason::TimeLimit, want, 9));
+            assert_eq!(out.stats.samples, 12 * 10 * want * 2);
+            // Every pixel holds exactly samples 0..want.
+            assert_eq!(bits(&out.image), bits(&one_pass_mean(&s, 9, want as u32)), "{round:?}");
+        }
+        // A limit that is never reached takes every sample.
+        let limits = Limits { time_limit: Some(Duration::from_secs(3600)), ..Limits::default() };
+        assert_eq!(limited(&s, 4, limits).stats.stop, StopReason::Completed);
+    }
+
+    #[test]
+    fn a_cancel_flag_set_before_the_start_renders_nothing() {
+        let s = scene();
+        let limits = Limits { cancel: Some(Arc::new(AtomicBool::new(true))), ..Limits::default() };
+        let out = limited(&s, 9, limits);
+        assert_eq!(
+            (out.stats.stop, out.stats.spp, out.stats.samples, out.stats.rays),
+            (StopReason::Interrupted, 0, 0, 0)
+        );
+        assert!(out.image.pixels().iter().all(|p| *p == lumen::color::Rgb32::BLACK));
+    }
+
+    #[test]
+    fn a_cancel_during_the_render_keeps_only_whole_rounds() {
+        let s = scene();
+        let flag = Arc::new(AtomicBool::new(false));
+        let setter = {
+            let flag = Arc::clone(&flag);
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(30));
+                flag.store(true, std::sync::atomic::Ordering::SeqCst);
+            })
+        };
+        // Rounds of 1 spp over 65,536 spp: the flag lands during some round, whenever it comes.
+        let limits = Limits { cancel: Some(flag), round_spp: Some(1), ..Limits::default() };
+        let out = limited(&s, 1 << 16, limits);
+        setter.join().unwrap();
+        let done = out.stats.spp;
+        assert_eq!((out.stats.stop, u64::from(out.stats.rounds)), (StopReason::Interrupted, done));
+        assert_eq!(out.stats.samples, 12 * 10 * done * 2);
+        // Whatever the timing, every pixel holds exactly samples 0..done.
+        if done > 0 {
+            assert_eq!(bits(&out.image), bits(&one_pass_mean(&s, 1 << 16, done as u32)));
+        }
+    }
+}

@@ -2,77 +2,12 @@
 //! from it; devices that cannot be opened are skipped with a warning rather than failing a
 //! whole study.
 
-use std::cell::RefCell;
-use std::fmt;
-
-use crate::cpu::{self, paths_per_sample, Progress, RenderOptions};
-use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
-use crate::gpu::{AdapterChoice, Gpu, GpuError, PassOptions};
+use crate::cpu::{self, paths_per_sample, Limits, Progress, RenderOptions};
+pub use crate::device::{open_devices, Device, OpenDevice};
+use crate::gpu::render::GpuRenderOptions;
+use crate::gpu::PassOptions;
 use crate::image::HdrImage;
 use crate::scene::Scene;
-
-/// A device to measure.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
-pub enum Device {
-    /// A GPU through wgpu (the adapter `--adapter` / $LUMEN_ADAPTER picks).
-    Gpu,
-    /// The f64 CPU reference renderer on every core.
-    Cpu,
-}
-
-impl fmt::Display for Device {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Device::Gpu => "gpu",
-            Device::Cpu => "cpu",
-        })
-    }
-}
-
-/// An opened device: the CPU, or a GPU with its open device and a renderer that keeps
-/// compiled kernels, so only the first render of a kind of scene pays for kernel creation.
-#[derive(Debug)]
-pub enum OpenDevice {
-    Cpu,
-    Gpu { gpu: Box<Gpu>, renderer: RefCell<GpuRenderer> },
-}
-
-impl OpenDevice {
-    pub fn kind(&self) -> Device {
-        match self {
-            OpenDevice::Cpu => Device::Cpu,
-            OpenDevice::Gpu { .. } => Device::Gpu,
-        }
-    }
-
-    /// A name for tables: `cpu`, or `gpu` with the adapter's name.
-    pub fn describe(&self) -> String {
-        match self {
-            OpenDevice::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
-            OpenDevice::Gpu { gpu, .. } => format!("gpu ({})", gpu.adapter_info.name),
-        }
-    }
-}
-
-/// Opens each requested device once (duplicates dropped, order kept). A GPU that cannot be
-/// opened is reported on standard error and skipped.
-pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevice> {
-    let mut out: Vec<OpenDevice> = Vec::new();
-    for &d in devices {
-        if out.iter().any(|o| o.kind() == d) {
-            continue;
-        }
-        match d {
-            Device::Cpu => out.push(OpenDevice::Cpu),
-            Device::Gpu => match Gpu::new(adapter) {
-                Ok(g) => out.push(OpenDevice::Gpu { gpu: Box::new(g), renderer: RefCell::new(GpuRenderer::new()) }),
-                Err(GpuError::NoAdapter) => eprintln!("warning: skipping device gpu: no GPU adapter"),
-                Err(e) => eprintln!("warning: skipping device gpu: {e}"),
-            },
-        }
-    }
-    out
-}
 
 /// What one render produced and cost.
 #[derive(Debug, Clone)]
@@ -118,7 +53,7 @@ impl Measurement {
 ///     println!("{}: {:.0} samples/s", device.describe(), m.samples_per_second());
 /// }
 /// ```
-pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> Result<Measurement, GpuError> {
+pub fn measure(device: &OpenDevice, scene: &Scene, spp: u32, progress: bool) -> anyhow::Result<Measurement> {
     measure_with(device, scene, spp, progress, None)
 }
 
@@ -129,14 +64,14 @@ pub fn measure_with(
     spp: u32,
     progress: bool,
     kernel: Option<crate::gpu::features::FeatureSet>,
-) -> Result<Measurement, GpuError> {
+) -> anyhow::Result<Measurement> {
     match device {
         OpenDevice::Cpu => {
             let bar = if progress { Progress::Bar } else { Progress::Hidden };
-            let out = cpu::render(scene, &RenderOptions { spp: Some(spp) }, bar);
+            let out = cpu::render_limited(scene, &RenderOptions { spp: Some(spp) }, &Limits::default(), bar)?;
             Ok(Measurement {
                 image: out.image,
-                spp,
+                spp: out.stats.spp as u32,
                 seconds: out.stats.seconds,
                 samples: out.stats.samples,
                 rays: Some(out.stats.rays),
@@ -167,6 +102,7 @@ pub fn measure_with(
 mod tests {
     use super::*;
     use crate::color::Color;
+    use crate::gpu::AdapterChoice;
     use crate::scene::{Renderer, SceneBuilder, Transform};
 
     #[test]

@@ -23,14 +23,13 @@
 mod font;
 mod line_fit;
 mod measure;
-mod memory;
 mod metrics;
 mod plot;
 mod table;
 
+pub use crate::memory::{format_bytes, peak_memory_bytes};
 pub use line_fit::{fit_line, fit_loglog, tail_flattens, LineFit};
 pub use measure::{measure, measure_with, open_devices, Device, Measurement, OpenDevice};
-pub use memory::{format_bytes, peak_memory_bytes};
 pub use metrics::{mse, rel_mse, rmse, ErrorMetrics, REL_MSE_EPSILON};
 pub use plot::{plot_loglog, Plot, Series};
 pub use table::{format_seconds, markdown_table, ConvergeRow, ConvergeTable};

@@ -11,11 +11,11 @@ use anyhow::{anyhow, bail, Context as _};
 use clap::Args;
 use glam::DVec3;
 
-use super::gpu_args::AdapterArgs;
-use super::render::{resize, MAX_SPP};
+use super::gpu_args::DeviceListArgs;
+use super::script_args::{SceneOverrides, ScriptArgs, SppArgs, MAX_SPP};
 use crate::analysis::{
-    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, measure_with, open_devices,
-    peak_memory_bytes, Device, Measurement, OpenDevice,
+    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, measure_with, peak_memory_bytes,
+    Device, Measurement, OpenDevice,
 };
 use crate::color::Color;
 use crate::cpu::World;
@@ -25,27 +25,26 @@ use crate::gpu::render::{assemble_stages, GpuRenderOptions};
 use crate::gpu::Gpu;
 use crate::sampling::Pcg32;
 use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Shape, ShapeKind, Transform};
-use crate::scenelang::{load_file, LoadOptions};
 
 /// Object counts of the scaling study (cut at `--max-spheres`).
 pub const SPHERE_COUNTS: [u32; 6] = [1, 10, 100, 1_000, 10_000, 100_000];
 
-/// Arguments of `lumen bench`.
+/// Arguments of `lumen bench`. `--spp` applies to the scene table (default 16; the scaling
+/// study takes 16× as many, so the GPU's kernel-creation jitter does not swamp the
+/// difference); `--width` defaults to 160.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Devices to measure, comma-separated; an unavailable GPU is skipped with a warning.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Device::Gpu, Device::Cpu])]
-    pub device: Vec<Device>,
+    #[command(flatten)]
+    pub devices: DeviceListArgs,
     /// Scene scripts, or directories whose *.sl files are all benchmarked, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "scenes")]
     pub scenes: Vec<PathBuf>,
-    /// Camera samples per pixel for the scene table (default 16; the scaling study takes 16× as
-    /// many, so the GPU's kernel-creation jitter does not swamp the difference).
-    #[arg(long)]
-    pub spp: Option<u32>,
-    /// Width every scene is rendered at (the height follows its camera's aspect ratio).
-    #[arg(long)]
-    pub width: Option<u32>,
+    #[command(flatten)]
+    pub spp: SppArgs,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
+    pub script: ScriptArgs,
     /// Small and fast: width 64, 4 spp, scaling up to 10 000 spheres.
     #[arg(long)]
     pub quick: bool,
@@ -59,29 +58,38 @@ pub struct BenchArgs {
     /// Also write the Markdown report to this file.
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
-    #[command(flatten)]
-    pub adapter: AdapterArgs,
 }
 
 /// Settings after `--quick` and the defaults are applied.
 struct Plan {
     spp: u32,
     width: u32,
+    /// `--height`, if given (else each scene's aspect ratio decides).
+    height: Option<u32>,
     max_spheres: u32,
+    script: ScriptArgs,
+    seed: Option<u64>,
 }
 
 impl Plan {
     fn of(args: &BenchArgs) -> anyhow::Result<Self> {
         let (spp, width, max_spheres) = if args.quick { (4, 64, 10_000) } else { (16, 160, 100_000) };
-        let plan = Plan {
-            spp: args.spp.unwrap_or(spp),
-            width: args.width.unwrap_or(width),
+        let o = &args.overrides;
+        Ok(Plan {
+            spp: args.spp.checked(MAX_SPP / 16)?.unwrap_or(spp),
+            width: o.width.unwrap_or(width),
+            height: o.height,
             max_spheres: args.max_spheres.unwrap_or(max_spheres),
-        };
-        if plan.spp == 0 || plan.spp > MAX_SPP / 16 {
-            bail!("--spp must be 1..={}, got {}", MAX_SPP / 16, plan.spp);
-        }
-        Ok(plan)
+            script: args.script.clone(),
+            seed: o.seed,
+        })
+    }
+
+    /// Loads a script at this width (and `--height`, `--seed`, `--vars`, `--time`).
+    fn load_scene(&self, path: &Path, width: u32, height: Option<u32>) -> anyhow::Result<Scene> {
+        let mut scene = self.script.load(path)?;
+        SceneOverrides { width: Some(width), height, seed: self.seed }.apply(&mut scene)?;
+        Ok(scene)
     }
 }
 
@@ -133,7 +141,7 @@ pub fn spheres_scene(n: u32, width: u32, height: u32) -> Scene {
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let plan = Plan::of(&args)?;
     let files = scene_files(&args.scenes)?;
-    let devices = open_devices(&args.device, &args.adapter.choice());
+    let devices = args.devices.open();
     if devices.is_empty() {
         bail!("none of the requested devices is available");
     }
@@ -164,19 +172,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         }
     }
     report.push_str(&format!("\nPeak resident memory of the whole run: {}\n", format_bytes(peak_memory_bytes())));
-    println!("{report}");
+    // The file first: it is written even when nobody reads standard output.
     if let Some(path) = &args.output {
         crate::image::write_atomically(path, report.as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }
-    Ok(())
-}
-
-fn load_scene(path: &Path, width: u32) -> anyhow::Result<Scene> {
-    let mut scene = load_file(path, &LoadOptions::default()).map_err(|e| anyhow!("{e}"))?;
-    resize(&mut scene, Some(width), None)?;
-    Ok(scene)
+    Ok(super::output::print(format_args!("{report}\n"))?)
 }
 
 /// Rates with an SI prefix: 1.23 M.
@@ -199,7 +201,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
     let mut rows = Vec::new();
     for file in files {
         let name = name_of(file);
-        let scene = match load_scene(file, plan.width) {
+        let scene = match plan.load_scene(file, plan.width, plan.height) {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("warning: skipping {name}: {e}");
@@ -381,7 +383,7 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
     let mut scenes =
         vec![("1000 spheres only (generated)".to_string(), spheres_scene(1000, plan.width, plan.width * 3 / 4))];
     for file in files {
-        match load_scene(file, plan.width) {
+        match plan.load_scene(file, plan.width, plan.height) {
             Ok(s) => scenes.push((name_of(file), s)),
             Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),
         }
@@ -462,7 +464,7 @@ fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> any
     let mut scenes: Vec<(String, Scene)> =
         LIST_COUNTS.iter().map(|&n| (format!("{n} spheres (generated)"), spheres_scene(n, w, h))).collect();
     for file in files {
-        match load_scene(file, w) {
+        match plan.load_scene(file, w, None) {
             Ok(s) if finite_objects(&s) <= LIST_MAX_OBJECTS => scenes.push((name_of(file), s)),
             Ok(_) => {}
             Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::output::Lines;
 use super::script_args::ScriptArgs;
 use crate::gpu::features::FeatureSet;
 use crate::scenelang::SceneSummary;
@@ -20,16 +21,16 @@ pub struct CheckArgs {
 /// Loads the scene and prints its summary; the error is the full diagnostic.
 pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     let scene = args.script.load(&args.scene)?;
-    println!("{}: ok", args.scene.display());
-    println!("{}", SceneSummary::of(&scene));
+    let mut out = Lines::default();
+    out.line(format_args!("{}: ok", args.scene.display())).line(SceneSummary::of(&scene));
     // What the GPU kernel is specialised for (`lumen shader` prints the kernel itself).
     let features = FeatureSet::of(&scene);
-    println!("GPU kernel features: {}", features.names().join(" "));
+    out.line(format_args!("GPU kernel features: {}", features.names().join(" ")));
     if features.csg {
-        println!(
+        out.line(format_args!(
             "CSG interval lists: at most {} intervals, trees {} deep",
             features.csg_max_intervals, features.csg_max_depth
-        );
+        ));
     }
-    Ok(())
+    Ok(out.print()?)
 }

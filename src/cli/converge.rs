@@ -11,16 +11,14 @@ use std::path::PathBuf;
 use anyhow::{anyhow, bail, Context as _};
 use clap::Args;
 
-use super::gpu_args::AdapterArgs;
-use super::render::{resize, MAX_SPP};
+use super::gpu_args::DeviceListArgs;
+use super::script_args::{SceneOverrides, ScriptArgs, MAX_SPP};
 use crate::analysis::{
-    format_seconds, measure, open_devices, ConvergeRow, ConvergeTable, Device, ErrorMetrics, OpenDevice, Plot, Series,
-    REL_MSE_EPSILON,
+    format_seconds, measure, ConvergeRow, ConvergeTable, ErrorMetrics, OpenDevice, Plot, Series, REL_MSE_EPSILON,
 };
 use crate::cpu::paths_per_sample;
 use crate::image::{read_image, write_image, HdrImage, ToneMap};
 use crate::scene::Scene;
-use crate::scenelang::{load_file, LoadOptions};
 
 /// The reference is rendered at this many times the largest spp unless told otherwise, so
 /// its own variance adds at most 1/16 to the smallest MSE measured.
@@ -39,26 +37,19 @@ pub struct ConvergeArgs {
     /// Samples per pixel of the CPU-rendered reference (default: 16 × the largest --spp).
     #[arg(long)]
     pub reference_spp: Option<u32>,
-    /// Devices to measure, comma-separated; an unavailable GPU is skipped with a warning.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Device::Gpu, Device::Cpu])]
-    pub device: Vec<Device>,
-    /// Camera samples per pixel to measure, comma-separated (sorted ascending).
+    #[command(flatten)]
+    pub devices: DeviceListArgs,
+    /// Camera samples per pixel to measure (a list: each count is one measurement; one
+    /// count is the `--spp` of the other commands), comma-separated (sorted ascending).
     #[arg(long, value_delimiter = ',', default_values_t = [1, 4, 16, 64, 256])]
     pub spp: Vec<u32>,
     /// Directory for converge.csv, converge.md, converge.png and the rendered reference.
     #[arg(short = 'o', long = "output", default_value = "converge")]
     pub output: PathBuf,
-    /// Image width (given alone, the height follows the camera's aspect ratio).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height (given alone, the width follows the camera's aspect ratio).
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Variables defined before the script runs, "name value, name value"; may repeat.
-    #[arg(long)]
-    pub vars: Vec<String>,
     #[command(flatten)]
-    pub adapter: AdapterArgs,
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
+    pub script: ScriptArgs,
 }
 
 fn check_spp(spp: u32, what: &str, scene: Option<&Scene>) -> anyhow::Result<()> {
@@ -118,16 +109,15 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
     if let Some(r) = args.reference_spp {
         check_spp(r, "--reference-spp", None)?;
     }
-    let mut scene =
-        load_file(&args.scene, &LoadOptions { time: 0.0, vars: args.vars.clone() }).map_err(|e| anyhow!("{e}"))?;
-    resize(&mut scene, args.width, args.height)?;
+    let mut scene = args.script.load(&args.scene)?;
+    args.overrides.apply(&mut scene)?;
     let max_spp = *spp.last().unwrap_or(&1);
     check_spp(max_spp, "--spp", Some(&scene))?;
     if let Some(r) = args.reference_spp {
         check_spp(r, "--reference-spp", Some(&scene))?;
     }
     std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
-    let devices = open_devices(&args.device, &args.adapter.choice());
+    let devices = args.devices.open();
     if devices.is_empty() {
         bail!("none of the requested devices is available");
     }
@@ -199,8 +189,9 @@ fn write_results(
 ) -> anyhow::Result<()> {
     let dir = &args.output;
     let slopes = slope_lines(table);
+    let mut out = super::output::Lines::default();
     for l in &slopes {
-        println!("{l}");
+        out.line(l);
     }
     let csv = dir.join("converge.csv");
     crate::image::write_atomically(&csv, table.to_csv().as_bytes())
@@ -233,5 +224,6 @@ fn write_results(
     let png = dir.join("converge.png");
     plot.write_png(&png, 800, 560).with_context(|| format!("cannot write {}", png.display()))?;
     eprintln!("wrote {}, {} and {}", csv.display(), md_path.display(), png.display());
-    Ok(())
+    // Last: the files are written even when nobody reads standard output.
+    Ok(out.print()?)
 }

@@ -4,6 +4,7 @@
 use clap::Args;
 
 use super::gpu_args::AdapterArgs;
+use super::output::Lines;
 use crate::gpu::{list_adapters, select_adapter};
 
 /// Arguments of `lumen devices`.
@@ -17,21 +18,26 @@ pub struct DevicesArgs {
 /// the CPU renderer still works).
 pub fn run(args: DevicesArgs) -> anyhow::Result<()> {
     let adapters = list_adapters();
+    let mut out = Lines::default();
     if adapters.is_empty() {
-        println!("no GPU adapters found: GPU rendering is unavailable (the CPU renderer still works).");
-        println!("On Linux, Mesa's software Vulkan driver works anywhere: apt-get install mesa-vulkan-drivers");
-        return Ok(());
+        out.line("no GPU adapters found: GPU rendering is unavailable (the CPU renderer still works).")
+            .line("On Linux, Mesa's software Vulkan driver works anywhere: apt-get install mesa-vulkan-drivers");
+        return Ok(out.print()?);
     }
     let choice = args.adapter.choice();
     let selected = select_adapter(&adapters, &choice);
     for (i, a) in adapters.iter().enumerate() {
         let mark = if selected.as_ref().ok() == Some(&i) { "  (selected)" } else { "" };
-        println!("{i}: {}{mark}", a.name);
-        println!("   backend: {}, type: {}", a.backend, a.device_type_name());
+        out.line(format_args!("{i}: {}{mark}", a.name)).line(format_args!(
+            "   backend: {}, type: {}",
+            a.backend,
+            a.device_type_name()
+        ));
         if !a.driver.is_empty() || !a.driver_info.is_empty() {
-            println!("   driver: {}", [a.driver.trim(), a.driver_info.trim()].join(" ").trim());
+            out.line(format_args!("   driver: {}", [a.driver.trim(), a.driver_info.trim()].join(" ").trim()));
         }
     }
+    out.print()?;
     // An adapter name that matches nothing is an error wherever it is used: say so here too.
     selected?;
     Ok(())

@@ -1,10 +1,11 @@
-//! Options shared by every subcommand that renders on the GPU (`#[command(flatten)]`):
+//! Options shared by the subcommands that render (`#[command(flatten)]`): which devices,
 //! which adapter, and when to stop a progressive render early.
 
 use std::time::Duration;
 
 use clap::Args;
 
+use crate::device::Device;
 use crate::gpu::{ctrlc_flag, AdapterChoice, PassOptions};
 
 /// `--adapter NAME` (default: `$LUMEN_ADAPTER`, else the best adapter).
@@ -22,13 +23,31 @@ impl AdapterArgs {
     }
 }
 
+/// `--device LIST` and `--adapter` of the studies that measure several devices in turn
+/// (`lumen converge`, `lumen bench`).
+#[derive(Debug, Clone, Args)]
+pub struct DeviceListArgs {
+    /// Devices to measure, comma-separated; an unavailable GPU is skipped with a warning.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Device::Gpu, Device::Cpu])]
+    pub device: Vec<Device>,
+    #[command(flatten)]
+    pub adapter: AdapterArgs,
+}
+
+impl DeviceListArgs {
+    /// Opens each device ([`crate::device::open_devices`]).
+    pub fn open(&self) -> Vec<crate::device::OpenDevice> {
+        crate::device::open_devices(&self.device, &self.adapter.choice())
+    }
+}
+
 /// The adapter plus progressive-render controls.
 #[derive(Debug, Clone, Default, Args)]
 pub struct GpuArgs {
     #[command(flatten)]
     pub adapter: AdapterArgs,
-    /// Stop after about this many seconds and save what was rendered (every pixel gets the
-    /// same number of samples; the image reports how many).
+    /// Stop after about this many seconds and save what was rendered, on the GPU or the CPU
+    /// (every pixel gets the same number of samples; the report says how many).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limit: Option<Duration>,
 }

@@ -1,5 +1,7 @@
 //! The `lumen` command line. Each subcommand lives in its own file and is one variant of
-//! [`Command`]; errors print as one line plus context and exit non-zero.
+//! [`Command`]; errors print as one line plus context and exit non-zero. Results go to
+//! standard output only through [`output`] (the lint below holds every file to it).
+#![deny(clippy::print_stdout)]
 
 use std::process::ExitCode;
 
@@ -10,6 +12,9 @@ mod check;
 pub mod converge;
 pub mod devices;
 pub mod gpu_args;
+#[cfg(unix)]
+pub mod headless;
+pub mod output;
 pub mod render;
 pub mod script_args;
 mod shader;
@@ -57,15 +62,37 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 
 /// Entry point of the binary: parse, run, report.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // First, while the process has one thread: it may set an environment variable.
+    #[cfg(unix)]
+    let _runtime_dir = headless::ensure_runtime_dir();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return clap_exit(&e),
+    };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            for cause in e.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
-            }
-            ExitCode::FAILURE
-        }
+        Err(e) => report(&e),
     }
+}
+
+/// Prints clap's help, version or usage error; `--help` into a closed pipe or a full disk
+/// is handled like any other output.
+fn clap_exit(e: &clap::Error) -> ExitCode {
+    match e.print() {
+        Err(io) if !e.use_stderr() => report(&output::StdoutError(io).into()),
+        _ => ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2)),
+    }
+}
+
+/// Prints an error as one line plus its causes; a broken pipe on standard output (the
+/// reader has gone, as with `| head`) exits quietly.
+fn report(e: &anyhow::Error) -> ExitCode {
+    if e.chain().any(|c| c.downcast_ref::<output::StdoutError>().is_some_and(output::StdoutError::is_broken_pipe)) {
+        return ExitCode::from(output::BROKEN_PIPE_EXIT);
+    }
+    eprintln!("error: {e}");
+    for cause in e.chain().skip(1) {
+        eprintln!("  caused by: {cause}");
+    }
+    ExitCode::FAILURE
 }

@@ -7,34 +7,23 @@ use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 
 use anyhow::{anyhow, bail, Context as _};
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use super::gpu_args::GpuArgs;
-use super::script_args::ScriptArgs;
-use crate::analysis::OpenDevice;
-use crate::cpu::{self, paths_per_sample, Progress, RenderOptions};
+pub use super::script_args::{resize, MAX_SPP};
+use super::script_args::{SceneOverrides, ScriptArgs, SppArgs};
+use crate::cpu::{self, paths_per_sample, Limits, Progress, RenderOptions};
+pub use crate::device::DeviceChoice;
+use crate::device::{open_device, OpenDevice};
 use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
-use crate::gpu::{Gpu, GpuError, StopReason};
-use crate::image::{check_size, write_image, HdrImage, ImageFormat, ToneMap};
-use crate::scene::{Renderer, Scene, MAX_IMAGE_SIDE};
-
-/// Most camera samples per pixel `--spp` accepts.
-pub const MAX_SPP: u32 = 1 << 20;
+use crate::gpu::{ctrlc_flag, Gpu, GpuError};
+use crate::image::{write_image, HdrImage, ImageFormat, ToneMap};
+use crate::scene::{Renderer, Scene};
+use crate::stop::StopReason;
 /// Most frames `--frames` accepts.
 pub const MAX_FRAMES: u32 = 100_000;
 /// Frame rate of the video assembled from `--frames`.
 pub const VIDEO_FPS: u32 = 24;
-
-/// Where to render.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum DeviceChoice {
-    /// The f64 CPU reference renderer (all cores).
-    Cpu,
-    /// A GPU through wgpu; an error when none can be used.
-    Gpu,
-    /// The GPU when one can be used, else the CPU with a warning.
-    Auto,
-}
 
 /// Arguments of `lumen render`.
 #[derive(Debug, Args)]
@@ -50,21 +39,12 @@ pub struct RenderArgs {
     pub device: DeviceChoice,
     #[command(flatten)]
     pub gpu: GpuArgs,
-    /// Image width in pixels. Given alone, the height follows from the camera's aspect ratio.
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height in pixels. Given alone, the width follows from the camera's aspect ratio.
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Camera samples per pixel (a perfect square s² gives s×s strata), instead of the
-    /// tracer's samples_per_side².
-    #[arg(long)]
-    pub spp: Option<u32>,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
+    pub spp: SppArgs,
     #[command(flatten)]
     pub script: ScriptArgs,
-    /// Replaces the state of the tracer's Pcg seed.
-    #[arg(long)]
-    pub seed: Option<u64>,
     /// Path tracer: no next-event estimation (light only found by BSDF sampling, as in
     /// Raytracer.jl); the script's `.nee 0` does the same.
     #[arg(long)]
@@ -128,27 +108,6 @@ pub fn frame_path(path: &Path, k: u32, count: u32) -> PathBuf {
     path.with_file_name(format!("{stem}_{:0digits$}{ext}", k + 1))
 }
 
-/// Applies `--width/--height`: both given replace the size (the camera keeps the script's
-/// aspect ratio); one alone sets that side and derives the other from the camera's aspect
-/// ratio, so pixels stay square.
-pub fn resize(scene: &mut Scene, width: Option<u32>, height: Option<u32>) -> anyhow::Result<()> {
-    let aspect = scene.camera.aspect_ratio;
-    let derive = |v: f64| -> u32 { v.round().clamp(1.0, f64::from(u32::MAX)) as u32 };
-    let (w, h) = match (width, height) {
-        (None, None) => return Ok(()),
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, derive(f64::from(w) / aspect)),
-        (None, Some(h)) => (derive(f64::from(h) * aspect), h),
-    };
-    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
-        bail!("image size {w}×{h} is invalid: each side must be 1..={MAX_IMAGE_SIDE}");
-    }
-    check_size(w as usize, h as usize).map_err(|e| anyhow!("image size {w}×{h}: {e}"))?;
-    scene.width = w;
-    scene.height = h;
-    Ok(())
-}
-
 /// The tone mapping for LDR outputs: Reinhard when `--alpha` or `--gamma` is given (with
 /// Raytracer.jl's values for the other), else the image module's default.
 pub fn tone_map(alpha: Option<f32>, gamma: Option<f32>) -> anyhow::Result<ToneMap> {
@@ -162,39 +121,12 @@ pub fn tone_map(alpha: Option<f32>, gamma: Option<f32>) -> anyhow::Result<ToneMa
     Ok(tm)
 }
 
-/// Opens the device `--device` asks for. `auto` falls back to the CPU, with a warning, when
-/// no GPU can be opened; an adapter asked for by name that does not exist is an error even
-/// then (the user wanted that one).
-fn open_device(args: &RenderArgs) -> anyhow::Result<OpenDevice> {
-    let open_gpu = || Gpu::new(&args.gpu.adapter.choice());
-    let gpu_device = |g: Gpu| {
-        if g.adapter_info.device_type == wgpu::DeviceType::Cpu {
-            eprintln!(
-                "note: {} is a software adapter (the GPU API emulated on the CPU); lumen's own CPU renderer \
-                 (--device cpu) is usually faster on this machine",
-                g.adapter_info.name
-            );
-        }
-        OpenDevice::Gpu { gpu: Box::new(g), renderer: Default::default() }
-    };
-    match args.device {
-        DeviceChoice::Cpu => {
-            if args.gpu.time_limit.is_some() {
-                eprintln!("warning: --time-limit applies to GPU renders; the CPU renders every sample");
-            }
-            Ok(OpenDevice::Cpu)
-        }
-        DeviceChoice::Gpu => Ok(gpu_device(open_gpu().context("--device gpu")?)),
-        DeviceChoice::Auto => match open_gpu() {
-            Ok(g) => Ok(gpu_device(g)),
-            Err(e @ GpuError::AdapterNotFound { .. }) => Err(e.into()),
-            Err(e) => {
-                eprintln!("warning: {e}");
-                eprintln!("warning: rendering on the CPU reference renderer instead (slower; --device cpu says so)");
-                Ok(OpenDevice::Cpu)
-            }
-        },
-    }
+/// Opens the device `--device` asks for ([`open_device`]).
+fn open(args: &RenderArgs) -> anyhow::Result<OpenDevice> {
+    open_device(args.device, &args.gpu.adapter.choice()).map_err(|e| match args.device {
+        DeviceChoice::Gpu => anyhow::Error::from(e).context("--device gpu"),
+        _ => e.into(),
+    })
 }
 
 /// One rendered image and how it went.
@@ -209,33 +141,55 @@ struct Rendered {
 /// for the adapter's limits, say) is rendered on the CPU instead, with a warning.
 fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene) -> anyhow::Result<Rendered> {
     let OpenDevice::Gpu { gpu, renderer } = device else {
-        return Ok(render_on_cpu(scene, args.spp));
+        return render_on_cpu(scene, args);
     };
     match render_on_gpu(gpu, &mut renderer.borrow_mut(), args, scene) {
         Err(e) if args.device == DeviceChoice::Auto && !matches!(e, GpuError::DeviceLost(_)) => {
             eprintln!("warning: the GPU cannot render this scene: {e}");
             eprintln!("warning: rendering on the CPU reference renderer instead");
-            Ok(render_on_cpu(scene, args.spp))
+            render_on_cpu(scene, args)
         }
         other => other.map_err(|e| anyhow!("GPU render failed: {e}")),
     }
 }
 
-fn render_on_cpu(scene: &Scene, spp: Option<u32>) -> Rendered {
-    let out = cpu::render(scene, &RenderOptions { spp }, Progress::Bar);
+fn render_on_cpu(scene: &Scene, args: &RenderArgs) -> anyhow::Result<Rendered> {
+    let limits = Limits { time_limit: args.gpu.time_limit, cancel: Some(ctrlc_flag()), ..Limits::default() };
+    let out = cpu::render_limited(scene, &RenderOptions { spp: args.spp.spp }, &limits, Progress::Bar)?;
     let s = &out.stats;
     eprintln!(
-        "{}×{} {} on the CPU ({} threads): {} samples, {} rays in {:.2} s ({:.2} Mrays/s)",
+        "{}×{} {} on the CPU ({} threads): {} of {} samples per pixel, {} samples, {} rays in {:.2} s ({:.2} Mrays/s)",
         scene.width,
         scene.height,
         scene.renderer.name(),
         rayon::current_num_threads(),
+        s.spp,
+        s.spp_requested,
         s.samples,
         s.rays,
         s.seconds,
         s.rays as f64 / s.seconds.max(1e-9) / 1e6
     );
-    Rendered { image: out.image, non_finite_samples: s.non_finite_samples, stopped_early: false }
+    let stopped_early = report_stop(s.stop, s.spp);
+    if s.spp == 0 {
+        bail!("stopped before any sample was complete; nothing to write");
+    }
+    Ok(Rendered { image: out.image, non_finite_samples: s.non_finite_samples, stopped_early })
+}
+
+/// Says why a render stopped early (the same words for both renderers); returns whether it did.
+fn report_stop(stop: StopReason, spp_done: u64) -> bool {
+    match stop {
+        StopReason::Completed => false,
+        StopReason::TimeLimit => {
+            eprintln!("note: stopped at the time limit with {spp_done} samples per pixel");
+            true
+        }
+        StopReason::Interrupted => {
+            eprintln!("note: interrupted; keeping the {spp_done} samples per pixel of the completed rounds");
+            true
+        }
+    }
 }
 
 fn render_on_gpu(
@@ -244,7 +198,7 @@ fn render_on_gpu(
     args: &RenderArgs,
     scene: &Scene,
 ) -> Result<Rendered, GpuError> {
-    let opts = GpuRenderOptions { spp: args.spp, passes: args.gpu.pass_options(), ..GpuRenderOptions::default() };
+    let opts = GpuRenderOptions { spp: args.spp.spp, passes: args.gpu.pass_options(), ..GpuRenderOptions::default() };
     let out = renderer.render(gpu, scene, &opts)?;
     let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
     eprintln!(
@@ -259,17 +213,7 @@ fn render_on_gpu(
         out.seconds,
         samples as f64 / out.seconds.max(1e-9) / 1e6
     );
-    let stopped_early = match out.stop {
-        StopReason::Completed => false,
-        StopReason::TimeLimit => {
-            eprintln!("note: stopped at the time limit with {} samples per pixel", out.spp_done);
-            true
-        }
-        StopReason::Interrupted => {
-            eprintln!("note: interrupted; keeping the {} samples per pixel of the completed rounds", out.spp_done);
-            true
-        }
-    };
+    let stopped_early = report_stop(out.stop, u64::from(out.spp_done));
     if out.spp_done == 0 {
         return Err(GpuError::Validation("stopped before any sample was complete; nothing to write".into()));
     }
@@ -281,11 +225,7 @@ fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, 
     for o in outputs {
         ImageFormat::from_path(o).with_context(|| format!("output {}", o.display()))?;
     }
-    if let Some(spp) = args.spp {
-        if spp == 0 || spp > MAX_SPP {
-            bail!("--spp must be 1..={MAX_SPP}, got {spp}");
-        }
-    }
+    args.spp.checked(MAX_SPP)?;
     if !args.script.time.is_finite() {
         bail!("--time must be finite");
     }
@@ -296,16 +236,13 @@ fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, 
 /// Loads the scene at `time` and applies the command-line overrides.
 fn load(args: &RenderArgs, time: f64) -> anyhow::Result<Scene> {
     let mut scene = args.script.load_at(&args.scene, time)?;
-    resize(&mut scene, args.width, args.height)?;
-    if let Some(seed) = args.seed {
-        scene.tracer.rng.state = seed;
-    }
+    args.overrides.apply(&mut scene)?;
     if args.no_nee {
         if let Renderer::PathTracer(p) = &mut scene.renderer {
             p.nee = false;
         }
     }
-    let spp = args.spp.map_or(u64::from(scene.tracer.samples_per_side).pow(2).max(1), u64::from);
+    let spp = args.spp.spp.map_or(u64::from(scene.tracer.samples_per_side).pow(2).max(1), u64::from);
     if spp * paths_per_sample(&scene) > u64::from(u32::MAX) {
         bail!("{spp} samples per pixel × {} paths per sample is too many (at most 2³² − 1)", paths_per_sample(&scene));
     }
@@ -343,7 +280,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let (tm, frames) = validate(&args, &outputs)?;
     // Load once before opening a device: a broken script fails fast, without GPU start-up.
     load(&args, frames.map_or(args.script.time, |f| f.time(0)))?;
-    let device = open_device(&args)?;
+    let device = open(&args)?;
     let Some(frames) = frames else {
         return render_one(&device, &args, args.script.time, &outputs, &tm).map(|_| ());
     };
@@ -389,7 +326,6 @@ fn make_video(output: &Path, count: u32) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::SceneBuilder;
 
     #[test]
     fn frames_parse_and_space_evenly() {
@@ -401,20 +337,6 @@ mod tests {
         }
         assert_eq!(frame_path(Path::new("dir/out.png"), 0, 10), PathBuf::from("dir/out_0001.png"));
         assert_eq!(frame_path(Path::new("o.pfm"), 41, 12345), PathBuf::from("o_00042.pfm"));
-    }
-
-    #[test]
-    fn size_overrides_keep_square_pixels_when_one_side_is_given() {
-        let mut s = SceneBuilder::new(160, 90).build().unwrap();
-        s.camera.aspect_ratio = 16.0 / 9.0;
-        resize(&mut s, Some(320), None).unwrap();
-        assert_eq!((s.width, s.height), (320, 180));
-        resize(&mut s, None, Some(45)).unwrap();
-        assert_eq!((s.width, s.height), (80, 45));
-        resize(&mut s, Some(10), Some(10)).unwrap();
-        assert_eq!((s.width, s.height, s.camera.aspect_ratio), (10, 10, 16.0 / 9.0));
-        assert!(resize(&mut s, Some(0), None).is_err());
-        assert!(resize(&mut s, Some(MAX_IMAGE_SIDE + 1), Some(1)).is_err());
     }
 
     #[test]

@@ -1,12 +1,18 @@
-//! Options shared by every subcommand that loads a SceneLang script (`#[command(flatten)]`).
+//! Options shared by the subcommands that load SceneLang scripts (`#[command(flatten)]`),
+//! so each is parsed, checked and documented once: the script's inputs ([`ScriptArgs`]),
+//! changes to the loaded scene ([`SceneOverrides`]) and the sample count ([`SppArgs`]).
 
 use std::path::Path;
 
-use anyhow::anyhow;
+use anyhow::{anyhow, bail};
 use clap::Args;
 
-use crate::scene::Scene;
+use crate::image::check_size;
+use crate::scene::{Scene, MAX_IMAGE_SIDE};
 use crate::scenelang::{load_file, LoadOptions};
+
+/// Most camera samples per pixel `--spp` accepts.
+pub const MAX_SPP: u32 = 1 << 20;
 
 /// `--time` and `--vars`.
 #[derive(Debug, Clone, Default, Args)]
@@ -31,5 +37,116 @@ impl ScriptArgs {
     /// Loads `path` at `--time`.
     pub fn load(&self, path: &Path) -> anyhow::Result<Scene> {
         self.load_at(path, self.time)
+    }
+}
+
+/// `--width`, `--height` and `--seed`: what the command line changes in a loaded scene.
+#[derive(Debug, Clone, Default, Args)]
+pub struct SceneOverrides {
+    /// Image width in pixels. Given alone, the height follows from the camera's aspect ratio.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels. Given alone, the width follows from the camera's aspect ratio.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Replaces the state of the tracer's Pcg seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+}
+
+impl SceneOverrides {
+    /// Applies the size ([`resize`]) and the seed.
+    pub fn apply(&self, scene: &mut Scene) -> anyhow::Result<()> {
+        resize(scene, self.width, self.height)?;
+        if let Some(seed) = self.seed {
+            scene.tracer.rng.state = seed;
+        }
+        Ok(())
+    }
+}
+
+/// `--spp`.
+#[derive(Debug, Clone, Copy, Default, Args)]
+pub struct SppArgs {
+    /// Camera samples per pixel (a perfect square s² gives s×s strata), instead of the
+    /// tracer's samples_per_side².
+    #[arg(long)]
+    pub spp: Option<u32>,
+}
+
+impl SppArgs {
+    /// The count, checked against `1..=max`.
+    pub fn checked(&self, max: u32) -> anyhow::Result<Option<u32>> {
+        match self.spp {
+            Some(spp) if spp == 0 || spp > max => bail!("--spp must be 1..={max}, got {spp}"),
+            spp => Ok(spp),
+        }
+    }
+}
+
+/// Applies `--width/--height`: both given replace the size (the camera keeps the script's
+/// aspect ratio); one alone sets that side and derives the other from the camera's aspect
+/// ratio, so pixels stay square.
+pub fn resize(scene: &mut Scene, width: Option<u32>, height: Option<u32>) -> anyhow::Result<()> {
+    let aspect = scene.camera.aspect_ratio;
+    let derive = |v: f64| -> u32 { v.round().clamp(1.0, f64::from(u32::MAX)) as u32 };
+    let (w, h) = match (width, height) {
+        (None, None) => return Ok(()),
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, derive(f64::from(w) / aspect)),
+        (None, Some(h)) => (derive(f64::from(h) * aspect), h),
+    };
+    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        bail!("image size {w}×{h} is invalid: each side must be 1..={MAX_IMAGE_SIDE}");
+    }
+    check_size(w as usize, h as usize).map_err(|e| anyhow!("image size {w}×{h}: {e}"))?;
+    scene.width = w;
+    scene.height = h;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SceneBuilder;
+    use clap::Parser;
+
+    #[test]
+    fn size_overrides_keep_square_pixels_when_one_side_is_given() {
+        let mut s = SceneBuilder::new(160, 90).build().unwrap();
+        s.camera.aspect_ratio = 16.0 / 9.0;
+        resize(&mut s, Some(320), None).unwrap();
+        assert_eq!((s.width, s.height), (320, 180));
+        resize(&mut s, None, Some(45)).unwrap();
+        assert_eq!((s.width, s.height), (80, 45));
+        resize(&mut s, Some(10), Some(10)).unwrap();
+        assert_eq!((s.width, s.height, s.camera.aspect_ratio), (10, 10, 16.0 / 9.0));
+        assert!(resize(&mut s, Some(0), None).is_err());
+        assert!(resize(&mut s, Some(MAX_IMAGE_SIDE + 1), Some(1)).is_err());
+    }
+
+    #[derive(Parser)]
+    struct T {
+        #[command(flatten)]
+        script: ScriptArgs,
+        #[command(flatten)]
+        scene: SceneOverrides,
+        #[command(flatten)]
+        spp: SppArgs,
+    }
+
+    #[test]
+    fn shared_arguments_parse_alike() {
+        let t = T::try_parse_from(["t", "--time", "-2", "--vars", "r 1", "--width", "9", "--seed", "7", "--spp", "4"])
+            .unwrap();
+        assert_eq!((t.script.time, t.script.vars.as_slice()), (-2.0, &["r 1".to_string()][..]));
+        assert_eq!((t.scene.width, t.scene.height, t.scene.seed), (Some(9), None, Some(7)));
+        assert_eq!(t.spp.checked(MAX_SPP).unwrap(), Some(4));
+        let mut s = SceneBuilder::new(16, 8).build().unwrap();
+        s.camera.aspect_ratio = 2.0;
+        t.scene.apply(&mut s).unwrap();
+        assert_eq!((s.width, s.height, s.tracer.rng.state), (9, 5, 7));
+        assert!(SppArgs { spp: Some(0) }.checked(MAX_SPP).is_err());
+        assert!(SppArgs { spp: Some(5) }.checked(4).is_err());
     }
 }

@@ -1,7 +1,6 @@
 //! `lumen shader SCENE.sl`: prints the WGSL compute kernels lumen assembles for a scene, one
 //! per wavefront stage (only the shader modules and `// #if` blocks each stage needs).
 
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Context as _};
@@ -48,7 +47,7 @@ pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
             write_atomically(path, text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
             eprintln!("wrote {} ({} bytes, {} lines)", path.display(), text.len(), text.lines().count());
         }
-        None => std::io::stdout().lock().write_all(text.as_bytes()).context("cannot write to standard output")?,
+        None => super::output::print(&text)?,
     }
     Ok(())
 }

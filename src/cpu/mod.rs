@@ -37,4 +37,7 @@ pub mod simple_renderers;
 pub mod vertex_draws;
 pub mod warp;
 
-pub use render::{paths_per_sample, render, render_pixel, Progress, RenderOptions, RenderOutput, RenderStats};
+pub use render::{
+    add_samples, memory_estimate, paths_per_sample, render, render_limited, render_pixel, Limits, Progress,
+    RenderOptions, RenderOutput, RenderStats, CPU_RENDER_BYTES_PER_PIXEL,
+};

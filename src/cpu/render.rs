@@ -1,14 +1,25 @@
 //! The CPU render loop: tiles on rayon, each pixel the mean of its camera samples (and the
 //! path tracer's `n` paths per sample), independent of thread count and tile order.
+//!
+//! Samples are taken in *rounds*, as on the GPU (`crate::stop`): round k adds samples
+//! `[j0, j1)` to every pixel's f64 sum, so a time limit checked between rounds or a Ctrl-C
+//! (which drops the unfinished round) still leaves the same number of samples in every
+//! pixel. Each pixel's sum is one running sum over its samples in index order, continued
+//! from round to round, so the image does not depend on how the samples were split into
+//! rounds: a complete render is bit-identical to summing every sample in one go.
 
-use std::time::Instant;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::color::{Color, Rgb32};
+use crate::color::Color;
 use crate::image::HdrImage;
+use crate::memory::{check_fits, try_filled, OutOfMemory};
 use crate::scene::{Renderer, Scene, CAMERA_RAY_TMIN};
+use crate::stop::StopReason;
 
 use super::context::{Context, Counters};
 use super::lights::Lights;
@@ -20,12 +31,41 @@ use super::{Ray, World};
 /// Side of the square tiles the image is split into.
 const TILE: u32 = 16;
 
+/// Wanted duration of one round: long enough that the per-round cost (copying the sums,
+/// waking the threads) stays under about 1%, short enough for a responsive progress bar
+/// and a time limit overshot by little.
+const TARGET_ROUND_SECONDS: f64 = 0.5;
+
+/// Bytes per pixel a CPU render holds at its peak: the f64 sums of the completed rounds and
+/// of the round in progress (24 bytes each), and the f32 image (12 bytes).
+pub const CPU_RENDER_BYTES_PER_PIXEL: u64 = 24 + 24 + 12;
+
 /// Options that override or extend what the scene says.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct RenderOptions {
     /// Camera samples per pixel instead of the tracer's `samples_per_side²` (a perfect
     /// square s² gives s×s strata; see DESIGN.md).
     pub spp: Option<u32>,
+}
+
+/// When a render may stop before every sample is taken: the GPU renderer's rules
+/// (`crate::gpu::PassOptions`), so `--time-limit` and Ctrl-C mean the same on both.
+#[derive(Debug, Clone, Default)]
+pub struct Limits {
+    /// Stop after the round during which this much time has passed.
+    pub time_limit: Option<Duration>,
+    /// When set (e.g. by Ctrl-C, see [`crate::stop::ctrlc_flag`]), stop soon and drop the
+    /// unfinished round.
+    pub cancel: Option<Arc<AtomicBool>>,
+    /// Camera samples per pixel in every round instead of adaptive rounds (tests use it to
+    /// force a split; `None` or 0: adaptive).
+    pub round_spp: Option<u32>,
+}
+
+impl Limits {
+    fn cancelled(&self) -> bool {
+        self.cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed))
+    }
 }
 
 /// Whether to draw a progress bar on standard error.
@@ -41,11 +81,18 @@ pub enum Progress {
 pub struct RenderStats {
     /// Radiance samples (camera samples × paths per sample, over all pixels).
     pub samples: u64,
-    /// Closest-hit and shadow rays traced.
+    /// Closest-hit and shadow rays traced (in the rounds kept).
     pub rays: u64,
     /// Samples whose radiance was NaN or infinite; each was counted as 0.
     pub non_finite_samples: u64,
     pub seconds: f64,
+    /// Camera samples per pixel taken, the same in every pixel.
+    pub spp: u64,
+    /// Camera samples per pixel asked for.
+    pub spp_requested: u64,
+    /// Rounds kept.
+    pub rounds: u32,
+    pub stop: StopReason,
 }
 
 /// A rendered image (linear radiance) and its statistics.
@@ -55,7 +102,8 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
-/// Renders `scene` on the CPU.
+/// Renders `scene` on the CPU, taking every sample. Panics when the memory for the image
+/// cannot be had: for sizes that come from input, use [`render_limited`].
 ///
 /// ```
 /// use lumen::color::Color;
@@ -73,37 +121,189 @@ pub struct RenderOutput {
 /// assert_eq!(out.stats.samples, 64);
 /// ```
 pub fn render(scene: &Scene, opts: &RenderOptions, progress: Progress) -> RenderOutput {
+    render_limited(scene, opts, &Limits::default(), progress).unwrap_or_else(|e| panic!("CPU render: {e}"))
+}
+
+/// Bytes a CPU render of `width × height` pixels needs at its peak (what [`render_limited`]
+/// checks before allocating).
+pub fn memory_estimate(width: u32, height: u32) -> u64 {
+    u64::from(width) * u64::from(height) * CPU_RENDER_BYTES_PER_PIXEL
+}
+
+/// One tile's running sums, and the round in progress.
+struct TileState {
+    x0: u32,
+    y0: u32,
+    width: u32,
+    /// Per-pixel sums of the completed rounds, row by row.
+    sums: Vec<Color>,
+    /// `sums` plus the round in progress; swapped into `sums` when every tile finishes it.
+    next: Vec<Color>,
+    counters: Counters,
+    non_finite: u64,
+    round_counters: Counters,
+    round_non_finite: u64,
+    round_complete: bool,
+}
+
+impl TileState {
+    /// Adds samples `j0..j1` of every pixel to a copy of the sums; stops early (leaving
+    /// `round_complete` false) once `limits` says cancel.
+    fn run_round(&mut self, ctx: &Context, layout: PixelSamples, j0: u32, j1: u32, limits: &Limits) {
+        self.next.copy_from_slice(&self.sums);
+        self.round_counters = Counters::default();
+        self.round_non_finite = 0;
+        self.round_complete = false;
+        for (i, sum) in self.next.iter_mut().enumerate() {
+            if limits.cancelled() {
+                return;
+            }
+            let (col, row) = (self.x0 + i as u32 % self.width, self.y0 + i as u32 / self.width);
+            add_samples(ctx, layout, col, row, j0..j1, sum, &mut self.round_counters, &mut self.round_non_finite);
+        }
+        self.round_complete = true;
+    }
+
+    fn commit_round(&mut self) {
+        std::mem::swap(&mut self.sums, &mut self.next);
+        self.counters.rays += self.round_counters.rays;
+        self.non_finite += self.round_non_finite;
+    }
+}
+
+/// Renders `scene` on the CPU in rounds of samples until every sample is taken, the time
+/// limit has passed (checked between rounds) or the cancel flag is set (the unfinished
+/// round is dropped). Every pixel of the image has `stats.spp` samples (black if 0).
+///
+/// The memory is estimated first ([`memory_estimate`]) and every buffer allocated
+/// fallibly, so a size this machine cannot hold is an error, never an abort.
+///
+/// ```
+/// use std::sync::{atomic::AtomicBool, Arc};
+/// use lumen::cpu::{render_limited, Limits, Progress, RenderOptions};
+/// use lumen::scene::SceneBuilder;
+/// use lumen::stop::StopReason;
+///
+/// let scene = SceneBuilder::new(4, 4).build().unwrap();
+/// let limits = Limits { cancel: Some(Arc::new(AtomicBool::new(true))), ..Limits::default() };
+/// let out = render_limited(&scene, &RenderOptions { spp: Some(9) }, &limits, Progress::Hidden).unwrap();
+/// assert_eq!((out.stats.stop, out.stats.spp, out.stats.samples), (StopReason::Interrupted, 0, 0));
+/// ```
+pub fn render_limited(
+    scene: &Scene,
+    opts: &RenderOptions,
+    limits: &Limits,
+    progress: Progress,
+) -> Result<RenderOutput, OutOfMemory> {
     let start = Instant::now();
+    let (w, h) = (scene.width, scene.height);
+    let estimate = memory_estimate(w, h);
+    check_fits(estimate, &format!("a {w}×{h} CPU render"))?;
+    // Sums are allocated tile by tile; a refusal reports them all.
+    let what = format!("the sample sums of a {w}×{h} CPU render");
+    let refused =
+        || OutOfMemory::Refused { what: what.clone(), bytes: u64::from(w) * u64::from(h) * 48, total: estimate };
+    let mut tiles = Vec::new();
+    tiles.try_reserve_exact(w.div_ceil(TILE) as usize * h.div_ceil(TILE) as usize).map_err(|_| refused())?;
+    for y0 in (0..h).step_by(TILE as usize) {
+        for x0 in (0..w).step_by(TILE as usize) {
+            let (width, height) = (TILE.min(w - x0), TILE.min(h - y0));
+            let n = (width * height) as usize;
+            tiles.push(TileState {
+                x0,
+                y0,
+                width,
+                sums: try_filled(n, Color::BLACK, &what, estimate).map_err(|_| refused())?,
+                next: try_filled(n, Color::BLACK, &what, estimate).map_err(|_| refused())?,
+                counters: Counters::default(),
+                non_finite: 0,
+                round_counters: Counters::default(),
+                round_non_finite: 0,
+                round_complete: false,
+            });
+        }
+    }
+
     let world = World::new(scene);
     let lights = Lights::new(scene);
     let ctx = Context { scene, world: &world, lights: &lights };
     let layout = PixelSamples::new(&scene.tracer, opts.spp);
-    let (w, h) = (scene.width, scene.height);
-    let tiles: Vec<(u32, u32)> =
-        (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE))).collect();
-    let bar = progress_bar(progress, u64::from(w) * u64::from(h));
-    let done: Vec<(Vec<Rgb32>, Counters, u64)> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let r = render_tile(&ctx, layout, x0, y0);
-            bar.inc(r.0.len() as u64);
-            r
-        })
-        .collect();
-    bar.finish_and_clear();
-    let mut image = HdrImage::new(w as usize, h as usize);
-    let mut stats = RenderStats::default();
-    for (&(x0, y0), (pixels, counters, bad)) in tiles.iter().zip(&done) {
-        let tw = TILE.min(w - x0);
-        for (i, p) in pixels.iter().enumerate() {
-            image.set((x0 + i as u32 % tw) as usize, (y0 + i as u32 / tw) as usize, *p);
+    // Sample indices are u32, as on the GPU (the CLI refuses counts that would wrap).
+    let total = u32::try_from(layout.count()).unwrap_or(u32::MAX);
+    let pixels = u64::from(w) * u64::from(h);
+    let bar = progress_bar(progress, u64::from(total) * pixels);
+    let fixed = limits.round_spp.filter(|&r| r > 0);
+    let mut round_spp = fixed.unwrap_or(1);
+    let (mut done, mut rounds) = (0u32, 0u32);
+    let mut stop = StopReason::Completed;
+    while done < total {
+        if limits.cancelled() {
+            stop = StopReason::Interrupted;
+            break;
         }
-        stats.rays += counters.rays;
-        stats.non_finite_samples += bad;
+        let (j0, j1) = (done, done.saturating_add(round_spp).min(total));
+        let t = Instant::now();
+        tiles.par_iter_mut().for_each(|tile| {
+            tile.run_round(&ctx, layout, j0, j1, limits);
+            bar.inc(u64::from(j1 - j0) * tile.sums.len() as u64);
+        });
+        if !tiles.iter().all(|t| t.round_complete) {
+            stop = StopReason::Interrupted;
+            break;
+        }
+        tiles.iter_mut().for_each(TileState::commit_round);
+        done = j1;
+        rounds += 1;
+        bar.set_message(format!("{done}/{total} spp"));
+        let per_spp = t.elapsed().as_secs_f64() / f64::from(j1 - j0);
+        let remaining = match limits.time_limit {
+            Some(limit) if start.elapsed() >= limit => {
+                if done < total {
+                    stop = StopReason::TimeLimit;
+                }
+                break;
+            }
+            Some(limit) => Some((limit - start.elapsed()).as_secs_f64()),
+            None => None,
+        };
+        round_spp = fixed.unwrap_or_else(|| next_round_spp(j1 - j0, per_spp, remaining));
     }
-    stats.samples = u64::from(w) * u64::from(h) * layout.count() * paths_per_sample(scene);
+    bar.finish_and_clear();
+
+    // The sums of the round in progress are not needed any more: free them before the image.
+    for t in &mut tiles {
+        t.next = Vec::new();
+    }
+    let mut image = HdrImage::try_new(w as usize, h as usize)?;
+    let mut stats =
+        RenderStats { spp: u64::from(done), spp_requested: layout.count(), rounds, stop, ..RenderStats::default() };
+    let n = u64::from(done) * paths_per_sample(scene);
+    for t in &tiles {
+        for (i, sum) in t.sums.iter().enumerate() {
+            let c = if n == 0 { Color::BLACK } else { *sum / n as f64 };
+            image.set((t.x0 + i as u32 % t.width) as usize, (t.y0 + i as u32 / t.width) as usize, c.into());
+        }
+        stats.rays += t.counters.rays;
+        stats.non_finite_samples += t.non_finite;
+    }
+    stats.samples = pixels * n;
     stats.seconds = start.elapsed().as_secs_f64();
-    RenderOutput { image, stats }
+    Ok(RenderOutput { image, stats })
+}
+
+/// Camera samples per pixel for the next round: about [`TARGET_ROUND_SECONDS`] at the last
+/// round's speed, at most twice the last round (its timing may be noise), and with a time
+/// limit no more than fits in the time left (so the limit is overshot by at most a round of
+/// one sample); at least 1.
+fn next_round_spp(last: u32, seconds_per_spp: f64, remaining: Option<f64>) -> u32 {
+    let mut spp = f64::from(last.saturating_mul(2));
+    if seconds_per_spp > 0.0 {
+        spp = spp.min(TARGET_ROUND_SECONDS / seconds_per_spp);
+        if let Some(rem) = remaining {
+            spp = spp.min(rem / seconds_per_spp);
+        }
+    }
+    (spp.floor() as u32).max(1)
 }
 
 fn progress_bar(progress: Progress, total: u64) -> ProgressBar {
@@ -112,7 +312,7 @@ fn progress_bar(progress: Progress, total: u64) -> ProgressBar {
         Progress::Bar => {
             let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
             if let Ok(style) =
-                ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} ETA {eta_precise}")
+                ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} ETA {eta_precise} {msg}")
             {
                 bar.set_style(style);
             }
@@ -129,23 +329,8 @@ pub fn paths_per_sample(scene: &Scene) -> u64 {
     }
 }
 
-/// The pixels of the tile at (x0, y0), row by row, with its counters and the number of
-/// non-finite samples.
-fn render_tile(ctx: &Context, layout: PixelSamples, x0: u32, y0: u32) -> (Vec<Rgb32>, Counters, u64) {
-    let (w, h) = (ctx.scene.width, ctx.scene.height);
-    let mut counters = Counters::default();
-    let mut bad = 0;
-    let mut pixels = Vec::with_capacity((TILE * TILE) as usize);
-    for row in y0..(y0 + TILE).min(h) {
-        for col in x0..(x0 + TILE).min(w) {
-            pixels.push(render_pixel(ctx, layout, col, row, &mut counters, &mut bad).into());
-        }
-    }
-    (pixels, counters, bad)
-}
-
-/// Mean radiance of pixel (col, row); non-finite samples count as 0 and are tallied.
-/// Sample indices j·n + i are taken modulo 2³² (the stream rule's u32).
+/// Mean radiance of pixel (col, row) over all its samples; non-finite samples count as 0
+/// and are tallied.
 pub fn render_pixel(
     ctx: &Context,
     layout: PixelSamples,
@@ -154,14 +339,36 @@ pub fn render_pixel(
     counters: &mut Counters,
     non_finite: &mut u64,
 ) -> Color {
+    let mut sum = Color::BLACK;
+    let count = u32::try_from(layout.count()).unwrap_or(u32::MAX);
+    add_samples(ctx, layout, col, row, 0..count, &mut sum, counters, non_finite);
+    let n = layout.count() * paths_per_sample(ctx.scene);
+    if n == 0 {
+        Color::BLACK
+    } else {
+        sum / n as f64
+    }
+}
+
+/// Adds camera samples `js` of pixel (col, row), each the sum of its paths, to `sum`, one
+/// radiance sample at a time in index order (what makes rounds bit-identical to one pass);
+/// non-finite samples count as 0 and are tallied. Sample indices j·n + i are taken modulo
+/// 2³² (the stream rule's u32).
+#[allow(clippy::too_many_arguments)]
+pub fn add_samples(
+    ctx: &Context,
+    layout: PixelSamples,
+    col: u32,
+    row: u32,
+    js: std::ops::Range<u32>,
+    sum: &mut Color,
+    counters: &mut Counters,
+    non_finite: &mut u64,
+) {
     let scene = ctx.scene;
     let pixel = row * scene.width + col;
     let paths = paths_per_sample(scene) as u32;
-    let mut sum = Color::BLACK;
-    // Stream indices are u32 as on the GPU: counts whose sample indices j·n + i would wrap
-    // are refused by the CLI.
-    for j in 0..layout.count() {
-        let j = j as u32;
+    for j in js {
         let (upx, vpx) = layout.position(scene.tracer.rng, pixel, j);
         let u = (f64::from(col) + upx) / f64::from(scene.width);
         let v = 1.0 - (f64::from(row) + vpx) / f64::from(scene.height);
@@ -171,17 +378,11 @@ pub fn render_pixel(
             let sample = j.wrapping_mul(paths).wrapping_add(i);
             let c = sample_radiance(ctx, &ray, pixel, sample, counters);
             if c.is_finite() {
-                sum += c;
+                *sum += c;
             } else {
                 *non_finite += 1;
             }
         }
-    }
-    let n = layout.count() * u64::from(paths);
-    if n == 0 {
-        Color::BLACK
-    } else {
-        sum / n as f64
     }
 }
 

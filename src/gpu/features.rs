@@ -97,7 +97,9 @@ impl FeatureSet {
                     f.csg = true;
                     f.bvh = true;
                     f.csg_trees += 1;
-                    f.csg_max_intervals = f.csg_max_intervals.max(crate::cpu::csg::max_intervals(shape) as u32);
+                    // Saturated, never truncated: pack refuses what the GPU cannot hold.
+                    let bound = crate::cpu::csg::max_intervals(shape).min(u64::from(u32::MAX)) as u32;
+                    f.csg_max_intervals = f.csg_max_intervals.max(bound);
                     f.csg_max_depth = f.csg_max_depth.max(shape.csg_depth() as u32);
                 }
             }

@@ -15,6 +15,8 @@ use crate::color::Rgb32;
 /// Why an EXR could not be decoded: the size check, or the crate's own message.
 pub(crate) enum ExrDecodeError {
     Size(SizeError),
+    /// The header's size is valid but its pixels do not fit in memory.
+    Memory(crate::memory::OutOfMemory),
     Other(String),
 }
 
@@ -23,8 +25,12 @@ pub(crate) fn decode_exr(bytes: &[u8]) -> Result<HdrImage, ExrDecodeError> {
         .no_deep_data()
         .largest_resolution_level()
         .rgb_channels(
-            |size: Vec2<usize>, _| check_size(size.width(), size.height()).map(|_| HdrImage::new(size.0, size.1)),
-            |img: &mut Result<HdrImage, SizeError>, pos: Vec2<usize>, (r, g, b): (f32, f32, f32)| {
+            |size: Vec2<usize>, _| {
+                check_size(size.width(), size.height())
+                    .map_err(ExrDecodeError::Size)
+                    .and_then(|_| HdrImage::try_new(size.0, size.1).map_err(ExrDecodeError::Memory))
+            },
+            |img: &mut Result<HdrImage, ExrDecodeError>, pos: Vec2<usize>, (r, g, b): (f32, f32, f32)| {
                 if let Ok(img) = img {
                     img.set(pos.x(), pos.y(), Rgb32::new(r, g, b));
                 }
@@ -35,7 +41,7 @@ pub(crate) fn decode_exr(bytes: &[u8]) -> Result<HdrImage, ExrDecodeError> {
         .non_parallel()
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| ExrDecodeError::Other(e.to_string()))?;
-    image.layer_data.channel_data.pixels.map_err(ExrDecodeError::Size)
+    image.layer_data.channel_data.pixels
 }
 
 pub(crate) fn encode_exr(img: &HdrImage) -> Result<Vec<u8>, String> {

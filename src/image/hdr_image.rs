@@ -3,6 +3,7 @@
 use std::ops::{Add, Index, IndexMut, Mul, Sub};
 
 use crate::color::{Color, Rgb32};
+use crate::memory::{try_filled, OutOfMemory};
 
 /// A `width × height` grid of linear RGB `f32` pixels, row 0 at the top.
 ///
@@ -35,6 +36,21 @@ impl HdrImage {
     pub fn new(width: usize, height: usize) -> Self {
         let n = width.checked_mul(height).expect("image size overflows usize");
         Self { width, height, pixels: vec![Rgb32::BLACK; n] }
+    }
+
+    /// A black image, or an error saying how much memory it needs when that cannot be had:
+    /// for sizes that come from input (a script's `Image(w, h)`, `--width`, a file header).
+    ///
+    /// ```
+    /// use lumen::image::HdrImage;
+    /// assert_eq!(HdrImage::try_new(3, 2).unwrap().pixels().len(), 6);
+    /// assert!(HdrImage::try_new(1 << 31, 1 << 31).is_err());
+    /// ```
+    pub fn try_new(width: usize, height: usize) -> Result<Self, OutOfMemory> {
+        let n = width.saturating_mul(height);
+        let bytes = (n as u64).saturating_mul(std::mem::size_of::<Rgb32>() as u64);
+        let pixels = try_filled(n, Rgb32::BLACK, &format!("a {width}×{height} image"), bytes)?;
+        Ok(Self { width, height, pixels })
     }
 
     /// Wraps existing pixels (row-major, top row first). `None` if the count is wrong.

@@ -105,6 +105,7 @@ pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
         ImageFormat::Exr => decode_exr(&bytes).map_err(|e| match e {
             ExrDecodeError::Size(cause) => ImageError::Size { path: path.to_owned(), cause },
             ExrDecodeError::Other(message) => decode_err(message),
+            ExrDecodeError::Memory(e) => decode_err(e.to_string()),
         })?,
         ImageFormat::RadianceHdr => decode_radiance(&bytes).map_err(decode_err)?,
         ImageFormat::Png => decode_ldr(&bytes, LdrFormat::Png).map_err(decode_err)?,

@@ -684,7 +684,10 @@ impl Interp<'_> {
                         )
                         .with_expected(format!("at most {MAX_BLANK_TEXTURE_PIXELS} pixels")));
                 }
-                Ok(Arc::new(HdrImage::new(width as usize, height as usize)))
+                // Bounded above, but still sized by input: a refusal is an error at the argument.
+                let img = HdrImage::try_new(width as usize, height as usize)
+                    .map_err(|e| self.err(s, ErrorKind::BadImageSize, e.to_string()))?;
+                Ok(Arc::new(img))
             }
             _ => Ok(Arc::new(HdrImage::new(1, 1))),
         }

@@ -11,6 +11,24 @@ use lumen::scene::{
     DEFAULT_THRESHOLD_ANGLE_RAD,
 };
 
+/// A small path-traced scene (sky sphere, checkered floor, red ball; 32×24, 1 spp) that
+/// renders in milliseconds on the CPU: for tests through the binary.
+pub const TINY_SKY_SL: &str = "\
+SET
+    sky   Material(Brdf.Diffuse(Pigment.Uniform(<0, 0, 0>)), Pigment.Uniform(<1, 0.95, 0.9>))
+    red   Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.7, 0.2, 0.2>)))
+    floor Material(.brdf Brdf.Diffuse(Pigment.Checkered(4, <0.6, 0.6, 0.6>, <0.2, 0.2, 0.2>)))
+SPAWN
+    Shape.Sphere(sky, SCALE 20)
+    Shape.Plane(floor, TRANSLATE(.Z -1))
+    Shape.Sphere(red, TRANSLATE(.X 2))
+USING
+    Camera.Perspective(.aspect_ratio 1.3333333, .screen_distance 1, .transformation TRANSLATE(.X -1))
+    Renderer.PathTracer(.n 1, .max_depth 3)
+    Image(32, 24)
+    Tracer(.samples_per_side 1)
+";
+
 /// Every `.sl` script in `scenes/`, sorted by name.
 pub fn example_scene_files() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");

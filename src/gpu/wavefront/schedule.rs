@@ -12,7 +12,7 @@
 //!   read back (two film and staging buffers), and nothing else is read back.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -65,16 +65,8 @@ impl Default for PassOptions {
     }
 }
 
-/// Why rendering returned.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StopReason {
-    /// All requested samples were taken.
-    Completed,
-    /// The time limit passed; fewer samples than requested.
-    TimeLimit,
-    /// The cancel flag was set; the unfinished round was dropped.
-    Interrupted,
-}
+// Shared with the CPU renderer.
+pub use crate::stop::{ctrlc_flag, StopReason};
 
 /// The result of the rounds.
 #[derive(Debug, Clone)]
@@ -267,29 +259,6 @@ fn progress_bar(enabled: bool, len: u64) -> ProgressBar {
         bar.set_style(style.progress_chars("=> "));
     }
     bar
-}
-
-/// A flag set by Ctrl-C, for [`PassOptions::cancel`]. The first Ctrl-C asks the render to
-/// stop after the current batch (keeping the rounds done); a second one exits at once. The
-/// handler is installed once per process; later calls return the same flag.
-pub fn ctrlc_flag() -> Arc<AtomicBool> {
-    static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
-    FLAG.get_or_init(|| {
-        let flag = Arc::new(AtomicBool::new(false));
-        let f = Arc::clone(&flag);
-        let installed = ctrlc::set_handler(move || {
-            if f.swap(true, Ordering::SeqCst) {
-                eprintln!("\ninterrupted twice: exiting");
-                std::process::exit(130);
-            }
-            eprintln!("\ninterrupted: finishing the current batch (Ctrl-C again to quit now)");
-        });
-        if let Err(e) = installed {
-            eprintln!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");
-        }
-        flag
-    })
-    .clone()
 }
 
 #[cfg(test)]

@@ -1,0 +1,117 @@
+//! Where a render runs: the CPU reference renderer or a GPU through wgpu. One home for the
+//! device choice and the opened device, used by `lumen render` and by the studies
+//! (`lumen converge`, `lumen bench`, [`crate::analysis::measure`]).
+
+use std::cell::RefCell;
+use std::fmt;
+
+use crate::gpu::render::GpuRenderer;
+use crate::gpu::{AdapterChoice, Gpu, GpuError};
+
+/// A device to measure (`lumen converge`, `lumen bench`: each is measured in turn).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Device {
+    /// A GPU through wgpu (the adapter `--adapter` / $LUMEN_ADAPTER picks).
+    Gpu,
+    /// The f64 CPU reference renderer on every core.
+    Cpu,
+}
+
+impl fmt::Display for Device {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Device::Gpu => "gpu",
+            Device::Cpu => "cpu",
+        })
+    }
+}
+
+/// Where to render one image (`lumen render`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum DeviceChoice {
+    /// The f64 CPU reference renderer (all cores).
+    Cpu,
+    /// A GPU through wgpu; an error when none can be used.
+    Gpu,
+    /// The GPU when one can be used, else the CPU with a warning.
+    Auto,
+}
+
+/// An opened device: the CPU, or a GPU with its open device and a renderer that keeps
+/// compiled kernels, so only the first render of a kind of scene pays for kernel creation.
+#[derive(Debug)]
+pub enum OpenDevice {
+    Cpu,
+    Gpu { gpu: Box<Gpu>, renderer: RefCell<GpuRenderer> },
+}
+
+impl OpenDevice {
+    /// The GPU with a fresh renderer.
+    pub fn gpu(gpu: Gpu) -> Self {
+        OpenDevice::Gpu { gpu: Box::new(gpu), renderer: RefCell::new(GpuRenderer::new()) }
+    }
+
+    pub fn kind(&self) -> Device {
+        match self {
+            OpenDevice::Cpu => Device::Cpu,
+            OpenDevice::Gpu { .. } => Device::Gpu,
+        }
+    }
+
+    /// A name for tables: `cpu`, or `gpu` with the adapter's name.
+    pub fn describe(&self) -> String {
+        match self {
+            OpenDevice::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
+            OpenDevice::Gpu { gpu, .. } => format!("gpu ({})", gpu.adapter_info.name),
+        }
+    }
+}
+
+/// Opens each requested device once (duplicates dropped, order kept). A GPU that cannot be
+/// opened is reported on standard error and skipped.
+pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevice> {
+    let mut out: Vec<OpenDevice> = Vec::new();
+    for &d in devices {
+        if out.iter().any(|o| o.kind() == d) {
+            continue;
+        }
+        match d {
+            Device::Cpu => out.push(OpenDevice::Cpu),
+            Device::Gpu => match Gpu::new(adapter) {
+                Ok(g) => out.push(OpenDevice::gpu(g)),
+                Err(GpuError::NoAdapter) => eprintln!("warning: skipping device gpu: no GPU adapter"),
+                Err(e) => eprintln!("warning: skipping device gpu: {e}"),
+            },
+        }
+    }
+    out
+}
+
+/// Opens the device `choice` asks for. `Auto` falls back to the CPU, with a warning, when no
+/// GPU can be opened; an adapter asked for by name that does not exist is an error even
+/// then (the user wanted that one).
+pub fn open_device(choice: DeviceChoice, adapter: &AdapterChoice) -> Result<OpenDevice, GpuError> {
+    let gpu_device = |g: Gpu| {
+        if g.adapter_info.device_type == wgpu::DeviceType::Cpu {
+            eprintln!(
+                "note: {} is a software adapter (the GPU API emulated on the CPU); lumen's own CPU renderer \
+                 (--device cpu) is usually faster on this machine",
+                g.adapter_info.name
+            );
+        }
+        OpenDevice::gpu(g)
+    };
+    match choice {
+        DeviceChoice::Cpu => Ok(OpenDevice::Cpu),
+        DeviceChoice::Gpu => Gpu::new(adapter).map(gpu_device),
+        DeviceChoice::Auto => match Gpu::new(adapter) {
+            Ok(g) => Ok(gpu_device(g)),
+            Err(e @ GpuError::AdapterNotFound { .. }) => Err(e),
+            Err(e) => {
+                eprintln!("warning: {e}");
+                eprintln!("warning: rendering on the CPU reference renderer instead (slower; --device cpu says so)");
+                Ok(OpenDevice::Cpu)
+            }
+        },
+    }
+}

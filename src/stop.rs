@@ -1,0 +1,42 @@
+//! What both renderers share about stopping a progressive render early: why it stopped,
+//! and the process-wide Ctrl-C flag. Both render in rounds (one sample range over every
+//! pixel), check a time limit between rounds and drop an unfinished round on Ctrl-C, so
+//! every pixel of a result has the same number of samples.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+
+/// Why a progressive render returned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StopReason {
+    /// All requested samples were taken.
+    #[default]
+    Completed,
+    /// The time limit passed; fewer samples than requested.
+    TimeLimit,
+    /// The cancel flag was set; the unfinished round was dropped.
+    Interrupted,
+}
+
+/// A flag set by Ctrl-C, for a render's cancel option. The first Ctrl-C asks the render to
+/// stop soon (keeping the completed rounds); a second one exits at once. The handler is
+/// installed once per process; later calls return the same flag.
+pub fn ctrlc_flag() -> Arc<AtomicBool> {
+    static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+    FLAG.get_or_init(|| {
+        let flag = Arc::new(AtomicBool::new(false));
+        let f = Arc::clone(&flag);
+        let installed = ctrlc::set_handler(move || {
+            if f.swap(true, Ordering::SeqCst) {
+                eprintln!("\ninterrupted twice: exiting");
+                std::process::exit(130);
+            }
+            eprintln!("\ninterrupted: keeping the completed rounds (Ctrl-C again to quit now)");
+        });
+        if let Err(e) = installed {
+            eprintln!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");
+        }
+        flag
+    })
+    .clone()
+}

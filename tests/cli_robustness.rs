@@ -1,0 +1,157 @@
+//! The `lumen` binary under hostile conditions (issue 16): standard output full or closed,
+//! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer.
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+mod common;
+use common::TINY_SKY_SL as SCENE;
+
+/// A directory holding `tiny.sl`.
+fn scene_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("tiny.sl"), SCENE).unwrap();
+    dir
+}
+
+fn lumen(dir: &Path) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lumen"));
+    cmd.current_dir(dir);
+    cmd
+}
+
+/// Every subcommand that writes results to standard output, with small arguments.
+fn printing_commands() -> Vec<Vec<&'static str>> {
+    vec![
+        vec!["check", "tiny.sl"],
+        vec!["devices"],
+        vec!["shader", "tiny.sl"],
+        vec!["converge", "tiny.sl", "--device", "cpu", "--spp", "1,2", "--reference-spp", "4", "-o", "conv"],
+        vec!["bench", "--device", "cpu", "--scenes", "tiny.sl", "--spp", "1", "--width", "8", "--max-spheres", "0"],
+        vec!["--help"],
+        vec!["check", "--help"],
+    ]
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn a_full_disk_on_stdout_is_one_error_line_and_a_failure() {
+    let dir = scene_dir();
+    for args in printing_commands() {
+        let full = File::options().write(true).open("/dev/full").expect("/dev/full");
+        let o = lumen(dir.path()).args(&args).stdout(Stdio::from(full)).output().unwrap();
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded on a full disk: {err}");
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+        let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+        assert_eq!(
+            lines,
+            ["error: cannot write to standard output: No space left on device (os error 28)"],
+            "{args:?}: {err}"
+        );
+    }
+}
+
+/// The write end of a pipe whose read end is already closed, so that every write fails
+/// with EPIPE whatever the timing: a FIFO opened read-write (Linux never blocks on that),
+/// then write-only, after which the read-write handle is dropped.
+fn closed_pipe(dir: &Path) -> File {
+    let fifo: PathBuf = dir.join("fifo");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo");
+    assert!(made.success());
+    let reader = File::options().read(true).write(true).open(&fifo).unwrap();
+    let writer = File::options().write(true).open(&fifo).unwrap();
+    drop(reader);
+    std::fs::remove_file(&fifo).unwrap();
+    writer
+}
+
+#[test]
+fn a_closed_pipe_on_stdout_is_a_quiet_failure() {
+    let dir = scene_dir();
+    for args in printing_commands() {
+        let o = lumen(dir.path()).args(&args).stdout(Stdio::from(closed_pipe(dir.path()))).output().unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(141), "{args:?}: {err}");
+        assert!(!err.contains("panicked") && !err.contains("error"), "{args:?} is not quiet: {err}");
+    }
+}
+
+#[test]
+fn results_still_reach_a_working_stdout() {
+    let dir = scene_dir();
+    let o = lumen(dir.path()).args(["check", "tiny.sl"]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    assert!(out.starts_with("tiny.sl: ok\n") && out.contains("GPU kernel features:"), "{out}");
+}
+
+#[test]
+fn no_runtime_dir_noise_on_a_headless_machine() {
+    let dir = scene_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    let o = lumen(dir.path()).arg("devices").env_remove("XDG_RUNTIME_DIR").env("TMPDIR", tmp.path()).output().unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "Wayland noise on stderr: {err}");
+    // The private runtime directory is gone after the run.
+    let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+    // A relative value is as unusable to libwayland as none.
+    let o = lumen(dir.path()).arg("devices").env("XDG_RUNTIME_DIR", "relative").output().unwrap();
+    assert!(!stderr(&o).contains("XDG_RUNTIME_DIR"), "{}", stderr(&o));
+}
+
+/// `lumen render` under a 4 GiB address-space limit (`ulimit -v`, as the issue's reproducer).
+fn render_limited_to_4_gib(dir: &Path, args: &str) -> Output {
+    let bin = env!("CARGO_BIN_EXE_lumen");
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v 4194304 && exec '{bin}' render {args}"))
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn an_image_too_large_for_memory_is_refused_with_the_amount() {
+    let dir = scene_dir();
+    std::fs::write(
+        dir.path().join("huge.sl"),
+        "USING Camera.Perspective() Image(32768, 32768) Renderer.Flat() Tracer()\n",
+    )
+    .unwrap();
+    let cases = [
+        ("tiny.sl --device cpu --width 16384 --height 16384 --spp 1 -o big.png", "15.00 GiB"),
+        ("huge.sl --device cpu -o big.png", "60.00 GiB"),
+    ];
+    for (args, needed) in cases {
+        let o = render_limited_to_4_gib(dir.path(), args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(needed), "{args}: {err}");
+        assert!(!err.contains("panicked") && !err.contains("memory allocation"), "{args}: {err}");
+        assert!(!dir.path().join("big.png").exists(), "{args} left an output file");
+    }
+}
+
+#[test]
+fn the_cpu_renderer_honours_the_time_limit() {
+    let dir = scene_dir();
+    // A zero limit has passed after the first round (1 sample per pixel), on any machine.
+    let o = lumen(dir.path())
+        .args(["render", "tiny.sl", "--device", "cpu", "--spp", "1000000", "--time-limit", "0", "-o", "t.pfm"])
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains(": 1 of 1000000 samples per pixel, 768 samples,"), "{err}");
+    assert!(err.contains("note: stopped at the time limit with 1 samples per pixel"), "{err}");
+    assert!(!err.contains("warning: --time-limit"), "{err}");
+    let img = lumen::image::read_image(&dir.path().join("t.pfm")).unwrap();
+    assert_eq!((img.width(), img.height()), (32, 24));
+}
