@@ -749,17 +749,33 @@ pub fn many_paths_per_sample(gpu: Option<&Gpu>) -> Outcome {
 
 // ------------------------------------------------------------------------- 4. glass
 
-/// Exact unpolarised Fresnel reflectance of a dielectric interface (written out here so the
-/// expectation does not come from the renderer's code).
-fn fresnel(cos_i: f64, eta: f64) -> f64 {
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
+/// Fresnel's amplitude reflection coefficients (r_s, r_p) of a dielectric interface for
+/// the incidence cosine `cos_i` and relative index `eta` = n_t / n_i, from his sine and
+/// tangent laws with the refraction angle from Snell's law (Born & Wolf, *Principles of
+/// Optics*, §1.5.2): r_s = −sin(θᵢ − θₜ) / sin(θᵢ + θₜ), r_p = tan(θᵢ − θₜ) / tan(θᵢ + θₜ).
+/// `None` under total internal reflection. Works with angles, not with the cosines of
+/// `cpu::fresnel` (the renderer's form), so the expectation is derived independently;
+/// `tests/stability.rs` checks it against textbook identities.
+pub fn fresnel_amplitudes(cos_i: f64, eta: f64) -> Option<(f64, f64)> {
+    let theta_i = cos_i.clamp(0.0, 1.0).acos();
+    let sin_t = theta_i.sin() / eta;
+    if sin_t >= 1.0 {
+        return None;
     }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    0.5 * (rs * rs + rp * rp)
+    let theta_t = sin_t.asin();
+    if theta_i == 0.0 {
+        // The limit of both laws at normal incidence (0/0 above): r = ∓(η − 1)/(η + 1).
+        let r = (eta - 1.0) / (eta + 1.0);
+        return Some((-r, r));
+    }
+    let (d, s) = (theta_i - theta_t, theta_i + theta_t);
+    Some((-d.sin() / s.sin(), d.tan() / s.tan()))
+}
+
+/// Unpolarised reflectance: the mean of |r_s|² and |r_p|², 1 under total internal
+/// reflection.
+pub fn fresnel(cos_i: f64, eta: f64) -> f64 {
+    fresnel_amplitudes(cos_i, eta).map_or(1.0, |(rs, rp)| 0.5 * (rs * rs + rp * rp))
 }
 
 /// A clear glass sphere (ior 1.5) under a uniform sky, seen near its rim (incidence 72° to
