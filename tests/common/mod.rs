@@ -183,10 +183,12 @@ impl std::fmt::Display for Agreement {
 impl Agreement {
     /// `Err` with every number and the worst pixels when any bound of `tol` fails.
     pub fn check(&self, tol: Tolerance) -> Result<(), String> {
-        let fails = self.share < tol.min_share
-            || !(self.outlier_error <= tol.max_outlier_error)
-            || !(self.mean_error <= tol.max_mean_error);
-        if fails {
+        // A NaN error is not within any bound.
+        let within = |v: f64, max: f64| v <= max;
+        let ok = self.share >= tol.min_share
+            && within(self.outlier_error, tol.max_outlier_error)
+            && within(self.mean_error, tol.max_mean_error);
+        if !ok {
             Err(format!("{self} (outside {tol:?})"))
         } else {
             Ok(())
