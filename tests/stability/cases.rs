@@ -156,6 +156,16 @@ fn centre_ray(scene: &Scene, col: usize, row: usize) -> CameraRay {
     scene.camera.ray(u, v)
 }
 
+/// Largest relative error of the green channel against `expected`, over every pixel.
+fn max_relative_error(img: &HdrImage, expected: f64) -> f64 {
+    img.pixels().iter().map(|p| (f64::from(p.g) / expected - 1.0).abs()).fold(0.0, f64::max)
+}
+
+/// Largest channel value over every pixel.
+fn max_radiance(img: &HdrImage) -> f64 {
+    img.pixels().iter().map(|p| f64::from(p.r.max(p.g).max(p.b))).fold(0.0, f64::max)
+}
+
 fn g(img: &HdrImage, col: usize, row: usize) -> f64 {
     f64::from(img.get(col, row).g)
 }
@@ -549,10 +559,9 @@ pub fn light_leak(gpu: Option<&Gpu>) -> Outcome {
         .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
     let scene = b.build().unwrap();
     let (cpu, gpu_img) = render_both(gpu, &scene, None);
-    let max = |img: &HdrImage| img.pixels().iter().map(|p| f64::from(p.r.max(p.g).max(p.b))).fold(0.0, f64::max);
     Outcome::new("closed box of abutting walls, lights outside", "black inside (exactly 0)", "max pixel radiance")
         .tolerances(0.0, 0.0)
-        .measure(&cpu, gpu_img.as_ref(), max, 1.0)
+        .measure(&cpu, gpu_img.as_ref(), max_radiance, 1.0)
         .note("sky 10, point light 100, area light Le 50; 16×16 × 4 spp × 8 paths")
 }
 
@@ -643,7 +652,7 @@ fn inside(gpu: Option<&Gpu>, kind: ShapeKind) -> Outcome {
     let scene = b.build().unwrap();
     let (cpu, gpu_img) = render_both(gpu, &scene, Some(1));
     let expected = 2.0 * (1.0 - 0.5f64.powi(21));
-    let err = |img: &HdrImage| img.pixels().iter().map(|p| (f64::from(p.g) / expected - 1.0).abs()).fold(0.0, f64::max);
+    let err = |img: &HdrImage| max_relative_error(img, expected);
     Outcome::new(
         format!("camera inside a {}: furnace", kind.name()),
         "2(1 − 2⁻²¹) exactly per path (ρ 0.5, Le 1, depth 20)",
@@ -737,7 +746,7 @@ pub fn many_paths_per_sample(gpu: Option<&Gpu>) -> Outcome {
     let scene = b.build().unwrap();
     let (cpu, gpu_img) = render_both(gpu, &scene, Some(1));
     let expected = 2.0 * (1.0 - 0.5f64.powi(51));
-    let err = |img: &HdrImage| img.pixels().iter().map(|p| (f64::from(p.g) / expected - 1.0).abs()).fold(0.0, f64::max);
+    let err = |img: &HdrImage| max_relative_error(img, expected);
     Outcome::new(
         "256 paths × 51 vertices per camera sample (furnace)",
         "2(1 − 2⁻⁵¹) exactly per path",
@@ -1196,14 +1205,13 @@ USING Camera.Perspective() Image(8, 8) Renderer.PathTracer(.n 2, .max_depth 3)
         g => g,
     };
     let (cpu, gpu_img) = render_both(gpu, &scene, None);
-    let max = |img: &HdrImage| img.pixels().iter().map(|p| f64::from(p.r.max(p.g).max(p.b))).fold(0.0, f64::max);
     Outcome::new(
         format!("script scales 1e-300 and {big} (enclosing)"),
         "no NaN/Inf; black (inside a non-emitting sphere)",
         "max pixel radiance",
     )
     .tolerances(0.0, 0.0)
-    .measure(&cpu, gpu_img.as_ref(), max, 1.0)
+    .measure(&cpu, gpu_img.as_ref(), max_radiance, 1.0)
     .note(note)
 }
 
