@@ -21,7 +21,7 @@ use lumen::gpu::Gpu;
 use lumen::image::HdrImage;
 use lumen::scene::*;
 
-use common::{agreement, mean_and_stderr, pt};
+use common::{agreement, mean_and_stderr, pt, Agreement, Tolerance};
 
 /// The result of one case: its errors on each renderer against the expected answer.
 #[derive(Debug, Clone)]
@@ -42,6 +42,10 @@ pub struct Outcome {
     pub gpu_agrees_with_cpu: Option<f64>,
     /// Smallest acceptable share of agreeing pixels.
     pub min_agreement: f64,
+    /// The whole GPU-vs-CPU comparison, worst over the case's images: the share above, and
+    /// how far off the other pixels and the image means are (each bounded by 2 % in
+    /// [`Outcome::check`]).
+    pub gpu_vs_cpu: Option<Agreement>,
     /// Extra facts for the table (sample counts, standard errors, …).
     pub note: String,
 }
@@ -60,6 +64,7 @@ impl Outcome {
             gpu: None,
             gpu_agrees_with_cpu: None,
             min_agreement: 0.0,
+            gpu_vs_cpu: None,
             note: String::new(),
         }
     }
@@ -87,16 +92,26 @@ impl Outcome {
         self.errors(cpu, gpu, err).agreement(cpu, gpu, min)
     }
 
-    /// GPU-vs-CPU agreement of one more pair of images (the smallest share over the case's
-    /// images is kept), and the smallest acceptable share; nothing without a GPU image.
+    /// GPU-vs-CPU agreement of one more pair of images (the worst over the case's images
+    /// is kept), and the smallest acceptable share; nothing without a GPU image.
     pub fn agreement(self, cpu: &HdrImage, gpu: Option<&HdrImage>, min: f64) -> Self {
-        self.agreement_share(gpu.map(|g| agreement(g, cpu).share), min)
+        self.agreement_of(gpu.map(|g| agreement(g, cpu)), min)
     }
 
-    /// As [`Outcome::agreement`], from a share measured elsewhere.
-    pub fn agreement_share(mut self, share: Option<f64>, min: f64) -> Self {
-        if let Some(a) = share {
-            self.gpu_agrees_with_cpu = Some(self.gpu_agrees_with_cpu.map_or(a, |x| x.min(a)));
+    /// As [`Outcome::agreement`], from a comparison made elsewhere.
+    pub fn agreement_of(mut self, a: Option<Agreement>, min: f64) -> Self {
+        if let Some(a) = a {
+            let worst = match self.gpu_vs_cpu.take() {
+                None => a,
+                Some(b) => Agreement {
+                    share: a.share.min(b.share),
+                    outlier_error: a.outlier_error.max(b.outlier_error),
+                    mean_error: a.mean_error.max(b.mean_error),
+                    worst: if a.share < b.share { a.worst } else { b.worst },
+                },
+            };
+            self.gpu_agrees_with_cpu = Some(worst.share);
+            self.gpu_vs_cpu = Some(worst);
         }
         self.min_agreement = min;
         self
@@ -114,8 +129,14 @@ impl Outcome {
         if let Some(g) = self.gpu {
             assert!(g.is_finite() && g <= self.gpu_tolerance, "GPU: {self:#?}");
         }
-        if let Some(a) = self.gpu_agrees_with_cpu {
-            assert!(a >= self.min_agreement, "GPU vs CPU: {self:#?}");
+        if let Some(a) = &self.gpu_vs_cpu {
+            // The images are small (one pixel of 256 is 0.4 %), so a single hit/miss flip
+            // between f32 and f64 moves the mean by ~0.5 % (lavapipe, the worst case): the
+            // means get the outliers' 2 % rather than the default 1 %.
+            let tol = Tolerance { max_mean_error: 0.02, ..Tolerance::share(self.min_agreement) };
+            if let Err(e) = a.check(tol) {
+                panic!("GPU vs CPU: {e}\n{self:#?}");
+            }
         }
     }
 }
@@ -427,7 +448,7 @@ fn sky_lit_classified(
     rho: f64,
     sky: f64,
     hit: impl Fn(usize, usize, f64) -> Option<bool>,
-) -> (f64, Option<f64>, Option<f64>, String) {
+) -> (f64, Option<f64>, Option<Agreement>, String) {
     let (cpu, gpu_img) = render_both(gpu, scene, None);
     let err = |img: &HdrImage, margin: f64, ambiguous: &mut usize| {
         let mut worst: f64 = 0.0;
@@ -450,7 +471,7 @@ fn sky_lit_classified(
     let (mut ca, mut ga) = (0, 0);
     let c = err(&cpu, CPU_MARGIN, &mut ca);
     let gerr = gpu_img.as_ref().map(|i| err(i, GPU_MARGIN, &mut ga));
-    let agree = gpu_img.as_ref().map(|g| agreement(g, &cpu).share);
+    let agree = gpu_img.as_ref().map(|g| agreement(g, &cpu));
     (c, gerr, agree, ambiguous_note(ca, gerr.map(|_| ga)))
 }
 
@@ -483,7 +504,7 @@ pub fn grazing_plane_sky(gpu: Option<&Gpu>) -> Outcome {
     )
     .tolerances(1e-7, 1e-5)
     .values(cpu, gpu_err)
-    .agreement_share(agree, 1.0)
+    .agreement_of(agree, 1.0)
     .note(amb)
 }
 
@@ -507,7 +528,7 @@ pub fn sphere_silhouette(gpu: Option<&Gpu>) -> Outcome {
     )
     .tolerances(1e-7, 1e-5)
     .values(cpu, gpu_err)
-    .agreement_share(agree, 0.99)
+    .agreement_of(agree, 0.99)
     .note(amb)
 }
 
@@ -532,7 +553,7 @@ pub fn cube_edges(gpu: Option<&Gpu>) -> Outcome {
     Outcome::new("cube corner and edges", "ρL on the cube, L off it (exact per path)", "max relative error")
         .tolerances(1e-7, 1e-5)
         .values(cpu, gpu_err)
-        .agreement_share(agree, 0.99)
+        .agreement_of(agree, 0.99)
         .note(amb)
 }
 
