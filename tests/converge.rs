@@ -74,6 +74,9 @@ fn cpu_error_falls_like_one_over_spp() {
     assert_eq!(md.lines().filter(|l| l.starts_with("| cpu |")).count(), 3);
     let png = image::open(dir.path().join("res/converge.png")).unwrap();
     assert!(png.width() >= 320 && png.height() >= 240);
+    // The same plot as a vector image, with the devices in its legend.
+    let svg = std::fs::read_to_string(dir.path().join("res/converge.svg")).unwrap();
+    assert!(svg.starts_with("<?xml") && svg.contains("<svg") && svg.contains(">cpu</text>"), "{svg}");
     assert!(dir.path().join("res/reference.pfm").exists());
 }
 

@@ -5,17 +5,17 @@
 //! chosen from each estimator's variance (estimated from the images themselves), so a
 //! different seed would pass as well.
 
+mod common;
+
 use std::f64::consts::PI;
+
+use common::{furnace, mean_and_stderr, pt};
 
 use glam::DVec3;
 use lumen::color::Color;
 use lumen::cpu::{render, Progress, RenderOptions, RenderOutput};
 use lumen::image::HdrImage;
 use lumen::scene::*;
-
-fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
-    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth, nee, ..Default::default() })
-}
 
 fn run(scene: &Scene, spp: Option<u32>) -> RenderOutput {
     let out = render(scene, &RenderOptions { spp }, Progress::Hidden);
@@ -27,46 +27,18 @@ fn px(img: &HdrImage, col: usize, row: usize) -> Color {
     img.get(col, row).into()
 }
 
-/// Mean of channel `c` over the selected pixels, and the standard error of that mean
-/// estimated from the spread of the pixels (valid when they share one expected value).
-fn mean_and_stderr(img: &HdrImage, select: impl Fn(usize, usize) -> bool) -> (f64, f64) {
-    let mut v = Vec::new();
-    for row in 0..img.height() {
-        for col in 0..img.width() {
-            if select(col, row) {
-                v.push(px(img, col, row).g);
-            }
-        }
-    }
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
-}
-
-/// Camera inside a sphere of radius 10 that emits `le` and reflects diffusely with albedo ρ.
-fn furnace(rho: f64, le: f64, renderer: Renderer) -> Scene {
-    let mut b = SceneBuilder::new(16, 16);
-    let m = b.material(Material::new(
-        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) },
-        Pigment::Uniform(Color::gray(le)),
-    ));
-    b.sphere(Transform::scaling(DVec3::splat(10.0)), m).renderer(renderer);
-    b.build().unwrap()
-}
-
 #[test]
 fn closed_furnace_without_roulette() {
     // L = Le Σ ρᵏ for k ≤ max_depth: with max_depth 20 the truncation is ρ²¹ = 5e-7 relative.
     let expected = 1.0 / (1.0 - 0.5);
     // Without NEE every path is exactly Le Σ ρᵏ (cosine sampling, β = ρᵏ): no variance.
-    let out = run(&furnace(0.5, 1.0, pt(1, 20, 1000, false)), Some(1));
+    let out = run(&furnace(16, 0.5, 1.0, pt(1, 20, 1000, false)), Some(1));
     for p in out.image.pixels() {
         assert!((f64::from(p.g) / expected - 1.0).abs() < 1e-5, "{p:?}");
     }
     // With NEE (area sampling from inside the light) + MIS: noisy, unbiased. 16×16 pixels
     // × 64 paths; the stated tolerance 0.5 % must exceed 5 standard errors.
-    let out = run(&furnace(0.5, 1.0, pt(16, 20, 1000, true)), Some(4));
+    let out = run(&furnace(16, 0.5, 1.0, pt(16, 20, 1000, true)), Some(4));
     let (mean, se) = mean_and_stderr(&out.image, |_, _| true);
     eprintln!("furnace ρ 0.5 with NEE: {mean} ± {se} (expected {expected})");
     assert!(5.0 * se < 0.005 * expected, "test too weak: se {se}");
@@ -80,7 +52,7 @@ fn closed_furnace_with_roulette_is_unbiased() {
     // errors below 0.5 % of 10 need > 5·10⁵ paths: 16×16 pixels × 16 samples × 200 paths.
     let expected = 1.0 / (1.0 - 0.9);
     for nee in [false, true] {
-        let out = run(&furnace(0.9, 1.0, pt(200, 300, 2, nee)), Some(16));
+        let out = run(&furnace(16, 0.9, 1.0, pt(200, 300, 2, nee)), Some(16));
         let (mean, se) = mean_and_stderr(&out.image, |_, _| true);
         eprintln!("furnace ρ 0.9 roulette, nee {nee}: {mean} ± {se} (expected {expected})");
         assert!(5.0 * se < 0.005 * expected, "test too weak: se {se} (nee {nee})");
@@ -362,7 +334,7 @@ fn on_off_and_flat_are_pixel_exact() {
 
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
-    let scene = furnace(0.7, 1.0, pt(3, 8, 2, true));
+    let scene = furnace(16, 0.7, 1.0, pt(3, 8, 2, true));
     let opts = RenderOptions { spp: Some(3) };
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let a = one.install(|| render(&scene, &opts, Progress::Hidden));
@@ -625,8 +597,7 @@ mod rounds {
 
     /// A path-traced furnace with 2 paths per sample: every sample's value differs.
     fn scene() -> Scene {
-        let mut s = furnace(0.7, 1.0, pt(2, 6, 2, true));
-        s.width = 12;
+        let mut s = furnace(12, 0.7, 1.0, pt(2, 6, 2, true));
         s.height = 10;
         s
     }

@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::{agreement, furnace, mean_and_stderr, pt, Tolerance};
 use lumen::gpu::gpu_for_tests;
 use lumen::sampling::{stream, CAMERA_BOUNCE};
 use lumen::scene::PcgSeed;
@@ -154,37 +155,65 @@ use lumen::gpu::Gpu;
 use lumen::image::HdrImage;
 use lumen::scene::*;
 
-/// Compares two images: the fraction of channels within 1e-3 relative or 1e-4 absolute,
-/// and a description of the worst offenders.
-fn agreement(gpu: &HdrImage, cpu: &HdrImage) -> (f64, String) {
-    assert_eq!((gpu.width(), gpu.height()), (cpu.width(), cpu.height()));
-    let mut bad = Vec::new();
-    let n = gpu.pixels().len();
-    let mut good = 0;
-    for (i, (g, c)) in gpu.pixels().iter().zip(cpu.pixels()).enumerate() {
-        let ok = [(g.r, c.r), (g.g, c.g), (g.b, c.b)].iter().all(|&(a, b)| {
-            let d = (a - b).abs();
-            d <= 1e-4 || d <= 1e-3 * b.abs().max(a.abs())
-        });
-        if ok {
-            good += 1;
-        } else {
-            bad.push(format!("({}, {}): gpu {:?} cpu {:?}", i % gpu.width(), i / gpu.width(), g, c));
-        }
-    }
-    bad.truncate(8);
-    (good as f64 / n as f64, bad.join("; "))
-}
-
 fn assert_matches_cpu(gpu: &Gpu, scene: &Scene, spp: Option<u32>, min_fraction: f64) -> HdrImage {
     let g = render(gpu, scene, &GpuRenderOptions::fixed_passes(spp, 4)).unwrap();
     let c = lumen::cpu::render(scene, &RenderOptions { spp }, Progress::Hidden);
-    let (frac, worst) = agreement(&g.image, &c.image);
-    println!("{:.2}% of pixels agree; outliers: {worst}", frac * 100.0);
-    assert!(frac >= min_fraction, "only {:.2}% of pixels agree: {worst}", frac * 100.0);
+    let a = agreement(&g.image, &c.image);
+    println!("{a}");
+    a.check(Tolerance::share(min_fraction)).unwrap_or_else(|e| panic!("GPU vs CPU: {e}"));
     assert_eq!(g.non_finite_samples, 0);
     assert_eq!(g.spp_done, g.spp_requested);
     g.image
+}
+
+/// The agreement check itself: 1 % of the pixels 10× too bright passes the share test
+/// (99 % agree) but must fail; so must outliers that cancel in the mean; small
+/// differences on the same pixels pass.
+#[test]
+fn agreement_bounds_the_outliers_and_the_mean() {
+    let mut want = HdrImage::new(50, 40);
+    for (i, p) in want.pixels_mut().iter_mut().enumerate() {
+        let v = 0.2 + 0.6 * ((i * 7919) % 101) as f32 / 100.0;
+        *p = lumen::color::Rgb32::new(v, 0.5 * v, 0.25);
+    }
+    let with = |f: &dyn Fn(usize, lumen::color::Rgb32) -> lumen::color::Rgb32| {
+        let mut img = want.clone();
+        for (i, p) in img.pixels_mut().iter_mut().enumerate() {
+            *p = f(i, *p);
+        }
+        img
+    };
+    let scale = |p: lumen::color::Rgb32, k: f32| lumen::color::Rgb32::new(p.r * k, p.g * k, p.b * k);
+    let tol = Tolerance::share(0.99);
+    assert!(agreement(&want, &want).check(tol).is_ok());
+    // 1 % of the pixels (every 100th) 10× off.
+    let ten_times = agreement(&with(&|i, p| if i % 100 == 0 { scale(p, 10.0) } else { p }), &want);
+    assert!((ten_times.share - 0.99).abs() < 1e-12 && ten_times.share >= tol.min_share, "{ten_times}");
+    assert!(ten_times.check(tol).is_err(), "{ten_times}");
+    // Half of those 10× too bright, half black: the means still differ by about 4 %, and
+    // the outliers add about 5 % of the image.
+    let mixed = agreement(
+        &with(&|i, p| match i % 200 {
+            0 => scale(p, 10.0),
+            100 => scale(p, 0.0),
+            _ => p,
+        }),
+        &want,
+    );
+    assert!(mixed.outlier_error > 0.02 && mixed.check(tol).is_err(), "{mixed}");
+    // Outliers that cancel exactly in every mean (pairs swapped ± the same amount) still fail.
+    let swapped = agreement(
+        &with(&|i, p| match i % 100 {
+            0 => lumen::color::Rgb32::new(p.r + 2.0, p.g + 2.0, p.b + 2.0),
+            1 => lumen::color::Rgb32::new(p.r - 2.0, p.g - 2.0, p.b - 2.0),
+            _ => p,
+        }),
+        &want,
+    );
+    assert!(swapped.mean_error < 1e-6 && swapped.check(tol).is_err(), "{swapped}");
+    // The same 1 % off by 0.5 %: outside `close`, but harmless.
+    let slight = agreement(&with(&|i, p| if i % 100 == 0 { scale(p, 1.005) } else { p }), &want);
+    assert!(slight.share < 1.0 && slight.check(tol).is_ok(), "{slight}");
 }
 
 /// Spheres, a cube, a cylinder, a checkered plane and a far-away translated sphere: every
@@ -406,10 +435,6 @@ fn csg_matches_the_cpu() {
 
 // ---- Analytic answers on the GPU (the CPU's tests/cpu_render.rs, sized for lavapipe) ----
 
-fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
-    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth, nee, ..Default::default() })
-}
-
 fn gpu_run(gpu: &Gpu, scene: &Scene, spp: Option<u32>) -> HdrImage {
     let out = render(gpu, scene, &GpuRenderOptions { spp, ..Default::default() }).unwrap();
     assert_eq!(out.non_finite_samples, 0);
@@ -417,46 +442,18 @@ fn gpu_run(gpu: &Gpu, scene: &Scene, spp: Option<u32>) -> HdrImage {
     out.image
 }
 
-/// Mean of the green channel over the selected pixels and the standard error of that mean
-/// estimated from their spread (valid when they share one expected value).
-fn mean_and_stderr(img: &HdrImage, select: impl Fn(usize, usize) -> bool) -> (f64, f64) {
-    let mut v = Vec::new();
-    for row in 0..img.height() {
-        for col in 0..img.width() {
-            if select(col, row) {
-                v.push(f64::from(img.get(col, row).g));
-            }
-        }
-    }
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
-}
-
-/// Camera inside a sphere of radius 10 that emits `le` and reflects diffusely with albedo ρ.
-fn furnace(rho: f64, le: f64, renderer: Renderer) -> Scene {
-    let mut b = SceneBuilder::new(12, 12);
-    let m = b.material(Material::new(
-        Brdf::Diffuse { pigment: Pigment::Uniform(Color::gray(rho)) },
-        Pigment::Uniform(Color::gray(le)),
-    ));
-    b.sphere(Transform::scaling(DVec3::splat(10.0)), m).renderer(renderer);
-    b.build().unwrap()
-}
-
 #[test]
 fn furnace_on_the_gpu() {
     let Some(gpu) = gpu_for_tests("furnace_on_the_gpu") else { return };
     // Without NEE or roulette every path is exactly Le Σ_{k ≤ 20} ρᵏ = 2(1 − 2⁻²¹).
     let expected = 2.0 * (1.0 - 0.5f64.powi(21));
-    let img = gpu_run(&gpu, &furnace(0.5, 1.0, pt(1, 20, 1000, false)), Some(1));
+    let img = gpu_run(&gpu, &furnace(12, 0.5, 1.0, pt(1, 20, 1000, false)), Some(1));
     for p in img.pixels() {
         assert!((f64::from(p.g) / expected - 1.0).abs() < 2e-6, "{p:?}");
     }
     // With NEE (area sampling from inside the light) + MIS: unbiased; tolerance 1 % must
     // exceed 5 standard errors.
-    let img = gpu_run(&gpu, &furnace(0.5, 1.0, pt(8, 20, 1000, true)), Some(4));
+    let img = gpu_run(&gpu, &furnace(12, 0.5, 1.0, pt(8, 20, 1000, true)), Some(4));
     let (mean, se) = mean_and_stderr(&img, |_, _| true);
     println!("furnace ρ 0.5 with NEE: {mean} ± {se} (expected {expected})");
     assert!(5.0 * se < 0.01 * expected, "test too weak: se {se}");
@@ -466,7 +463,7 @@ fn furnace_on_the_gpu() {
     // tolerance 3 %.
     let expected = 10.0;
     for nee in [false, true] {
-        let img = gpu_run(&gpu, &furnace(0.9, 1.0, pt(64, 300, 2, nee)), Some(4));
+        let img = gpu_run(&gpu, &furnace(12, 0.9, 1.0, pt(64, 300, 2, nee)), Some(4));
         let (mean, se) = mean_and_stderr(&img, |_, _| true);
         println!("furnace ρ 0.9 roulette, nee {nee}: {mean} ± {se} (expected {expected})");
         assert!(5.0 * se < 0.03 * expected, "test too weak: se {se} (nee {nee})");

@@ -16,6 +16,38 @@ fn run(name: &str, case: fn(Option<&Gpu>) -> cases::Outcome) {
     case(gpu.as_ref()).check();
 }
 
+/// The glass cases' Fresnel oracle against identities that do not depend on how it is
+/// computed: the normal-incidence reflectance ((η − 1)/(η + 1))², no p-reflection at
+/// Brewster's angle atan η, Abelès' relation r_p = r_s² at 45° (any η), Stokes'
+/// reciprocity (the same reflectance from either side of the interface), total internal
+/// reflection beyond the critical angle asin(1/η), and total reflection at grazing
+/// incidence.
+#[test]
+fn the_fresnel_oracle_obeys_the_textbook_identities() {
+    use std::f64::consts::FRAC_PI_4;
+    let cos = |deg: f64| deg.to_radians().cos();
+    for eta in [1.33f64, 1.5, 2.4] {
+        let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+        assert!((cases::fresnel(1.0, eta) - f0).abs() < 1e-15, "η {eta}");
+        assert!((cases::fresnel(1.0, 1.0 / eta) - f0).abs() < 1e-15, "1/η {eta}");
+        let (_, rp) = cases::fresnel_amplitudes(eta.atan().cos(), eta).unwrap();
+        assert!(rp.abs() < 1e-15, "Brewster, η {eta}: r_p {rp}");
+        let (rs, rp) = cases::fresnel_amplitudes(FRAC_PI_4.cos(), eta).unwrap();
+        assert!((rp - rs * rs).abs() < 1e-14, "Abelès, η {eta}: r_p {rp}, r_s² {}", rs * rs);
+        for deg in [5.0f64, 20.0, 40.0, 60.0, 80.0, 89.0] {
+            let sin_t = deg.to_radians().sin() / eta;
+            let cos_t = (1.0 - sin_t * sin_t).sqrt();
+            let (outside, inside) = (cases::fresnel(cos(deg), eta), cases::fresnel(cos_t, 1.0 / eta));
+            assert!((outside - inside).abs() < 1e-12, "Stokes, η {eta}, {deg}°: {outside} vs {inside}");
+            assert!(outside > f0 && outside < 1.0, "η {eta}, {deg}°: {outside}");
+        }
+        let critical = (1.0 / eta).asin().to_degrees();
+        assert_eq!(cases::fresnel(cos(critical + 0.01), 1.0 / eta), 1.0);
+        assert!(cases::fresnel(cos(critical - 0.01), 1.0 / eta) < 1.0);
+        assert!((cases::fresnel(0.0, eta) - 1.0).abs() < 1e-12);
+    }
+}
+
 #[test]
 fn scene_scaled_by_1e_minus_4_renders_like_the_unit_scene_on_the_cpu() {
     cases::scaled_down(None).check();

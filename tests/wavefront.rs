@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::emissive;
+use common::{agreement, emissive, Tolerance};
 use glam::DVec3;
 use lumen::color::Color;
 use lumen::cpu::{Progress, RenderOptions};
@@ -13,8 +13,9 @@ use lumen::gpu::render::{render, GpuRenderOptions, GpuRenderOutput};
 use lumen::gpu::{gpu_for_tests, probe_loop_limiter, Gpu, StopReason, LOOP_LIMITER_PROBE_TRIPS};
 use lumen::scene::*;
 
+/// The path tracer without roulette (every path has its full length).
 fn pt(n: u32, max_depth: u32, nee: bool) -> Renderer {
-    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth: 1000, nee, ..Default::default() })
+    common::pt(n, max_depth, 1000, nee)
 }
 
 /// The camera inside `shells` concentric emitting spheres (ρ 0.5, Le 1, radii 10 to 11):
@@ -42,13 +43,6 @@ fn gpu_render(gpu: &Gpu, scene: &Scene, spp: u32, batch_paths: u32) -> GpuRender
 
 fn bits(img: &lumen::image::HdrImage) -> Vec<[u32; 3]> {
     img.pixels().iter().map(|p| [p.r.to_bits(), p.g.to_bits(), p.b.to_bits()]).collect()
-}
-
-/// Share of pixels whose channels agree within 1e-3 relative or 1e-4 absolute.
-fn agreement(a: &lumen::image::HdrImage, b: &lumen::image::HdrImage) -> f64 {
-    let close = |x: f32, y: f32| (x - y).abs() <= 1e-4 || (x - y).abs() <= 1e-3 * x.abs().max(y.abs());
-    let good = a.pixels().iter().zip(b.pixels()).filter(|(p, q)| close(p.r, q.r) && close(p.g, q.g) && close(p.b, q.b));
-    good.count() as f64 / a.pixels().len() as f64
 }
 
 /// Diffuse, glass and mirror surfaces, an emitting sphere and cube (NEE), a point light
@@ -125,7 +119,7 @@ fn images_do_not_depend_on_the_batch_size() {
         }
         let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(4) }, Progress::Hidden);
         let agree = agreement(&whole.image, &cpu.image);
-        assert!(agree >= 0.99, "{name}: {:.1}% of pixels agree with the CPU", agree * 100.0);
+        agree.check(Tolerance::share(0.99)).unwrap_or_else(|e| panic!("{name} against the CPU: {e}"));
     }
 }
 

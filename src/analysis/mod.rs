@@ -31,5 +31,5 @@ pub use crate::memory::{format_bytes, peak_memory_bytes};
 pub use line_fit::{fit_line, fit_loglog, tail_flattens, LineFit};
 pub use measure::{measure, measure_with, open_devices, Device, Measurement, OpenDevice};
 pub use metrics::{mse, rel_mse, rmse, ErrorMetrics, REL_MSE_EPSILON};
-pub use plot::{plot_loglog, Plot, Series};
+pub use plot::{plot_loglog, plot_loglog_svg, Plot, Series};
 pub use table::{format_seconds, markdown_table, ConvergeRow, ConvergeTable};

@@ -1,6 +1,8 @@
-//! A log-log line plot drawn straight into an RGB buffer: axes with decade ticks, grid,
-//! labels in the built-in bitmap font, one coloured polyline with markers per series and a
-//! legend. Enough for convergence plots without a plotting dependency or a font file.
+//! A log-log line plot: axes with decade ticks, grid, labels, one coloured polyline with
+//! markers per series and a legend. One layout drives two surfaces: an RGB buffer (PNG,
+//! labels in the built-in bitmap font) and an SVG document (vector, for the docs and the
+//! browser, same geometry, text as `<text>`). Enough for convergence plots without a
+//! plotting dependency or a font file (docs/DESIGN.md, "Dependencies").
 
 use std::path::Path;
 
@@ -78,6 +80,17 @@ pub(crate) fn tick_label(log10: f64) -> String {
     }
 }
 
+/// What the layout draws with, in pixel coordinates (y down).
+trait Surface {
+    /// `text` with its top-left corner at (x, y); `vertical` reads bottom to top with
+    /// (x, y) as its bottom-left corner (as [`draw_text`]).
+    fn text(&mut self, s: &str, x: i64, y: i64, vertical: bool, c: [u8; 3]);
+    /// The filled rectangle with corners (x0, y0) and (x1, y1), both included.
+    fn rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, c: [u8; 3]);
+    /// A line `2·half + 1` pixels thick with square ends.
+    fn line(&mut self, a: (i64, i64), b: (i64, i64), half: i64, c: [u8; 3]);
+}
+
 struct Canvas {
     img: RgbImage,
 }
@@ -88,7 +101,9 @@ impl Canvas {
             self.img.put_pixel(x as u32, y as u32, Rgb(c));
         }
     }
+}
 
+impl Surface for Canvas {
     fn text(&mut self, s: &str, x: i64, y: i64, vertical: bool, c: [u8; 3]) {
         let mut lit = Vec::new();
         draw_text(s, x, y, SCALE, vertical, |px, py| lit.push((px, py)));
@@ -105,7 +120,7 @@ impl Canvas {
         }
     }
 
-    /// A line `2·half + 1` pixels thick (Bresenham with square pens).
+    /// Bresenham with square pens.
     fn line(&mut self, (x0, y0): (i64, i64), (x1, y1): (i64, i64), half: i64, c: [u8; 3]) {
         let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
         let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
@@ -128,11 +143,102 @@ impl Canvas {
     }
 }
 
+/// The SVG surface: one element per primitive, coordinates in pixels of the same layout,
+/// text in a monospace font stretched to the bitmap font's width.
+struct Svg {
+    body: String,
+}
+
+fn rgb(c: [u8; 3]) -> String {
+    format!("rgb({},{},{})", c[0], c[1], c[2])
+}
+
+/// `s` with the five XML special characters escaped.
+fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+impl Surface for Svg {
+    fn text(&mut self, s: &str, x: i64, y: i64, vertical: bool, c: [u8; 3]) {
+        if s.is_empty() {
+            return;
+        }
+        // Drawn horizontally at the origin (baseline at the glyph height), then placed;
+        // rotate(-90) maps (u, v) to (v, −u), as `draw_text` does for vertical labels.
+        let h = GLYPH_H * SCALE;
+        let rotate = if vertical { " rotate(-90)" } else { "" };
+        self.body += &format!(
+            "<text transform=\"translate({x},{y}){rotate}\" y=\"{h}\" font-size=\"{}\" textLength=\"{}\" \
+             lengthAdjust=\"spacingAndGlyphs\" fill=\"{}\">{}</text>\n",
+            h + 2,
+            text_width(s, SCALE),
+            rgb(c),
+            xml_escape(s)
+        );
+    }
+
+    fn rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, c: [u8; 3]) {
+        self.body += &format!(
+            "<rect x=\"{x0}\" y=\"{y0}\" width=\"{}\" height=\"{}\" fill=\"{}\"/>\n",
+            x1 - x0 + 1,
+            y1 - y0 + 1,
+            rgb(c)
+        );
+    }
+
+    fn line(&mut self, (x0, y0): (i64, i64), (x1, y1): (i64, i64), half: i64, c: [u8; 3]) {
+        // Pixel centres, so a 1-pixel line covers the raster's pixels.
+        let f = |v: i64| v as f64 + 0.5;
+        self.body += &format!(
+            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" stroke-width=\"{}\"/>\n",
+            f(x0),
+            f(y0),
+            f(x1),
+            f(y1),
+            rgb(c),
+            2 * half + 1
+        );
+    }
+}
+
 /// Draws `plot` on a `width × height` image (at least 320 × 240). Series without a single
 /// positive point are left out of the axes but stay in the legend.
 pub fn plot_loglog(plot: &Plot, width: u32, height: u32) -> RgbImage {
     let (width, height) = (width.max(320), height.max(240));
     let mut cv = Canvas { img: RgbImage::from_pixel(width, height, Rgb([255, 255, 255])) };
+    layout(plot, width, height, &mut cv);
+    cv.img
+}
+
+/// `plot` as a standalone SVG document of `width × height` pixels (at least 320 × 240),
+/// the same layout as [`plot_loglog`].
+pub fn plot_loglog_svg(plot: &Plot, width: u32, height: u32) -> String {
+    let (width, height) = (width.max(320), height.max(240));
+    let mut svg = Svg { body: String::new() };
+    layout(plot, width, height, &mut svg);
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\
+         <svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" \
+         viewBox=\"0 0 {width} {height}\" font-family=\"DejaVu Sans Mono, Menlo, Consolas, monospace\" \
+         stroke-linecap=\"square\">\n<title>{}</title>\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n{}</svg>\n",
+        xml_escape(&plot.title),
+        svg.body
+    )
+}
+
+/// Draws every element of the plot on `cv`.
+fn layout(plot: &Plot, width: u32, height: u32, cv: &mut impl Surface) {
     let all = || plot.series.iter().flat_map(|s| s.points.iter()).filter(|(x, y)| *x > 0.0 && *y > 0.0);
     let (xr, yr) = (decade_range(all().map(|p| p.0)), decade_range(all().map(|p| p.1)));
     let (x0, y0) = (i64::from(MARGIN_LEFT), i64::from(MARGIN_TOP));
@@ -203,7 +309,6 @@ pub fn plot_loglog(plot: &Plot, width: u32, height: u32) -> RgbImage {
         cv.rect(lx + 19, ry + glyph_h / 2 - 4, lx + 27, ry + glyph_h / 2 + 4, c);
         cv.text(&s.label, lx + 46, ry, false, BLACK);
     }
-    cv.img
 }
 
 impl Plot {
@@ -213,6 +318,11 @@ impl Plot {
         let mut bytes = std::io::Cursor::new(Vec::new());
         img.write_to(&mut bytes, ImageFormat::Png).map_err(std::io::Error::other)?;
         crate::image::write_atomically(path, bytes.get_ref())
+    }
+
+    /// Writes the plot as an SVG document (atomically).
+    pub fn write_svg(&self, path: &Path, width: u32, height: u32) -> std::io::Result<()> {
+        crate::image::write_atomically(path, plot_loglog_svg(self, width, height).as_bytes())
     }
 }
 
@@ -261,6 +371,39 @@ mod tests {
         // Text is black: labels exist left of the axis and below it.
         let black_left = (0..MARGIN_LEFT).flat_map(|x| (0..480).map(move |y| (x, y)));
         assert!(black_left.filter(|&(x, y)| img.get_pixel(x, y).0 == BLACK).count() > 50);
+    }
+
+    /// The SVG has the same layout as the PNG: every series' polyline and markers in its
+    /// colour at the raster's pixel positions, every label as escaped text, and it parses
+    /// as balanced XML elements.
+    #[test]
+    fn svg_has_the_png_layout() {
+        let mut p = plot();
+        p.title = "a < b & \"c\"".into();
+        let svg = plot_loglog_svg(&p, 640, 480);
+        assert!(svg.starts_with("<?xml") && svg.trim_end().ends_with("</svg>"));
+        assert!(svg.contains(r#"width="640" height="480""#));
+        assert!(svg.contains("a &lt; b &amp; &quot;c&quot;") && !svg.contains("a < b"));
+        for label in ["seconds", "RMSE", "cpu", "gpu", "0.01"] {
+            assert!(svg.contains(&format!(">{label}</text>")), "{label}");
+        }
+        // cpu's last point (1, 0.1) is the axes' bottom-right corner: its marker is the
+        // 9-pixel square centred there, as in the raster test above.
+        let (x, y) = (640 - MARGIN_RIGHT as i64, 480 - MARGIN_BOTTOM as i64);
+        assert!(svg.contains(&format!(
+            r#"<rect x="{}" y="{}" width="9" height="9" fill="rgb(31,119,180)"/>"#,
+            x - 4,
+            y - 4
+        )));
+        assert!(svg.matches("rgb(255,127,14)").count() >= 4, "gpu: 2 points, a segment, the legend");
+        // Balanced: every opened element is closed or self-closing.
+        let opened = svg.matches("<text").count();
+        assert_eq!(opened, svg.matches("</text>").count());
+        assert_eq!(svg.matches("<svg").count(), 1);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.svg");
+        p.write_svg(&path, 400, 300).unwrap();
+        assert!(std::fs::read_to_string(&path).unwrap().contains(r#"viewBox="0 0 400 300""#));
     }
 
     #[test]

@@ -223,7 +223,9 @@ fn write_results(
     };
     let png = dir.join("converge.png");
     plot.write_png(&png, 800, 560).with_context(|| format!("cannot write {}", png.display()))?;
-    eprintln!("wrote {}, {} and {}", csv.display(), md_path.display(), png.display());
+    let svg = dir.join("converge.svg");
+    plot.write_svg(&svg, 800, 560).with_context(|| format!("cannot write {}", svg.display()))?;
+    eprintln!("wrote {}, {}, {} and {}", csv.display(), md_path.display(), png.display(), svg.display());
     // Last: the files are written even when nobody reads standard output.
     Ok(out.print()?)
 }

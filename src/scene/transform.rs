@@ -78,13 +78,17 @@ impl Transform {
         Self::try_scaling(s).expect("scaling factors must be finite and non-zero")
     }
 
-    /// Rotation about +x by `deg` degrees (right-handed).
+    /// Rotation about +x by `deg` **degrees** (right-handed), like SceneLang's `ROTATE`:
+    /// the angle APIs that scenes and people call take degrees; radians stay internal
+    /// (docs/DESIGN.md, "Conventions").
     pub fn rotation_x(deg: f64) -> Self {
         Self::rotation(DMat4::from_rotation_x(deg.to_radians()))
     }
+    /// Rotation about +y by `deg` degrees (right-handed).
     pub fn rotation_y(deg: f64) -> Self {
         Self::rotation(DMat4::from_rotation_y(deg.to_radians()))
     }
+    /// Rotation about +z by `deg` degrees (right-handed).
     pub fn rotation_z(deg: f64) -> Self {
         Self::rotation(DMat4::from_rotation_z(deg.to_radians()))
     }

@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use lumen::color::Color;
+use lumen::image::HdrImage;
 use lumen::scene::{
-    Brdf, Material, MaterialId, Pigment, PointLight, Renderer, Scene, SceneBuilder, Transform,
+    Brdf, Material, MaterialId, PathTracerSettings, Pigment, PointLight, Renderer, Scene, SceneBuilder, Transform,
     DEFAULT_THRESHOLD_ANGLE_RAD,
 };
 
@@ -66,10 +67,151 @@ pub fn emissive(b: &mut SceneBuilder, rho: f64, le: f64) -> MaterialId {
 
 /// Clear glass of index 1.5.
 pub fn glass(b: &mut SceneBuilder) -> MaterialId {
+    dielectric(b, 1.5)
+}
+
+/// Clear glass of index `ior`.
+pub fn dielectric(b: &mut SceneBuilder, ior: f64) -> MaterialId {
     b.material(Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 },
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior },
         Pigment::Uniform(Color::BLACK),
     ))
+}
+
+/// The path tracer with `n` paths per camera sample, the other settings at their defaults.
+pub fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
+    Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth, nee, ..Default::default() })
+}
+
+/// The camera inside a sphere of radius 10 that emits `le` and reflects diffusely with
+/// albedo ρ, on a `size`×`size` image: every path's expectation is Le Σ ρᵏ.
+pub fn furnace(size: u32, rho: f64, le: f64, renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(size, size);
+    let m = emissive(&mut b, rho, le);
+    b.sphere(Transform::scaling(DVec3::splat(10.0)), m).renderer(renderer);
+    b.build().unwrap()
+}
+
+/// Mean of the green channel over the selected pixels and the standard error of that mean
+/// estimated from their spread (valid when they share one expected value).
+pub fn mean_and_stderr(img: &HdrImage, select: impl Fn(usize, usize) -> bool) -> (f64, f64) {
+    let mut v = Vec::new();
+    for row in 0..img.height() {
+        for col in 0..img.width() {
+            if select(col, row) {
+                v.push(f64::from(img.get(col, row).g));
+            }
+        }
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+// ------------------------------------------------------------------ image agreement
+
+/// Whether two channel values agree: within 1e-3 relative or 1e-4 absolute.
+pub fn close(a: f32, b: f32) -> bool {
+    let d = (a - b).abs();
+    d <= 1e-4 || d <= 1e-3 * a.abs().max(b.abs())
+}
+
+/// How closely an image (`got`, e.g. the f32 GPU render) agrees with a reference (`want`,
+/// e.g. the f64 CPU render). The share of agreeing pixels alone lets the other pixels be
+/// arbitrarily wrong, so two more numbers bound how far off they are.
+#[derive(Debug, Clone)]
+pub struct Agreement {
+    /// Share of pixels whose three channels all agree ([`close`]).
+    pub share: f64,
+    /// Total absolute difference of the disagreeing channels over the reference's total
+    /// (both summed over every channel of every pixel): 1 % of the pixels 10× too bright
+    /// in a uniform image give 0.09.
+    pub outlier_error: f64,
+    /// Largest difference of the channel means (r, g, b), relative to the reference's mean.
+    pub mean_error: f64,
+    /// Up to eight disagreeing pixels, for messages.
+    pub worst: String,
+}
+
+/// What [`Agreement::check`] accepts.
+#[derive(Debug, Clone, Copy)]
+pub struct Tolerance {
+    pub min_share: f64,
+    pub max_outlier_error: f64,
+    pub max_mean_error: f64,
+}
+
+impl Tolerance {
+    /// At least `min_share` of the pixels agree, the others add at most 2 % of the image's
+    /// total, and the channel means agree within 1 %.
+    pub fn share(min_share: f64) -> Self {
+        Self { min_share, max_outlier_error: 0.02, max_mean_error: 0.01 }
+    }
+}
+
+/// Compares `got` with the reference `want` (same size).
+pub fn agreement(got: &HdrImage, want: &HdrImage) -> Agreement {
+    assert_eq!((got.width(), got.height()), (want.width(), want.height()));
+    let (mut good, mut outlier_sum, mut total) = (0usize, 0.0f64, 0.0f64);
+    let (mut sum_got, mut sum_want) = ([0.0f64; 3], [0.0f64; 3]);
+    let mut bad = Vec::new();
+    for (i, (g, w)) in got.pixels().iter().zip(want.pixels()).enumerate() {
+        let pairs = [(g.r, w.r), (g.g, w.g), (g.b, w.b)];
+        for (k, &(a, b)) in pairs.iter().enumerate() {
+            sum_got[k] += f64::from(a);
+            sum_want[k] += f64::from(b);
+            total += f64::from(b).abs();
+            if !close(a, b) {
+                outlier_sum += f64::from(a - b).abs();
+            }
+        }
+        if pairs.iter().all(|&(a, b)| close(a, b)) {
+            good += 1;
+        } else if bad.len() < 8 {
+            bad.push(format!("({}, {}): got {g:?} want {w:?}", i % got.width(), i / got.width()));
+        }
+    }
+    let n = got.pixels().len() as f64;
+    // An absolute floor of 1e-4 per channel (as in `close`), so that black images agree.
+    let floor = 1e-4 * n;
+    let mean_error =
+        (0..3).map(|k| (sum_got[k] - sum_want[k]).abs() / sum_want[k].abs().max(floor)).fold(0.0, f64::max);
+    Agreement {
+        share: good as f64 / n,
+        outlier_error: outlier_sum / total.max(3.0 * floor),
+        mean_error,
+        worst: bad.join("; "),
+    }
+}
+
+impl std::fmt::Display for Agreement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.2}% of pixels agree; the others add {:.3}% of the image; means differ by {:.3}%; outliers: {}",
+            100.0 * self.share,
+            100.0 * self.outlier_error,
+            100.0 * self.mean_error,
+            self.worst
+        )
+    }
+}
+
+impl Agreement {
+    /// `Err` with every number and the worst pixels when any bound of `tol` fails.
+    pub fn check(&self, tol: Tolerance) -> Result<(), String> {
+        // A NaN error is not within any bound.
+        let within = |v: f64, max: f64| v <= max;
+        let ok = self.share >= tol.min_share
+            && within(self.outlier_error, tol.max_outlier_error)
+            && within(self.mean_error, tol.max_mean_error);
+        if !ok {
+            Err(format!("{self} (outside {tol:?})"))
+        } else {
+            Ok(())
+        }
+    }
 }
 
 /// A mirror reflecting 80 %.

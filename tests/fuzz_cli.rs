@@ -1,0 +1,980 @@
+//! Hostile-input harness (issue 16): seeded proptest strategies over SceneLang (token soup,
+//! generated scripts, mutated scripts), image files (PFM, PNG, Radiance HDR and OpenEXR
+//! headers and bodies, read by `lumen tonemap` and as image pigments) and command lines,
+//! each run through the real `lumen` binary in its own directory, under a 4 GiB address
+//! space limit and a per-run timeout. Every run must end in success or a clean error:
+//!
+//! - no panic text (`panicked at`, the `RUST_BACKTRACE` note) on stdout or stderr;
+//! - no death by a signal (an abort on a failed allocation included) and no timeout;
+//! - after a failure (non-zero exit), no file in the directory but the inputs (no output,
+//!   no temporary file);
+//! - after a success, no NaN or infinity in any HDR image it wrote.
+//!
+//! The case counts are fixed and the seed too, so a run is reproducible and fits about two
+//! minutes of CI; `LUMEN_FUZZ_SCALE=k` multiplies the counts, `LUMEN_FUZZ_SEED=n` changes
+//! the seed, and `LUMEN_FUZZ_KNOWN=1` adds the input classes that issue 16 lists as being
+//! fixed elsewhere ([`known_failing_classes`]). A failing case is shrunk (proptest's value
+//! trees, bounded) and printed with its files.
+//! The test prints the "Hostile input" table of docs/STABILITY.md:
+//!
+//! ```text
+//! cargo test --release --test fuzz_cli -- --nocapture
+//! ```
+#![cfg(unix)]
+
+use std::collections::BTreeSet;
+use std::fmt;
+use std::io::Read;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use lumen::color::Rgb32;
+use lumen::image::{write_image, HdrImage, ToneMap};
+use proptest::prelude::*;
+use proptest::strategy::ValueTree;
+use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+
+/// Address-space limit of every run: far above what a tiny render needs, far below what a
+/// size taken from a hostile header could ask for.
+const MEMORY_LIMIT: u64 = 4 << 30;
+/// Wall-clock limit of one run; every input here renders in milliseconds.
+const TIMEOUT: Duration = Duration::from_secs(20);
+/// Shrinking stops after this many extra runs, or this long.
+const MAX_SHRINK_RUNS: usize = 48;
+const MAX_SHRINK_TIME: Duration = Duration::from_secs(60);
+
+/// One run of the binary: the files it starts with (in an empty directory) and its
+/// arguments.
+#[derive(Clone)]
+struct Case {
+    files: Vec<(String, Vec<u8>)>,
+    args: Vec<String>,
+    /// Whether the reader of stdout goes away at once (`lumen … | head -0`).
+    stdout_closed: bool,
+}
+
+impl fmt::Debug for Case {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let pipe = if self.stdout_closed { " | (stdout closed)" } else { "" };
+        writeln!(f, "lumen {}{pipe}", self.args.iter().map(|a| format!("{a:?}")).collect::<Vec<_>>().join(" "))?;
+        for (name, bytes) in &self.files {
+            match std::str::from_utf8(bytes) {
+                Ok(text) if name.ends_with(".sl") && text.len() > 4000 => {
+                    let cut = (0..=3000).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
+                    writeln!(f, "--- {name} ({} bytes, the first 3000):\n{} …", text.len(), &text[..cut])?
+                }
+                Ok(text) if name.ends_with(".sl") => writeln!(f, "--- {name}:\n{text}")?,
+                _ => {
+                    let head: Vec<String> = bytes.iter().take(96).map(|b| format!("{b:02x}")).collect();
+                    writeln!(
+                        f,
+                        "--- {name}: {} bytes: {}{}",
+                        bytes.len(),
+                        head.join(" "),
+                        if bytes.len() > 96 { " …" } else { "" }
+                    )?
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+enum Verdict {
+    Ok,
+    CleanError,
+    Failure(String),
+}
+
+/// Runs `case` and judges it.
+fn run(case: &Case) -> Verdict {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in &case.files {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    let before = listing(dir.path());
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lumen"));
+    cmd.args(&case.args)
+        .current_dir(dir.path())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        // A panic then prints its `RUST_BACKTRACE` note, which the judge looks for.
+        .env_remove("RUST_BACKTRACE")
+        .env_remove("LUMEN_REQUIRE_GPU")
+        // Two render threads whatever the machine: tiny renders gain nothing from more, and
+        // each thread's stack and malloc arena count against the address-space limit.
+        .env("RAYON_NUM_THREADS", "2");
+    // SAFETY: only async-signal-safe calls (setrlimit) between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = |resource, value| {
+                let rl = libc::rlimit { rlim_cur: value, rlim_max: value };
+                if libc::setrlimit(resource, &rl) == 0 {
+                    Ok(())
+                } else {
+                    Err(std::io::Error::last_os_error())
+                }
+            };
+            limit(libc::RLIMIT_AS, MEMORY_LIMIT as libc::rlim_t)?;
+            limit(libc::RLIMIT_CORE, 0)
+        });
+    }
+    let mut child = cmd.spawn().expect("spawn lumen");
+    let pipe = |mut r: Box<dyn Read + Send>| {
+        std::thread::spawn(move || {
+            let mut v = Vec::new();
+            let _ = r.read_to_end(&mut v);
+            String::from_utf8_lossy(&v).into_owned()
+        })
+    };
+    let stdout_pipe = child.stdout.take().unwrap();
+    let out = if case.stdout_closed {
+        drop(stdout_pipe);
+        std::thread::spawn(String::new)
+    } else {
+        pipe(Box::new(stdout_pipe))
+    };
+    let err = pipe(Box::new(child.stderr.take().unwrap()));
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if start.elapsed() > TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    let (stdout, stderr) = (out.join().unwrap(), err.join().unwrap());
+    let tail = |s: &str| s.chars().rev().take(600).collect::<Vec<_>>().into_iter().rev().collect::<String>();
+    let said = format!("stderr: {}", tail(&stderr));
+    let Some(status) = status else { return Verdict::Failure(format!("timed out after {TIMEOUT:?}; {said}")) };
+    for text in [&stdout, &stderr] {
+        if text.contains("panicked at") || text.contains("RUST_BACKTRACE") {
+            return Verdict::Failure(format!("panic: {said}"));
+        }
+    }
+    if let Some(sig) = status.signal() {
+        return Verdict::Failure(format!("killed by signal {sig}; {said}"));
+    }
+    let new: Vec<String> = listing(dir.path()).difference(&before).cloned().collect();
+    if !status.success() {
+        if stderr.trim().is_empty() {
+            return Verdict::Failure(format!("exit {:?} without a message", status.code()));
+        }
+        if !new.is_empty() {
+            return Verdict::Failure(format!("failed ({said}) but left files: {new:?}"));
+        }
+        if std::env::var_os("LUMEN_FUZZ_VERBOSE").is_some() {
+            eprintln!("clean error: {}", stderr.lines().take(4).collect::<Vec<_>>().join(" | "));
+        }
+        return Verdict::CleanError;
+    }
+    for name in &new {
+        let lower = name.to_ascii_lowercase();
+        if [".pfm", ".exr", ".hdr"].iter().any(|x| lower.ends_with(x)) {
+            match lumen::image::read_image(&dir.path().join(name)) {
+                Ok(img) if img.pixels().iter().all(|p| p.r.is_finite() && p.g.is_finite() && p.b.is_finite()) => {}
+                Ok(_) => return Verdict::Failure(format!("{name} holds NaN or infinite pixels")),
+                Err(e) => return Verdict::Failure(format!("{name} was written but does not read back: {e}")),
+            }
+        }
+    }
+    Verdict::Ok
+}
+
+/// Every file under `dir`, relative.
+fn listing(dir: &Path) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p.clone());
+            }
+            out.insert(p.strip_prefix(dir).unwrap().to_string_lossy().into_owned());
+        }
+    }
+    out
+}
+
+// ------------------------------------------------------------------------- SceneLang
+
+/// Numbers a hostile script would write: zero, signed zero, extreme, malformed.
+fn hostile_number() -> impl Strategy<Value = String> {
+    prop::sample::select(vec![
+        "0",
+        "-0",
+        "1e308",
+        "-1e308",
+        "1e309",
+        "1e-308",
+        "5e-324",
+        "1e-320",
+        "1e18",
+        "1e30",
+        "1e300",
+        "0.0000001",
+        "4294967296",
+        "18446744073709551616",
+        "1.",
+        ".5",
+        "1e",
+        "--1",
+        "0x10",
+        "1_000",
+        "NaN",
+        "inf",
+        "$0/0$",
+        "$1/0$",
+        "$sqrt(-1)$",
+        "$2^2000$",
+        "$1e308 * 10$",
+        "$log(0)$",
+        "$pi$",
+        "$TIME$",
+        "$-2^2$",
+        "$3 div 0$",
+        "$3 % 0$",
+        "$atan(0, 0)$",
+    ])
+    .prop_map(String::from)
+}
+
+/// Mostly ordinary numbers (so that most generated scripts load and render), one in
+/// fifty hostile: a script has dozens of numbers.
+fn number() -> impl Strategy<Value = String> {
+    prop_oneof![
+        25 => (1i32..5).prop_map(|v| v.to_string()),
+        15 => (0.05f64..3.0).prop_map(|v| format!("{v:.3}")),
+        9 => (-3.0f64..0.0).prop_map(|v| format!("{v:.3}")),
+        1 => hostile_number(),
+    ]
+}
+
+/// As [`number`], for slots that must be positive (colours, indices, ratios).
+fn positive() -> impl Strategy<Value = String> {
+    prop_oneof![49 => (0.05f64..3.0).prop_map(|v| format!("{v:.3}")), 1 => hostile_number()]
+}
+
+const WORDS: &[&str] = &[
+    "SET",
+    "SPAWN",
+    "USING",
+    "UNSET",
+    "DUMP",
+    "DUMP.ALL",
+    "DUMP.world",
+    "DUMP.variables",
+    "UNITE",
+    "INTERSECT",
+    "DIFF",
+    "FUSE",
+    "TRANSLATE",
+    "SCALE",
+    "ROTATE",
+    "Transformation",
+    "Shape.Sphere",
+    "Shape.Cube",
+    "Shape.Plane",
+    "Shape.Cylinder",
+    "Light",
+    "Material",
+    "Brdf.Diffuse",
+    "Brdf.Specular",
+    "Brdf.Dielectric",
+    "Pigment.Uniform",
+    "Pigment.Checkered",
+    "Pigment.Image",
+    "Image",
+    "Camera.Perspective",
+    "Camera.Orthogonal",
+    "Renderer.OnOff",
+    "Renderer.Flat",
+    "Renderer.PointLight",
+    "Renderer.PathTracer",
+    "Tracer",
+    "Pcg",
+    "Environment.Uniform",
+    "Environment.Gradient",
+    "Environment.Image",
+    "Point",
+    "RGB",
+    "TIME",
+    "pi",
+    ".material",
+    ".transformation",
+    ".brdf",
+    ".emitted_radiance",
+    ".pigment",
+    ".ior",
+    ".N",
+    ".color_on",
+    ".color_off",
+    ".image",
+    ".filter",
+    ".aspect_ratio",
+    ".screen_distance",
+    ".n",
+    ".max_depth",
+    ".roulette_depth",
+    ".nee",
+    ".samples_per_side",
+    ".rng",
+    ".state",
+    ".inc",
+    ".position",
+    ".color",
+    ".linear_radius",
+    ".X",
+    ".Y",
+    ".Z",
+    ".intensity",
+    ".rotation",
+    "(",
+    ")",
+    "(",
+    ")",
+    "<",
+    ">",
+    "{",
+    "}",
+    "[",
+    "]",
+    ",",
+    ",",
+    "*",
+    "$",
+    "+",
+    "-",
+    "/",
+    "^",
+    "#",
+    "\"",
+    "\"img.pfm\"",
+    "\"missing.pfm\"",
+    "\"\"",
+    "\"bilinear\"",
+    "a",
+    "b",
+    "x",
+    "a",
+    "é",
+    "\u{0}",
+    "\n",
+];
+
+/// Token soup: SceneLang's own words, punctuation and numbers in random order.
+fn token_soup() -> impl Strategy<Value = String> {
+    let token = prop_oneof![
+        10 => prop::sample::select(WORDS).prop_map(String::from),
+        3 => number(),
+        1 => hostile_number(),
+    ];
+    prop::collection::vec(token, 0..80).prop_map(|t| t.join(" "))
+}
+
+fn colour() -> impl Strategy<Value = String> {
+    (positive(), positive(), positive()).prop_map(|(r, g, b)| format!("<{r}, {g}, {b}>"))
+}
+
+fn pigment() -> BoxedStrategy<String> {
+    prop_oneof![
+        3 => colour().prop_map(|c| format!("Pigment.Uniform({c})")),
+        1 => ((1i32..40), colour(), colour())
+            .prop_map(|(n, a, b)| format!("Pigment.Checkered(.N {n}, .color_on {a}, .color_off {b})")),
+        1 => prop::sample::select(vec!["\"nearest\"", "\"bilinear\""])
+            .prop_map(|f| format!("Pigment.Image(.image Image(\"img.pfm\"), .filter {f})")),
+    ]
+    .boxed()
+}
+
+fn material() -> impl Strategy<Value = String> {
+    let brdf = prop_oneof![
+        pigment().prop_map(|p| format!("Brdf.Diffuse({p})")),
+        pigment().prop_map(|p| format!("Brdf.Specular({p})")),
+        (pigment(), positive()).prop_map(|(p, ior)| format!("Brdf.Dielectric({p}, .ior {ior})")),
+    ];
+    (brdf, prop::option::of(pigment())).prop_map(|(b, e)| match e {
+        Some(e) => format!("Material(.brdf {b}, .emitted_radiance {e})"),
+        None => format!("Material(.brdf {b})"),
+    })
+}
+
+fn transform() -> impl Strategy<Value = String> {
+    let one = prop_oneof![
+        (number(), number(), number()).prop_map(|(x, y, z)| format!("TRANSLATE({x}, {y}, {z})")),
+        number().prop_map(|s| format!("SCALE {s}")),
+        (number(), number(), number()).prop_map(|(x, y, z)| format!("SCALE({x}, {y}, {z})")),
+        (prop::sample::select(vec!["X", "Y", "Z"]), number()).prop_map(|(a, d)| format!("ROTATE(.{a} {d})")),
+        prop::collection::vec(number(), 12).prop_map(|m| format!("Transformation([{}, 0, 0, 0, 1])", m.join(", "))),
+    ];
+    prop::collection::vec(one, 1..4).prop_map(|t| t.join(" * "))
+}
+
+/// A shape, possibly a CSG tree. Trees are small and written in place, never built from
+/// names that are reused: exponential SET/FUSE chains are issue 16's "exponential CSG
+/// chains" item, fixed elsewhere, and left out of the default strategy.
+fn shape() -> impl Strategy<Value = String> {
+    let leaf = (
+        prop::sample::select(vec!["Sphere", "Cube", "Plane", "Cylinder"]),
+        prop::sample::select(vec!["m0", "m1"]),
+        transform(),
+    )
+        .prop_map(|(k, m, t)| format!("Shape.{k}(.material {m}, .transformation {t})"));
+    leaf.prop_recursive(3, 12, 3, |inner| {
+        (
+            prop::sample::select(vec!["UNITE", "INTERSECT", "DIFF", "FUSE"]),
+            prop::collection::vec(inner, 2..4),
+            prop::option::of(transform()),
+        )
+            .prop_map(|(op, kids, t)| {
+                let t = t.map_or(String::new(), |t| format!(", .transformation {t}"));
+                format!("{op}({}{t})", kids.join(", "))
+            })
+    })
+}
+
+fn renderer() -> impl Strategy<Value = String> {
+    prop_oneof![
+        Just("Renderer.OnOff()".to_string()),
+        colour().prop_map(|c| format!("Renderer.Flat(.background_color {c})")),
+        (colour(), colour())
+            .prop_map(|(b, a)| format!("Renderer.PointLight(.background_color {b}, .ambient_color {a})")),
+        (1u32..3, 0u32..5, 0u32..4, 0u32..2).prop_map(|(n, d, r, nee)| format!(
+            "Renderer.PathTracer(.n {n}, .max_depth {d}, .roulette_depth {r}, .nee {nee})"
+        )),
+    ]
+}
+
+fn environment() -> impl Strategy<Value = String> {
+    prop_oneof![
+        Just(String::new()),
+        colour().prop_map(|c| format!("Environment.Uniform(.color {c})")),
+        (colour(), colour(), colour())
+            .prop_map(|(z, h, n)| format!("Environment.Gradient(.zenith {z}, .horizon {h}, .nadir {n})")),
+        (positive(), number())
+            .prop_map(|(i, r)| format!("Environment.Image(.image Image(\"img.pfm\"), .intensity {i}, .rotation {r})")),
+    ]
+}
+
+/// A whole script of the documented structure with hostile values in every slot. The
+/// `Image(W, H)` size stays small: huge image sizes are issue 16's "huge Image sizes" item,
+/// fixed elsewhere, and left out of the default strategy.
+fn script() -> impl Strategy<Value = String> {
+    let camera = prop_oneof![
+        (positive(), positive(), transform()).prop_map(|(a, d, t)| format!(
+            "Camera.Perspective(.aspect_ratio {a}, .screen_distance {d}, .transformation {t})"
+        )),
+        (positive(), transform())
+            .prop_map(|(a, t)| format!("Camera.Orthogonal(.aspect_ratio {a}, .transformation {t})")),
+    ];
+    let light = (number(), number(), number(), colour(), positive())
+        .prop_map(|(x, y, z, c, r)| format!("Light(.position {{{x}, {y}, {z}}}, .color {c}, .linear_radius {r})"));
+    let tracer = (0u32..4, 0u64..1 << 53, 0u64..1 << 53)
+        .prop_map(|(s, st, inc)| format!("Tracer(.samples_per_side {s}, .rng Pcg(.state {st}, .inc {inc}))"));
+    (
+        material(),
+        material(),
+        prop::collection::vec(shape(), 1..4),
+        prop::collection::vec(light, 0..3),
+        camera,
+        (1u32..6, 1u32..6),
+        renderer(),
+        tracer,
+        environment(),
+        prop::bool::ANY,
+    )
+        .prop_map(|(m0, m1, shapes, lights, camera, (w, h), renderer, tracer, env, dump)| {
+            let spawn: Vec<String> = shapes.into_iter().chain(lights).collect();
+            format!(
+                "SET m0 {m0}\n    m1 {m1}\nSPAWN\n    {}\n{}USING {camera}\n    Image({w}, {h})\n    {renderer}\n    {tracer}\n    {env}\n",
+                spawn.join("\n    "),
+                if dump { "DUMP.ALL\n" } else { "" },
+            )
+        })
+}
+
+/// Byte-level edits of a text: delete a range, insert a word, duplicate a range.
+#[derive(Debug, Clone)]
+enum Edit {
+    Delete(usize, usize),
+    Insert(usize, String),
+    Duplicate(usize, usize),
+}
+
+fn edits() -> impl Strategy<Value = Vec<Edit>> {
+    let edit = prop_oneof![
+        (any::<usize>(), 1usize..12).prop_map(|(a, n)| Edit::Delete(a, n)),
+        (any::<usize>(), prop_oneof![prop::sample::select(WORDS).prop_map(String::from), number()])
+            .prop_map(|(a, w)| Edit::Insert(a, w)),
+        (any::<usize>(), 1usize..40).prop_map(|(a, n)| Edit::Duplicate(a, n)),
+    ];
+    prop::collection::vec(edit, 1..3)
+}
+
+fn apply(text: &str, edits: &[Edit]) -> Vec<u8> {
+    let mut b = text.as_bytes().to_vec();
+    for e in edits {
+        let at = |a: usize, len: usize| if len == 0 { 0 } else { a % (len + 1) };
+        match e {
+            Edit::Delete(a, n) => {
+                let s = at(*a, b.len());
+                let end = (s + n).min(b.len());
+                b.drain(s..end);
+            }
+            Edit::Insert(a, w) => {
+                let s = at(*a, b.len());
+                b.splice(s..s, w.bytes());
+            }
+            Edit::Duplicate(a, n) => {
+                let s = at(*a, b.len());
+                let end = (s + n).min(b.len());
+                let piece = b[s..end].to_vec();
+                b.splice(end..end, piece);
+            }
+        }
+    }
+    b
+}
+
+/// A valid 3×2 PFM, the texture every script may name.
+fn texture() -> Vec<u8> {
+    lumen::image::encode_pfm(&HdrImage::from_fn(3, 2, |c, r| Rgb32::new(c as f32 * 0.3, r as f32 * 0.5, 0.25)))
+}
+
+/// `lumen render` of `script` on the CPU at a tiny size into `out`, the texture beside it.
+fn render_case(script: Vec<u8>, extra: Vec<String>) -> Case {
+    let mut args: Vec<String> =
+        ["render", "s.sl", "--device", "cpu", "--width", "3", "--height", "2", "--spp", "1"].map(String::from).into();
+    args.extend(extra);
+    Case { files: vec![("s.sl".into(), script), ("img.pfm".into(), texture())], args, stdout_closed: false }
+}
+
+fn outputs() -> impl Strategy<Value = Vec<String>> {
+    prop::collection::vec(prop::sample::select(vec!["out.pfm", "out.exr", "out.hdr", "out.png", "out.jpg"]), 1..3)
+        .prop_map(|o| o.into_iter().flat_map(|o| ["-o".to_string(), o.to_string()]).collect())
+}
+
+// ----------------------------------------------------------------------------- images
+
+/// Floats a hostile image holds.
+fn sample() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        4 => 0.0f32..4.0,
+        1 => prop::sample::select(vec![
+            0.0, -0.0, -1.0, 1e-45, 1e-38, 65504.0, 1e30, 3.4e38, f32::MAX, f32::NAN, f32::INFINITY, f32::NEG_INFINITY,
+        ]),
+    ]
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Format {
+    Pfm,
+    Png,
+    Hdr,
+    Exr,
+}
+
+impl Format {
+    fn ext(self) -> &'static str {
+        match self {
+            Format::Pfm => "pfm",
+            Format::Png => "png",
+            Format::Hdr => "hdr",
+            Format::Exr => "exr",
+        }
+    }
+}
+
+/// A small image in `format`: PFM written here byte by byte (any float, either byte
+/// order, any header), the others by lumen's own writer (which stores NaN as black).
+fn encode(format: Format, w: usize, h: usize, px: &[f32], pfm_header: &Option<(String, String, String)>) -> Vec<u8> {
+    let img = HdrImage::from_fn(w, h, |c, r| {
+        let i = 3 * (r * w + c);
+        Rgb32::new(px[i % px.len()], px[(i + 1) % px.len()], px[(i + 2) % px.len()])
+    });
+    match format {
+        Format::Pfm => {
+            let (dims, scale, magic) = pfm_header.clone().unwrap_or((format!("{w} {h}"), "-1.0".into(), "PF".into()));
+            let little = !scale.trim_start().starts_with(|c: char| c.is_ascii_digit());
+            let mut b = format!("{magic}\n{dims}\n{scale}\n").into_bytes();
+            // Rows bottom to top.
+            for r in (0..h).rev() {
+                for c in 0..w {
+                    let p = img.get(c, r);
+                    for v in [p.r, p.g, p.b] {
+                        b.extend(if little { v.to_le_bytes() } else { v.to_be_bytes() });
+                    }
+                }
+            }
+            b
+        }
+        _ => {
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join(format!("x.{}", format.ext()));
+            write_image(&path, &img, &ToneMap::default()).unwrap();
+            std::fs::read(path).unwrap()
+        }
+    }
+}
+
+/// Damage to a file's bytes.
+#[derive(Debug, Clone)]
+enum Damage {
+    Truncate(usize),
+    Flip(usize, u8),
+    Append(Vec<u8>),
+}
+
+fn damage() -> impl Strategy<Value = Vec<Damage>> {
+    let d = prop_oneof![
+        any::<usize>().prop_map(Damage::Truncate),
+        (any::<usize>(), 1u8..=255).prop_map(|(a, x)| Damage::Flip(a, x)),
+        prop::collection::vec(any::<u8>(), 1..16).prop_map(Damage::Append),
+    ];
+    prop::collection::vec(d, 0..4)
+}
+
+fn damaged(mut b: Vec<u8>, damage: &[Damage]) -> Vec<u8> {
+    for d in damage {
+        match d {
+            Damage::Truncate(a) => b.truncate(a % (b.len() + 1)),
+            Damage::Flip(a, x) if !b.is_empty() => {
+                let i = a % b.len();
+                b[i] ^= x;
+            }
+            Damage::Flip(..) => {}
+            Damage::Append(extra) => b.extend(extra),
+        }
+    }
+    b
+}
+
+/// PFM header fields: sizes up to the 2¹⁶ side and 2²⁸ pixel limits and beyond,
+/// malformed numbers, scales of either sign, other magics.
+fn pfm_header() -> impl Strategy<Value = Option<(String, String, String)>> {
+    let side = prop::sample::select(vec![
+        "0",
+        "1",
+        "2",
+        "3",
+        "-1",
+        "65536",
+        "65537",
+        "16384",
+        "16385",
+        "4294967297",
+        "1e3",
+        "",
+        "3.0",
+        "+2",
+    ]);
+    let dims = prop_oneof![
+        (side.clone(), side).prop_map(|(w, h)| format!("{w} {h}")),
+        Just("3".to_string()),
+        Just("3 2 1".to_string()),
+        Just("3\t2".to_string()),
+    ];
+    let scale = prop::sample::select(vec!["-1.0", "1.0", "0", "-0", "nan", "inf", "-1e-40", "x", ""]);
+    let magic = prop::sample::select(vec!["PF", "Pf", "P6", "PF ", ""]);
+    prop::option::weighted(0.5, (dims, scale.prop_map(String::from), magic.prop_map(String::from)))
+}
+
+/// An image file (`in.EXT`) that lumen reads: `lumen tonemap` to another format, or as an
+/// image pigment and environment of a scene rendered on the CPU.
+fn image_case() -> impl Strategy<Value = Case> {
+    let format = prop::sample::select(vec![Format::Pfm, Format::Png, Format::Hdr, Format::Exr]);
+    (
+        format,
+        1usize..5,
+        1usize..5,
+        prop::collection::vec(sample(), 3..12),
+        pfm_header(),
+        damage(),
+        prop::sample::select(vec!["out.png", "out.pfm", "out.exr", "out.hdr", "out.jpg", "scene"]),
+    )
+        .prop_map(|(format, w, h, px, header, dmg, target)| {
+            let name = format!("in.{}", format.ext());
+            let bytes = damaged(encode(format, w, h, &px, &header), &dmg);
+            if target == "scene" {
+                let script = format!(
+                    "SET m Material(.brdf Brdf.Diffuse(Pigment.Image(.image Image(\"{name}\"), .filter \"bilinear\")))
+SPAWN Shape.Sphere(.material m, .transformation TRANSLATE(.X 3))
+USING Camera.Perspective() Image(3, 2) Renderer.PathTracer(.n 1, .max_depth 2) Tracer()
+      Environment.Image(.image Image(\"{name}\"))
+"
+                );
+                let mut case = render_case(script.into_bytes(), vec!["-o".into(), "out.pfm".into()]);
+                case.files.push((name, bytes));
+                case
+            } else {
+                Case {
+                    files: vec![(name.clone(), bytes)],
+                    args: vec!["tonemap".into(), name, target.into()],
+                    stdout_closed: false,
+                }
+            }
+        })
+}
+
+// ---------------------------------------------------------------------- command lines
+
+/// Command lines: a subcommand, then flags of every subcommand with hostile values and
+/// paths (an existing script and image, missing files, a directory). `converge`, `bench`
+/// and `devices` are left out (they measure the machine's devices and take seconds), as
+/// are GPU devices. Sizes, sample and frame counts stay small: a huge size is issue 16's
+/// "huge Image sizes" item (fixed elsewhere), and billions of samples are a long render,
+/// not an error.
+fn command_line() -> impl Strategy<Value = Case> {
+    let sub = prop::sample::select(vec![
+        "render", "render", "render", "check", "tonemap", "shader", "", "nope", "--help", "-V",
+    ]);
+    let path = prop::sample::select(vec!["s.sl", "s.sl", "img.pfm", "missing.sl", ".", "", "-", "sub/x.sl", "s.sl/"]);
+    let out = prop::sample::select(vec![
+        "out.png",
+        "out.pfm",
+        "out.exr",
+        "out.hdr",
+        "out.jpg",
+        "out.txt",
+        "out",
+        "missing/out.png",
+        ".",
+        "s.sl",
+        "img.pfm",
+        "OUT.PFM",
+    ]);
+    let small = prop::sample::select(vec!["0", "1", "2", "3", "-1", "x", "", "1.5", "3e0"]);
+    let real = prop::sample::select(vec!["0", "1", "-1", "1e308", "nan", "inf", "-inf", "0.5", "x", "1e-45", ""]);
+    let flag = prop_oneof![
+        path.clone().prop_map(|p| vec![p.to_string()]),
+        out.prop_map(|o| vec!["-o".into(), o.to_string()]),
+        small.clone().prop_map(|v| vec!["--width".into(), v.to_string()]),
+        small.clone().prop_map(|v| vec!["--height".into(), v.to_string()]),
+        small.clone().prop_map(|v| vec!["--spp".into(), v.to_string()]),
+        prop::sample::select(vec!["cpu", "CPU", "x", ""]).prop_map(|v| vec!["--device".into(), v.to_string()]),
+        real.clone().prop_map(|v| vec!["--time".into(), v.to_string()]),
+        prop::sample::select(vec!["0", "18446744073709551615", "-1", "x"])
+            .prop_map(|v| vec!["--seed".into(), v.to_string()]),
+        Just(vec!["--no-nee".into()]),
+        real.clone().prop_map(|v| vec!["--alpha".into(), v.to_string()]),
+        real.clone().prop_map(|v| vec!["--gamma".into(), v.to_string()]),
+        real.clone().prop_map(|v| vec!["--exposure".into(), v.to_string()]),
+        real.prop_map(|v| vec!["--luminosity".into(), v.to_string()]),
+        prop::sample::select(vec!["aces", "exposure", "reinhard", "x"])
+            .prop_map(|v| vec!["--curve".into(), v.to_string()]),
+        prop::sample::select(vec!["0:1:2", "0:0:1", "1:0:3", "0:1:0", "0:1", "a:b:c", "nan:1:2", "0:1:-1", "0:1:2:3"])
+            .prop_map(|v| vec!["--frames".into(), v.to_string()]),
+        prop::sample::select(vec!["r 1", "m0 <1, 0, 0>", "r", "r $0/0$", "1 2", "r 1, r 2", "", ",,,", "TIME 3"])
+            .prop_map(|v| vec!["--vars".into(), v.to_string()]),
+        prop::sample::select(vec!["--", "-", "--unknown", "-x", "--help"]).prop_map(|v| vec![v.to_string()]),
+    ];
+    (sub, prop::collection::vec(flag, 0..7)).prop_map(|(sub, flags)| {
+        let mut args = vec![sub.to_string()];
+        args.extend(flags.into_iter().flatten());
+        // Renders run on the CPU (a second `--device` is then a usage error).
+        if sub == "render" {
+            args.splice(1..1, ["--device".to_string(), "cpu".to_string()]);
+        }
+        let script = "SET r 0.5\nSPAWN Shape.Sphere(.transformation TRANSLATE(.X 3) * SCALE r)\n\
+                      USING Camera.Perspective() Image(4, 3) Renderer.Flat() Tracer()\n";
+        Case {
+            files: vec![("s.sl".into(), script.as_bytes().to_vec()), ("img.pfm".into(), texture())],
+            args,
+            stdout_closed: false,
+        }
+    })
+}
+
+// ------------------------------------------------- known failures (issue 16, being fixed)
+
+/// Input classes that issue 16 lists as being fixed elsewhere, out of the default run:
+/// `LUMEN_FUZZ_KNOWN=1` runs them too (and expects them to pass once the fixes land).
+fn known_failing_classes() -> Vec<(&'static str, usize, BoxedStrategy<Case>)> {
+    let using = "USING Camera.Perspective() Image(3, 2) Renderer.Flat() Tracer()\n";
+    vec![
+        (
+            // Issue 16, "closed stdout panics": `lumen … | head` must not panic.
+            "stdout closed by the reader (issue 16: closed stdout)",
+            20,
+            (prop::sample::select(vec!["check", "shader", "--help", "render"]), 0usize..2)
+                .prop_map(move |(sub, _)| {
+                    let mut case = render_case(format!("SPAWN Shape.Sphere()\n{using}").into_bytes(), vec![]);
+                    case.args = match sub {
+                        "render" => case.args,
+                        "--help" => vec!["--help".into()],
+                        s => vec![s.into(), "s.sl".into()],
+                    };
+                    case.stdout_closed = true;
+                    case
+                })
+                .boxed(),
+        ),
+        (
+            // Issue 16, "exponential SET/FUSE chains": each name used twice by the next.
+            "CSG chains by name (issue 16: exponential SET/FUSE chains)",
+            10,
+            (prop::sample::select(vec!["FUSE", "UNITE", "DIFF", "INTERSECT"]), 20usize..40)
+                .prop_map(move |(op, n)| {
+                    let mut s = "SET a0 Shape.Sphere()\n".to_string();
+                    for k in 1..=n {
+                        s += &format!("SET a{k} {op}(a{}, a{})\n", k - 1, k - 1);
+                    }
+                    s += &format!("SPAWN a{n}\n{using}");
+                    render_case(s.into_bytes(), vec![])
+                })
+                .boxed(),
+        ),
+        (
+            // Issue 16, "huge Image sizes": the script's size, without a command-line one.
+            "huge Image sizes (issue 16: huge Image sizes)",
+            10,
+            (
+                prop::sample::select(vec!["32768", "20000", "65536", "4294967295"]),
+                prop::sample::select(vec!["32768", "20000", "1"]),
+            )
+                .prop_map(|(w, h)| {
+                    let s = format!(
+                        "SPAWN Shape.Sphere()\nUSING Camera.Perspective() Image({w}, {h}) Renderer.OnOff() Tracer()\n"
+                    );
+                    let mut case = render_case(s.into_bytes(), vec!["-o".into(), "out.pfm".into()]);
+                    case.args = vec![
+                        "render".into(),
+                        "s.sl".into(),
+                        "--device".into(),
+                        "cpu".into(),
+                        "-o".into(),
+                        "out.pfm".into(),
+                    ];
+                    case
+                })
+                .boxed(),
+        ),
+        (
+            // Issue 16, "quadratic check": long scripts must load in linear time.
+            "long scripts (issue 16: quadratic check)",
+            4,
+            (20_000usize..60_000)
+                .prop_map(move |n| {
+                    let mut s = String::from("SET m Material()\n");
+                    for k in 0..n {
+                        s += &format!(
+                            "SET x{k} {k}\nSPAWN Shape.Sphere(.material m, .transformation TRANSLATE(.X x{k}))\n"
+                        );
+                    }
+                    s += using;
+                    let mut case = render_case(s.into_bytes(), vec![]);
+                    case.args = vec!["check".into(), "s.sl".into()];
+                    case
+                })
+                .boxed(),
+        ),
+    ]
+}
+
+// ------------------------------------------------------------------------------ driver
+
+/// Counts of one input class.
+#[derive(Default)]
+struct Tally {
+    ok: usize,
+    clean: usize,
+    failures: Vec<(Case, String)>,
+}
+
+/// Runs `cases` seeded cases of `strategy`; a failure is shrunk and recorded.
+fn fuzz<S: Strategy<Value = Case>>(strategy: S, cases: usize, seed: u64, class: &str) -> Tally {
+    let mut key = [0u8; 32];
+    key[..8].copy_from_slice(&seed.to_le_bytes());
+    key[8..8 + class.len().min(24)].copy_from_slice(&class.as_bytes()[..class.len().min(24)]);
+    let mut runner = TestRunner::new_with_rng(Config::default(), TestRng::from_seed(RngAlgorithm::ChaCha, &key));
+    let mut tally = Tally::default();
+    for _ in 0..cases {
+        let mut tree = strategy.new_tree(&mut runner).expect("strategy");
+        match run(&tree.current()) {
+            Verdict::Ok => tally.ok += 1,
+            Verdict::CleanError => tally.clean += 1,
+            Verdict::Failure(why) => {
+                // proptest's shrinking loop, bounded.
+                let (mut best, mut runs, t) = ((tree.current(), why), 0, Instant::now());
+                if tree.simplify() {
+                    while runs < MAX_SHRINK_RUNS && t.elapsed() < MAX_SHRINK_TIME {
+                        runs += 1;
+                        let still = match run(&tree.current()) {
+                            Verdict::Failure(why) => {
+                                best = (tree.current(), why);
+                                true
+                            }
+                            _ => false,
+                        };
+                        if !(if still { tree.simplify() } else { tree.complicate() }) {
+                            break;
+                        }
+                    }
+                }
+                eprintln!("FAILURE in {class}: {}\nshrunk reproducer:\n{:?}", best.1, best.0);
+                tally.failures.push(best);
+            }
+        }
+    }
+    tally
+}
+
+fn env_number(name: &str, default: u64) -> u64 {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+/// Every input class with its case count (about two minutes in all on two cores).
+#[test]
+fn hostile_inputs_end_in_success_or_a_clean_error() {
+    let seed = env_number("LUMEN_FUZZ_SEED", 16);
+    let scale = env_number("LUMEN_FUZZ_SCALE", 1) as usize;
+    let start = Instant::now();
+    let classes: Vec<(&str, usize, BoxedStrategy<Case>)> = vec![
+        ("SceneLang token soup", 2000, token_soup().prop_map(|s| render_case(s.into_bytes(), vec![])).boxed()),
+        (
+            "SceneLang scripts (generated)",
+            2000,
+            (script(), outputs()).prop_map(|(s, o)| render_case(s.into_bytes(), o)).boxed(),
+        ),
+        (
+            "SceneLang scripts (mutated)",
+            2000,
+            (script(), edits(), outputs()).prop_map(|(s, e, o)| render_case(apply(&s, &e), o)).boxed(),
+        ),
+        ("image files (PFM, PNG, HDR, EXR)", 3000, image_case().boxed()),
+        ("command lines", 3000, command_line().boxed()),
+    ];
+    let mut classes = classes;
+    if std::env::var_os("LUMEN_FUZZ_KNOWN").is_some() {
+        classes.extend(known_failing_classes());
+    }
+    let mut rows = Vec::new();
+    let mut failures = Vec::new();
+    for (class, cases, strategy) in classes {
+        let t = Instant::now();
+        let tally = fuzz(strategy, cases * scale, seed, class);
+        let n = tally.ok + tally.clean + tally.failures.len();
+        rows.push(format!(
+            "| {class} | {n} | {} | {} | {} | {:.0} s |",
+            tally.ok,
+            tally.clean,
+            tally.failures.len(),
+            t.elapsed().as_secs_f64()
+        ));
+        failures.extend(tally.failures.into_iter().map(|(c, why)| format!("{class}: {why}\n{c:?}")));
+    }
+    println!("Hostile input (seed {seed}, {:.0} s in all):\n", start.elapsed().as_secs_f64());
+    println!("| input class | runs | ok | clean error | failure | time |\n|---|---|---|---|---|---|");
+    for r in &rows {
+        println!("{r}");
+    }
+    assert!(failures.is_empty(), "{} failing inputs:\n\n{}", failures.len(), failures.join("\n\n"));
+}
