@@ -50,6 +50,10 @@ pub struct GpuArgs {
     /// (every pixel gets the same number of samples; the report says how many).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limit: Option<Duration>,
+    /// GPU path slots per batch (paths in flight at once; default from the device: 65,536
+    /// on a software adapter, 2,097,152 on a hardware GPU). Images do not depend on it.
+    #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..=1 << 30))]
+    pub batch_paths: Option<u32>,
 }
 
 impl GpuArgs {
@@ -60,6 +64,7 @@ impl GpuArgs {
             time_limit: self.time_limit,
             cancel: Some(ctrlc_flag()),
             progress: true,
+            batch_paths: self.batch_paths.unwrap_or(0),
             ..PassOptions::default()
         }
     }
@@ -88,7 +93,10 @@ mod tests {
         assert_eq!(t.gpu.adapter.adapter.as_deref(), Some("llvm"));
         assert_eq!(t.gpu.time_limit, Some(Duration::from_millis(2500)));
         let t = T::try_parse_from(["t"]).unwrap();
-        assert_eq!(t.gpu.time_limit, None);
+        assert_eq!((t.gpu.time_limit, t.gpu.pass_options().batch_paths), (None, 0));
+        let t = T::try_parse_from(["t", "--batch-paths", "4096"]).unwrap();
+        assert_eq!(t.gpu.pass_options().batch_paths, 4096);
+        assert!(T::try_parse_from(["t", "--batch-paths", "0"]).is_err());
     }
 
     #[test]
