@@ -139,6 +139,26 @@ fn an_image_too_large_for_memory_is_refused_with_the_amount() {
     }
 }
 
+/// The same on the GPU (issue 16's reproducer): the device-side state is bounded by the
+/// batch whatever the image size, and the host's accumulation buffers are estimated
+/// before they are allocated. Under `--device auto` the CPU then refuses alike.
+#[test]
+fn a_gpu_render_too_large_for_host_memory_is_refused_with_the_amount() {
+    if lumen::gpu::gpu_for_tests("gpu_render_too_large").is_none() {
+        return;
+    }
+    let dir = scene_dir();
+    for device in ["gpu", "auto"] {
+        let args = format!("tiny.sl --device {device} --width 16384 --height 16384 --spp 1 -o big.png");
+        let o = render_limited_to_4_gib(dir.path(), &args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args}: {err}");
+        assert!(err.contains("error: ") && err.contains("15.00 GiB"), "{args}: {err}");
+        assert!(!err.contains("panicked") && !err.contains("memory allocation"), "{args}: {err}");
+        assert!(!dir.path().join("big.png").exists(), "{args} left an output file");
+    }
+}
+
 #[test]
 fn the_cpu_renderer_honours_the_time_limit() {
     let dir = scene_dir();

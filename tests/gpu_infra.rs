@@ -93,7 +93,7 @@ fn oversized_buffers_are_refused_with_the_limit() {
 
 // ---- shader assembly ----------------------------------------------------------------
 
-use lumen::gpu::{FeatureSet, KernelCache, ShaderLibrary};
+use lumen::gpu::{FeatureNames, KernelCache, ShaderLibrary};
 
 #[test]
 fn assembled_kernels_run_and_are_cached_by_source() {
@@ -115,8 +115,8 @@ fn assembled_kernels_run_and_are_cached_by_source() {
     )
     .unwrap();
     let mut cache = KernelCache::new();
-    let plain = FeatureSet::new();
-    let bright = FeatureSet::new().with("bright");
+    let plain = FeatureNames::new();
+    let bright = FeatureNames::new().with("bright");
     // Values alternate 2, 3 with `bright`.
     for (features, want) in
         [(&plain, [1.0f32, 1.0]), (&bright, [2.0, 3.0]), (&plain, [1.0, 1.0]), (&bright, [2.0, 3.0])]

@@ -145,3 +145,21 @@ fn a_time_limit_keeps_whole_rounds() {
     let out = render(&gpu, &scene, &opts).unwrap();
     assert_eq!((out.stop, out.spp_done), (StopReason::TimeLimit, 3));
 }
+
+/// A device lost in the middle of a render (destroyed from another thread) ends it with an
+/// error, not a panic or a hang (`lumen render --device auto` then renders on the CPU).
+#[test]
+fn a_device_lost_mid_render_is_an_error() {
+    let Some(gpu) = gpu_for_tests("wavefront_device_lost") else { return };
+    let scene = mixed_scene(pt(2, 8, true));
+    let opts = GpuRenderOptions { spp: Some(1 << 16), ..GpuRenderOptions::default() };
+    let result = std::thread::scope(|s| {
+        s.spawn(|| {
+            std::thread::sleep(std::time::Duration::from_millis(300));
+            gpu.device.destroy();
+        });
+        render(&gpu, &scene, &opts)
+    });
+    let err = result.expect_err("65,536 spp cannot finish in 0.3 s");
+    println!("{err}");
+}

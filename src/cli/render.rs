@@ -138,15 +138,21 @@ struct Rendered {
 }
 
 /// Renders on the open device. With `--device auto`, a scene the GPU refuses (too large
-/// for the adapter's limits, say) is rendered on the CPU instead, with a warning.
+/// for the adapter's limits, say), or a render the GPU fails (device lost, out of memory),
+/// is rendered on the CPU instead, from the start, with a warning.
 fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene) -> anyhow::Result<Rendered> {
     let OpenDevice::Gpu { gpu, renderer } = device else {
         return render_on_cpu(scene, args);
     };
     match render_on_gpu(gpu, &mut renderer.borrow_mut(), args, scene) {
-        Err(e) if args.device == DeviceChoice::Auto && !matches!(e, GpuError::DeviceLost(_)) => {
-            eprintln!("warning: the GPU cannot render this scene: {e}");
-            eprintln!("warning: rendering on the CPU reference renderer instead");
+        Err(e) if args.device == DeviceChoice::Auto => {
+            match e {
+                GpuError::DeviceLost(_) | GpuError::OutOfMemory(_) | GpuError::Readback(_) => {
+                    eprintln!("warning: the GPU failed during the render: {e}")
+                }
+                _ => eprintln!("warning: the GPU cannot render this scene: {e}"),
+            }
+            eprintln!("warning: rendering on the CPU reference renderer instead, from the first sample");
             render_on_cpu(scene, args)
         }
         other => other.map_err(|e| anyhow!("GPU render failed: {e}")),

@@ -25,19 +25,17 @@ pub struct Accumulator {
 }
 
 impl Accumulator {
-    /// An empty accumulator, or an error naming the memory it needs when the host cannot
-    /// allocate it (the size comes from user input: never an abort).
-    pub fn new(width: u32, height: u32) -> Result<Self, String> {
+    /// An empty accumulator, or an error naming the memory the render needs when the host
+    /// cannot have it (the size comes from user input: never an abort). The estimate counts
+    /// both f64 sum buffers and the f32 image made from them.
+    pub fn new(width: u32, height: u32) -> Result<Self, crate::memory::OutOfMemory> {
         let n = width as usize * height as usize;
-        let zeroed = || -> Result<Vec<[f64; 3]>, String> {
-            let mut v = Vec::new();
-            v.try_reserve_exact(n).map_err(|_| {
-                format!("cannot allocate {} MiB for the {width}×{height} accumulation buffers", (2 * n * 24) >> 20)
-            })?;
-            v.resize(n, [0.0; 3]);
-            Ok(v)
-        };
-        Ok(Self { width, height, total: zeroed()?, round: zeroed()?, spp: 0, nonfinite: 0 })
+        let total = (n as u64).saturating_mul(2 * 24 + 12);
+        let what = format!("the {width}×{height} image's accumulation buffers");
+        crate::memory::check_fits(total, &what)?;
+        let total_sums = crate::memory::try_filled(n, [0.0; 3], &what, total)?;
+        let round = crate::memory::try_filled(n, [0.0; 3], &what, total)?;
+        Ok(Self { width, height, total: total_sums, round, spp: 0, nonfinite: 0 })
     }
 
     /// Adds the sums of the pixels `first..first + sums.len()` (row-major indices) to the

@@ -8,7 +8,7 @@
 //! - `// #requires A B …` lists modules that must come before it; [`ShaderLibrary::assemble`]
 //!   concatenates the roots and everything they require, dependencies first, once each.
 //! - `// #if FEATURE`, `// #if !FEATURE`, `// #else`, `// #endif` (nestable) keep or drop
-//!   lines according to the [`FeatureSet`]. Directives inside a dropped section are
+//!   lines according to the [`FeatureNames`]. Directives inside a dropped section are
 //!   ignored, so `#requires` can itself be conditional.
 //! - Every feature named in a directive or a feature set must be one the library declares:
 //!   a typo is an error with file and line, not a silently missing feature.
@@ -40,11 +40,12 @@ pub enum AssembleError {
     Duplicate { name: String, first: String, second: String },
 }
 
-/// The optional parts of the shaders a kernel is assembled with (e.g. `csg`, `env_map`).
+/// The names of the `// #if` sections a kernel is assembled with (e.g. `CSG`, `ENV_IMAGE`);
+/// [`crate::gpu::features::FeatureSet`] is the scene-level description they are derived from.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct FeatureSet(BTreeSet<String>);
+pub struct FeatureNames(BTreeSet<String>);
 
-impl FeatureSet {
+impl FeatureNames {
     pub fn new() -> Self {
         Self::default()
     }
@@ -64,13 +65,13 @@ impl FeatureSet {
     }
 }
 
-impl<'a> FromIterator<&'a str> for FeatureSet {
+impl<'a> FromIterator<&'a str> for FeatureNames {
     fn from_iter<I: IntoIterator<Item = &'a str>>(iter: I) -> Self {
         Self(iter.into_iter().map(str::to_string).collect())
     }
 }
 
-impl fmt::Display for FeatureSet {
+impl fmt::Display for FeatureNames {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.0.is_empty() {
             return f.write_str("(none)");
@@ -104,17 +105,17 @@ fn directive(line: &str) -> Option<(&str, &str)> {
 /// Runs the conditional-section preprocessor over one file (see the module docs).
 ///
 /// ```
-/// use lumen::gpu::{preprocess, FeatureSet};
+/// use lumen::gpu::{preprocess, FeatureNames};
 /// let known = ["csg".to_string()].into_iter().collect();
 /// let src = "a\n// #if csg\nb\n// #else\nc\n// #endif\n";
-/// let with: Vec<String> = preprocess("x.wgsl", src, &FeatureSet::new().with("csg"), &known).unwrap()
+/// let with: Vec<String> = preprocess("x.wgsl", src, &FeatureNames::new().with("csg"), &known).unwrap()
 ///     .lines.into_iter().map(|l| l.text).collect();
 /// assert_eq!(with, ["a", "b"]);
 /// ```
 pub fn preprocess(
     file: &str,
     text: &str,
-    features: &FeatureSet,
+    features: &FeatureNames,
     known: &BTreeSet<String>,
 ) -> Result<Preprocessed, AssembleError> {
     // One frame per open `#if`: (line it opened on, its condition, whether `#else` was seen,
@@ -222,7 +223,7 @@ impl ShaderLibrary {
     /// is its `// #provides` or else the file stem. Directive errors are reported here, for
     /// every branch (all features off), and again at assembly for the branch taken.
     pub fn add(&mut self, file: &str, source: &str) -> Result<(), AssembleError> {
-        let pre = preprocess(file, source, &FeatureSet::new(), &self.known)?;
+        let pre = preprocess(file, source, &FeatureNames::new(), &self.known)?;
         let stem = std::path::Path::new(file).file_stem().and_then(|s| s.to_str()).unwrap_or(file);
         let name = pre.provides.unwrap_or_else(|| stem.to_string());
         if let Some((first, _)) = self.modules.get(&name) {
@@ -241,18 +242,18 @@ impl ShaderLibrary {
     /// sections `features` selects.
     ///
     /// ```
-    /// use lumen::gpu::{FeatureSet, ShaderLibrary};
+    /// use lumen::gpu::{FeatureNames, ShaderLibrary};
     /// let mut lib = ShaderLibrary::new(&["double"]);
     /// lib.add("consts.wgsl", "const K: f32 = 2.0;").unwrap();
     /// lib.add("main.wgsl", "// #requires consts\n\
     ///     fn f(x: f32) -> f32 {\n\
     ///     // #if double\n    return K * x;\n// #else\n    return x;\n// #endif\n}").unwrap();
-    /// let a = lib.assemble(&["main"], &FeatureSet::new().with("double")).unwrap();
+    /// let a = lib.assemble(&["main"], &FeatureNames::new().with("double")).unwrap();
     /// assert_eq!(a.modules, ["consts", "main"]);
     /// assert!(a.source.contains("return K * x;") && !a.source.contains("return x;"));
     /// a.validate().unwrap();
     /// ```
-    pub fn assemble(&self, roots: &[&str], features: &FeatureSet) -> Result<Assembled, AssembleError> {
+    pub fn assemble(&self, roots: &[&str], features: &FeatureNames) -> Result<Assembled, AssembleError> {
         for f in features.iter() {
             if !self.known.contains(f) {
                 return Err(AssembleError::UnknownFeature {
@@ -289,7 +290,7 @@ impl ShaderLibrary {
         &self,
         name: &str,
         required_by: &str,
-        features: &FeatureSet,
+        features: &FeatureNames,
         visiting: &mut Vec<String>,
         order: &mut Vec<(String, Preprocessed)>,
     ) -> Result<(), AssembleError> {
@@ -359,7 +360,7 @@ mod tests {
     }
 
     fn kept(src: &str, features: &[&str]) -> Vec<String> {
-        let fs: FeatureSet = features.iter().copied().collect();
+        let fs: FeatureNames = features.iter().copied().collect();
         preprocess("t.wgsl", src, &fs, &known()).unwrap().lines.into_iter().map(|l| l.text).collect()
     }
 
@@ -374,7 +375,7 @@ mod tests {
 
     #[test]
     fn kept_lines_keep_their_file_line_numbers() {
-        let fs = FeatureSet::new();
+        let fs = FeatureNames::new();
         let pre = preprocess("t.wgsl", "x\n// #if a\ny\n// #endif\nz", &fs, &known()).unwrap();
         let lines: Vec<usize> = pre.lines.iter().map(|l| l.line).collect();
         assert_eq!(lines, [1, 5]);
@@ -382,7 +383,7 @@ mod tests {
 
     #[test]
     fn errors_name_file_and_line() {
-        let fs = FeatureSet::new();
+        let fs = FeatureNames::new();
         let e = |src: &str| preprocess("m.wgsl", src, &fs, &known()).unwrap_err();
         assert_eq!(
             e("x\n// #if csg\n// #endif"),
@@ -412,16 +413,16 @@ mod tests {
             "// #requires base\n// #if a\n// #requires extra\n// #endif\nfn main_value() -> u32 { return BASE; }",
         )
         .unwrap();
-        let without = lib.assemble(&["main"], &FeatureSet::new()).unwrap();
+        let without = lib.assemble(&["main"], &FeatureNames::new()).unwrap();
         assert_eq!(without.modules, ["base", "main"]);
-        let with = lib.assemble(&["main", "base"], &FeatureSet::new().with("a")).unwrap();
+        let with = lib.assemble(&["main", "base"], &FeatureNames::new().with("a")).unwrap();
         assert_eq!(with.modules, ["base", "extra", "main"]);
         with.validate().unwrap();
         assert!(matches!(
-            lib.assemble(&["main"], &FeatureSet::new().with("zzz")),
+            lib.assemble(&["main"], &FeatureNames::new().with("zzz")),
             Err(AssembleError::UnknownFeature { .. })
         ));
-        assert!(matches!(lib.assemble(&["nope"], &FeatureSet::new()), Err(AssembleError::MissingModule { .. })));
+        assert!(matches!(lib.assemble(&["nope"], &FeatureNames::new()), Err(AssembleError::MissingModule { .. })));
     }
 
     #[test]
@@ -429,7 +430,7 @@ mod tests {
         let mut lib = ShaderLibrary::new(&[]);
         lib.add("x.wgsl", "// #requires y").unwrap();
         lib.add("y.wgsl", "// #requires x").unwrap();
-        let e = lib.assemble(&["x"], &FeatureSet::new()).unwrap_err();
+        let e = lib.assemble(&["x"], &FeatureNames::new()).unwrap_err();
         assert_eq!(e, AssembleError::Cycle("x -> y -> x".into()));
         assert!(matches!(lib.add("other/x.wgsl", ""), Err(AssembleError::Duplicate { .. })));
         lib.add("z.wgsl", "// #provides w\n").unwrap();
@@ -441,7 +442,7 @@ mod tests {
         let mut lib = ShaderLibrary::new(&[]);
         lib.add("shaders/ok.wgsl", "const A: f32 = 1.0;\nconst B: f32 = 2.0;").unwrap();
         lib.add("shaders/bad.wgsl", "// #requires ok\n\nfn f() -> u32 {\n    return A;\n}").unwrap();
-        let a = lib.assemble(&["bad"], &FeatureSet::new()).unwrap();
+        let a = lib.assemble(&["bad"], &FeatureNames::new()).unwrap();
         let err = a.validate().unwrap_err();
         let GpuError::Shader { label, .. } = &err else { panic!("{err}") };
         // naga's first label is the invalid function, which starts on line 3 of bad.wgsl.
@@ -450,16 +451,16 @@ mod tests {
         let mut lib = ShaderLibrary::new(&[]);
         lib.add("shaders/ok.wgsl", "const A: f32 = 1.0;").unwrap();
         lib.add("shaders/typo.wgsl", "// #requires ok\nconst B: f32 = 2.0;\nconst C: f32 = ;").unwrap();
-        let err = lib.assemble(&["typo"], &FeatureSet::new()).unwrap().validate().unwrap_err();
+        let err = lib.assemble(&["typo"], &FeatureNames::new()).unwrap().validate().unwrap_err();
         let GpuError::Shader { label, .. } = &err else { panic!("{err}") };
         assert_eq!(label, "shaders/typo.wgsl:3");
     }
 
     #[test]
     fn feature_sets_compare_by_content() {
-        let x: FeatureSet = ["b", "a"].into_iter().collect();
-        assert_eq!(x, FeatureSet::new().with("a").with("b"));
+        let x: FeatureNames = ["b", "a"].into_iter().collect();
+        assert_eq!(x, FeatureNames::new().with("a").with("b"));
         assert_eq!(x.to_string(), "a,b");
-        assert_eq!(FeatureSet::new().to_string(), "(none)");
+        assert_eq!(FeatureNames::new().to_string(), "(none)");
     }
 }

@@ -335,7 +335,7 @@ impl FeatureSet {
     }
 
     /// The set in the form the shader assembler takes.
-    pub fn assembly_features(&self) -> crate::gpu::FeatureSet {
+    pub fn assembly_features(&self) -> crate::gpu::FeatureNames {
         self.names().into_iter().collect()
     }
 }

@@ -19,7 +19,7 @@ mod test_support;
 pub mod wavefront;
 
 pub use accumulate::Accumulator;
-pub use assemble::{preprocess, AssembleError, Assembled, FeatureSet, Preprocessed, ShaderLibrary, SourceLine};
+pub use assemble::{preprocess, AssembleError, Assembled, FeatureNames, Preprocessed, ShaderLibrary, SourceLine};
 pub use compute::{validate_wgsl, BindingKind, ComputeKernel, ValidatedModule, MIN_BUFFER_BYTES};
 pub use device::{
     list_adapters, probe_loop_limiter, select_adapter, AdapterChoice, AdapterDescription, Gpu, GpuError, ADAPTER_ENV,

@@ -66,7 +66,7 @@ pub struct Scene {
 /// A top-level primitive whose material emits, with a shape that can be sampled
 /// (sphere or cube): the path tracer's area lights.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AreaLight {
+pub struct EmissiveShape {
     /// Index into [`Scene::shapes`].
     pub shape: usize,
 }
@@ -88,7 +88,7 @@ impl Scene {
     /// Emissive top-level spheres and cubes, in shape order. Emitters inside CSG trees,
     /// planes and cylinders are not sampled directly; their emission still counts when a
     /// path hits them (with full weight, so the estimate stays unbiased).
-    pub fn area_lights(&self) -> Vec<AreaLight> {
+    pub fn area_lights(&self) -> Vec<EmissiveShape> {
         self.shapes
             .iter()
             .enumerate()
@@ -97,7 +97,7 @@ impl Scene {
                     if matches!(p.kind, ShapeKind::Sphere | ShapeKind::Cube)
                         && self.material(p.material).is_emissive() =>
                 {
-                    Some(AreaLight { shape: i })
+                    Some(EmissiveShape { shape: i })
                 }
                 _ => None,
             })

@@ -159,7 +159,7 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     }
     let start = Instant::now();
     let max_spp = opts.max_spp_per_pass.clamp(1, MAX_SPP_PER_ROUND);
-    let mut acc = Accumulator::new(width, height).map_err(GpuError::Validation)?;
+    let mut acc = Accumulator::new(width, height).map_err(|e| GpuError::OutOfMemory(format!("host memory: {e}")))?;
     let progress = progress_bar(opts.progress, u64::from(total_spp) * u64::from(width) * u64::from(height));
     let cancelled = || opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst));
     let mut spp_per_round = opts.initial_spp_per_pass.clamp(1, max_spp);
