@@ -758,8 +758,9 @@ pub fn furnace_roulette(gpu: Option<&Gpu>) -> Outcome {
 /// The camera inside an emitting cube (ρ 0.5, Le 1, no NEE, depth 50) with 256 paths per
 /// camera sample: every path is exactly Σ_{k≤50} 0.5ᵏ, so every pixel must be too. On
 /// lavapipe, Mesa's loop limiter stops all loops of an invocation after 65,535 iterations
-/// in total: without resumable passes only the first 129 of the 256 paths counted (see
-/// docs/STABILITY.md, "Fixed by this suite").
+/// in total: the megakernel counted only the first 129 of the 256 paths (see
+/// docs/STABILITY.md, "Fixed by this suite"); the wavefront renderer runs one vertex per
+/// invocation.
 pub fn many_paths_per_sample(gpu: Option<&Gpu>) -> Outcome {
     let mut b = SceneBuilder::new(4, 4);
     let m = common::emissive(&mut b, 0.5, 1.0);

@@ -249,7 +249,7 @@ mod tests {
             assert!(q > queue::SHADOW && q < queue::COUNT);
         }
         assert_eq!(queue::COUNT, 8);
-        assert!(control::COUNT + queue::COUNT <= control::RAYS);
-        assert!(control::RAYS + 2 <= control::SHADOW_RAYS && control::SHADOW_RAYS + 2 <= control::NAN);
+        const { assert!(control::COUNT + queue::COUNT <= control::RAYS) };
+        const { assert!(control::RAYS + 2 <= control::SHADOW_RAYS && control::SHADOW_RAYS + 2 <= control::NAN) };
     }
 }
