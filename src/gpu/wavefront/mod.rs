@@ -340,20 +340,7 @@ impl<'a> Runner<'a> {
     }
 
     fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u32>, GpuError> {
-        let (tx, rx) = std::sync::mpsc::channel();
-        buffer.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
-            let _ = tx.send(r);
-        });
-        self.gpu.wait_idle()?;
-        rx.recv()
-            .map_err(|_| GpuError::Readback("map callback never ran".into()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let out = {
-            let view = buffer.get_mapped_range(0..bytes).map_err(|e| GpuError::Readback(e.to_string()))?;
-            bytemuck::pod_collect_to_vec(&view)
-        };
-        buffer.unmap();
-        Ok(out)
+        map_read(self.gpu, buffer, bytes, None)
     }
 
     /// The ray and NaN counters (after every batch has been collected).
@@ -369,6 +356,32 @@ impl<'a> Runner<'a> {
             non_finite: u64::from(w[control::NAN as usize]),
         })
     }
+}
+
+/// The first `bytes` of a mappable `buffer`, once the submission `after` (or all work) is done.
+fn map_read<T: bytemuck::Pod>(
+    gpu: &Gpu,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    after: Option<wgpu::SubmissionIndex>,
+) -> Result<Vec<T>, GpuError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::Wait { submission_index: after, timeout: None })
+        .map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+    gpu.check()?;
+    rx.recv()
+        .map_err(|_| GpuError::Readback("map callback never ran".into()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let out = {
+        let view = buffer.get_mapped_range(0..bytes).map_err(|e| GpuError::Readback(e.to_string()))?;
+        bytemuck::pod_collect_to_vec(&view)
+    };
+    buffer.unmap();
+    Ok(out)
 }
 
 impl BatchRunner for Runner<'_> {
@@ -427,25 +440,7 @@ impl BatchRunner for Runner<'_> {
 
     fn collect(&mut self, pending: Pending) -> Result<Vec<[f32; 4]>, GpuError> {
         let bytes = u64::from(pending.pixels) * 16;
-        let staging = &self.staging[pending.slot];
-        let (tx, rx) = std::sync::mpsc::channel();
-        staging.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
-            let _ = tx.send(r);
-        });
-        self.gpu
-            .device
-            .poll(wgpu::PollType::Wait { submission_index: Some(pending.submission), timeout: None })
-            .map_err(|e| GpuError::DeviceLost(e.to_string()))?;
-        self.gpu.check()?;
-        rx.recv()
-            .map_err(|_| GpuError::Readback("map callback never ran".into()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let out = {
-            let view = staging.get_mapped_range(0..bytes).map_err(|e| GpuError::Readback(e.to_string()))?;
-            bytemuck::pod_collect_to_vec(&view)
-        };
-        staging.unmap();
-        Ok(out)
+        map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission))
     }
 
     fn drain(&mut self) -> Result<(), GpuError> {
