@@ -93,17 +93,17 @@ fn sample_diffuse(color: vec3<f32>, n: vec3<f32>, xi0: f32, xi1: f32) -> BsdfSam
 fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_face: bool, xi_lobe: f32, xi0: f32,
                xi1: f32) -> BsdfSample {
 // #if SPECULAR
-    if (m.brdf == 1u) {
+    if (m.brdf == BRDF_SPECULAR) {
         return BsdfSample(reflect_dir(d, n), color, 0.0, true, true);
     }
 // #endif
 // #if DIELECTRIC
-    if (m.brdf == 2u) {
+    if (m.brdf == BRDF_DIELECTRIC) {
         return sample_dielectric(color, d, n, select(1.0 / m.ior, m.ior, front_face), xi_lobe);
     }
 // #endif
 // #if DIFFUSE
-    if (m.brdf == 0u) {
+    if (m.brdf == BRDF_DIFFUSE) {
         return sample_diffuse(color, n, xi0, xi1);
     }
 // #endif
@@ -115,7 +115,7 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
 // #if SHADOWS
 // bsdf::eval_bsdf: f for light from `l` (0 for delta BRDFs).
 fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
-    if (m.brdf == 0u && dot(n, l) > 0.0) {
+    if (m.brdf == BRDF_DIFFUSE && dot(n, l) > 0.0) {
         return color * INV_PI;
     }
     return vec3<f32>(0.0);
@@ -126,7 +126,7 @@ fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<
 // #if DIFFUSE
 // bsdf::pdf_bsdf.
 fn pdf_bsdf(m: Material, n: vec3<f32>, l: vec3<f32>) -> f32 {
-    if (m.brdf == 0u) {
+    if (m.brdf == BRDF_DIFFUSE) {
         return cosine_hemisphere_pdf(dot(n, l));
     }
     return 0.0;

@@ -6,7 +6,7 @@
 fn camera_ray(u: f32, v: f32) -> Ray {
     var o: vec3<f32>;
     var d: vec3<f32>;
-    if (camera.projection == 0u) {
+    if (camera.projection == PROJECTION_PERSPECTIVE) {
         let sd = camera.screen_distance;
         o = vec3<f32>(-sd, 0.0, 0.0);
         d = vec3<f32>(sd, (1.0 - 2.0 * u) * camera.aspect_ratio, 2.0 * v - 1.0);
@@ -20,13 +20,13 @@ fn camera_ray(u: f32, v: f32) -> Ray {
 // Position (u_px, v_px) of camera sample j in pixel `pixel`, from its top-left corner:
 // PixelSamples::position.
 fn pixel_sample_position(pixel: u32, j: u32) -> vec2<f32> {
-    if (settings.jitter == 0u) {
+    if (settings.jitter == JITTER_CENTRE) {
         return vec2<f32>(0.5, 0.5);
     }
     var rng = stream(settings.tracer_seed.xy, settings.tracer_seed.zw, pixel, j, CAMERA_BOUNCE);
     let xi0 = pcg_next_f32(&rng);
     let xi1 = pcg_next_f32(&rng);
-    if (settings.jitter == 1u) {
+    if (settings.jitter == JITTER_STRATIFIED) {
         let s = settings.samples_per_side;
         return vec2<f32>((f32(j % s) + xi0) / f32(s), (f32(j / s) + xi1) / f32(s));
     }

@@ -178,10 +178,10 @@ fn csg_combine(op: u32, f: u32, i: u32, src: u32) {
         return;
     }
     switch op {
-        case 1u: {
+        case CSG_INTERSECT: {
             csg_intersect(acc, src);
         }
-        case 2u: {
+        case CSG_DIFF: {
             csg_append(acc + 1u, src);
         }
         default: {
@@ -194,14 +194,14 @@ fn csg_combine(op: u32, f: u32, i: u32, src: u32) {
 fn csg_finish(op: u32, f: u32) {
     let acc = 2u * f;
     switch op {
-        case 0u: {
+        case CSG_UNITE: {
             csg_sort(acc);
         }
-        case 2u: {
+        case CSG_DIFF: {
             csg_merge(acc + 1u);
             csg_subtract(acc, acc + 1u);
         }
-        case 3u: {
+        case CSG_FUSE: {
             csg_merge(acc);
         }
         default: {}

@@ -87,7 +87,7 @@ fn env_image_pdf(pdf_uv: f32, v: f32) -> f32 {
 // EnvLight::sample: a unit direction toward the environment (xyz) and its density (w).
 fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
 // #if ENV_IMAGE
-    if (environment.kind == 3u) {
+    if (environment.kind == ENV_IMAGE) {
         let v = dist1d_sample(environment.dist_offset, environment.tex_height, xi1);
         let u = dist1d_sample(env_row_base(u32(v.z)), environment.tex_width, xi0);
         let dir = equirect_dir(u.x, v.x, environment.rotation_rad);
@@ -102,7 +102,7 @@ fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
 // EnvLight::pdf for a unit direction.
 fn env_pdf(dir: vec3<f32>) -> f32 {
 // #if ENV_IMAGE
-    if (environment.kind == 3u) {
+    if (environment.kind == ENV_IMAGE) {
         let uv = equirect_uv(dir, environment.rotation_rad);
         return env_image_pdf(env_dist_pdf(uv.x, uv.y), uv.y);
     }

@@ -20,7 +20,7 @@ fn equirect_uv(d: vec3<f32>, rotation_rad: f32) -> vec2<f32> {
 fn escape_radiance(dir: vec3<f32>) -> vec3<f32> {
     let d = normalize_or(dir, vec3<f32>(0.0, 0.0, 1.0));
 // #if ENV_GRADIENT
-    if (environment.kind == 2u) {
+    if (environment.kind == ENV_GRADIENT) {
         if (d.z >= 0.0) {
             return environment.b.xyz * (1.0 - d.z) + environment.a.xyz * d.z;
         }
@@ -28,7 +28,7 @@ fn escape_radiance(dir: vec3<f32>) -> vec3<f32> {
     }
 // #endif
 // #if ENV_IMAGE
-    if (environment.kind == 3u) {
+    if (environment.kind == ENV_IMAGE) {
         let uv = equirect_uv(d, environment.rotation_rad);
         let w = environment.tex_width;
         let h = environment.tex_height;

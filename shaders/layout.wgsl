@@ -1,3 +1,4 @@
+// #requires tags
 // The packed scene, mirrored byte for byte from src/gpu/layout.rs (a unit test parses
 // this file with naga and compares every struct's size and member offsets with Rust's).
 // Positions are relative to the camera (see DESIGN.md "GPU renderer").

@@ -43,7 +43,7 @@ fn uniform_cone_pdf(one_minus_cos_max: f32) -> f32 {
 
 // area_light::object_normal.
 fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
-    if (kind == 0u) {
+    if (kind == SHAPE_SPHERE) {
         return normalize(p);
     }
     let a = abs(p);
@@ -66,7 +66,7 @@ fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>
     let s = shapes[light.shape];
     let n_world = affine_normal(s.to_object, n_obj);
     let jacobian = light.det * length(n_world);
-    let area_obj = select(6.0, 2.0 * TAU, s.kind == 0u);
+    let area_obj = select(6.0, 2.0 * TAU, s.kind == SHAPE_SPHERE);
     let to_light = y - x;
     let dist2 = dot(to_light, to_light);
     let cos_light = abs(dot(normalize_or(n_world, vec3<f32>(0.0)), to_light)) / sqrt(dist2);
@@ -143,7 +143,7 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     let s = shapes[light.shape];
     var p_obj: vec3<f32>;
     var n_obj: vec3<f32>;
-    if (s.kind == 0u) {
+    if (s.kind == SHAPE_SPHERE) {
         p_obj = uniform_sphere(xi0, xi1);
         n_obj = p_obj;
     } else {
@@ -175,7 +175,7 @@ fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
     let m = materials[s.material];
     let n = light_object_normal(s.kind, lp.object_point);
     var face = 0u;
-    if (s.kind == 2u) {
+    if (s.kind == SHAPE_CUBE) {
         let a = abs(n);
         var axis = 0u;
         if (a.y > a.x && a.y >= a.z) {

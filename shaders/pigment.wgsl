@@ -11,7 +11,7 @@ fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {
     if (w == 0u || h == 0u) {
         return vec3<f32>(0.0);
     }
-    if (p.image_filter == 0u) {
+    if (p.image_filter == FILTER_NEAREST) {
         let col = min(u32(max(u * f32(w), 0.0)), w - 1u);
         let row = min(u32(max(v * f32(h), 0.0)), h - 1u);
         return texel(p.tex_offset, w, col, row);
@@ -37,7 +37,7 @@ fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {
 fn pigment_color(index: u32, uv: vec2<f32>) -> vec3<f32> {
     let p = pigments[index];
 // #if PIGMENT_CHECKERED
-    if (p.kind == 1u) {
+    if (p.kind == PIGMENT_CHECKERED) {
         let n = f32(p.n);
         let iu = i32(floor(uv.x * n));
         let iv = i32(floor(uv.y * n));
@@ -48,7 +48,7 @@ fn pigment_color(index: u32, uv: vec2<f32>) -> vec3<f32> {
     }
 // #endif
 // #if PIGMENT_IMAGE
-    if (p.kind == 2u) {
+    if (p.kind == PIGMENT_IMAGE) {
         return image_lookup(p, uv.x, uv.y);
     }
 // #endif

@@ -19,22 +19,22 @@
 fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
     switch kind {
 // #if SPHERE
-        case 0u: {
+        case SHAPE_SPHERE: {
             return sphere_span(o, d);
         }
 // #endif
 // #if PLANE
-        case 1u: {
+        case SHAPE_PLANE: {
             return plane_span(o, d);
         }
 // #endif
 // #if CUBE
-        case 2u: {
+        case SHAPE_CUBE: {
             return cube_span(o, d);
         }
 // #endif
 // #if CYLINDER
-        case 3u: {
+        case SHAPE_CYLINDER: {
             return cylinder_span(o, d);
         }
 // #endif
@@ -73,22 +73,22 @@ fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
 fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
     switch kind {
 // #if SPHERE
-        case 0u: {
+        case SHAPE_SPHERE: {
             return sphere_surface(p);
         }
 // #endif
 // #if PLANE
-        case 1u: {
+        case SHAPE_PLANE: {
             return plane_surface(p);
         }
 // #endif
 // #if CUBE
-        case 2u: {
+        case SHAPE_CUBE: {
             return cube_surface(p, face);
         }
 // #endif
 // #if CYLINDER
-        case 3u: {
+        case SHAPE_CYLINDER: {
             return cylinder_surface(p, face);
         }
 // #endif

@@ -427,7 +427,7 @@ mod tests {
                 .into_iter()
                 .map(|(_, a)| a.source)
                 .collect();
-            for env in ["fn escape_radiance", "environment.kind == 2u", "environment.kind == 3u"] {
+            for env in ["fn escape_radiance", "environment.kind == ENV_GRADIENT", "environment.kind == ENV_IMAGE"] {
                 assert_eq!(source.contains(env), renderer != RendererKind::OnOff, "{renderer:?}: {env}");
             }
             let other = if renderer == RendererKind::Flat { RendererKind::OnOff } else { RendererKind::Flat };
@@ -465,5 +465,22 @@ mod tests {
         let many = csg(max + 5, 2).full_for();
         assert_eq!(many.csg_trees, max + 5);
         assert!(many.covers(&csg(max + 100, 2)) && !many.covers(&csg(1, 2)));
+    }
+
+    /// Issue 16's reproducer: an INTERSECT of 32 two-sphere UNITEs has an interval bound of
+    /// 2³², which once truncated to 0 and compiled a kernel with room for one interval. It
+    /// saturates, and the packer refuses the scene with the limit (SceneLang refuses it
+    /// earlier, at its line; a scene built in Rust reaches the GPU side).
+    #[test]
+    fn csg_bounds_beyond_u32_saturate_and_the_packer_refuses_them() {
+        let mut b = SceneBuilder::new(2, 2);
+        let m = b.diffuse(Color::gray(0.5));
+        let sphere = |x: f64| Shape::primitive(ShapeKind::Sphere, Transform::translation(DVec3::new(x, 0.0, 0.0)), m);
+        let unite = || Shape::csg(CsgOp::Unite, vec![sphere(0.0), sphere(0.5)], Transform::IDENTITY);
+        b.shape(Shape::csg(CsgOp::Intersect, (0..32).map(|_| unite()).collect(), Transform::IDENTITY));
+        let scene = b.build().unwrap();
+        assert_eq!(FeatureSet::of(&scene).csg_max_intervals, u32::MAX);
+        let err = crate::gpu::pack::pack(&scene, None).unwrap_err();
+        assert!(err.to_string().contains("CSG interval slots"), "{err}");
     }
 }

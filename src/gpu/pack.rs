@@ -143,7 +143,8 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     scene.validate()?;
     let features = FeatureSet::of(scene);
     if features.csg {
-        let pool = (2 * features.csg_max_depth as usize + 2) * features.csg_max_intervals as usize;
+        // Saturating: the interval bound itself saturates (at u32::MAX here) rather than wrap.
+        let pool = (2 * features.csg_max_depth as usize + 2).saturating_mul(features.csg_max_intervals as usize);
         if pool > MAX_CSG_POOL {
             return Err(PackError::TooMany {
                 what: "CSG interval slots (2·tree depth + 2 lists of csg::max_intervals entries)",
@@ -422,8 +423,8 @@ fn push_pigment(
         Pigment::Image { image, filter } => {
             out.kind = layout::pigment_kind::IMAGE;
             out.image_filter = match filter {
-                crate::scene::ImageFilter::Nearest => 0,
-                crate::scene::ImageFilter::Bilinear => 1,
+                crate::scene::ImageFilter::Nearest => layout::image_filter_kind::NEAREST,
+                crate::scene::ImageFilter::Bilinear => layout::image_filter_kind::BILINEAR,
             };
             out.tex_offset = push_texels(&mut p.floats, textures, image)?;
             out.tex_width = image.width() as u32;

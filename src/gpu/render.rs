@@ -149,6 +149,7 @@ fn constants_module(features: &FeatureSet) -> String {
 pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, GpuError> {
     let mut lib = shader_library();
     let generated = [
+        ("<generated tags>", super::layout::tags_wgsl()),
         ("<generated constants>", constants_module(features)),
         ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features))),
     ];
@@ -317,7 +318,15 @@ impl GpuRenderer {
         let shadow_rays = if wavefront::has_shadow_rays(&f) { s.point_light_count + s.nee } else { 0 };
         let capacity = wavefront::capacity(gpu, scene.width, scene.height, n, shadow_rays, &f, opts.passes.batch_paths);
         let groups = buffers.groups(gpu, &kernels)?;
-        let mut runner = wavefront::Runner::new(gpu, &kernels, &groups, &f, capacity, shadow_rays, s.max_depth)?;
+        let setup = wavefront::RunnerSetup {
+            gpu,
+            kernels: &kernels,
+            groups1: &groups,
+            features: f,
+            shadow_rays,
+            max_depth: s.max_depth,
+        };
+        let mut runner = wavefront::Runner::new(&setup, capacity)?;
         let plan = Plan {
             width: scene.width,
             height: scene.height,
@@ -636,5 +645,45 @@ mod tests {
             let err = (f64::from(a) - want).abs();
             assert!(err < 2e-7 + ulp, "atan2({y:e}, {x:e}) = {a} on the device, {want} in f64 (error {err:e})");
         }
+    }
+
+    /// Tags reach WGSL only through the constants `layout::tags_wgsl` generates: no shader
+    /// compares a tag field with a number or switches over tags with numeric cases, so a
+    /// tag that changes in Rust changes in every kernel.
+    #[test]
+    fn shaders_name_tags_only_through_generated_constants() {
+        const FIELDS: [&str; 7] = [".kind", ".brdf", ".projection", ".jitter", ".image_filter", "kind", " op"];
+        for (file, src) in MODULES {
+            let mut tag_switch = false;
+            for (n, line) in src.lines().enumerate() {
+                let code = line.split("//").next().unwrap_or("");
+                for op in ["==", "!="] {
+                    for (i, _) in code.match_indices(op) {
+                        let (lhs, rhs) = (code[..i].trim_end(), code[i + 2..].trim_start());
+                        let tagged = FIELDS.iter().any(|f| lhs.ends_with(f.trim_start()));
+                        assert!(
+                            !(tagged && rhs.starts_with(|c: char| c.is_ascii_digit())),
+                            "{file}:{}: a tag compared with a number: {line}",
+                            n + 1
+                        );
+                    }
+                }
+                let t = code.trim();
+                if t.starts_with("switch ") {
+                    tag_switch = t.contains("kind") || t.contains(" op");
+                }
+                if tag_switch && t.starts_with("case ") {
+                    assert!(
+                        !t[5..].starts_with(|c: char| c.is_ascii_digit()),
+                        "{file}:{}: a numeric tag case: {line}",
+                        n + 1
+                    );
+                }
+            }
+        }
+        // The generated constants carry Rust's values.
+        let tags = crate::gpu::layout::tags_wgsl();
+        assert!(tags.contains(&format!("const BRDF_DIELECTRIC: u32 = {}u;", crate::gpu::layout::brdf_kind::DIELECTRIC)));
+        assert!(tags.contains(&format!("const CSG_FUSE: u32 = {}u;", crate::gpu::layout::csg_op::FUSE)));
     }
 }

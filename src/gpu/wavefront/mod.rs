@@ -25,6 +25,7 @@ pub use schedule::{
     ctrlc_flag, Accumulated, PassOptions, StopReason, MAX_PATHS_PER_PIXEL_PER_ROUND, MAX_SPP_PER_ROUND,
 };
 pub(crate) use schedule::{run_rounds, Plan};
+
 pub use stages::{csg_queue, has_shadow_rays, Stage};
 
 use std::collections::BTreeMap;
@@ -132,40 +133,35 @@ pub(crate) struct Pending {
     submission: wgpu::SubmissionIndex,
 }
 
+/// What a [`Runner`] renders with: the device, the scene's stage kernels and their scene
+/// bind groups, and the run-time sizes of the path tracer.
+pub(crate) struct RunnerSetup<'a> {
+    pub gpu: &'a Gpu,
+    pub kernels: &'a StageKernels,
+    pub groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
+    pub features: FeatureSet,
+    /// Shadow rays a vertex may queue ([`BatchUniform::shadow_rays`]).
+    pub shadow_rays: u32,
+    pub max_depth: u32,
+}
+
 impl<'a> Runner<'a> {
     /// Allocates the state for `capacity` slots (halving it while the device refuses the
-    /// memory, down to what one pixel's paths need).
-    pub fn new(
-        gpu: &'a Gpu,
-        kernels: &'a StageKernels,
-        groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
-        features: &FeatureSet,
-        capacity: u32,
-        shadow_rays: u32,
-        max_depth: u32,
-    ) -> Result<Self, GpuError> {
+    /// memory, down to 1,024 slots).
+    pub fn new(setup: &RunnerSetup<'a>, capacity: u32) -> Result<Self, GpuError> {
         let mut capacity = capacity.max(1);
         loop {
-            match Self::allocate(gpu, kernels, groups1, features, capacity, shadow_rays, max_depth) {
+            match Self::allocate(setup, capacity) {
                 Ok(r) => return Ok(r),
-                Err(e @ (GpuError::TooLarge { .. } | GpuError::OutOfMemory(_))) if capacity > 1024 => {
-                    let _ = e;
-                    capacity /= 2;
-                }
+                Err(GpuError::TooLarge { .. } | GpuError::OutOfMemory(_)) if capacity > 1024 => capacity /= 2,
                 Err(e) => return Err(e),
             }
         }
     }
 
-    fn allocate(
-        gpu: &'a Gpu,
-        kernels: &'a StageKernels,
-        groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
-        features: &FeatureSet,
-        capacity: u32,
-        shadow_rays: u32,
-        max_depth: u32,
-    ) -> Result<Self, GpuError> {
+    fn allocate(setup: &RunnerSetup<'a>, capacity: u32) -> Result<Self, GpuError> {
+        let RunnerSetup { gpu, kernels, groups1, shadow_rays, max_depth, .. } = *setup;
+        let features = &setup.features;
         let cap = u64::from(capacity);
         let storage =
             |label: &str, buffer: StateBuffer| gpu.storage_buffer_zeroed(label, cap * state_bytes(buffer, shadow_rays));
