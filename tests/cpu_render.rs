@@ -615,7 +615,7 @@ mod rounds {
     fn one_pass_mean(scene: &Scene, total: u32, spp: u32) -> HdrImage {
         let (world, lights) = (World::new(scene), Lights::new(scene));
         let ctx = Context { scene, world: &world, lights: &lights };
-        let layout = lumen::cpu::pixel_samples::PixelSamples::new(&scene.tracer, Some(total));
+        let layout = lumen::prepare::pixel_samples::PixelSamples::new(&scene.tracer, Some(total));
         let n = f64::from(spp) * lumen::cpu::paths_per_sample(scene) as f64;
         HdrImage::from_fn(scene.width as usize, scene.height as usize, |c, r| {
             let mut sum = Color::BLACK;

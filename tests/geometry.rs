@@ -1,8 +1,9 @@
 //! Geometry against hand-computed answers: primitives, CSG, offsets, BVH vs brute force.
 
 use glam::{DVec2, DVec3};
-use lumen::cpu::csg::{max_intervals, CsgTree};
+use lumen::cpu::csg::CsgTree;
 use lumen::cpu::{offset_origin, Hit, Ray, World};
+use lumen::prepare::max_intervals;
 use lumen::scene::{CsgOp, MaterialId, Shape, ShapeKind, Transform};
 use proptest::prelude::*;
 
@@ -578,7 +579,7 @@ proptest! {
 /// finds, with CSG trees in front of, behind and among primitives, planes included.
 #[test]
 fn deferred_and_immediate_csg_trees_find_the_brute_force_hit() {
-    use lumen::cpu::CSG_DEFER_MAX;
+    use lumen::prepare::CSG_DEFER_MAX;
     use lumen::sampling::Pcg32;
     for trees in [3, CSG_DEFER_MAX, CSG_DEFER_MAX + 5] {
         let mut rng = Pcg32::new(trees as u64, 99);

@@ -13,28 +13,16 @@
 
 use std::f64::consts::PI;
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 
 use crate::color::Color;
-use crate::scene::{MaterialId, Pigment, Scene, Shape, ShapeKind, Transform};
+use crate::scene::{Pigment, Scene, ShapeKind};
 
 use super::normalize_scaled;
 use super::offset::error_scale;
 use super::warp::{cone_one_minus_cos, uniform_cone, uniform_cone_pdf, uniform_sphere};
 
-/// One area light, with what sampling needs precomputed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AreaLight {
-    /// Index of the shape in [`Scene::shapes`].
-    pub shape: u32,
-    pub kind: ShapeKind,
-    pub transform: Transform,
-    pub material: MaterialId,
-    /// |det| of the linear part of the object-to-world transform.
-    pub det: f64,
-    /// World centre and radius when the shape is a sphere under a similarity transform.
-    pub sphere: Option<(DVec3, f64)>,
-}
+pub use crate::prepare::AreaLight;
 
 /// A point sampled on a light, seen from the shading point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -52,24 +40,6 @@ pub struct LightPoint {
 }
 
 impl AreaLight {
-    /// The light for `Scene::shapes[shape]`, which must be a sphere or cube primitive.
-    pub fn new(scene: &Scene, shape: usize) -> Option<Self> {
-        let Shape::Primitive(p) = &scene.shapes[shape] else { return None };
-        if !matches!(p.kind, ShapeKind::Sphere | ShapeKind::Cube) {
-            return None;
-        }
-        let lin = DMat3::from_mat4(p.transform.matrix());
-        let sphere = (p.kind == ShapeKind::Sphere).then(|| similarity_scale(lin)).flatten();
-        Some(Self {
-            shape: shape as u32,
-            kind: p.kind,
-            transform: p.transform,
-            material: p.material,
-            det: lin.determinant().abs(),
-            sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
-        })
-    }
-
     /// Whether directions toward this light are drawn from its cone, for a shading point
     /// `x` lying on shape `x_shape`.
     pub fn uses_cone(&self, x: DVec3, x_shape: u32) -> Option<(DVec3, f64, f64)> {
@@ -156,14 +126,6 @@ impl AreaLight {
     }
 }
 
-/// Uniform radius of a linear map that is a rotation times a uniform scale, else `None`.
-fn similarity_scale(m: DMat3) -> Option<f64> {
-    let s = m.x_axis.length();
-    let g = m.transpose() * m;
-    let ok = (g - DMat3::from_diagonal(DVec3::splat(s * s))).to_cols_array().iter().all(|v| v.abs() <= 1e-12 * s * s);
-    ok.then_some(s)
-}
-
 /// Unit outward normal of the unit sphere or cube at (or near) object point `p`.
 pub fn object_normal(kind: ShapeKind, p: DVec3) -> DVec3 {
     match kind {
@@ -222,7 +184,7 @@ fn sample_cone(c: DVec3, r: f64, d: f64, x: DVec3, xi0: f64, xi1: f64) -> (DVec3
 mod tests {
     use super::*;
     use crate::sampling::Pcg32;
-    use crate::scene::{Material, SceneBuilder};
+    use crate::scene::{Material, SceneBuilder, Shape, Transform};
 
     use crate::color::Color;
 

@@ -28,15 +28,9 @@ impl EnvLight {
     /// The scene's escape radiance as a light: its environment, else a uniform environment
     /// of the background colour. `None` when escaping rays see black.
     pub fn new(scene: &Scene) -> Option<Self> {
-        let environment = match &scene.environment {
-            Some(e) => e.clone(),
-            None => Environment::Uniform(scene.renderer.background()),
-        };
-        if is_black(&environment) {
-            return None;
-        }
+        let environment = crate::prepare::escape_light(scene)?;
         let distribution = match &environment {
-            Environment::Image { image, .. } => Some(image_distribution(image)),
+            Environment::Image { image, .. } => Some(crate::prepare::image_distribution(image)),
             _ => None,
         };
         Some(Self { environment, distribution })
@@ -69,27 +63,6 @@ impl EnvLight {
             _ => UNIFORM_SPHERE_PDF,
         }
     }
-}
-
-fn is_black(e: &Environment) -> bool {
-    match e {
-        Environment::Uniform(c) => c.is_black(),
-        Environment::Gradient { zenith, horizon, nadir } => zenith.is_black() && horizon.is_black() && nadir.is_black(),
-        Environment::Image { image, intensity, .. } => *intensity == 0.0 || image.pixels().iter().all(|p| p.is_black()),
-    }
-}
-
-/// The texel weights luminance × sin θ (θ at the row centre), row 0 at the zenith.
-pub fn image_distribution(image: &crate::image::HdrImage) -> Distribution2D {
-    let (w, h) = (image.width(), image.height());
-    let mut values = Vec::with_capacity(w * h);
-    for row in 0..h {
-        let sin_theta = (PI * (row as f64 + 0.5) / h as f64).sin();
-        for col in 0..w {
-            values.push(f64::from(image.get(col, row).luminance()).max(0.0) * sin_theta);
-        }
-    }
-    Distribution2D::new(&values, w, h)
 }
 
 /// Unit direction of equirectangular coordinates (u, v), inverse of [`equirect_uv`].

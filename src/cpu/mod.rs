@@ -4,9 +4,10 @@
 //! offsets, ONB. Shading, one concept per file, each mirrored by a WGSL file: [`warp`]
 //! (square → directions), [`fresnel`], [`bsdf`], [`area_light`], [`env_light`], [`lights`]
 //! (what NEE chooses from), [`point_lights`], [`vertex_draws`] (the 7 uniforms per vertex),
-//! [`pixel_samples`] (camera sample placement), [`simple_renderers`] (OnOff, Flat,
-//! PointLight), [`path_tracer`], and [`render()`] (tiles on rayon). DESIGN.md states the
-//! rules they follow.
+//! [`simple_renderers`] (OnOff, Flat,
+//! PointLight), [`path_tracer`], and [`render()`] (tiles on rayon). What both renderers
+//! prepare from a scene (BVH, lights, environment tables, camera samples, CSG bounds) is
+//! in [`crate::prepare`]. DESIGN.md states the rules they follow.
 
 pub mod csg;
 mod hit;
@@ -20,7 +21,7 @@ pub use hit::Hit;
 pub use offset::offset_origin;
 pub use onb::onb;
 pub use ray::{normalize_scaled, pow2_rescale, Ray};
-pub use world::{World, CSG_DEFER_MAX};
+pub use world::World;
 
 // Shading: BSDFs, lights, integrators and the render loop.
 pub mod area_light;
@@ -30,7 +31,6 @@ pub mod env_light;
 pub mod fresnel;
 pub mod lights;
 pub mod path_tracer;
-pub mod pixel_samples;
 pub mod point_lights;
 mod render;
 pub mod simple_renderers;

@@ -24,9 +24,9 @@ use crate::stop::StopReason;
 use super::context::{Context, Counters};
 use super::lights::Lights;
 use super::path_tracer::path_radiance;
-use super::pixel_samples::PixelSamples;
 use super::simple_renderers::{flat_radiance, on_off_radiance, point_light_radiance};
 use super::{Ray, World};
+use crate::prepare::pixel_samples::PixelSamples;
 
 /// Side of the square tiles the image is split into.
 const TILE: u32 = 16;

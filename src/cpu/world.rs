@@ -1,9 +1,10 @@
 //! The scene's geometry prepared for ray queries: closest hit and occlusion.
 
-use crate::accel::{Bvh, BvhItem, Visit};
+use crate::accel::{Bvh, Visit};
 use crate::cpu::csg::{CsgHit, CsgTree};
 use crate::cpu::shapes::{Crossing, Instance};
 use crate::cpu::{Hit, Ray};
+use crate::prepare::{SceneBvh, CSG_DEFER_MAX};
 use crate::scene::{Scene, Shape};
 
 /// One top-level shape, prepared. Primitives (the common case) stay inline for locality.
@@ -46,15 +47,6 @@ impl Object {
     }
 }
 
-/// Most top-level CSG trees whose evaluation a closest-hit query defers until the
-/// traversal is over (more trees: each is evaluated where the traversal meets it).
-///
-/// Why defer: on SIMD software GPUs (lavapipe) the CSG code inside the traversal loop costs
-/// on every iteration, even when no ray takes it (DESIGN.md, "Software adapters"); the GPU
-/// kernel evaluates the trees after the traversal, and the CPU does the same so that both
-/// compare candidates in one order (ties between coincident surfaces resolve alike).
-pub const CSG_DEFER_MAX: usize = 16;
-
 /// Every top-level shape of a scene with its transformations precomputed, the bounded ones
 /// in a BVH and the unbounded ones (planes, CSG trees with unbounded solids) in a list
 /// that every ray tests.
@@ -80,8 +72,7 @@ pub const CSG_DEFER_MAX: usize = 16;
 #[derive(Debug, Clone, PartialEq)]
 pub struct World {
     objects: Vec<Object>,
-    bvh: Bvh,
-    unbounded: Vec<u32>,
+    geometry: SceneBvh,
     /// Whether closest-hit queries evaluate CSG trees after the traversal
     /// (at most [`CSG_DEFER_MAX`] trees).
     defer_csg: bool,
@@ -94,40 +85,27 @@ impl World {
 
     /// Prepares a list of top-level shapes (index i is reported as `Hit::shape = i`).
     pub fn from_shapes(shapes: &[Shape]) -> World {
-        let mut items = Vec::new();
-        let mut unbounded = Vec::new();
         let objects = shapes
             .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                let b = s.bounds();
-                if b.is_empty() {
-                    // Nothing to hit (e.g. an INTERSECT of disjoint solids).
-                } else if b.is_finite() {
-                    items.push(BvhItem { id: i as u32, bounds: b });
-                } else {
-                    unbounded.push(i as u32);
+            .map(|s| match s {
+                Shape::Primitive(p) => {
+                    Object::Primitive(Instance { kind: p.kind, to_world: p.transform, material: p.material })
                 }
-                match s {
-                    Shape::Primitive(p) => {
-                        Object::Primitive(Instance { kind: p.kind, to_world: p.transform, material: p.material })
-                    }
-                    Shape::Csg(c) => Object::Csg(CsgTree::from_csg(c)),
-                }
+                Shape::Csg(c) => Object::Csg(CsgTree::from_csg(c)),
             })
             .collect();
         let csg_trees = shapes.iter().filter(|s| matches!(s, Shape::Csg(_))).count();
-        World { objects, bvh: Bvh::build(&items), unbounded, defer_csg: csg_trees <= CSG_DEFER_MAX }
+        World { objects, geometry: SceneBvh::from_shapes(shapes), defer_csg: csg_trees <= CSG_DEFER_MAX }
     }
 
     /// The BVH over the bounded top-level shapes; its ids index `Scene::shapes`.
     pub fn bvh(&self) -> &Bvh {
-        &self.bvh
+        &self.geometry.bvh
     }
 
     /// Indices (into `Scene::shapes`) of the unbounded shapes, which are outside the BVH.
     pub fn unbounded(&self) -> &[u32] {
-        &self.unbounded
+        &self.geometry.unbounded
     }
 
     /// The closest hit with t in the open range (tmin, tmax).
@@ -154,13 +132,13 @@ impl World {
             }
             csg
         };
-        for &id in &self.unbounded {
+        for &id in &self.geometry.unbounded {
             if !defer(id) {
                 test(id, &mut tmax);
             }
         }
         let mut t = tmax;
-        self.bvh.traverse(ray.origin, ray.dir, ray.tmin, tmax, |id| {
+        self.geometry.bvh.traverse(ray.origin, ray.dir, ray.tmin, tmax, |id| {
             if defer(id) {
                 Visit::Continue
             } else {
@@ -190,11 +168,11 @@ impl World {
 
     /// Whether anything lies on the ray with t in (tmin, tmax); stops at the first hit found.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        if self.unbounded.iter().any(|&id| self.objects[id as usize].occludes(ray)) {
+        if self.geometry.unbounded.iter().any(|&id| self.objects[id as usize].occludes(ray)) {
             return true;
         }
         let mut hit = false;
-        self.bvh.traverse(ray.origin, ray.dir, ray.tmin, ray.tmax, |id| {
+        self.geometry.bvh.traverse(ray.origin, ray.dir, ray.tmin, ray.tmax, |id| {
             if self.objects[id as usize].occludes(ray) {
                 hit = true;
                 Visit::Stop

@@ -61,7 +61,7 @@ pub struct FeatureSet {
     pub csg_max_intervals: u32,
     /// Bound on the depth of any CSG tree (sizes the evaluation stack).
     pub csg_max_depth: u32,
-    /// Top-level CSG trees: up to `cpu::CSG_DEFER_MAX` of them are evaluated after the BVH
+    /// Top-level CSG trees: up to `prepare::CSG_DEFER_MAX` of them are evaluated after the BVH
     /// traversal rather than inside it (as `cpu::World` does; DESIGN.md "Software adapters").
     pub csg_trees: u32,
     pub pigment_uniform: bool,
@@ -98,7 +98,7 @@ impl FeatureSet {
                     f.bvh = true;
                     f.csg_trees += 1;
                     // Saturated, never truncated: pack refuses what the GPU cannot hold.
-                    let bound = crate::cpu::csg::max_intervals(shape).min(u64::from(u32::MAX)) as u32;
+                    let bound = crate::prepare::max_intervals(shape).min(u64::from(u32::MAX)) as u32;
                     f.csg_max_intervals = f.csg_max_intervals.max(bound);
                     f.csg_max_depth = f.csg_max_depth.max(shape.csg_depth() as u32);
                 }
@@ -186,7 +186,7 @@ impl FeatureSet {
     /// Two things stay the scene's, because they select an algorithm rather than add code:
     /// the renderer (one integrator per kernel; four full kernels in all) and whether CSG
     /// trees are deferred past the BVH traversal (the CPU reference decides that from the
-    /// tree count, `cpu::CSG_DEFER_MAX`; a deferring full kernel gets every deferral slot).
+    /// tree count, `prepare::CSG_DEFER_MAX`; a deferring full kernel gets every deferral slot).
     /// Run-time switches (`settings.nee`, light counts, `environment.kind`, pigment and
     /// shape kinds) choose among the compiled paths, so the result is the scene's image.
     pub fn full_for(&self) -> FeatureSet {
@@ -194,7 +194,7 @@ impl FeatureSet {
         let path = self.renderer == RendererKind::PathTracer;
         let scatters = matches!(self.renderer, RendererKind::PathTracer | RendererKind::PointLight);
         let pigments = self.renderer != RendererKind::OnOff;
-        let defer_max = crate::cpu::CSG_DEFER_MAX as u32;
+        let defer_max = crate::prepare::CSG_DEFER_MAX as u32;
         FeatureSet {
             sphere: true,
             plane: true,
@@ -243,7 +243,7 @@ impl FeatureSet {
                     scene.csg_max_intervals, scene.csg_max_depth, self.csg_max_intervals, self.csg_max_depth
                 ));
             }
-            let defer_max = crate::cpu::CSG_DEFER_MAX as u32;
+            let defer_max = crate::prepare::CSG_DEFER_MAX as u32;
             let (kernel_defers, scene_defers) = (self.csg_trees <= defer_max, scene.csg_trees <= defer_max);
             if kernel_defers != scene_defers || (kernel_defers && self.csg_trees < scene.csg_trees) {
                 missing.push(format!("{} top-level CSG trees (kernel: {})", scene.csg_trees, self.csg_trees));
@@ -451,7 +451,7 @@ mod tests {
         // CSG: larger bounds are raised, and the deferral mode (chosen from the tree count,
         // as the CPU reference chooses it) is kept: a deferring kernel cannot take a scene
         // with more trees than its slots, nor a non-deferring one a scene the CPU defers.
-        let max = crate::cpu::CSG_DEFER_MAX as u32;
+        let max = crate::prepare::CSG_DEFER_MAX as u32;
         let csg = |trees, intervals| FeatureSet {
             csg: true,
             csg_trees: trees,

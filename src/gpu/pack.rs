@@ -17,11 +17,10 @@ use super::features::FeatureSet;
 use super::layout::{self, Affine, NONE};
 use crate::accel::BvhNode;
 use crate::color::Color;
-use crate::cpu::area_light::AreaLight;
-use crate::cpu::env_light::image_distribution;
-use crate::cpu::pixel_samples::PixelSamples;
-use crate::cpu::World;
 use crate::image::HdrImage;
+use crate::prepare::image_distribution;
+use crate::prepare::pixel_samples::PixelSamples;
+use crate::prepare::AreaLight;
 use crate::scene::{Brdf, CsgOp, Environment, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform};
 
 /// A scene ready for upload: every buffer of `shaders/bindings.wgsl`.
@@ -157,7 +156,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     let shift = Transform::translation(-origin);
     // The scene in the camera frame, as f64.
     let shifted: Vec<Shape> = scene.shapes.iter().map(|s| shifted_shape(s, &shift)).collect();
-    let world = World::from_shapes(&shifted);
+    let world = crate::prepare::SceneBvh::from_shapes(&shifted);
     let area_lights = scene.area_lights();
     let mut area_of_shape = vec![NONE; scene.shapes.len()];
     for (i, l) in area_lights.iter().enumerate() {
@@ -171,7 +170,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         environment: bytemuck::Zeroable::zeroed(),
         shapes: Vec::new(),
         indices: Vec::new(),
-        bvh_nodes: world.bvh().nodes().to_vec(),
+        bvh_nodes: world.bvh.nodes().to_vec(),
         csg_nodes: Vec::new(),
         materials: Vec::new(),
         pigments: Vec::new(),
@@ -198,10 +197,10 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
             }
         };
     }
-    p.indices.extend(world.bvh().prim_indices().iter().map(|&i| object_ref[i as usize]));
+    p.indices.extend(world.bvh.prim_indices().iter().map(|&i| object_ref[i as usize]));
     let plane_offset = count_u32("indices", p.indices.len())?;
-    p.indices.extend(world.unbounded().iter().map(|&i| object_ref[i as usize]));
-    let plane_count = count_u32("infinite shapes", world.unbounded().len())?;
+    p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
+    let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
     for (node, children) in csg_children {
         p.csg_nodes[node].first_child = count_u32("indices", p.indices.len())?;
         p.indices.extend(children);
@@ -457,7 +456,7 @@ fn pack_environment(
         intensity: 1.0,
         rotation_rad: 0.0,
         dist_offset: 0,
-        is_light: u32::from(crate::cpu::env_light::EnvLight::new(scene).is_some()),
+        is_light: u32::from(crate::prepare::escape_light(scene).is_some()),
     };
     match &scene.environment {
         None => e.a = rgba(scene.renderer.background()),

@@ -140,8 +140,8 @@ fn constants_module(features: &FeatureSet) -> String {
         intervals,
         depth,
         (2 * depth + 2) * intervals,
-        features.csg_trees as usize <= crate::cpu::CSG_DEFER_MAX,
-        features.csg_trees.clamp(1, crate::cpu::CSG_DEFER_MAX as u32),
+        features.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX,
+        features.csg_trees.clamp(1, crate::prepare::CSG_DEFER_MAX as u32),
     )
 }
 

@@ -64,7 +64,7 @@ pub const MAX_PRIMITIVES: u64 = 1 << 21;
 /// the GPU's packing) walks it recursively and the GPU sizes its stacks by the depth.
 pub const MAX_CSG_DEPTH: usize = 256;
 
-/// Largest [`crate::cpu::csg::max_intervals`] bound a CSG tree may have: it is the length
+/// Largest [`crate::prepare::max_intervals`] bound a CSG tree may have: it is the length
 /// of the interval lists along one ray, which INTERSECT and DIFF of UNITEs multiply
 /// (32 two-sphere UNITEs intersected: 2³²). Large enough for a UNITE or FUSE of 65 536
 /// primitives; a union of more shapes should be spawned as separate shapes.

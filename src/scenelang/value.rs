@@ -5,8 +5,8 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::color::Color;
-use crate::cpu::csg::IntervalBound;
 use crate::image::HdrImage;
+use crate::prepare::IntervalBound;
 use crate::scene::{
     Brdf, Camera, CsgOp, Environment, Material, PcgSeed, Pigment, PointLight, Renderer, ShapeKind, Tracer, Transform,
 };

@@ -14,11 +14,11 @@ mod common;
 
 use glam::DVec3;
 use lumen::color::Color;
-use lumen::cpu::pixel_samples::PixelSamples;
 use lumen::cpu::{Progress, RenderOptions};
 use lumen::gpu::render::{render as gpu_render, GpuRenderOptions};
 use lumen::gpu::Gpu;
 use lumen::image::HdrImage;
+use lumen::prepare::pixel_samples::PixelSamples;
 use lumen::scene::*;
 
 use common::{agreement, mean_and_stderr, pt, Agreement, Tolerance};

@@ -78,7 +78,7 @@ pub fn capacity(
     let widest = (16 * u64::from(path_field::COUNT))
         .max(48 * u64::from(shadow_rays))
         .max(4 * u64::from(queue::COUNT))
-        .max(if csg_queue(features) { 4 * (crate::cpu::CSG_DEFER_MAX as u64 + 1) } else { 0 });
+        .max(if csg_queue(features) { 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1) } else { 0 });
     slots = slots.min(limit / widest).max(1);
     slots.min(u64::from(u32::MAX / 2)) as u32
 }
@@ -99,7 +99,7 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32) -> u64 {
         StateBuffer::Paths => 16 * u64::from(path_field::COUNT),
         StateBuffer::Words => 16 * u64::from(word_field::COUNT),
         StateBuffer::Shadow => 48 * u64::from(shadow_rays.max(1)),
-        StateBuffer::DeferredRefs => 4 * (crate::cpu::CSG_DEFER_MAX as u64 + 1),
+        StateBuffer::DeferredRefs => 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1),
         StateBuffer::Film => 16,
         StateBuffer::Args => 0,
     }

@@ -280,10 +280,10 @@ impl Stage {
 }
 
 /// Whether CSG trees are evaluated in a stage of their own: the scene has CSG and few
-/// enough trees to defer them (`cpu::CSG_DEFER_MAX`, as `cpu::World` decides); otherwise
+/// enough trees to defer them (`prepare::CSG_DEFER_MAX`, as `cpu::World` decides); otherwise
 /// the traversal evaluates each tree where it meets it.
 pub fn csg_queue(f: &FeatureSet) -> bool {
-    f.csg && f.csg_trees as usize <= crate::cpu::CSG_DEFER_MAX
+    f.csg && f.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX
 }
 
 /// Whether path vertices queue shadow rays (point lights or NEE, at diffuse vertices); how

@@ -1,0 +1,155 @@
+//! Scene preparation that both renderers use: what a scene needs before any ray is traced,
+//! computed once in f64 from the scene model. The CPU reference consumes these directly;
+//! the GPU packer converts them (`src/gpu/pack.rs`), so the two renderers agree on the BVH,
+//! the lights, the environment's sampling tables, the placement of camera samples and the
+//! CSG bounds by construction, not by two implementations kept alike.
+
+pub mod csg_bounds;
+pub mod pixel_samples;
+
+use glam::{DMat3, DVec3};
+
+use crate::accel::{Bvh, BvhItem};
+use crate::image::HdrImage;
+use crate::sampling::Distribution2D;
+use crate::scene::{Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
+
+pub use csg_bounds::{max_intervals, IntervalBound};
+pub use pixel_samples::PixelSamples;
+
+/// Most top-level CSG trees whose evaluation a closest-hit query defers until the
+/// traversal is over (more trees: each is evaluated where the traversal meets it).
+///
+/// Why defer: on SIMD software GPUs (lavapipe) the CSG code inside the traversal loop costs
+/// on every iteration, even when no ray takes it (DESIGN.md, "Software adapters"); the GPU
+/// evaluates the trees after the traversal, and the CPU does the same so that both
+/// compare candidates in one order (ties between coincident surfaces resolve alike).
+pub const CSG_DEFER_MAX: usize = 16;
+
+/// The top-level shapes a ray can hit: the bounded ones in a BVH (ids index
+/// `Scene::shapes`), the unbounded ones (planes, CSG trees with unbounded solids) in a list
+/// that every ray tests. Shapes with empty bounds (an INTERSECT of disjoint solids) are in
+/// neither.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneBvh {
+    pub bvh: Bvh,
+    pub unbounded: Vec<u32>,
+}
+
+impl SceneBvh {
+    pub fn from_shapes(shapes: &[Shape]) -> Self {
+        let mut items = Vec::new();
+        let mut unbounded = Vec::new();
+        for (i, s) in shapes.iter().enumerate() {
+            let b = s.bounds();
+            if b.is_empty() {
+                // Nothing to hit.
+            } else if b.is_finite() {
+                items.push(BvhItem { id: i as u32, bounds: b });
+            } else {
+                unbounded.push(i as u32);
+            }
+        }
+        Self { bvh: Bvh::build(&items), unbounded }
+    }
+}
+
+/// One area light, with what sampling needs precomputed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AreaLight {
+    /// Index of the shape in [`Scene::shapes`].
+    pub shape: u32,
+    pub kind: ShapeKind,
+    pub transform: Transform,
+    pub material: MaterialId,
+    /// |det| of the linear part of the object-to-world transform.
+    pub det: f64,
+    /// World centre and radius when the shape is a sphere under a similarity transform.
+    pub sphere: Option<(DVec3, f64)>,
+}
+
+impl AreaLight {
+    /// The light for `Scene::shapes[shape]`, which must be a sphere or cube primitive.
+    pub fn new(scene: &Scene, shape: usize) -> Option<Self> {
+        let Shape::Primitive(p) = &scene.shapes[shape] else { return None };
+        if !matches!(p.kind, ShapeKind::Sphere | ShapeKind::Cube) {
+            return None;
+        }
+        let lin = DMat3::from_mat4(p.transform.matrix());
+        let sphere = (p.kind == ShapeKind::Sphere).then(|| similarity_scale(lin)).flatten();
+        Some(Self {
+            shape: shape as u32,
+            kind: p.kind,
+            transform: p.transform,
+            material: p.material,
+            det: lin.determinant().abs(),
+            sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
+        })
+    }
+}
+
+/// Uniform radius of a linear map that is a rotation times a uniform scale, else `None`.
+fn similarity_scale(m: DMat3) -> Option<f64> {
+    let s = m.x_axis.length();
+    let g = m.transpose() * m;
+    let ok = (g - DMat3::from_diagonal(DVec3::splat(s * s))).to_cols_array().iter().all(|v| v.abs() <= 1e-12 * s * s);
+    ok.then_some(s)
+}
+
+/// What escaping rays see, as a light for NEE: the scene's environment, else a uniform one
+/// of the renderer's background colour; `None` when that is black (nothing to sample).
+pub fn escape_light(scene: &Scene) -> Option<Environment> {
+    let environment = match &scene.environment {
+        Some(e) => e.clone(),
+        None => Environment::Uniform(scene.renderer.background()),
+    };
+    (!environment_is_black(&environment)).then_some(environment)
+}
+
+fn environment_is_black(e: &Environment) -> bool {
+    match e {
+        Environment::Uniform(c) => c.is_black(),
+        Environment::Gradient { zenith, horizon, nadir } => zenith.is_black() && horizon.is_black() && nadir.is_black(),
+        Environment::Image { image, intensity, .. } => *intensity == 0.0 || image.pixels().iter().all(|p| p.is_black()),
+    }
+}
+
+/// The texel weights luminance × sin θ (θ at the row centre), row 0 at the zenith.
+pub fn image_distribution(image: &HdrImage) -> Distribution2D {
+    let (w, h) = (image.width(), image.height());
+    let mut values = Vec::with_capacity(w * h);
+    for row in 0..h {
+        let sin_theta = (std::f64::consts::PI * (row as f64 + 0.5) / h as f64).sin();
+        for col in 0..w {
+            values.push(f64::from(image.get(col, row).luminance()).max(0.0) * sin_theta);
+        }
+    }
+    Distribution2D::new(&values, w, h)
+}
+
+#[cfg(test)]
+mod tests {
+    /// The GPU side reads scene preparation from here, never from the CPU renderer
+    /// (`src/gpu/` does not import `crate::cpu`), so neither renderer's internals leak into
+    /// the other's.
+    #[test]
+    fn the_gpu_renderer_does_not_depend_on_the_cpu_renderer() {
+        fn rust_files(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+            for e in std::fs::read_dir(dir).unwrap().flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    rust_files(&p, out);
+                } else if p.extension().is_some_and(|x| x == "rs") {
+                    out.push(p);
+                }
+            }
+        }
+        let mut files = Vec::new();
+        rust_files(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu"), &mut files);
+        assert!(files.len() > 10, "{files:?}");
+        for f in files {
+            let text = std::fs::read_to_string(&f).unwrap();
+            assert!(!text.contains("crate::cpu"), "{} imports the CPU renderer", f.display());
+        }
+    }
+}
