@@ -1,12 +1,11 @@
-// #requires wf_path shapes bindings
+// #requires wf_hit bindings
 // The end of a closest-hit query: the candidate is stored as the path's hit, and the path
 // queued for the escape stage or for the shading stage of its material's BRDF kind.
 
 fn classify(slot: u32, cand: Candidate) {
 // #if GEOMETRY
     if (cand.c.t < OPEN) {
-        words[field(W_HIT, slot)] =
-            vec4<u32>(bitcast<u32>(cand.c.t), cand.shape, cand.c.face | select(0u, HIT_FLIP, cand.flip), cand.object);
+        store_hit(slot, cand);
         let brdf = materials[shapes[cand.shape].material].brdf;
         wf_push(Q_SHADE + brdf, slot);
         return;

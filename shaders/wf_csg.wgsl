@@ -10,8 +10,7 @@ fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         return;
     }
     var ray = load_ray(slot);
-    let h = words[field(W_HIT, slot)];
-    var best = Candidate(Crossing(bitcast<f32>(h.x), h.z & ~HIT_FLIP), h.y, (h.z & HIT_FLIP) != 0u, h.w);
+    var best = load_hit(slot);
     ray.tmax = min(ray.tmax, best.c.t);
     let base = slot * (CSG_DEFER_SLOTS + 1u);
     let count = deferred_refs[base];

@@ -20,8 +20,7 @@ fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
         for (var k = 0u; k < deferred.count; k++) {
             deferred_refs[base + 1u + k] = deferred.refs[k];
         }
-        words[field(W_HIT, slot)] =
-            vec4<u32>(bitcast<u32>(best.c.t), best.shape, best.c.face | select(0u, HIT_FLIP, best.flip), best.object);
+        store_hit(slot, best);
         wf_push(Q_CSG, slot);
         return;
     }

@@ -1,4 +1,4 @@
-// #requires mis random pigment brdf offset constants shapes
+// #requires mis random pigment brdf offset constants wf_hit
 // #if POINT_LIGHTS
 // #requires point_lights
 // #endif
@@ -125,8 +125,8 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
     let ray = load_ray(slot);
-    let h = words[field(W_HIT, slot)];
-    let hit = shape_surface_hit(h.y, ray, Crossing(bitcast<f32>(h.x), h.z & ~HIT_FLIP), (h.z & HIT_FLIP) != 0u, h.w);
+    let c = load_hit(slot);
+    let hit = shape_surface_hit(c.shape, ray, c.c, c.flip, c.object);
     // The seven draws of this vertex, used or not.
     let id = path_id(slot);
     var rng = stream(settings.tracer_seed.xy, settings.tracer_seed.zw, id.pixel, id.sample, bounce);

@@ -55,7 +55,7 @@ pub fn path_radiance(
             break;
         }
         if !material.brdf.is_delta() {
-            radiance += beta * point_lights(ctx, &hit, &material.brdf, color, counters);
+            add_point_lights(ctx, &hit, &material.brdf, color, beta, &mut radiance, counters);
             if settings.nee {
                 radiance += beta * sample_light(ctx, &hit, &material.brdf, color, &xi, counters);
             }
@@ -124,15 +124,23 @@ fn escaped(ctx: &Context, settings: &PathTracerSettings, prev: &Previous, dir: D
     le * power_heuristic(prev.pdf, ctx.lights.selection_pdf() * env.pdf(dir))
 }
 
-/// Direct light from every point light (always on: point lights cannot be hit).
-fn point_lights(ctx: &Context, hit: &Hit, brdf: &Brdf, color: Color, counters: &mut Counters) -> Color {
-    let mut sum = Color::BLACK;
+/// Direct light from every point light (always on: point lights cannot be hit), each one's
+/// throughput-weighted contribution added on its own, as the GPU's shadow stage adds each
+/// shadow ray's (`shaders/wf_shade.wgsl`, `wf_shadow.wgsl`).
+fn add_point_lights(
+    ctx: &Context,
+    hit: &Hit,
+    brdf: &Brdf,
+    color: Color,
+    beta: Color,
+    radiance: &mut Color,
+    counters: &mut Counters,
+) {
     for light in &ctx.scene.point_lights {
         if let Some((dir, factor)) = point_light_factor(ctx, hit, light, counters) {
-            sum += eval_bsdf(brdf, color, hit.normal, dir) * light.color * factor;
+            *radiance += beta * (eval_bsdf(brdf, color, hit.normal, dir) * light.color * factor);
         }
     }
-    sum
 }
 
 /// A direction toward a light chosen by ξ0, with its radiance and density.

@@ -162,6 +162,14 @@ impl Gpu {
                 self.limits.max_bind_groups
             )));
         }
+        let storage =
+            groups.values().flatten().filter(|(_, k)| matches!(k, BindingKind::Storage { .. })).count() as u32;
+        if storage > self.limits.max_storage_buffers_per_shader_stage {
+            return Err(GpuError::Validation(format!(
+                "shader {label:?} needs {storage} storage buffers; this adapter allows {} per shader stage",
+                self.limits.max_storage_buffers_per_shader_stage
+            )));
+        }
         let mut bindings = vec![Vec::new(); n_groups];
         for (g, mut list) in groups {
             list.sort_by_key(|b| b.0);

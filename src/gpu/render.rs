@@ -18,7 +18,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 38] = [
+const MODULES: [(&str, &str); 39] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -50,6 +50,7 @@ const MODULES: [(&str, &str); 38] = [
     ("shaders/wf_control.wgsl", include_str!("../../shaders/wf_control.wgsl")),
     ("shaders/wf_camera.wgsl", include_str!("../../shaders/wf_camera.wgsl")),
     ("shaders/wf_first_hit.wgsl", include_str!("../../shaders/wf_first_hit.wgsl")),
+    ("shaders/wf_hit.wgsl", include_str!("../../shaders/wf_hit.wgsl")),
     ("shaders/wf_classify.wgsl", include_str!("../../shaders/wf_classify.wgsl")),
     ("shaders/wf_intersect.wgsl", include_str!("../../shaders/wf_intersect.wgsl")),
     ("shaders/wf_csg.wgsl", include_str!("../../shaders/wf_csg.wgsl")),
@@ -151,23 +152,13 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
     let generated = [
         ("<generated tags>", super::layout::tags_wgsl()),
         ("<generated constants>", constants_module(features)),
-        ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features))),
+        ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features), stage.shade_queue())),
     ];
     for (name, text) in &generated {
         lib.add(name, text).map_err(|e| GpuError::Validation(e.to_string()))?;
     }
-    let mut names: Vec<&str> = stage.names(features);
-    if let Stage::Shade(kind) = stage {
-        // The queue this kernel drains is a constant of its own.
-        lib.add(
-            "<generated shade queue>",
-            &format!("// #provides shade_queue\nconst SHADE_QUEUE: u32 = {}u;\n", wavefront::queue::shade(kind)),
-        )
-        .map_err(|e| GpuError::Validation(e.to_string()))?;
-        names.sort();
-    }
-    let root = stage.entry().0;
-    let roots: Vec<&str> = if matches!(stage, Stage::Shade(_)) { vec!["shade_queue", root] } else { vec![root] };
+    let names: Vec<&str> = stage.names(features);
+    let roots = [stage.entry().0];
     let assembled = lib
         .assemble(&roots, &names.iter().copied().collect())
         .map_err(|e| GpuError::Validation(format!("shader assembly of the {} stage: {e}", stage.label())))?;
@@ -282,7 +273,6 @@ impl GpuRenderer {
                 .into_iter()
                 .map(|(stage, assembled)| {
                     scope.spawn(move || {
-                        check_binding_limits(gpu, &assembled, stage)?;
                         let label = format!("{} stage (assembled)", stage.label());
                         let k = gpu.compute_kernel(&label, &assembled.source, stage.entry().1)?;
                         Ok((stage, assembled.source, k))
@@ -364,22 +354,6 @@ fn kernel_features(scene: &FeatureSet, kernel: Option<FeatureSet>) -> Result<Fea
         )));
     }
     Ok(kernel)
-}
-
-/// A clear error when a kernel needs more storage buffers than the adapter allows.
-fn check_binding_limits(gpu: &Gpu, assembled: &Assembled, stage: Stage) -> Result<(), GpuError> {
-    let module = assembled.validate()?.module;
-    let storage =
-        module.global_variables.iter().filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. })).count()
-            as u32;
-    let limit = gpu.limits.max_storage_buffers_per_shader_stage;
-    if storage > limit {
-        return Err(GpuError::Validation(format!(
-            "this scene's {} kernel needs {storage} storage buffers; the adapter allows {limit} per shader stage",
-            stage.label()
-        )));
-    }
-    Ok(())
 }
 
 /// The uploaded scene: a buffer for each group-1 binding some stage declares (buffers no

@@ -75,10 +75,7 @@ pub fn capacity(
     let mut slots = u64::from(wanted).min(image.max(1)).max(u64::from(paths_per_sample));
     // The largest per-slot array must fit one binding and one buffer.
     let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-    let widest = (16 * u64::from(path_field::COUNT))
-        .max(48 * u64::from(shadow_rays))
-        .max(4 * u64::from(queue::COUNT))
-        .max(if csg_queue(features) { 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1) } else { 0 });
+    let widest = scene_buffers(features).into_iter().map(|b| state_bytes(b, shadow_rays)).max().unwrap_or(1).max(1);
     slots = slots.min(limit / widest).max(1);
     slots.min(u64::from(u32::MAX / 2)) as u32
 }
@@ -90,7 +87,13 @@ pub struct Counters {
     pub non_finite: u64,
 }
 
-/// Bytes of one element of each state buffer, per slot.
+/// The state buffers some stage of a scene with features `f` binds (the others are
+/// allocated as a token 16 bytes: their bindings exist, nothing reads them).
+fn scene_buffers(f: &FeatureSet) -> std::collections::BTreeSet<StateBuffer> {
+    Stage::for_scene(f).into_iter().flat_map(|s| s.buffers(f)).collect()
+}
+
+/// Bytes of one element of each state buffer, per slot (0: not sized by the slots).
 fn state_bytes(buffer: StateBuffer, shadow_rays: u32) -> u64 {
     match buffer {
         StateBuffer::Batch => 0,
@@ -165,9 +168,9 @@ impl<'a> Runner<'a> {
         let cap = u64::from(capacity);
         let storage =
             |label: &str, buffer: StateBuffer| gpu.storage_buffer_zeroed(label, cap * state_bytes(buffer, shadow_rays));
-        let needs = |b: StateBuffer| kernels.kernels.keys().any(|s| s.buffers(features).contains(&b));
+        let used = scene_buffers(features);
         let tiny = |label: &str, b: StateBuffer| -> Result<wgpu::Buffer, GpuError> {
-            if needs(b) {
+            if used.contains(&b) {
                 storage(label, b)
             } else {
                 gpu.storage_buffer_zeroed(label, 16)

@@ -62,6 +62,14 @@ impl Stage {
         stages
     }
 
+    /// The queue a shading stage drains (`SHADE_QUEUE` in its WGSL).
+    pub fn shade_queue(self) -> Option<u32> {
+        match self {
+            Stage::Shade(kind) => Some(super::queue::shade(kind)),
+            _ => None,
+        }
+    }
+
     /// The root module and entry point.
     pub fn entry(self) -> (&'static str, &'static str) {
         match self {
@@ -192,6 +200,14 @@ impl Stage {
         }
         // Placed shapes and the camera transform points; nothing else does.
         let geometry = scene.contains(&"GEOMETRY");
+        // The hit record: stored where a query ends (if anything can be hit), read back by
+        // the CSG and shading stages.
+        if geometry && matches!(self, Stage::Intersect | Stage::Csg) {
+            names.push("WF_HIT_STORE");
+        }
+        if matches!(self, Stage::Csg | Stage::Shade(_)) {
+            names.push("WF_HIT_LOAD");
+        }
         if matches!(self, Stage::Camera | Stage::FirstHit)
             || (geometry && matches!(self, Stage::Intersect | Stage::Csg | Stage::Shade(_) | Stage::Shadow))
         {
@@ -241,7 +257,9 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 24] = [
+    pub const NAMES: [&'static str; 26] = [
+        "WF_HIT_STORE",
+        "WF_HIT_LOAD",
         "AFFINE",
         "ENVIRONMENT",
         "SETTINGS",
