@@ -1,4 +1,4 @@
-// #requires shapes constants bindings
+// #requires shapes constants bindings wavefront
 // Constructive solid geometry by interval lists along the ray: mirrors cpu::csg.
 //
 // WGSL has neither recursion nor dynamic arrays, so the tree is evaluated depth-first with
@@ -6,6 +6,11 @@
 // entries (the bound csg::max_intervals computes from the scene). Frame f (a node at
 // depth f) keeps its accumulated list in slot 2f and, for DIFF, the list to cut in slot
 // 2f + 1; a child's result arrives in slot 2(f + 1); the last slot is scratch.
+//
+// The slots live in the `csg_pool` storage buffer, CSG_POOL_SIZE intervals per path slot,
+// not in private arrays: the kernel's code and private memory stay the same whatever the
+// scene's bound (a UNITE of 1,000 spheres compiles like one of two), and the host keeps
+// the pool within a memory budget by the number of slots per batch.
 
 const CSG_SLOTS: u32 = 2u * CSG_MAX_DEPTH + 2u;
 const CSG_SCRATCH: u32 = CSG_SLOTS - 1u;
@@ -15,12 +20,13 @@ const NO_SURFACE: u32 = 0xFFFFFFFFu;
 const CSG_SLIVER: f32 = 3.0517578125e-5;
 
 // One end of an interval: the ray parameter and the surface bounding the solid there
-// (a shape index, or NO_SURFACE at an open end); `flip` marks carved surfaces.
+// (a shape index, or NO_SURFACE at an open end); `flip` (0 or 1: storage holds no bools)
+// marks carved surfaces.
 struct End {
     t: f32,
     leaf: u32,
     face: u32,
-    flip: bool,
+    flip: u32,
 }
 
 struct Interval {
@@ -28,18 +34,29 @@ struct Interval {
     exit: End,
 }
 
-var<private> csg_pool: array<Interval, CSG_POOL_SIZE>;
+// This invocation's first interval in `csg_pool`: set by the stage (csg_use_slot).
+var<private> csg_base: u32;
 var<private> csg_len: array<u32, CSG_SLOTS>;
 
+// The stages that evaluate trees call this first, for the path slot they work on.
+fn csg_use_slot(slot: u32) {
+    csg_base = slot * CSG_POOL_SIZE;
+}
+
+// The pool index of entry i of a list slot.
+fn csg_at(slot: u32, i: u32) -> u32 {
+    return csg_base + slot * CSG_MAX_INTERVALS + i;
+}
+
 fn csg_get(slot: u32, i: u32) -> Interval {
-    return csg_pool[slot * CSG_MAX_INTERVALS + i];
+    return csg_pool[csg_at(slot, i)];
 }
 
 // Appends to a slot; the scene's bound guarantees room (an overflow would drop the rest).
 fn csg_push(slot: u32, iv: Interval) {
     let n = csg_len[slot];
     if (n < CSG_MAX_INTERVALS) {
-        csg_pool[slot * CSG_MAX_INTERVALS + n] = iv;
+        csg_pool[csg_at(slot, n)] = iv;
         csg_len[slot] = n + 1u;
     }
 }
@@ -59,7 +76,7 @@ fn csg_append(dst: u32, src: u32) {
 
 // Stable insertion sort by entry (csg::sort).
 fn csg_sort(slot: u32) {
-    let base = slot * CSG_MAX_INTERVALS;
+    let base = csg_at(slot, 0u);
     for (var i = 1u; i < csg_len[slot]; i++) {
         let iv = csg_pool[base + i];
         var j = i;
@@ -74,7 +91,7 @@ fn csg_sort(slot: u32) {
 // Union into disjoint sorted intervals, in place (csg::merge).
 fn csg_merge(slot: u32) {
     csg_sort(slot);
-    let base = slot * CSG_MAX_INTERVALS;
+    let base = csg_at(slot, 0u);
     var out = 0u;
     for (var i = 0u; i < csg_len[slot]; i++) {
         let iv = csg_pool[base + i];
@@ -121,7 +138,7 @@ fn csg_intersect(a: u32, b: u32) {
 }
 
 fn flipped(e: End) -> End {
-    return End(e.t, e.leaf, e.face, !e.flip);
+    return End(e.t, e.leaf, e.face, 1u - e.flip);
 }
 
 // a := a minus the disjoint sorted `cut`; cut ends become carved surfaces (csg::subtract).
@@ -157,7 +174,7 @@ fn csg_subtract(a: u32, cut: u32) {
 }
 
 fn end_from_crossing(c: Crossing, leaf: u32) -> End {
-    return End(c.t, select(NO_SURFACE, leaf, abs(c.t) < OPEN), c.face, false);
+    return End(c.t, select(NO_SURFACE, leaf, abs(c.t) < OPEN), c.face, 0u);
 }
 
 // The leaf's interval (if any) into `slot`.
@@ -254,7 +271,7 @@ fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
                 e = iv.enter;
             }
             if (e.leaf != NO_SURFACE && e.t > ray.tmin && e.t < ray.tmax && e.t < best.c.t) {
-                best = Candidate(Crossing(e.t, e.face), e.leaf, e.flip, object);
+                best = Candidate(Crossing(e.t, e.face), e.leaf, e.flip != 0u, object);
             }
         }
     }

@@ -9,6 +9,7 @@ fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     if (slot == WF_NONE) {
         return;
     }
+    csg_use_slot(slot);
     var ray = load_ray(slot);
     var best = load_hit(slot);
     ray.tmax = min(ray.tmax, best.c.t);

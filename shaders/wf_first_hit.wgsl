@@ -9,6 +9,9 @@ fn first_hit_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     if (slot >= batch.path_count) {
         return;
     }
+// #if CSG
+    csg_use_slot(slot);
+// #endif
     let id = path_id(slot);
     let ray = pixel_ray(id.pixel % settings.width, id.pixel / settings.width, id.j);
 // #if ONOFF

@@ -11,6 +11,11 @@ fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     if (slot == WF_NONE) {
         return;
     }
+// #if CSG
+// #if !CSG_QUEUE
+    csg_use_slot(slot);
+// #endif
+// #endif
     let ray = load_ray(slot);
 // #if CSG_QUEUE
     let best = traverse(ray, false);

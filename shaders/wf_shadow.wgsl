@@ -9,6 +9,9 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (slot == WF_NONE) {
         return;
     }
+// #if CSG
+    csg_use_slot(slot);
+// #endif
     let ri = field(F_RADIANCE, slot);
     var radiance = paths[ri].xyz;
     for (var k = 0u; k < batch.shadow_rays; k++) {

@@ -57,9 +57,12 @@ impl PackedScene {
     }
 }
 
-/// Most CSG intervals one GPU invocation may hold in private memory (32 bytes each): the
-/// evaluation needs (2·depth + 2) lists of `csg::max_intervals` entries.
-pub const MAX_CSG_POOL: usize = 8192;
+/// Most CSG intervals one path may need in the GPU's interval pool (32 bytes each, so
+/// 8 MiB; `wavefront::csg_pool_intervals`: 2·depth + 2 lists of `csg::max_intervals`
+/// entries). The pool bounds a batch's paths by its memory budget (256 MiB on a software
+/// adapter), so beyond this a batch would hold too few paths to be worth running; a UNITE
+/// of 65,536 spheres is within it.
+pub const MAX_CSG_POOL: usize = 1 << 18;
 
 /// `data`, or one zeroed element when it is empty: what is bound for a buffer the kernel
 /// declares but the scene does not fill (wgpu requires a binding to hold at least one
@@ -142,8 +145,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     scene.validate()?;
     let features = FeatureSet::of(scene);
     if features.csg {
-        // Saturating: the interval bound itself saturates (at u32::MAX here) rather than wrap.
-        let pool = (2 * features.csg_max_depth as usize + 2).saturating_mul(features.csg_max_intervals as usize);
+        let pool = usize::try_from(crate::gpu::wavefront::csg_pool_intervals(&features)).unwrap_or(usize::MAX);
         if pool > MAX_CSG_POOL {
             return Err(PackError::TooMany {
                 what: "CSG interval slots (2·tree depth + 2 lists of csg::max_intervals entries)",
@@ -539,10 +541,11 @@ mod tests {
     }
 
     #[test]
-    fn a_csg_tree_too_wide_for_private_memory_is_a_clear_error() {
+    fn a_csg_tree_too_wide_for_the_interval_pool_is_a_clear_error() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
-        let many = (0..3000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
+        // A UNITE of n spheres needs 4n intervals: 70,000 is past the limit.
+        let many = (0..70_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
         b.shape(Shape::csg(CsgOp::Unite, many, Transform::IDENTITY));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");

@@ -140,7 +140,7 @@ fn constants_module(features: &FeatureSet) -> String {
         super::layout::CSG_NODE_BIT,
         intervals,
         depth,
-        (2 * depth + 2) * intervals,
+        wavefront::csg_pool_intervals(features),
         features.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX,
         features.csg_trees.clamp(1, crate::prepare::CSG_DEFER_MAX as u32),
     )
@@ -585,6 +585,58 @@ mod tests {
 
     /// `shaders/angles.wgsl` against f64 atan2 on the device: every octant, both signed
     /// zeros, tiny and huge magnitudes, and the polar angle near the poles.
+    /// Issue 12, goal 3: kernel code and private memory must not grow with a scene's size.
+    /// A UNITE of 1,000 spheres gets the same kernels as a UNITE of 2 but for the values of
+    /// the two interval-bound constants, and neither sizes an array (the lists live in the
+    /// storage pool, whose size the host picks).
+    #[test]
+    fn csg_kernels_do_not_grow_with_the_interval_bound() {
+        use crate::scene::{CsgOp, Shape, ShapeKind, Transform};
+        let unite = |n: usize| {
+            let mut b = crate::scene::SceneBuilder::new(4, 4);
+            let m = b.diffuse(crate::color::Color::gray(0.5));
+            let spheres = (0..n)
+                .map(|i| {
+                    let at = glam::DVec3::new(i as f64 * 0.1, 0.0, 0.0);
+                    Shape::primitive(ShapeKind::Sphere, Transform::translation(at), m)
+                })
+                .collect();
+            b.shape(Shape::csg(CsgOp::Unite, spheres, Transform::IDENTITY));
+            b.point_light(crate::scene::PointLight {
+                position: glam::DVec3::new(0.0, 0.0, 5.0),
+                color: crate::color::Color::WHITE,
+                linear_radius: 0.0,
+            });
+            FeatureSet::of(&b.build().unwrap())
+        };
+        let (small, large) = (unite(2), unite(1000));
+        assert_eq!((small.csg_max_intervals, large.csg_max_intervals), (2, 1000));
+        let bound_free = |src: &str| -> String {
+            src.lines()
+                .filter(|l| !l.starts_with("const CSG_MAX_INTERVALS") && !l.starts_with("const CSG_POOL_SIZE"))
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        let (a, b) = (assemble_stages(&small).unwrap(), assemble_stages(&large).unwrap());
+        assert_eq!(a.len(), b.len());
+        let mut csg_stages = 0;
+        for ((stage, x), (_, y)) in a.iter().zip(&b) {
+            assert_eq!(bound_free(&x.source), bound_free(&y.source), "{stage:?}");
+            for line in y.source.lines().filter(|l| l.contains("array<")) {
+                assert!(!line.contains("CSG_MAX_INTERVALS") && !line.contains("CSG_POOL_SIZE"), "{stage:?}: {line}");
+            }
+            if y.source.contains("fn csg_intervals") {
+                csg_stages += 1;
+                // The pool's element is the size the host allocates by.
+                let module = y.validate().unwrap().module;
+                let ty = module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Interval")).unwrap().1;
+                let naga::TypeInner::Struct { span, .. } = ty.inner else { panic!("Interval is not a struct") };
+                assert_eq!(u64::from(span), wavefront::CSG_INTERVAL_BYTES);
+            }
+        }
+        assert_eq!(csg_stages, 2, "the CSG and shadow stages evaluate trees");
+    }
+
     #[test]
     fn precise_atan2_on_the_device_is_within_2e_7_rad_plus_an_ulp() {
         let Some(gpu) = crate::gpu::gpu_for_tests("precise_atan2") else { return };

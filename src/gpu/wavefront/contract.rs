@@ -11,12 +11,16 @@
 //! - `shadow` (`array<vec4<f32>>`): per path, `batch.shadow_rays` shadow rays of three vec4 each.
 //! - `deferred_refs` (`array<u32>`): per path, the CSG trees its closest-hit query met.
 //! - `film` (`array<vec4<f32>>`): per pixel of the batch, the sum of its camera samples.
+//! - `csg_pool` (`array<Interval>`): per path, the CSG interval lists of the query it is in
+//!   ([`csg_pool_intervals`] each; the host bounds the batch so that the pool stays within
+//!   a memory budget however large a tree's bound).
 //! - `args` (`array<u32>`): indirect dispatch arguments, three words per queue, written by
 //!   the control kernels (a separate buffer: a dispatch may not use one buffer both as its
 //!   indirect arguments and as writable storage).
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::gpu::features::FeatureSet;
 use crate::gpu::layout::brdf_kind;
 
 /// Invocations per workgroup of every queue-driven stage.
@@ -135,10 +139,11 @@ pub enum StateBuffer {
     DeferredRefs,
     Film,
     Args,
+    CsgPool,
 }
 
 impl StateBuffer {
-    pub const ALL: [StateBuffer; 9] = [
+    pub const ALL: [StateBuffer; 10] = [
         StateBuffer::Batch,
         StateBuffer::Control,
         StateBuffer::Queues,
@@ -148,6 +153,7 @@ impl StateBuffer {
         StateBuffer::DeferredRefs,
         StateBuffer::Film,
         StateBuffer::Args,
+        StateBuffer::CsgPool,
     ];
 
     /// Its binding number in group 0.
@@ -167,9 +173,21 @@ impl StateBuffer {
             StateBuffer::DeferredRefs => ("deferred_refs", "array<u32>"),
             StateBuffer::Film => ("film", "array<vec4<f32>>"),
             StateBuffer::Args => ("args", "array<u32>"),
+            // `Interval` is declared by the csg module, the only one that binds this.
+            StateBuffer::CsgPool => ("csg_pool", "array<Interval>"),
         };
         format!("@group(0) @binding({}) var<storage, read_write> {name}: {ty};", self.binding())
     }
+}
+
+/// Bytes of one CSG interval in `csg_pool` (two ends of four 32-bit words; a test checks
+/// the WGSL struct).
+pub const CSG_INTERVAL_BYTES: u64 = 32;
+
+/// Intervals of `csg_pool` one lane needs for the scene's trees (features `f`): 2·depth + 2
+/// slots (two per frame, the leaf's, and the scratch slot) of the lists' bound each.
+pub fn csg_pool_intervals(f: &FeatureSet) -> u64 {
+    (2 * u64::from(f.csg_max_depth.max(1)) + 2) * u64::from(f.csg_max_intervals.max(1))
 }
 
 /// The generated `wavefront` module for a stage that binds `buffers`: every constant above,
@@ -222,7 +240,9 @@ mod tests {
 
     #[test]
     fn batch_struct_matches_rust_and_buffers_have_distinct_bindings() {
-        let src = wavefront_module(&StateBuffer::ALL, None);
+        // The pool's element type lives in the csg module (checked with it, in gpu::render).
+        let alone: Vec<StateBuffer> = StateBuffer::ALL.into_iter().filter(|b| *b != StateBuffer::CsgPool).collect();
+        let src = wavefront_module(&alone, None);
         let v = crate::gpu::validate_wgsl("wavefront", &src).unwrap();
         let ty = v.module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Batch")).unwrap().1;
         let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("Batch is not a struct") };

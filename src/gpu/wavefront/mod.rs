@@ -32,6 +32,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use contract::{control, path_field, word_field, MAX_GRID, WORKGROUP};
+pub use contract::{csg_pool_intervals, CSG_INTERVAL_BYTES};
 use schedule::BatchRunner;
 
 use crate::gpu::compute::ComputeKernel;
@@ -75,8 +76,14 @@ pub fn capacity(
     let mut slots = u64::from(wanted).min(image.max(1)).max(u64::from(paths_per_sample));
     // The largest per-slot array must fit one binding and one buffer.
     let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-    let widest = scene_buffers(features).into_iter().map(|b| state_bytes(b, shadow_rays)).max().unwrap_or(1).max(1);
+    let per_slot = |b| state_bytes(b, shadow_rays, features);
+    let widest = scene_buffers(features).into_iter().map(per_slot).max().unwrap_or(1).max(1);
     slots = slots.min(limit / widest).max(1);
+    // CSG interval lists (per slot, sized by the trees' bound) within their budget: a tree
+    // with a large bound makes batches smaller, never the kernels larger.
+    if scene_buffers(features).contains(&StateBuffer::CsgPool) {
+        slots = slots.min(csg_pool_budget(gpu) / per_slot(StateBuffer::CsgPool)).max(1);
+    }
     slots.min(u64::from(u32::MAX / 2)) as u32
 }
 
@@ -94,7 +101,7 @@ fn scene_buffers(f: &FeatureSet) -> std::collections::BTreeSet<StateBuffer> {
 }
 
 /// Bytes of one element of each state buffer, per slot (0: not sized by the slots).
-fn state_bytes(buffer: StateBuffer, shadow_rays: u32) -> u64 {
+fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> u64 {
     match buffer {
         StateBuffer::Batch => 0,
         StateBuffer::Control => 0,
@@ -105,6 +112,16 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32) -> u64 {
         StateBuffer::DeferredRefs => 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1),
         StateBuffer::Film => 16,
         StateBuffer::Args => 0,
+        StateBuffer::CsgPool => contract::csg_pool_intervals(features) * contract::CSG_INTERVAL_BYTES,
+    }
+}
+
+/// Device memory the CSG interval pool may take (it bounds the slots of a batch): a
+/// software adapter's caches favour a small pool, a hardware GPU has memory to spare.
+fn csg_pool_budget(gpu: &Gpu) -> u64 {
+    match gpu.adapter_info.device_type {
+        wgpu::DeviceType::Cpu => 256 << 20,
+        _ => 2 << 30,
     }
 }
 
@@ -166,8 +183,9 @@ impl<'a> Runner<'a> {
         let RunnerSetup { gpu, kernels, groups1, shadow_rays, max_depth, .. } = *setup;
         let features = &setup.features;
         let cap = u64::from(capacity);
-        let storage =
-            |label: &str, buffer: StateBuffer| gpu.storage_buffer_zeroed(label, cap * state_bytes(buffer, shadow_rays));
+        let storage = |label: &str, buffer: StateBuffer| {
+            gpu.storage_buffer_zeroed(label, cap * state_bytes(buffer, shadow_rays, features))
+        };
         let used = scene_buffers(features);
         let tiny = |label: &str, b: StateBuffer| -> Result<wgpu::Buffer, GpuError> {
             if used.contains(&b) {
@@ -181,6 +199,7 @@ impl<'a> Runner<'a> {
         let words = tiny("path words", StateBuffer::Words)?;
         let shadow = tiny("shadow rays", StateBuffer::Shadow)?;
         let deferred = tiny("deferred CSG trees", StateBuffer::DeferredRefs)?;
+        let csg_pool = tiny("CSG interval pool", StateBuffer::CsgPool)?;
         let films = [storage("film 0", StateBuffer::Film)?, storage("film 1", StateBuffer::Film)?];
         let staging_buffer = |label: &str, bytes: u64| {
             gpu.scoped(|| {
@@ -222,6 +241,7 @@ impl<'a> Runner<'a> {
                 StateBuffer::DeferredRefs => &deferred,
                 StateBuffer::Film => &films[film],
                 StateBuffer::Args => &args,
+                StateBuffer::CsgPool => &csg_pool,
             }
         };
         let mut groups0 = BTreeMap::new();

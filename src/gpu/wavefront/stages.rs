@@ -91,17 +91,21 @@ impl Stage {
         use StateBuffer::*;
         match self {
             Stage::Camera => vec![Batch, Queues, Paths, Words],
+            Stage::FirstHit if f.csg => vec![Batch, Control, Paths, CsgPool],
             Stage::FirstHit => vec![Batch, Control, Paths],
             Stage::Intersect if csg_queue(f) => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
+            // Trees evaluated where the traversal meets them.
+            Stage::Intersect if f.csg => vec![Batch, Control, Queues, Paths, Words, CsgPool],
             Stage::Intersect if f.bvh || f.plane => vec![Batch, Control, Queues, Paths, Words],
             // Nothing to hit: every ray escapes and no hit is recorded.
             Stage::Intersect => vec![Batch, Control, Queues, Paths],
-            Stage::Csg => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
+            Stage::Csg => vec![Batch, Control, Queues, Paths, Words, DeferredRefs, CsgPool],
             Stage::Escape => vec![Batch, Control, Queues, Paths, Words],
             Stage::Shade(kind) if kind == brdf_kind::DIFFUSE && has_shadow_rays(f) => {
                 vec![Batch, Control, Queues, Paths, Words, Shadow]
             }
             Stage::Shade(_) => vec![Batch, Control, Queues, Paths, Words],
+            Stage::Shadow if f.csg => vec![Batch, Control, Queues, Paths, Shadow, CsgPool],
             Stage::Shadow => vec![Batch, Control, Queues, Paths, Shadow],
             Stage::Film => vec![Batch, Control, Paths, Film],
             Stage::DispatchArgs | Stage::Advance => vec![Control, Args],
