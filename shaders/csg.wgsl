@@ -61,13 +61,6 @@ fn csg_push(slot: u32, iv: Interval) {
     }
 }
 
-fn csg_copy(dst: u32, src: u32) {
-    csg_len[dst] = 0u;
-    for (var i = 0u; i < csg_len[src]; i++) {
-        csg_push(dst, csg_get(src, i));
-    }
-}
-
 fn csg_append(dst: u32, src: u32) {
     for (var i = 0u; i < csg_len[src]; i++) {
         csg_push(dst, csg_get(src, i));
@@ -88,9 +81,8 @@ fn csg_sort(slot: u32) {
     }
 }
 
-// Union into disjoint sorted intervals, in place (csg::merge).
-fn csg_merge(slot: u32) {
-    csg_sort(slot);
+// A sorted list's union into disjoint intervals, in place (csg::merge after its sort).
+fn csg_coalesce(slot: u32) {
     let base = csg_at(slot, 0u);
     var out = 0u;
     for (var i = 0u; i < csg_len[slot]; i++) {
@@ -113,7 +105,8 @@ fn csg_solid(a: f32, b: f32) -> bool {
     return b - a > CSG_SLIVER * max(abs(a), abs(b));
 }
 
-// a := pairwise intersection of a and b, pieces longer than a sliver (csg::intersect).
+// scratch := pairwise intersection of a and b, pieces longer than a sliver, unsorted
+// (csg::intersect before its sort).
 fn csg_intersect(a: u32, b: u32) {
     csg_len[CSG_SCRATCH] = 0u;
     for (var i = 0u; i < csg_len[a]; i++) {
@@ -133,15 +126,14 @@ fn csg_intersect(a: u32, b: u32) {
             }
         }
     }
-    csg_sort(CSG_SCRATCH);
-    csg_copy(a, CSG_SCRATCH);
 }
 
 fn flipped(e: End) -> End {
     return End(e.t, e.leaf, e.face, 1u - e.flip);
 }
 
-// a := a minus the disjoint sorted `cut`; cut ends become carved surfaces (csg::subtract).
+// scratch := a minus the disjoint sorted `cut`, unsorted; cut ends become carved surfaces
+// (csg::subtract before its sort).
 fn csg_subtract(a: u32, cut: u32) {
     csg_len[CSG_SCRATCH] = 0u;
     for (var i = 0u; i < csg_len[a]; i++) {
@@ -169,8 +161,6 @@ fn csg_subtract(a: u32, cut: u32) {
             csg_push(CSG_SCRATCH, Interval(start, x.exit));
         }
     }
-    csg_sort(CSG_SCRATCH);
-    csg_copy(a, CSG_SCRATCH);
 }
 
 fn end_from_crossing(c: Crossing, leaf: u32) -> End {
@@ -186,43 +176,105 @@ fn csg_leaf(slot: u32, shape: u32, ray: Ray) {
     }
 }
 
+// The list operations a step of the evaluation runs, as (operation, slot, slot) triples in
+// `csg_ops`, executed by one loop (csg_run) that calls each list function from one place
+// only: Mesa inlines every call, and the several call sites of sort and copy the nodes'
+// rules would otherwise have made compiled the interval code several times over.
+const OP_CLEAR: u32 = 0u;
+const OP_APPEND: u32 = 1u;
+const OP_SORT: u32 = 2u;
+const OP_COALESCE: u32 = 3u;
+const OP_INTERSECT: u32 = 4u;
+const OP_SUBTRACT: u32 = 5u;
+// A step plans at most a node's finish (DIFF: 6 operations) and its fold into the parent
+// (INTERSECT: 4).
+const CSG_MAX_OPS: u32 = 10u;
+
+var<private> csg_ops: array<vec3<u32>, CSG_MAX_OPS>;
+var<private> csg_op_count: u32;
+
+fn csg_plan(op: u32, a: u32, b: u32) {
+    csg_ops[csg_op_count] = vec3<u32>(op, a, b);
+    csg_op_count++;
+}
+
+// Replaces list `dst` by the scratch list sorted (the end of INTERSECT and DIFF).
+fn plan_sorted_scratch_into(dst: u32) {
+    csg_plan(OP_SORT, CSG_SCRATCH, 0u);
+    csg_plan(OP_CLEAR, dst, 0u);
+    csg_plan(OP_APPEND, dst, CSG_SCRATCH);
+}
+
 // Folds child number `i` (its list in `src`) into the node of frame f.
-fn csg_combine(op: u32, f: u32, i: u32, src: u32) {
+fn plan_combine(op: u32, f: u32, i: u32, src: u32) {
     let acc = 2u * f;
     if (i == 0u) {
-        csg_copy(acc, src);
-        csg_len[acc + 1u] = 0u;
+        csg_plan(OP_CLEAR, acc, 0u);
+        csg_plan(OP_APPEND, acc, src);
+        csg_plan(OP_CLEAR, acc + 1u, 0u);
         return;
     }
     switch op {
         case CSG_INTERSECT: {
-            csg_intersect(acc, src);
+            csg_plan(OP_INTERSECT, acc, src);
+            plan_sorted_scratch_into(acc);
         }
         case CSG_DIFF: {
-            csg_append(acc + 1u, src);
+            csg_plan(OP_APPEND, acc + 1u, src);
         }
         default: {
-            csg_append(acc, src);
+            csg_plan(OP_APPEND, acc, src);
         }
     }
 }
 
 // The node's final list, in its accumulator slot.
-fn csg_finish(op: u32, f: u32) {
+fn plan_finish(op: u32, f: u32) {
     let acc = 2u * f;
     switch op {
         case CSG_UNITE: {
-            csg_sort(acc);
+            csg_plan(OP_SORT, acc, 0u);
         }
         case CSG_DIFF: {
-            csg_merge(acc + 1u);
-            csg_subtract(acc, acc + 1u);
+            csg_plan(OP_SORT, acc + 1u, 0u);
+            csg_plan(OP_COALESCE, acc + 1u, 0u);
+            csg_plan(OP_SUBTRACT, acc, acc + 1u);
+            plan_sorted_scratch_into(acc);
         }
         case CSG_FUSE: {
-            csg_merge(acc);
+            csg_plan(OP_SORT, acc, 0u);
+            csg_plan(OP_COALESCE, acc, 0u);
         }
         default: {}
     }
+}
+
+// Runs the planned operations, in order.
+fn csg_run() {
+    for (var k = 0u; k < csg_op_count; k++) {
+        let o = csg_ops[k];
+        switch o.x {
+            case OP_CLEAR: {
+                csg_len[o.y] = 0u;
+            }
+            case OP_APPEND: {
+                csg_append(o.y, o.z);
+            }
+            case OP_SORT: {
+                csg_sort(o.y);
+            }
+            case OP_COALESCE: {
+                csg_coalesce(o.y);
+            }
+            case OP_INTERSECT: {
+                csg_intersect(o.y, o.z);
+            }
+            default: {
+                csg_subtract(o.y, o.z);
+            }
+        }
+    }
+    csg_op_count = 0u;
 }
 
 // Evaluates the tree rooted at node `root` along the ray's whole line; the result is in
@@ -233,29 +285,34 @@ fn csg_intervals(root: u32, ray: Ray) {
     var depth = 1u;
     csg_len[0] = 0u;
     csg_len[1] = 0u;
-    loop {
+    csg_op_count = 0u;
+    var done = false;
+    while (!done) {
         let f = depth - 1u;
         let node = csg_nodes[frames[f].x];
         let i = frames[f].y;
         if (i == node.child_count) {
-            csg_finish(node.op, f);
+            // The node is complete: finish it and fold it into its parent.
+            plan_finish(node.op, f);
             if (f == 0u) {
-                return;
+                done = true;
+            } else {
+                depth = f;
+                let parent = csg_nodes[frames[f - 1u].x];
+                plan_combine(parent.op, f - 1u, frames[f - 1u].y - 1u, 2u * f);
             }
-            depth = f;
-            let parent = csg_nodes[frames[f - 1u].x];
-            csg_combine(parent.op, f - 1u, frames[f - 1u].y - 1u, 2u * f);
-            continue;
+        } else {
+            frames[f].y = i + 1u;
+            let r = indices[node.first_child + i];
+            if ((r & CSG_NODE_BIT) != 0u && depth < CSG_MAX_DEPTH) {
+                frames[depth] = vec2<u32>(r & ~CSG_NODE_BIT, 0u);
+                depth++;
+                continue;
+            }
+            csg_leaf(2u * depth, r & ~CSG_NODE_BIT, ray);
+            plan_combine(node.op, f, i, 2u * depth);
         }
-        frames[f].y = i + 1u;
-        let r = indices[node.first_child + i];
-        if ((r & CSG_NODE_BIT) != 0u && depth < CSG_MAX_DEPTH) {
-            frames[depth] = vec2<u32>(r & ~CSG_NODE_BIT, 0u);
-            depth++;
-            continue;
-        }
-        csg_leaf(2u * depth, r & ~CSG_NODE_BIT, ray);
-        csg_combine(node.op, f, i, 2u * depth);
+        csg_run();
     }
 }
 
