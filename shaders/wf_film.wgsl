@@ -3,6 +3,10 @@
 // order (camera sample j, then path i), whatever order the queues ran them in, so images
 // are bitwise reproducible: the pixel's value is the sum over its camera samples of the
 // mean of their n paths. NaN/∞ estimates are counted and add 0 (DESIGN.md "Pixel estimate").
+// The sum over camera samples is compensated (Knuth's TwoSum: `film[2p]` the rounded sum,
+// `film[2p + 1]` its exact rounding error, added in f64 on the host), so a pixel's sum is
+// the exact sum of its sample means to about 2⁻⁴⁸ whatever the round sizes: renders of
+// sample ranges (shards) then merge into the one-render image to the last f32 bit.
 
 // Whether any channel is NaN or infinite (by bits: immune to fast-math folding).
 fn non_finite(v: vec3<f32>) -> bool {
@@ -19,6 +23,7 @@ fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     let n = batch.paths_per_sample;
     let first = p * batch.samples * n;
     var sum = vec3<f32>(0.0);
+    var err = vec3<f32>(0.0);
     var bad = 0u;
     for (var j = 0u; j < batch.samples; j++) {
         var sample_sum = vec3<f32>(0.0);
@@ -35,10 +40,14 @@ fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
             bad++;
             mean = vec3<f32>(0.0);
         }
-        sum += mean;
+        let t = sum + mean;
+        let back = t - sum;
+        err += (sum - (t - back)) + (mean - back);
+        sum = t;
     }
     if (bad > 0u) {
         atomicAdd(&control[CTRL_NAN], bad);
     }
-    film[p] = vec4<f32>(sum, 0.0);
+    film[2u * p] = vec4<f32>(sum, 0.0);
+    film[2u * p + 1u] = vec4<f32>(err, 0.0);
 }

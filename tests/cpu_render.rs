@@ -18,7 +18,7 @@ use lumen::image::HdrImage;
 use lumen::scene::*;
 
 fn run(scene: &Scene, spp: Option<u32>) -> RenderOutput {
-    let out = render(scene, &RenderOptions { spp }, Progress::Hidden);
+    let out = render(scene, &RenderOptions { spp, ..RenderOptions::default() }, Progress::Hidden);
     assert_eq!(out.stats.non_finite_samples, 0);
     out
 }
@@ -335,7 +335,7 @@ fn on_off_and_flat_are_pixel_exact() {
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
     let scene = furnace(16, 0.7, 1.0, pt(3, 8, 2, true));
-    let opts = RenderOptions { spp: Some(3) };
+    let opts = RenderOptions { spp: Some(3), ..RenderOptions::default() };
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let a = one.install(|| render(&scene, &opts, Progress::Hidden));
     let b = render(&scene, &opts, Progress::Hidden);
@@ -603,7 +603,8 @@ mod rounds {
     }
 
     fn limited(scene: &Scene, spp: u32, limits: Limits) -> RenderOutput {
-        render_limited(scene, &RenderOptions { spp: Some(spp) }, &limits, Progress::Hidden).unwrap()
+        render_limited(scene, &RenderOptions { spp: Some(spp), ..RenderOptions::default() }, &limits, Progress::Hidden)
+            .unwrap()
     }
 
     fn bits(img: &HdrImage) -> Vec<[u32; 3]> {
@@ -630,7 +631,10 @@ mod rounds {
         let whole = limited(&s, 9, Limits { round_spp: Some(9), ..Limits::default() });
         assert_eq!((whole.stats.rounds, whole.stats.spp, whole.stats.stop), (1, 9, StopReason::Completed));
         assert_eq!(bits(&whole.image), bits(&one_pass_mean(&s, 9, 9)));
-        assert_eq!(whole.image, render(&s, &RenderOptions { spp: Some(9) }, Progress::Hidden).image);
+        assert_eq!(
+            whole.image,
+            render(&s, &RenderOptions { spp: Some(9), ..RenderOptions::default() }, Progress::Hidden).image
+        );
         for round in [1, 2, 4] {
             let split = limited(&s, 9, Limits { round_spp: Some(round), ..Limits::default() });
             assert_eq!(split.stats.rounds, 9u32.div_ceil(round));

@@ -157,7 +157,7 @@ use lumen::scene::*;
 
 fn assert_matches_cpu(gpu: &Gpu, scene: &Scene, spp: Option<u32>, min_fraction: f64) -> HdrImage {
     let g = render(gpu, scene, &GpuRenderOptions::fixed_passes(spp, 4)).unwrap();
-    let c = lumen::cpu::render(scene, &RenderOptions { spp }, Progress::Hidden);
+    let c = lumen::cpu::render(scene, &RenderOptions { spp, ..RenderOptions::default() }, Progress::Hidden);
     let a = agreement(&g.image, &c.image);
     println!("{a}");
     a.check(Tolerance::share(min_fraction)).unwrap_or_else(|e| panic!("GPU vs CPU: {e}"));
@@ -737,7 +737,10 @@ fn gpu_ray_counts_match_the_cpu() {
         ("path tracer, no NEE", path_traced_scene(false, Some(Environment::Uniform(Color::gray(0.3))))),
     ];
     for (name, scene) in scenes {
-        let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(4) }, Progress::Hidden).stats.rays;
+        let cpu =
+            lumen::cpu::render(&scene, &RenderOptions { spp: Some(4), ..RenderOptions::default() }, Progress::Hidden)
+                .stats
+                .rays;
         let opts = GpuRenderOptions::fixed_passes(Some(4), 2);
         let counted = render(&gpu, &scene, &opts).unwrap();
         // Batches of 7 slots: the count must not depend on how paths are batched.

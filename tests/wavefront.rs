@@ -117,7 +117,8 @@ fn images_do_not_depend_on_the_batch_size() {
             );
             assert!(bits(&out.image) == bits(&whole.image), "{name}: batches of {batch} slots change the image");
         }
-        let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(4) }, Progress::Hidden);
+        let cpu =
+            lumen::cpu::render(&scene, &RenderOptions { spp: Some(4), ..RenderOptions::default() }, Progress::Hidden);
         let agree = agreement(&whole.image, &cpu.image);
         agree.check(Tolerance::share(0.99)).unwrap_or_else(|e| panic!("{name} against the CPU: {e}"));
     }
@@ -194,7 +195,7 @@ fn a_unite_of_1000_spheres_renders_like_the_cpu() {
     let few = gpu_render(&gpu, &scene, 2, 7);
     assert!(few.batches > whole.batches);
     assert!(bits(&few.image) == bits(&whole.image), "batches of 7 slots change the image");
-    let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(2) }, Progress::Hidden);
+    let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(2), ..RenderOptions::default() }, Progress::Hidden);
     let block = cpu.image.pixels().iter().filter(|p| (p.r - 0.3).abs() > 1e-3).count();
     assert!(block > 60, "the block should fill much of the view ({block} of 192 pixels)");
     agreement(&whole.image, &cpu.image).check(Tolerance::share(0.97)).unwrap_or_else(|e| panic!("{e}"));

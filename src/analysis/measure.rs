@@ -68,7 +68,12 @@ pub fn measure_with(
     match device {
         OpenDevice::Cpu => {
             let bar = if progress { Progress::Bar } else { Progress::Hidden };
-            let out = cpu::render_limited(scene, &RenderOptions { spp: Some(spp) }, &Limits::default(), bar)?;
+            let out = cpu::render_limited(
+                scene,
+                &RenderOptions { spp: Some(spp), ..RenderOptions::default() },
+                &Limits::default(),
+                bar,
+            )?;
             Ok(Measurement {
                 image: out.image,
                 spp: out.stats.spp as u32,
@@ -83,6 +88,7 @@ pub fn measure_with(
                 spp: Some(spp),
                 passes: PassOptions { progress, ..PassOptions::default() },
                 features: kernel,
+                samples: None,
             };
             let out = renderer.borrow_mut().render(gpu, scene, &opts)?;
             let pixels = u64::from(scene.width) * u64::from(scene.height);

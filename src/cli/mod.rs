@@ -14,6 +14,7 @@ pub mod devices;
 pub mod gpu_args;
 #[cfg(unix)]
 pub mod headless;
+pub mod merge;
 pub mod output;
 pub mod render;
 pub mod script_args;
@@ -39,6 +40,8 @@ pub enum Command {
     Check(check::CheckArgs),
     /// Render a SceneLang script to image files.
     Render(render::RenderArgs),
+    /// Merge EXR renders of disjoint sample ranges (shards) into one image.
+    Merge(merge::MergeArgs),
     /// Print the WGSL kernel assembled for a scene (only what the scene uses).
     Shader(shader::ShaderArgs),
     /// Measure how error falls with samples and time on each device (table + log-log plot).
@@ -54,6 +57,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Devices(args) => devices::run(args),
         Command::Check(args) => check::run(args),
         Command::Render(args) => render::run(args),
+        Command::Merge(args) => merge::run(args),
         Command::Shader(args) => shader::run(args),
         Command::Converge(args) => converge::run(args),
         Command::Bench(args) => bench::run(args),

@@ -17,7 +17,9 @@ pub use crate::device::DeviceChoice;
 use crate::device::{open_device, OpenDevice};
 use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
 use crate::gpu::{ctrlc_flag, Gpu, GpuError};
-use crate::image::{write_image, HdrImage, ImageFormat, ToneMap};
+use crate::image::render_metadata::fingerprint;
+use crate::image::{write_image_with, HdrImage, ImageFormat, RenderMetadata, ToneMap};
+use crate::prepare::SampleRange;
 use crate::scene::{Renderer, Scene};
 use crate::stop::StopReason;
 /// Most frames `--frames` accepts.
@@ -59,6 +61,47 @@ pub struct RenderArgs {
     /// (out.png → out_0001.png ...), plus an mp4 when ffmpeg is on PATH.
     #[arg(long, value_name = "START:END:COUNT")]
     pub frames: Option<String>,
+    /// Render only camera samples [A, B) of the image's sample layout (the `--spp` count, or
+    /// the tracer's): a shard that `lumen merge` combines exactly with the others. Write it
+    /// as .exr, which records the range.
+    #[arg(long, value_name = "A:B", conflicts_with = "shard")]
+    pub samples: Option<String>,
+    /// Render part I (0-based) of N: of the samples per pixel split into N contiguous
+    /// ranges, or with --frames, of the frames. For job arrays: SLURM_ARRAY_TASK_ID,
+    /// JOB_COMPLETION_INDEX.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
+}
+
+/// Which part of the work this render does (`--samples`, `--shard`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Part {
+    All,
+    Samples(SampleRange),
+    Shard { index: u32, count: u32 },
+}
+
+impl Part {
+    fn of(args: &RenderArgs) -> anyhow::Result<Self> {
+        Ok(match (&args.samples, &args.shard) {
+            (Some(r), _) => Part::Samples(SampleRange::parse(r).context("--samples")?),
+            (None, Some(s)) => {
+                let (index, count) = SampleRange::parse_shard(s).context("--shard")?;
+                Part::Shard { index, count }
+            }
+            (None, None) => Part::All,
+        })
+    }
+
+    /// The camera samples to take of a layout of `total` per pixel (frames: all of them).
+    fn samples(self, total: u32, frames: bool) -> anyhow::Result<SampleRange> {
+        match self {
+            Part::Shard { .. } | Part::All if frames => Ok(SampleRange::all(total)),
+            Part::All => Ok(SampleRange::all(total)),
+            Part::Samples(r) => Ok(r.within(total).context("--samples")?),
+            Part::Shard { index, count } => Ok(SampleRange::shard(index, count, total).context("--shard")?),
+        }
+    }
 }
 
 /// An animation's times.
@@ -132,6 +175,10 @@ fn open(args: &RenderArgs) -> anyhow::Result<OpenDevice> {
 /// One rendered image and how it went.
 struct Rendered {
     image: HdrImage,
+    /// Samples per pixel taken (from the range's start) and where.
+    spp: u32,
+    device: String,
+    seconds: f64,
     non_finite_samples: u64,
     /// The render was cut short (time limit, Ctrl-C): later frames are not rendered.
     stopped_early: bool,
@@ -140,11 +187,11 @@ struct Rendered {
 /// Renders on the open device. With `--device auto`, a scene the GPU refuses (too large
 /// for the adapter's limits, say), or a render the GPU fails (device lost, out of memory),
 /// is rendered on the CPU instead, from the start, with a warning.
-fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene) -> anyhow::Result<Rendered> {
+fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene, range: SampleRange) -> anyhow::Result<Rendered> {
     let OpenDevice::Gpu { gpu, renderer } = device else {
-        return render_on_cpu(scene, args);
+        return render_on_cpu(scene, args, range);
     };
-    match render_on_gpu(gpu, &mut renderer.borrow_mut(), args, scene) {
+    match render_on_gpu(gpu, &mut renderer.borrow_mut(), args, scene, range) {
         Err(e) if args.device == DeviceChoice::Auto => {
             match e {
                 GpuError::DeviceLost(_) | GpuError::OutOfMemory(_) | GpuError::Readback(_) => {
@@ -153,15 +200,16 @@ fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene) -> anyhow::R
                 _ => eprintln!("warning: the GPU cannot render this scene: {e}"),
             }
             eprintln!("warning: rendering on the CPU reference renderer instead, from the first sample");
-            render_on_cpu(scene, args)
+            render_on_cpu(scene, args, range)
         }
         other => other.map_err(|e| anyhow!("GPU render failed: {e}")),
     }
 }
 
-fn render_on_cpu(scene: &Scene, args: &RenderArgs) -> anyhow::Result<Rendered> {
+fn render_on_cpu(scene: &Scene, args: &RenderArgs, range: SampleRange) -> anyhow::Result<Rendered> {
     let limits = Limits { time_limit: args.gpu.time_limit, cancel: Some(ctrlc_flag()), ..Limits::default() };
-    let out = cpu::render_limited(scene, &RenderOptions { spp: args.spp.spp }, &limits, Progress::Bar)?;
+    let opts = RenderOptions { spp: args.spp.spp, samples: Some(range) };
+    let out = cpu::render_limited(scene, &opts, &limits, Progress::Bar)?;
     let s = &out.stats;
     eprintln!(
         "{}×{} {} on the CPU ({} threads): {} of {} samples per pixel, {} samples, {} rays in {:.2} s ({:.2} Mrays/s)",
@@ -180,7 +228,14 @@ fn render_on_cpu(scene: &Scene, args: &RenderArgs) -> anyhow::Result<Rendered> {
     if s.spp == 0 {
         bail!("stopped before any sample was complete; nothing to write");
     }
-    Ok(Rendered { image: out.image, non_finite_samples: s.non_finite_samples, stopped_early })
+    Ok(Rendered {
+        image: out.image,
+        spp: s.spp as u32,
+        device: format!("cpu ({} threads)", rayon::current_num_threads()),
+        seconds: s.seconds,
+        non_finite_samples: s.non_finite_samples,
+        stopped_early,
+    })
 }
 
 /// Says why a render stopped early (the same words for both renderers); returns whether it did.
@@ -203,8 +258,14 @@ fn render_on_gpu(
     renderer: &mut GpuRenderer,
     args: &RenderArgs,
     scene: &Scene,
+    range: SampleRange,
 ) -> Result<Rendered, GpuError> {
-    let opts = GpuRenderOptions { spp: args.spp.spp, passes: args.gpu.pass_options(), ..GpuRenderOptions::default() };
+    let opts = GpuRenderOptions {
+        spp: args.spp.spp,
+        samples: Some(range),
+        passes: args.gpu.pass_options(),
+        ..GpuRenderOptions::default()
+    };
     let out = renderer.render(gpu, scene, &opts)?;
     let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
     eprintln!(
@@ -223,20 +284,45 @@ fn render_on_gpu(
     if out.spp_done == 0 {
         return Err(GpuError::Validation("stopped before any sample was complete; nothing to write".into()));
     }
-    Ok(Rendered { image: out.image, non_finite_samples: out.non_finite_samples, stopped_early })
+    Ok(Rendered {
+        image: out.image,
+        spp: out.spp_done,
+        device: format!("gpu ({})", gpu.adapter_info.name),
+        seconds: out.seconds,
+        non_finite_samples: out.non_finite_samples,
+        stopped_early,
+    })
 }
 
 /// Checks everything that can be checked before rendering.
-fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, Option<Frames>)> {
+fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, Option<Frames>, Part)> {
     for o in outputs {
         ImageFormat::from_path(o).with_context(|| format!("output {}", o.display()))?;
+    }
+    let part = Part::of(args)?;
+    let exr = outputs.iter().any(|o| ImageFormat::from_path(o).is_ok_and(|f| f == ImageFormat::Exr));
+    if matches!(part, Part::Samples(_) | Part::Shard { .. }) && args.frames.is_none() && !exr {
+        eprintln!("note: no .exr output: only EXR files record the sample range that `lumen merge` needs");
+    }
+    if matches!(part, Part::Samples(_)) && args.frames.is_some() {
+        bail!("--samples renders part of one image; with --frames, split the frames with --shard I/N");
     }
     args.spp.checked(MAX_SPP)?;
     if !args.script.time.is_finite() {
         bail!("--time must be finite");
     }
     let frames = args.frames.as_deref().map(Frames::parse).transpose()?;
-    Ok((tone_map(args.alpha, args.gamma)?, frames))
+    if let (Some(f), Part::Shard { count, .. }) = (frames, part) {
+        if count > f.count {
+            bail!("--shard: {count} shards of {} frames leave some empty (use at most {} shards)", f.count, f.count);
+        }
+    }
+    Ok((tone_map(args.alpha, args.gamma)?, frames, part))
+}
+
+/// Samples per pixel of the scene's layout: `--spp`, else the tracer's.
+fn layout_spp(args: &RenderArgs, scene: &Scene) -> u32 {
+    args.spp.spp.unwrap_or_else(|| crate::prepare::PixelSamples::new(&scene.tracer, None).count() as u32)
 }
 
 /// Loads the scene at `time` and applies the command-line overrides.
@@ -262,14 +348,20 @@ fn render_one(
     time: f64,
     outputs: &[PathBuf],
     tm: &ToneMap,
+    part: Part,
 ) -> anyhow::Result<bool> {
     let scene = load(args, time)?;
-    let out = render_on(device, args, &scene)?;
+    let total = layout_spp(args, &scene);
+    let range = part.samples(total, args.frames.is_some())?;
+    let out = render_on(device, args, &scene, range)?;
     if out.non_finite_samples > 0 {
         eprintln!("warning: {} NaN or infinite radiance samples were counted as black", out.non_finite_samples);
     }
+    // What was taken: the whole range, or its first `spp` samples when stopped early.
+    let taken = SampleRange { begin: range.begin, end: range.begin + out.spp };
+    let meta = RenderMetadata::new(taken, fingerprint(&scene, total), &out.device, out.seconds);
     for o in outputs {
-        write_image(o, &out.image, tm).with_context(|| format!("cannot write {}", o.display()))?;
+        write_image_with(o, &out.image, tm, Some(&meta)).with_context(|| format!("cannot write {}", o.display()))?;
         eprintln!("wrote {}", o.display());
     }
     Ok(out.stopped_early)
@@ -283,22 +375,34 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     } else {
         args.outputs.clone()
     };
-    let (tm, frames) = validate(&args, &outputs)?;
+    let (tm, frames, part) = validate(&args, &outputs)?;
     // Load once before opening a device: a broken script fails fast, without GPU start-up.
     load(&args, frames.map_or(args.script.time, |f| f.time(0)))?;
     let device = open(&args)?;
     let Some(frames) = frames else {
-        return render_one(&device, &args, args.script.time, &outputs, &tm).map(|_| ());
+        return render_one(&device, &args, args.script.time, &outputs, &tm, part).map(|_| ());
     };
-    for k in 0..frames.count {
+    // `--shard I/N` with frames: contiguous runs of frames, as for samples.
+    let mine = match part {
+        Part::Shard { index, count } => SampleRange::shard(index, count, frames.count).context("--shard")?,
+        _ => SampleRange::all(frames.count),
+    };
+    for k in mine.begin..mine.end {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
         eprintln!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
-        if render_one(&device, &args, frames.time(k), &paths, &tm)? {
+        if render_one(&device, &args, frames.time(k), &paths, &tm, part)? {
             eprintln!("note: stopping the animation after frame {}", k + 1);
             return Ok(());
         }
     }
-    if let Some(ldr) = outputs.iter().find(|o| ImageFormat::from_path(o).is_ok_and(|f| !f.is_hdr())) {
+    if mine.len() < frames.count {
+        eprintln!(
+            "note: frames {}..{} of {} rendered (shard); no video assembled",
+            mine.begin + 1,
+            mine.end,
+            frames.count
+        );
+    } else if let Some(ldr) = outputs.iter().find(|o| ImageFormat::from_path(o).is_ok_and(|f| !f.is_hdr())) {
         make_video(ldr, frames.count)?;
     }
     Ok(())

@@ -27,6 +27,7 @@ use super::path_tracer::path_radiance;
 use super::simple_renderers::{flat_radiance, on_off_radiance, point_light_radiance};
 use super::{Ray, World};
 use crate::prepare::pixel_samples::PixelSamples;
+use crate::prepare::SampleRange;
 
 /// Side of the square tiles the image is split into.
 const TILE: u32 = 16;
@@ -46,6 +47,10 @@ pub struct RenderOptions {
     /// Camera samples per pixel instead of the tracer's `samples_per_side²` (a perfect
     /// square s² gives s×s strata; see DESIGN.md).
     pub spp: Option<u32>,
+    /// Only camera samples `[begin, end)` of that layout (`None`: all of them): a shard of
+    /// the full render, which `lumen merge` combines exactly with the other shards. A range
+    /// reaching past the layout's count is cut at it.
+    pub samples: Option<SampleRange>,
 }
 
 /// When a render may stop before every sample is taken: the GPU renderer's rules
@@ -186,7 +191,7 @@ impl TileState {
 ///
 /// let scene = SceneBuilder::new(4, 4).build().unwrap();
 /// let limits = Limits { cancel: Some(Arc::new(AtomicBool::new(true))), ..Limits::default() };
-/// let out = render_limited(&scene, &RenderOptions { spp: Some(9) }, &limits, Progress::Hidden).unwrap();
+/// let out = render_limited(&scene, &RenderOptions { spp: Some(9), ..RenderOptions::default() }, &limits, Progress::Hidden).unwrap();
 /// assert_eq!((out.stats.stop, out.stats.spp, out.stats.samples), (StopReason::Interrupted, 0, 0));
 /// ```
 pub fn render_limited(
@@ -229,12 +234,14 @@ pub fn render_limited(
     let ctx = Context { scene, world: &world, lights: &lights };
     let layout = PixelSamples::new(&scene.tracer, opts.spp);
     // Sample indices are u32, as on the GPU (the CLI refuses counts that would wrap).
-    let total = u32::try_from(layout.count()).unwrap_or(u32::MAX);
+    let count = u32::try_from(layout.count()).unwrap_or(u32::MAX);
+    let range = opts.samples.unwrap_or(SampleRange::all(count));
+    let (first, total) = (range.begin.min(count), range.end.min(count));
     let pixels = u64::from(w) * u64::from(h);
-    let bar = progress_bar(progress, u64::from(total) * pixels);
+    let bar = progress_bar(progress, u64::from(total - first) * pixels);
     let fixed = limits.round_spp.filter(|&r| r > 0);
     let mut round_spp = fixed.unwrap_or(1);
-    let (mut done, mut rounds) = (0u32, 0u32);
+    let (mut done, mut rounds) = (first, 0u32);
     let mut stop = StopReason::Completed;
     while done < total {
         if limits.cancelled() {
@@ -254,7 +261,7 @@ pub fn render_limited(
         tiles.iter_mut().for_each(TileState::commit_round);
         done = j1;
         rounds += 1;
-        bar.set_message(format!("{done}/{total} spp"));
+        bar.set_message(format!("{}/{} spp", done - first, total - first));
         let per_spp = t.elapsed().as_secs_f64() / f64::from(j1 - j0);
         let remaining = match limits.time_limit {
             Some(limit) if start.elapsed() >= limit => {
@@ -275,9 +282,14 @@ pub fn render_limited(
         t.next = Vec::new();
     }
     let mut image = HdrImage::try_new(w as usize, h as usize)?;
-    let mut stats =
-        RenderStats { spp: u64::from(done), spp_requested: layout.count(), rounds, stop, ..RenderStats::default() };
-    let n = u64::from(done) * paths_per_sample(scene);
+    let mut stats = RenderStats {
+        spp: u64::from(done - first),
+        spp_requested: u64::from(total - first),
+        rounds,
+        stop,
+        ..RenderStats::default()
+    };
+    let n = u64::from(done - first) * paths_per_sample(scene);
     for t in &tiles {
         for (i, sum) in t.sums.iter().enumerate() {
             let c = if n == 0 { Color::BLACK } else { *sum / n as f64 };

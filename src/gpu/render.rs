@@ -66,6 +66,9 @@ pub struct GpuRenderOptions {
     /// `--spp`: overrides the tracer's samples per pixel (a perfect square s² means s×s
     /// strata, any other count jitters over the whole pixel).
     pub spp: Option<u32>,
+    /// Only camera samples `[begin, end)` of the layout (`None`: all), as
+    /// the CPU renderer's `RenderOptions::samples`.
+    pub samples: Option<crate::prepare::SampleRange>,
     /// Round sizing, batch size, time limit, cancellation and progress display.
     pub passes: PassOptions,
     /// The kernels to compile instead of the scene's own (`None`): they must cover the
@@ -317,10 +320,13 @@ impl GpuRenderer {
             max_depth: s.max_depth,
         };
         let mut runner = wavefront::Runner::new(&setup, capacity)?;
+        let range = opts.samples.unwrap_or(crate::prepare::SampleRange::all(s.spp));
+        let (first, end) = (range.begin.min(s.spp), range.end.min(s.spp));
         let plan = Plan {
             width: scene.width,
             height: scene.height,
-            total_spp: s.spp,
+            sample_begin: first,
+            total_spp: end - first,
             paths_per_sample: n,
             capacity: runner.capacity(),
             shadow_rays,
@@ -330,7 +336,7 @@ impl GpuRenderer {
         Ok(GpuRenderOutput {
             image: acc.image,
             spp_done: acc.spp_done,
-            spp_requested: s.spp,
+            spp_requested: end - first,
             seconds: start.elapsed().as_secs_f64(),
             non_finite_samples: counters.non_finite + acc.nonfinite,
             stop: acc.stop,

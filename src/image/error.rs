@@ -30,6 +30,8 @@ pub enum ImageError {
     Size { path: PathBuf, cause: SizeError },
     #[error("{}: invalid tone mapping: {cause}", path.display())]
     ToneMap { path: PathBuf, cause: ToneMapError },
+    #[error("{}: {message}", path.display())]
+    Metadata { path: PathBuf, message: String },
 }
 
 /// The extensions [`crate::image::read_image`] and [`crate::image::write_image`] accept.
@@ -53,7 +55,8 @@ impl ImageError {
             | Self::Decode { path, .. }
             | Self::Encode { path, .. }
             | Self::Size { path, .. }
-            | Self::ToneMap { path, .. } => path,
+            | Self::ToneMap { path, .. }
+            | Self::Metadata { path, .. } => path,
         }
     }
 }

@@ -6,6 +6,7 @@
 
 use std::io::Cursor;
 
+use exr::meta::attribute::{AttributeValue, Text};
 use exr::prelude::{read, Image, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
 
 use super::size::{check_size, SizeError};
@@ -21,6 +22,12 @@ pub(crate) enum ExrDecodeError {
 }
 
 pub(crate) fn decode_exr(bytes: &[u8]) -> Result<HdrImage, ExrDecodeError> {
+    decode_exr_with_attributes(bytes).map(|(img, _)| img)
+}
+
+/// The image and the header attributes lumen does not interpret itself (the image's and the
+/// first layer's `other` attributes, merged).
+pub(crate) fn decode_exr_with_attributes(bytes: &[u8]) -> Result<(HdrImage, Attributes), ExrDecodeError> {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -41,15 +48,27 @@ pub(crate) fn decode_exr(bytes: &[u8]) -> Result<HdrImage, ExrDecodeError> {
         .non_parallel()
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| ExrDecodeError::Other(e.to_string()))?;
-    image.layer_data.channel_data.pixels
+    let mut attrs = image.attributes.other;
+    attrs.extend(image.layer_data.attributes.other);
+    Ok((image.layer_data.channel_data.pixels?, attrs))
 }
 
+/// Header attributes by name.
+pub(crate) type Attributes = std::collections::HashMap<Text, AttributeValue>;
+
+#[cfg(test)]
 pub(crate) fn encode_exr(img: &HdrImage) -> Result<Vec<u8>, String> {
+    encode_exr_with_attributes(img, Attributes::new())
+}
+
+/// Writes `attrs` into the image header.
+pub(crate) fn encode_exr_with_attributes(img: &HdrImage, attrs: Attributes) -> Result<Vec<u8>, String> {
     let channels = SpecificChannels::rgb(|Vec2(x, y)| {
         let c = img.get(x, y);
         (c.r, c.g, c.b)
     });
-    let image = Image::from_channels((img.width(), img.height()), channels);
+    let mut image = Image::from_channels((img.width(), img.height()), channels);
+    image.attributes.other = attrs;
     let mut out = Cursor::new(Vec::new());
     image.write().non_parallel().to_buffered(&mut out).map_err(|e| e.to_string())?;
     Ok(out.into_inner())

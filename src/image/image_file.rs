@@ -5,10 +5,11 @@ use std::path::Path;
 
 use super::atomic_file::write_atomically;
 use super::error::ImageError;
-use super::exr_file::{decode_exr, encode_exr, ExrDecodeError};
+use super::exr_file::{decode_exr, decode_exr_with_attributes, encode_exr_with_attributes, ExrDecodeError};
 use super::ldr_file::{decode_ldr, encode_ldr, LdrFormat};
 use super::pfm::{decode_pfm, encode_pfm};
 use super::radiance_file::{decode_radiance, encode_radiance};
+use super::render_metadata::RenderMetadata;
 use super::size::check_size;
 use super::tone_map::ToneMap;
 use super::HdrImage;
@@ -102,11 +103,7 @@ pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
     let decode_err = |message: String| ImageError::Decode { path: path.to_owned(), format: format.name(), message };
     let img = match format {
         ImageFormat::Pfm => decode_pfm(&bytes).map_err(|cause| ImageError::Pfm { path: path.to_owned(), cause })?,
-        ImageFormat::Exr => decode_exr(&bytes).map_err(|e| match e {
-            ExrDecodeError::Size(cause) => ImageError::Size { path: path.to_owned(), cause },
-            ExrDecodeError::Other(message) => decode_err(message),
-            ExrDecodeError::Memory(e) => decode_err(e.to_string()),
-        })?,
+        ImageFormat::Exr => decode_exr(&bytes).map_err(|e| exr_error(path, e))?,
         ImageFormat::RadianceHdr => decode_radiance(&bytes).map_err(decode_err)?,
         ImageFormat::Png => decode_ldr(&bytes, LdrFormat::Png).map_err(decode_err)?,
         ImageFormat::Jpeg => decode_ldr(&bytes, LdrFormat::Jpeg).map_err(decode_err)?,
@@ -115,11 +112,50 @@ pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
     Ok(img)
 }
 
+fn exr_error(path: &Path, e: ExrDecodeError) -> ImageError {
+    let decode_err = |message: String| ImageError::Decode { path: path.to_owned(), format: "OpenEXR", message };
+    match e {
+        ExrDecodeError::Size(cause) => ImageError::Size { path: path.to_owned(), cause },
+        ExrDecodeError::Other(message) => decode_err(message),
+        ExrDecodeError::Memory(e) => decode_err(e.to_string()),
+    }
+}
+
+/// Reads an EXR file that `lumen render` wrote, with its render metadata (what `lumen merge`
+/// combines): an error naming the file for another format, or an EXR without lumen's
+/// attributes.
+pub fn read_render_part(path: &Path) -> Result<(HdrImage, RenderMetadata), ImageError> {
+    let format = ImageFormat::from_path(path)?;
+    if format != ImageFormat::Exr {
+        return Err(ImageError::Metadata {
+            path: path.to_owned(),
+            message: format!("a {} file cannot carry lumen's render metadata; shards must be .exr", format.name()),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|cause| ImageError::Read { path: path.to_owned(), cause })?;
+    let (img, attrs) = decode_exr_with_attributes(&bytes).map_err(|e| exr_error(path, e))?;
+    check_size(img.width(), img.height()).map_err(|cause| ImageError::Size { path: path.to_owned(), cause })?;
+    let meta = RenderMetadata::from_attributes(&attrs)
+        .map_err(|e| ImageError::Metadata { path: path.to_owned(), message: e.to_string() })?;
+    Ok((img, meta))
+}
+
 /// Writes an image atomically (temporary file in the same directory, then rename: on any
 /// error neither the output nor a temporary file remains). HDR formats get the linear
 /// values; PNG and JPEG get the image tone-mapped by `tm`. NaN/Inf pixels are written as
 /// black and counted in the report.
 pub fn write_image(path: &Path, img: &HdrImage, tm: &ToneMap) -> Result<WriteReport, ImageError> {
+    write_image_with(path, img, tm, None)
+}
+
+/// [`write_image`], with lumen's render metadata in the header when the file is EXR (the
+/// other formats have no place for it).
+pub fn write_image_with(
+    path: &Path,
+    img: &HdrImage,
+    tm: &ToneMap,
+    meta: Option<&RenderMetadata>,
+) -> Result<WriteReport, ImageError> {
     let format = ImageFormat::from_path(path)?;
     let owned = || path.to_owned();
     check_size(img.width(), img.height()).map_err(|cause| ImageError::Size { path: owned(), cause })?;
@@ -133,7 +169,10 @@ pub fn write_image(path: &Path, img: &HdrImage, tm: &ToneMap) -> Result<WriteRep
         };
         match format {
             ImageFormat::Pfm => encode_pfm(&clean),
-            ImageFormat::Exr => encode_exr(&clean).map_err(encode_err)?,
+            ImageFormat::Exr => {
+                let attrs = meta.map(RenderMetadata::to_attributes).unwrap_or_default();
+                encode_exr_with_attributes(&clean, attrs).map_err(encode_err)?
+            }
             _ => encode_radiance(&clean).map_err(encode_err)?,
         }
     } else {

@@ -14,6 +14,7 @@ mod image_file;
 mod ldr_file;
 mod pfm;
 mod radiance_file;
+pub mod render_metadata;
 mod size;
 mod srgb;
 mod tone_map;
@@ -21,9 +22,12 @@ mod tone_map;
 pub use atomic_file::write_atomically;
 pub use error::{ImageError, SUPPORTED_EXTENSIONS};
 pub use hdr_image::HdrImage;
-pub use image_file::{is_hdr_path, read_image, write_image, ImageFormat, WriteReport};
+pub use image_file::{
+    is_hdr_path, read_image, read_render_part, write_image, write_image_with, ImageFormat, WriteReport,
+};
 pub use ldr_file::JPEG_QUALITY;
 pub use pfm::{decode_pfm, encode_pfm, PfmError};
+pub use render_metadata::RenderMetadata;
 pub use size::{check_size, SizeError, MAX_PIXELS, MAX_SIDE};
 pub use srgb::{linear_to_srgb, quantize_u8, srgb_to_linear};
 pub use tone_map::{

@@ -6,6 +6,7 @@
 
 pub mod csg_bounds;
 pub mod pixel_samples;
+pub mod sample_range;
 
 use glam::{DMat3, DVec3};
 
@@ -16,6 +17,7 @@ use crate::scene::{Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
 
 pub use csg_bounds::{max_intervals, IntervalBound};
 pub use pixel_samples::PixelSamples;
+pub use sample_range::{SampleRange, SampleRangeError};
 
 /// Most top-level CSG trees whose evaluation a closest-hit query defers until the
 /// traversal is over (more trees: each is evaluated where the traversal meets it).

@@ -146,7 +146,7 @@ impl Outcome {
 /// The CPU image and, with a GPU, the GPU image of `scene`; both must have no NaN/Inf
 /// sample and the GPU must finish every sample.
 pub fn render_both(gpu: Option<&Gpu>, scene: &Scene, spp: Option<u32>) -> (HdrImage, Option<HdrImage>) {
-    let c = lumen::cpu::render(scene, &RenderOptions { spp }, Progress::Hidden);
+    let c = lumen::cpu::render(scene, &RenderOptions { spp, ..RenderOptions::default() }, Progress::Hidden);
     assert_eq!(c.stats.non_finite_samples, 0, "CPU reported NaN/Inf samples");
     assert!(c.image.pixels().iter().all(|p| p.r.is_finite() && p.g.is_finite() && p.b.is_finite()));
     let g = gpu.map(|gpu| {

@@ -110,7 +110,8 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> 
         StateBuffer::Words => 16 * u64::from(word_field::COUNT),
         StateBuffer::Shadow => 48 * u64::from(shadow_rays.max(1)),
         StateBuffer::DeferredRefs => 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1),
-        StateBuffer::Film => 16,
+        // The compensated sum: value and error (wf_film.wgsl).
+        StateBuffer::Film => 32,
         StateBuffer::Args => 0,
         StateBuffer::CsgPool => contract::csg_pool_intervals(features) * contract::CSG_INTERVAL_BYTES,
     }
@@ -211,7 +212,8 @@ impl<'a> Runner<'a> {
                 })
             })
         };
-        let staging = [staging_buffer("film readback 0", cap * 16)?, staging_buffer("film readback 1", cap * 16)?];
+        let film_bytes = cap * state_bytes(StateBuffer::Film, shadow_rays, features);
+        let staging = [staging_buffer("film readback 0", film_bytes)?, staging_buffer("film readback 1", film_bytes)?];
         let probe = staging_buffer("control readback", u64::from(control::WORDS) * 4)?;
         let batch = gpu.uniform_buffer("batch", &<BatchUniform as bytemuck::Zeroable>::zeroed())?;
         let control = gpu.scoped(|| {
@@ -451,15 +453,17 @@ impl BatchRunner for Runner<'_> {
                 }
                 self.direct(&mut pass, Stage::Film, slot, pixels)?;
             }
-            e.copy_buffer_to_buffer(&self.films[slot], 0, &self.staging[slot], 0, u64::from(pixels) * 16);
+            e.copy_buffer_to_buffer(&self.films[slot], 0, &self.staging[slot], 0, u64::from(pixels) * 32);
             Ok(())
         })?;
         Ok(Pending { slot, pixels, submission })
     }
 
-    fn collect(&mut self, pending: Pending) -> Result<Vec<[f32; 4]>, GpuError> {
-        let bytes = u64::from(pending.pixels) * 16;
-        map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission))
+    fn collect(&mut self, pending: Pending) -> Result<Vec<[f64; 3]>, GpuError> {
+        let bytes = u64::from(pending.pixels) * 32;
+        let film: Vec<[f32; 4]> = map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission))?;
+        // Each pixel's value and rounding error, summed exactly in f64.
+        Ok(film.chunks_exact(2).map(|v| std::array::from_fn(|c| f64::from(v[0][c]) + f64::from(v[1][c]))).collect())
     }
 
     fn drain(&mut self) -> Result<(), GpuError> {

@@ -89,8 +89,9 @@ pub(crate) trait BatchRunner {
     type Pending;
     /// Submits every launch of `batch`, its film going to double-buffer `slot` (0 or 1).
     fn submit(&mut self, batch: &BatchUniform, slot: usize) -> Result<Self::Pending, GpuError>;
-    /// Waits for a submitted batch and returns its per-pixel sums.
-    fn collect(&mut self, pending: Self::Pending) -> Result<Vec<[f32; 4]>, GpuError>;
+    /// Waits for a submitted batch and returns its per-pixel sums (f64: the film's
+    /// compensated f32 sum, value plus error).
+    fn collect(&mut self, pending: Self::Pending) -> Result<Vec<[f64; 3]>, GpuError>;
     /// Waits for everything submitted (before returning early).
     fn drain(&mut self) -> Result<(), GpuError>;
 }
@@ -100,6 +101,9 @@ pub(crate) trait BatchRunner {
 pub(crate) struct Plan {
     pub width: u32,
     pub height: u32,
+    /// The first camera sample of the render (a shard's start; 0 for a whole render).
+    pub sample_begin: u32,
+    /// Camera samples per pixel to take, from `sample_begin`.
     pub total_spp: u32,
     pub paths_per_sample: u32,
     pub capacity: u32,
@@ -171,7 +175,7 @@ pub(crate) fn run_rounds<R: BatchRunner>(
         let t = Instant::now();
         rounds += 1;
         let mut pending: Option<(R::Pending, BatchUniform)> = None;
-        for (k, batch) in batches(plan, done, samples).iter().enumerate() {
+        for (k, batch) in batches(plan, plan.sample_begin + done, samples).iter().enumerate() {
             let submitted = runner.submit(batch, k % 2)?;
             batch_count += 1;
             if let Some((p, b)) = pending.replace((submitted, *batch)) {
@@ -280,7 +284,7 @@ mod tests {
     }
 
     fn plan(width: u32, height: u32, n: u32, capacity: u32) -> Plan {
-        Plan { width, height, total_spp: 64, paths_per_sample: n, capacity, shadow_rays: 1 }
+        Plan { width, height, sample_begin: 0, total_spp: 64, paths_per_sample: n, capacity, shadow_rays: 1 }
     }
 
     #[test]
@@ -321,13 +325,13 @@ mod tests {
             }
             Ok(*batch)
         }
-        fn collect(&mut self, b: BatchUniform) -> Result<Vec<[f32; 4]>, GpuError> {
+        fn collect(&mut self, b: BatchUniform) -> Result<Vec<[f64; 3]>, GpuError> {
             // Sample j of pixel p is worth p + j: the round's sum is exact in f32.
             Ok((0..b.pixel_count)
                 .map(|i| {
-                    let p = (b.pixel_begin + i) as f32;
-                    let s: f32 = (b.sample_begin..b.sample_begin + b.samples).map(|j| p + j as f32).sum();
-                    [s, 0.0, 0.0, 0.0]
+                    let p = f64::from(b.pixel_begin + i);
+                    let s: f64 = (b.sample_begin..b.sample_begin + b.samples).map(|j| p + f64::from(j)).sum();
+                    [s, 0.0, 0.0]
                 })
                 .collect())
         }
