@@ -22,7 +22,9 @@ fn cpu_render(c: &mut Criterion) {
     group.sample_size(10);
     let scene = spheres_scene(100, 32, 24);
     group.bench_function("100_spheres_32x24_4spp", |b| {
-        b.iter(|| render(black_box(&scene), &RenderOptions { spp: Some(4) }, Progress::Hidden))
+        b.iter(|| {
+            render(black_box(&scene), &RenderOptions { spp: Some(4), ..RenderOptions::default() }, Progress::Hidden)
+        })
     });
     group.finish();
 }
