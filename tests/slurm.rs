@@ -55,7 +55,11 @@ impl Cluster {
             s.push_str(&String::from_utf8_lossy(&o.stdout));
         }
         for e in std::fs::read_dir(out.join("logs")).into_iter().flatten().flatten() {
-            s.push_str(&format!("--- {}\n{}", e.path().display(), std::fs::read_to_string(e.path()).unwrap_or_default()));
+            s.push_str(&format!(
+                "--- {}\n{}",
+                e.path().display(),
+                std::fs::read_to_string(e.path()).unwrap_or_default()
+            ));
         }
         s
     }
@@ -104,16 +108,30 @@ fn a_slurm_job_array_renders_shards_and_a_dependent_job_merges_them() {
         if q.status.success() && state.is_empty() {
             break;
         }
-        assert!(Instant::now() < deadline, "the merge job is still {state:?} after 150 s\n{}", cluster.logs(&w.join("parts")));
+        assert!(
+            Instant::now() < deadline,
+            "the merge job is still {state:?} after 150 s\n{}",
+            cluster.logs(&w.join("parts"))
+        );
         std::thread::sleep(Duration::from_millis(500));
     }
     let merged = w.join("merged.exr");
     assert!(merged.exists(), "no merged image\n{}", cluster.logs(&w.join("parts")));
-    let parts = std::fs::read_dir(w.join("parts")).unwrap().flatten().filter(|e| e.path().extension().is_some_and(|x| x == "exr")).count();
+    let parts = std::fs::read_dir(w.join("parts"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.path().extension().is_some_and(|x| x == "exr"))
+        .count();
     assert_eq!(parts, 4);
 
     // One render of all twelve samples, outside Slurm.
-    let o = Command::new(lumen).current_dir(w).args(["render", "tiny.sl"]).args(render).args(["-o", "whole.exr"]).output().unwrap();
+    let o = Command::new(lumen)
+        .current_dir(w)
+        .args(["render", "tiny.sl"])
+        .args(render)
+        .args(["-o", "whole.exr"])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let whole = lumen::image::read_image(&w.join("whole.exr")).unwrap();
     let (img, meta) = lumen::image::read_render_part(&merged).unwrap();
