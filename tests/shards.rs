@@ -186,6 +186,19 @@ fn the_cli_renders_shards_merges_them_and_refuses_parts_that_do_not_belong() {
     refused(d, &["merge", "-o", "out.exr", "p0.exr", "missing.exr"], "missing.exr");
     refused(d, &["merge", "-o", "out.pfm", "p0.exr"], "must be .exr");
 
+    // With --frames, --shard splits the frames: shard 1 of 2 of five frames is frames 4 and 5.
+    ok(
+        d,
+        &[
+            "render", "tiny.sl", "--device", "cpu", "--width", "8", "--spp", "1", "--frames", "0:1:5", "--shard",
+            "1/2", "-o", "f.png",
+        ],
+    );
+    let frames: Vec<bool> = (1..=5).map(|k| d.join(format!("f_{k:04}.png")).exists()).collect();
+    assert_eq!(frames, [false, false, false, true, true]);
+    refused(d, &["render", "tiny.sl", "--frames", "0:1:2", "--shard", "0/3", "-o", "out.exr"], "--shard");
+    refused(d, &["render", "tiny.sl", "--frames", "0:1:2", "--samples", "0:1", "-o", "out.exr"], "--samples");
+
     // Bad ranges and shards.
     for (flag, value) in [
         ("--samples", "5:3"),

@@ -16,7 +16,7 @@ use std::fmt::Write as _;
 use exr::meta::attribute::{AttributeValue, Text};
 
 use crate::prepare::SampleRange;
-use crate::scene::Scene;
+use crate::scene::{Scene, Shape};
 
 /// The metadata of one render, or of a merge of renders.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,15 +49,45 @@ const DEVICE: &str = "lumen.device";
 const SECONDS: &str = "lumen.renderSeconds";
 const VERSION: &str = "lumen.version";
 
-/// A 64-bit FNV-1a hash, fed through `fmt::Write` so that a scene's `Debug` text (which
-/// writes every f64 exactly, texels included) is hashed without being held in memory.
+/// A 64-bit FNV-1a hash, fed through `fmt::Write` so that `Debug` text (which writes every
+/// f64 exactly, texels included) is hashed without being held in memory.
 struct Fnv(u64);
+
+impl Fnv {
+    fn bytes(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+
+    fn f64s(&mut self, values: &[f64]) {
+        for v in values {
+            self.bytes(&v.to_bits().to_le_bytes());
+        }
+    }
+
+    /// A shape tree by its bits: formatting a tree of millions of primitives would take
+    /// longer than rendering it.
+    fn shape(&mut self, shape: &Shape) {
+        match shape {
+            Shape::Primitive(p) => {
+                self.bytes(&[0, p.kind as u8]);
+                self.f64s(&p.transform.matrix().to_cols_array());
+                self.bytes(&p.material.0.to_le_bytes());
+            }
+            Shape::Csg(c) => {
+                self.bytes(&[1, c.op as u8]);
+                self.bytes(&(c.children.len() as u64).to_le_bytes());
+                self.f64s(&c.transform.matrix().to_cols_array());
+                c.children.iter().for_each(|child| self.shape(child));
+            }
+        }
+    }
+}
 
 impl std::fmt::Write for Fnv {
     fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        for b in s.bytes() {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-        }
+        self.bytes(s.as_bytes());
         Ok(())
     }
 }
@@ -68,7 +98,15 @@ impl std::fmt::Write for Fnv {
 /// purpose (CPU and GPU shards of one render may be merged).
 pub fn fingerprint(scene: &Scene, layout_spp: u32) -> String {
     let mut h = Fnv(0xcbf2_9ce4_8422_2325);
-    let _ = write!(h, "lumen {} layout {layout_spp} {scene:?}", env!("CARGO_PKG_VERSION"));
+    let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment } = scene;
+    let _ = write!(
+        h,
+        "lumen {} layout {layout_spp} {width}x{height} {materials:?} {point_lights:?} {camera:?} {renderer:?} \
+         {tracer:?} {environment:?}",
+        env!("CARGO_PKG_VERSION")
+    );
+    h.bytes(&(shapes.len() as u64).to_le_bytes());
+    shapes.iter().for_each(|s| h.shape(s));
     format!("{:016x}", h.0)
 }
 
@@ -183,5 +221,26 @@ mod tests {
         let mut seeded = scene(4);
         seeded.tracer.rng.state += 1;
         assert_ne!(fingerprint(&scene(4), 16), fingerprint(&seeded, 16));
+        // Shapes: a moved sphere, another material, another CSG operation.
+        use crate::scene::{CsgOp, MaterialId, ShapeKind, Transform};
+        let sphere = |x: f64, m: u32| {
+            Shape::primitive(ShapeKind::Sphere, Transform::translation(glam::DVec3::new(x, 0.0, 0.0)), MaterialId(m))
+        };
+        let with = |shapes: Vec<Shape>| Scene { shapes, ..scene(4) };
+        let csg = |op| Shape::csg(op, vec![sphere(0.0, 0), sphere(1.0, 0)], Transform::IDENTITY);
+        let prints: Vec<String> = [
+            with(vec![sphere(0.0, 0)]),
+            with(vec![sphere(1e-12, 0)]),
+            with(vec![sphere(0.0, 1)]),
+            with(vec![csg(CsgOp::Unite)]),
+            with(vec![csg(CsgOp::Fuse)]),
+            with(vec![sphere(0.0, 0), sphere(1.0, 0)]),
+        ]
+        .iter()
+        .map(|s| fingerprint(s, 16))
+        .collect();
+        for (i, a) in prints.iter().enumerate() {
+            assert!(prints[i + 1..].iter().all(|b| b != a), "{prints:?}");
+        }
     }
 }
