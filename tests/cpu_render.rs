@@ -109,7 +109,7 @@ fn glass_sphere_under_uniform_sky_conserves_energy() {
     // inside only with probability ≲ F⁶⁴.
     let sky = 1.5;
     for nee in [false, true] {
-        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 };
+        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5, roughness: 0.0 };
         let (scene, mask) = object_under_sky(brdf, sky, pt(16, 64, 1000, nee));
         let out = run(&scene, None);
         let (mean, se) = mean_and_stderr(&out.image, |c, r| mask.get(c, r).g > 0.5);

@@ -85,7 +85,10 @@ fn pigments_brdfs_materials_and_defaults() {
         material(&s, 1).brdf,
         Brdf::Specular { pigment: Pigment::Uniform(Color::WHITE), threshold_angle_rad: 0.0017453294 }
     );
-    assert_eq!(material(&s, 2).brdf, Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 });
+    assert_eq!(
+        material(&s, 2).brdf,
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5, roughness: 0.0 }
+    );
     assert_eq!(material(&s, 2).emitted, Pigment::Checkered { n: 2, on: Color::WHITE, off: Color::BLACK });
     assert_eq!(
         material(&s, 3).brdf,
@@ -96,7 +99,10 @@ fn pigments_brdfs_materials_and_defaults() {
         material(&s, 4).brdf,
         Brdf::Specular { pigment: Pigment::Uniform(Color::WHITE), threshold_angle_rad: 0.5 }
     );
-    assert_eq!(material(&s, 5).brdf, Brdf::Dielectric { pigment: Pigment::Uniform(Color::gray(0.5)), ior: 2.4 });
+    assert_eq!(
+        material(&s, 5).brdf,
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::gray(0.5)), ior: 2.4, roughness: 0.0 }
+    );
     // Equal materials are stored once.
     assert_eq!(with_settings("SPAWN Shape.Sphere() Shape.Cube(Material())").materials.len(), 1);
 }
@@ -818,7 +824,7 @@ fn a_colour_where_a_pigment_goes_is_a_uniform_pigment() {
                Shape.Cube(.material Material(Brdf.Diffuse(<0.5, 0.25, 0>), <2, 3, 4>))",
     );
     let glass = Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::new(1.0, 1.0, 1.0)), ior: 1.5 },
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::new(1.0, 1.0, 1.0)), ior: 1.5, roughness: 0.0 },
         Pigment::Uniform(Color::BLACK),
     );
     assert_eq!(material(&s, 0), &glass);

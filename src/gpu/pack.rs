@@ -86,6 +86,9 @@ pub enum PackError {
          (±3.4e38) that the GPU computes in"
     )]
     OutOfRange { shape: usize, kind: ShapeKind, magnitude: f64 },
+    /// The rough materials of issue 14 render on the CPU reference only, so far.
+    #[error("material {material}: {what} is not yet supported by the GPU renderer (render it with the CPU)")]
+    Unsupported { material: usize, what: &'static str },
 }
 
 /// The camera's position in the world: where the packed frame's origin goes. For a
@@ -211,11 +214,15 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
 
     // Appearance.
     let mut textures: HashMap<*const HdrImage, u32> = HashMap::new();
-    for m in &scene.materials {
+    for (index, m) in scene.materials.iter().enumerate() {
+        let unsupported = |what| PackError::Unsupported { material: index, what };
         let (brdf, ior) = match m.brdf {
             Brdf::Diffuse { .. } => (layout::brdf_kind::DIFFUSE, 1.0),
             Brdf::Specular { .. } => (layout::brdf_kind::SPECULAR, 1.0),
-            Brdf::Dielectric { ior, .. } => (layout::brdf_kind::DIELECTRIC, ior as f32),
+            Brdf::Dielectric { ior, roughness: 0.0, .. } => (layout::brdf_kind::DIELECTRIC, ior as f32),
+            Brdf::Dielectric { .. } => return Err(unsupported("a rough Brdf.Dielectric")),
+            Brdf::Conductor { .. } => return Err(unsupported("Brdf.Conductor")),
+            Brdf::Plastic { .. } => return Err(unsupported("Brdf.Plastic")),
         };
         let pigment = push_pigment(&mut p, &mut textures, m.brdf.pigment())?;
         let emitted = push_pigment(&mut p, &mut textures, &m.emitted)?;

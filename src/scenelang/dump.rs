@@ -37,7 +37,19 @@ fn brdf(b: &Brdf) -> String {
         Brdf::Specular { pigment: p, threshold_angle_rad } => {
             format!("Brdf.Specular({}, {threshold_angle_rad})", pigment(p))
         }
-        Brdf::Dielectric { pigment: p, ior } => format!("Brdf.Dielectric({}, {ior})", pigment(p)),
+        Brdf::Dielectric { pigment: p, ior, roughness: r } if *r == 0.0 => {
+            format!("Brdf.Dielectric({}, {ior})", pigment(p))
+        }
+        Brdf::Dielectric { pigment: p, ior, roughness } => {
+            format!("Brdf.Dielectric({}, {ior}, {roughness})", pigment(p))
+        }
+        Brdf::Conductor { pigment: p, roughness, fresnel: None } => {
+            format!("Brdf.Conductor({}, {roughness})", pigment(p))
+        }
+        Brdf::Conductor { pigment: p, roughness, fresnel: Some((eta, k)) } => {
+            format!("Brdf.Conductor({}, {roughness}, {}, {})", pigment(p), color(eta), color(k))
+        }
+        Brdf::Plastic { pigment: p, ior, roughness } => format!("Brdf.Plastic({}, {ior}, {roughness})", pigment(p)),
     }
 }
 

@@ -73,7 +73,7 @@ pub fn glass(b: &mut SceneBuilder) -> MaterialId {
 /// Clear glass of index `ior`.
 pub fn dielectric(b: &mut SceneBuilder, ior: f64) -> MaterialId {
     b.material(Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior },
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior, roughness: 0.0 },
         Pigment::Uniform(Color::BLACK),
     ))
 }
