@@ -123,7 +123,7 @@ pub fn conductor_sample(
 
 /// The weight f·|cos|/pdf of a sampled direction, or `None` when nothing is scattered.
 fn finish(i: DVec3, f: Color, pdf: f64, delta: bool) -> Option<LocalSample> {
-    if !(pdf > 0.0) || !i.is_finite() || f.is_black() {
+    if pdf.is_nan() || pdf <= 0.0 || !i.is_finite() || f.is_black() {
         return None;
     }
     let weight = f * (i.z.abs() / pdf);
@@ -170,7 +170,7 @@ fn dielectric_energy(t: &EnergyTables, alpha: f64, eta: f64, mu_o: f64) -> Diele
 fn refraction_half_vector(o: DVec3, i: DVec3, eta: f64) -> Option<DVec3> {
     let h = -(o + eta * i);
     let len = h.length();
-    if !(len > 1e-12) {
+    if len.is_nan() || len <= 1e-12 {
         return None;
     }
     let h = h / len;

@@ -271,7 +271,7 @@ mod tests {
         let t = energy_tables();
         for alpha in [0.05, 0.23, 0.61, 0.97] {
             for mu in [0.07, 0.33, 0.71] {
-                let o = DVec3::new((1.0 - mu * mu as f64).sqrt(), 0.0, mu);
+                let o = DVec3::new((1.0f64 - mu * mu).sqrt(), 0.0, mu);
                 let e = conductor_albedo_integral(alpha, o, 96);
                 assert!((t.conductor_albedo(mu, alpha) - e).abs() < 4e-3, "α {alpha} μ {mu}");
                 for eta in [1.5, 1.0 / 1.33] {
