@@ -635,7 +635,7 @@ fn far_from_the_origin_the_gpu_still_matches_the_cpu() {
 #[test]
 fn example_scenes_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("example_scenes_match_the_cpu") else { return };
-    for path in common::example_scene_files() {
+    for path in common::gpu_example_scene_files() {
         let scene = common::thumbnail(&path, 24, 32);
         println!("{}: {}×{}, {}", path.display(), scene.width, scene.height, scene.renderer.name());
         // glass.sl sends 10-bounce paths through curved glass toward a small, very bright

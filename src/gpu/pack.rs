@@ -556,6 +556,33 @@ mod tests {
         assert!(err.to_string().contains("CSG interval slots"), "{err}");
     }
 
+    /// Rough materials render on the CPU only (issue 14, GPU kernels not yet written): the
+    /// packer says so instead of rendering them as something else; smooth glass still packs.
+    #[test]
+    fn rough_materials_are_a_clear_error() {
+        let white = crate::scene::Pigment::Uniform(Color::WHITE);
+        let rough = [
+            Brdf::Conductor { pigment: white.clone(), roughness: 0.0, fresnel: None },
+            Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.2 },
+            Brdf::Plastic { pigment: white.clone(), ior: 1.5, roughness: 0.1 },
+        ];
+        for brdf in rough {
+            let mut b = SceneBuilder::new(4, 4);
+            let m = b.material(crate::scene::Material::new(brdf, crate::scene::Pigment::Uniform(Color::BLACK)));
+            b.sphere(Transform::IDENTITY, m);
+            let err = pack(&b.build().unwrap(), None).unwrap_err();
+            assert!(matches!(err, PackError::Unsupported { material: 0, .. }), "{err}");
+            assert!(err.to_string().contains("not yet supported by the GPU"), "{err}");
+        }
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.material(crate::scene::Material::new(
+            Brdf::smooth_dielectric(white, 1.5),
+            crate::scene::Pigment::Uniform(Color::BLACK),
+        ));
+        b.sphere(Transform::IDENTITY, m);
+        assert!(pack(&b.build().unwrap(), None).is_ok());
+    }
+
     #[test]
     fn a_shape_beyond_f32_range_is_a_clear_error() {
         let mut b = SceneBuilder::new(4, 4);
