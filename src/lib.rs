@@ -15,6 +15,7 @@ pub mod device;
 pub mod gpu;
 pub mod image;
 pub mod memory;
+pub mod optics;
 pub mod prepare;
 pub mod sampling;
 pub mod scene;

@@ -109,7 +109,7 @@ fn glass_sphere_under_uniform_sky_conserves_energy() {
     // inside only with probability ≲ F⁶⁴.
     let sky = 1.5;
     for nee in [false, true] {
-        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 };
+        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5, roughness: 0.0 };
         let (scene, mask) = object_under_sky(brdf, sky, pt(16, 64, 1000, nee));
         let out = run(&scene, None);
         let (mean, se) = mean_and_stderr(&out.image, |c, r| mask.get(c, r).g > 0.5);
@@ -693,6 +693,31 @@ mod rounds {
         // Whatever the timing, every pixel holds exactly samples 0..done.
         if done > 0 {
             assert_eq!(bits(&out.image), bits(&one_pass_mean(&s, 1 << 16, done as u32)));
+        }
+    }
+}
+
+#[test]
+fn rough_materials_under_uniform_sky_conserve_energy() {
+    // An F = 1 GGX sphere, rough clear glass and a white plastic neither absorb nor emit:
+    // with the multiple-scattering compensation every pixel sees the sky (1 %), with or
+    // without NEE (which exercises eval and pdf through MIS). The BSDF-level furnace
+    // (cpu::microfacet) checks 1 %; here 2 % covers four standard errors.
+    let sky = 1.5;
+    let white = Pigment::Uniform(Color::WHITE);
+    let brdfs = [
+        Brdf::Conductor { pigment: white.clone(), roughness: 0.8, fresnel: None },
+        Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.5 },
+        Brdf::Plastic { pigment: white, ior: 1.5, roughness: 0.3 },
+    ];
+    for brdf in brdfs {
+        for nee in [false, true] {
+            let (scene, mask) = object_under_sky(brdf.clone(), sky, pt(256, 48, 1000, nee));
+            let out = run(&scene, None);
+            let (mean, se) = mean_and_stderr(&out.image, |c, r| mask.get(c, r).g > 0.5);
+            eprintln!("{brdf:?} under the sky, nee {nee}: {mean} ± {se} (expected {sky})");
+            assert!(4.0 * se < 0.02 * sky, "test too weak: se {se}");
+            assert!((mean / sky - 1.0).abs() < 0.02, "{brdf:?} nee {nee}: {mean} (se {se})");
         }
     }
 }

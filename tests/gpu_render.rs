@@ -338,7 +338,7 @@ fn csg_scene(renderer: Renderer) -> Scene {
     let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
     let green = b.diffuse(Color::new(0.2, 0.7, 0.2));
     let glass = b.material(Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.4 },
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.4, roughness: 0.0 },
         Pigment::Uniform(Color::BLACK),
     ));
     let p = |k: ShapeKind, t: Transform, m: MaterialId| Shape::primitive(k, t, m);
@@ -503,7 +503,7 @@ fn glass_and_diffuse_spheres_under_a_uniform_sky_on_the_gpu() {
     assert!(hits > 20, "the sphere covers {hits} pixels");
     // Clear glass neither absorbs nor emits: every pixel sees the sky (η² factors cancel).
     for nee in [false, true] {
-        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 };
+        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5, roughness: 0.0 };
         let (scene, mask) = object_under_sky(&gpu, brdf, 1.5, pt(32, 64, 1000, nee));
         let img = gpu_run(&gpu, &scene, None);
         let (mean, se) = mean_and_stderr(&img, |c, r| mask.get(c, r).g > 0.5);
@@ -635,7 +635,7 @@ fn far_from_the_origin_the_gpu_still_matches_the_cpu() {
 #[test]
 fn example_scenes_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("example_scenes_match_the_cpu") else { return };
-    for path in common::example_scene_files() {
+    for path in common::gpu_example_scene_files() {
         let scene = common::thumbnail(&path, 24, 32);
         println!("{}: {}×{}, {}", path.display(), scene.width, scene.height, scene.renderer.name());
         // glass.sl sends 10-bounce paths through curved glass toward a small, very bright

@@ -85,7 +85,10 @@ fn pigments_brdfs_materials_and_defaults() {
         material(&s, 1).brdf,
         Brdf::Specular { pigment: Pigment::Uniform(Color::WHITE), threshold_angle_rad: 0.0017453294 }
     );
-    assert_eq!(material(&s, 2).brdf, Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5 });
+    assert_eq!(
+        material(&s, 2).brdf,
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5, roughness: 0.0 }
+    );
     assert_eq!(material(&s, 2).emitted, Pigment::Checkered { n: 2, on: Color::WHITE, off: Color::BLACK });
     assert_eq!(
         material(&s, 3).brdf,
@@ -96,7 +99,10 @@ fn pigments_brdfs_materials_and_defaults() {
         material(&s, 4).brdf,
         Brdf::Specular { pigment: Pigment::Uniform(Color::WHITE), threshold_angle_rad: 0.5 }
     );
-    assert_eq!(material(&s, 5).brdf, Brdf::Dielectric { pigment: Pigment::Uniform(Color::gray(0.5)), ior: 2.4 });
+    assert_eq!(
+        material(&s, 5).brdf,
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::gray(0.5)), ior: 2.4, roughness: 0.0 }
+    );
     // Equal materials are stored once.
     assert_eq!(with_settings("SPAWN Shape.Sphere() Shape.Cube(Material())").materials.len(), 1);
 }
@@ -818,7 +824,7 @@ fn a_colour_where_a_pigment_goes_is_a_uniform_pigment() {
                Shape.Cube(.material Material(Brdf.Diffuse(<0.5, 0.25, 0>), <2, 3, 4>))",
     );
     let glass = Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::new(1.0, 1.0, 1.0)), ior: 1.5 },
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::new(1.0, 1.0, 1.0)), ior: 1.5, roughness: 0.0 },
         Pigment::Uniform(Color::BLACK),
     );
     assert_eq!(material(&s, 0), &glass);
@@ -844,4 +850,42 @@ fn loading_is_linear_in_the_number_of_names() {
     src += "SET n999998 1";
     let e = check_err(&src, ErrorKind::RedefinedName, n + 1, 5, "`n999998` is already defined");
     assert_eq!(e.note(), Some("`n999998` was defined at t.sl:999999:5"));
+}
+
+#[test]
+fn rough_materials_and_their_defaults() {
+    let s = with_settings(
+        "SPAWN Shape.Sphere(Material(Brdf.Conductor()))
+               Shape.Sphere(Material(Brdf.Conductor(<1, 0.8, 0.6>, 0.3, <0.2, 0.4, 1.4>, <3.9, 2.4, 1.6>)))
+               Shape.Sphere(Material(Brdf.Dielectric(.roughness 0.5)))
+               Shape.Sphere(Material(Brdf.Plastic(<0.5, 0.1, 0.1>)))
+               Shape.Sphere(Material(Brdf.Plastic(.ior 1.4, .roughness 0)))",
+    );
+    let white = Pigment::Uniform(Color::WHITE);
+    assert_eq!(material(&s, 0).brdf, Brdf::Conductor { pigment: white.clone(), roughness: 0.0, fresnel: None });
+    assert_eq!(
+        material(&s, 1).brdf,
+        Brdf::Conductor {
+            pigment: Pigment::Uniform(Color::new(1.0, 0.8, 0.6)),
+            roughness: 0.3,
+            fresnel: Some((Color::new(0.2, 0.4, 1.4), Color::new(3.9, 2.4, 1.6)))
+        }
+    );
+    assert_eq!(material(&s, 2).brdf, Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.5 });
+    assert_eq!(
+        material(&s, 3).brdf,
+        Brdf::Plastic { pigment: Pigment::Uniform(Color::new(0.5, 0.1, 0.1)), ior: 1.5, roughness: 0.1 }
+    );
+    assert_eq!(material(&s, 4).brdf, Brdf::Plastic { pigment: white, ior: 1.4, roughness: 0.0 });
+    assert!(!material(&s, 3).brdf.is_delta() && material(&s, 0).brdf.is_delta() && !material(&s, 2).brdf.is_delta());
+}
+
+#[test]
+fn bad_rough_material_values_are_located_errors() {
+    check_err("SET b Brdf.Conductor(.roughness -0.1)", ErrorKind::BadValue, 1, 33, "`.roughness` must be in [0, 1]");
+    check_err("SET b Brdf.Conductor(.roughness 1.5)", ErrorKind::BadValue, 1, 33, "`.roughness` must be in [0, 1]");
+    check_err("SET b Brdf.Dielectric(.roughness 2)", ErrorKind::BadValue, 1, 34, "`.roughness` must be in [0, 1]");
+    check_err("SET b Brdf.Plastic(.ior -1)", ErrorKind::BadValue, 1, 25, "must be > 0");
+    check_err("SET b Brdf.Conductor(.eta <0, 1, 1>)", ErrorKind::BadValue, 1, 27, "`.eta` must be finite and positive");
+    check_err("SET b Brdf.Conductor(.k <1, -1, 1>)", ErrorKind::BadValue, 1, 25, "`.k` must be finite and positive");
 }

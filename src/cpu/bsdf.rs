@@ -1,4 +1,5 @@
-//! Sampling, evaluation and densities of the scene's BRDFs (diffuse, mirror, dielectric).
+//! Sampling, evaluation and densities of the scene's BSDFs: diffuse, mirror and smooth glass
+//! here, the rough ones (and the smooth conductor's Fresnel) in [`super::microfacet`].
 //!
 //! Conventions: `d` is the unit direction the incoming ray travels along, `n` the unit
 //! normal facing it (`d · n ≤ 0`, as [`super::Hit`] gives it), `color` the BRDF pigment's
@@ -12,7 +13,9 @@ use crate::color::Color;
 use crate::scene::Brdf;
 
 use super::fresnel::{fresnel_dielectric, reflect, refract};
+use super::microfacet::{self as mf, LocalSample, Rough};
 use super::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::optics::ggx::alpha_of;
 
 /// A scattered direction and its Monte Carlo weight.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,25 +45,116 @@ pub fn sample_bsdf(
     match brdf {
         Brdf::Diffuse { .. } => sample_diffuse(color, n, xi_dir[0], xi_dir[1]),
         Brdf::Specular { .. } => Some(BsdfSample { dir: reflect(d, n), weight: color, pdf: 0.0, delta: true }),
-        Brdf::Dielectric { ior, .. } => Some(sample_dielectric(color, d, n, relative_ior(*ior, front_face), xi_lobe)),
+        Brdf::Dielectric { ior, roughness, .. } if *roughness == 0.0 => {
+            Some(sample_dielectric(color, d, n, relative_ior(*ior, front_face), xi_lobe))
+        }
+        Brdf::Conductor { roughness, fresnel, .. } if *roughness == 0.0 => {
+            let weight = color * mf::conductor_fresnel(-d.dot(n), *fresnel);
+            Some(BsdfSample { dir: reflect(d, n), weight, pdf: 0.0, delta: true })
+        }
+        _ => {
+            let frame = Frame::new(n);
+            let o = frame.local(-d);
+            let s = sample_rough(brdf, color, front_face, o, xi_lobe, xi_dir)?;
+            Some(BsdfSample { dir: frame.world(s.dir).normalize(), weight: s.weight, pdf: s.pdf, delta: s.delta })
+        }
     }
 }
 
-/// BRDF value f for light arriving from `l` seen along `-d` (0 for delta BRDFs, whose value
+/// BSDF value f for light arriving from `l` seen along `-d` (0 for delta BSDFs, whose value
 /// is a Dirac delta that light sampling never hits).
-pub fn eval_bsdf(brdf: &Brdf, color: Color, n: DVec3, l: DVec3) -> Color {
+pub fn eval_bsdf(brdf: &Brdf, color: Color, d: DVec3, n: DVec3, front_face: bool, l: DVec3) -> Color {
     match brdf {
         Brdf::Diffuse { .. } if n.dot(l) > 0.0 => color * FRAC_1_PI,
+        Brdf::Diffuse { .. } => Color::BLACK,
+        b if b.is_delta() => Color::BLACK,
+        _ => {
+            let frame = Frame::new(n);
+            eval_rough(brdf, color, front_face, frame.local(-d), frame.local(l))
+        }
+    }
+}
+
+/// Solid-angle density with which [`sample_bsdf`] produces `l` (0 for delta BSDFs).
+pub fn pdf_bsdf(brdf: &Brdf, d: DVec3, n: DVec3, front_face: bool, l: DVec3) -> f64 {
+    match brdf {
+        Brdf::Diffuse { .. } => cosine_hemisphere_pdf(n.dot(l)),
+        b if b.is_delta() => 0.0,
+        _ => {
+            let frame = Frame::new(n);
+            let (o, i) = (frame.local(-d), frame.local(l));
+            match brdf {
+                Brdf::Conductor { roughness, .. } => mf::conductor_pdf(rough(*roughness), o, i),
+                Brdf::Dielectric { ior, roughness, .. } => {
+                    mf::dielectric_pdf(rough(*roughness), relative_ior(*ior, front_face), o, i)
+                }
+                Brdf::Plastic { ior, roughness, .. } => mf::plastic_pdf(coat(*roughness), *ior, o, i),
+                _ => 0.0,
+            }
+        }
+    }
+}
+
+/// The frame of the normal: local z = n (Duff et al.'s basis, as the GPU builds it).
+struct Frame {
+    t: DVec3,
+    b: DVec3,
+    n: DVec3,
+}
+
+impl Frame {
+    fn new(n: DVec3) -> Self {
+        let (t, b) = super::onb(n);
+        Frame { t, b, n }
+    }
+    fn local(&self, v: DVec3) -> DVec3 {
+        DVec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+    fn world(&self, v: DVec3) -> DVec3 {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+}
+
+/// The rough lobe of a roughness > 0, compensated.
+fn rough(roughness: f64) -> Rough {
+    Rough { alpha: alpha_of(roughness), compensate: true }
+}
+
+/// The plastic's coat: `None` when smooth.
+fn coat(roughness: f64) -> Option<f64> {
+    (roughness > 0.0).then(|| alpha_of(roughness))
+}
+
+fn eval_rough(brdf: &Brdf, color: Color, front_face: bool, o: DVec3, i: DVec3) -> Color {
+    match brdf {
+        Brdf::Conductor { roughness, fresnel, .. } => color * mf::conductor_eval(rough(*roughness), *fresnel, o, i),
+        Brdf::Dielectric { ior, roughness, .. } => {
+            color * mf::dielectric_eval(rough(*roughness), relative_ior(*ior, front_face), o, i)
+        }
+        Brdf::Plastic { ior, roughness, .. } => mf::plastic_eval(coat(*roughness), *ior, color, o, i),
         _ => Color::BLACK,
     }
 }
 
-/// Solid-angle density with which [`sample_bsdf`] produces `l` (0 for delta BRDFs).
-pub fn pdf_bsdf(brdf: &Brdf, n: DVec3, l: DVec3) -> f64 {
-    match brdf {
-        Brdf::Diffuse { .. } => cosine_hemisphere_pdf(n.dot(l)),
-        _ => 0.0,
-    }
+fn sample_rough(
+    brdf: &Brdf,
+    color: Color,
+    front_face: bool,
+    o: DVec3,
+    xi_lobe: f64,
+    xi: [f64; 2],
+) -> Option<LocalSample> {
+    let s = match brdf {
+        Brdf::Conductor { roughness, fresnel, .. } => mf::conductor_sample(rough(*roughness), *fresnel, o, xi_lobe, xi),
+        Brdf::Dielectric { ior, roughness, .. } => {
+            mf::dielectric_sample(rough(*roughness), relative_ior(*ior, front_face), o, xi_lobe, xi)
+        }
+        Brdf::Plastic { ior, roughness, .. } => {
+            return mf::plastic_sample(coat(*roughness), *ior, color, o, xi_lobe, xi);
+        }
+        _ => None,
+    }?;
+    Some(LocalSample { weight: s.weight * color, ..s })
 }
 
 /// n_transmitted / n_incident for a ray entering (`front_face`) or leaving a dielectric.
@@ -104,71 +198,44 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
-    use crate::sampling::Pcg32;
     use crate::scene::Pigment;
 
     fn diffuse() -> Brdf {
         Brdf::Diffuse { pigment: Pigment::default() }
     }
 
-    /// Chi-square test of diffuse sampling against its pdf, over a sphere binned in
-    /// (cos θ, φ) cells of equal solid angle about a tilted normal.
+    /// χ² of diffuse sampling about a tilted normal; the weight is exactly the pigment.
     #[test]
     fn diffuse_sampling_matches_its_pdf_chi_square() {
         let n = DVec3::new(0.3, -0.5, 0.8).normalize();
         let d = -n;
-        let (nz, nphi) = (20usize, 40usize);
-        let (t, b) = super::super::onb(n);
-        let mut counts = vec![0f64; 2 * nz * nphi];
-        let mut rng = Pcg32::new(1, 2);
-        let samples = 400_000;
-        for _ in 0..samples {
-            let s = sample_bsdf(&diffuse(), Color::WHITE, d, n, true, rng.next_f64(), [rng.next_f64(), rng.next_f64()])
-                .unwrap();
-            assert!((s.pdf - pdf_bsdf(&diffuse(), n, s.dir)).abs() < 1e-12);
-            assert_eq!(s.weight, Color::WHITE);
-            counts[bin(s.dir, n, t, b, nz, nphi)] += 1.0;
-        }
-        // Expected counts: integrate the pdf over each bin (midpoint rule in cos θ, fine bins).
-        let mut chi2 = 0.0;
-        let mut dof = 0;
-        for (i, c) in counts.iter().enumerate() {
-            let zi = i / nphi;
-            let sub = 64;
-            let mut p = 0.0;
-            for k in 0..sub {
-                let z = -1.0 + (zi as f64 + (k as f64 + 0.5) / sub as f64) * 2.0 / (2 * nz) as f64;
-                p += cosine_hemisphere_pdf(z) * (2.0 / (2 * nz) as f64 / sub as f64) * (2.0 * PI / nphi as f64);
-            }
-            let e = p * samples as f64;
-            if e < 5.0 {
-                // Pool tiny bins into a "must be empty-ish" check instead of chi-square.
-                assert!(*c <= e + 20.0, "bin {i}: {c} vs {e}");
-                continue;
-            }
-            chi2 += (c - e) * (c - e) / e;
-            dof += 1;
-        }
-        // For ~400 degrees of freedom the 1e-6 upper quantile is about dof + 5.3·√(2·dof).
-        let limit = dof as f64 + 5.3 * (2.0 * dof as f64).sqrt() + 10.0;
-        assert!(chi2 < limit, "chi2 = {chi2} over {dof} bins, limit {limit}");
-    }
-
-    fn bin(l: DVec3, n: DVec3, t: DVec3, b: DVec3, nz: usize, nphi: usize) -> usize {
-        let z = l.dot(n).clamp(-1.0, 1.0);
-        let phi = l.dot(b).atan2(l.dot(t)).rem_euclid(2.0 * PI);
-        let zi = (((z + 1.0) / 2.0 * (2 * nz) as f64) as usize).min(2 * nz - 1);
-        let pi = ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1);
-        zi * nphi + pi
+        super::super::chi_square::chi_square_test(
+            "diffuse",
+            n,
+            |rng| {
+                let s = sample_bsdf(
+                    &diffuse(),
+                    Color::WHITE,
+                    d,
+                    n,
+                    true,
+                    rng.next_f64(),
+                    [rng.next_f64(), rng.next_f64()],
+                )?;
+                assert_eq!(s.weight, Color::WHITE);
+                Some(LocalSample { dir: s.dir, weight: s.weight, pdf: s.pdf, delta: s.delta })
+            },
+            |l| pdf_bsdf(&diffuse(), d, n, true, l),
+        );
     }
 
     #[test]
     fn diffuse_eval_and_albedo() {
         let n = DVec3::Z;
         let c = Color::new(0.2, 0.5, 0.9);
-        assert_eq!(eval_bsdf(&diffuse(), c, n, DVec3::new(0.0, 0.6, 0.8)), c / PI);
-        assert_eq!(eval_bsdf(&diffuse(), c, n, DVec3::new(0.0, 0.6, -0.8)), Color::BLACK);
-        assert_eq!(pdf_bsdf(&diffuse(), n, -DVec3::Z), 0.0);
+        assert_eq!(eval_bsdf(&diffuse(), c, -n, n, true, DVec3::new(0.0, 0.6, 0.8)), c / PI);
+        assert_eq!(eval_bsdf(&diffuse(), c, -n, n, true, DVec3::new(0.0, 0.6, -0.8)), Color::BLACK);
+        assert_eq!(pdf_bsdf(&diffuse(), -n, n, true, -DVec3::Z), 0.0);
     }
 
     #[test]
@@ -181,12 +248,12 @@ mod tests {
         assert_eq!(s.dir, DVec3::new(0.6, 0.0, 0.8));
         assert_eq!(s.weight, c);
         assert!(s.delta);
-        assert_eq!(eval_bsdf(&m, c, n, s.dir), Color::BLACK);
+        assert_eq!(eval_bsdf(&m, c, d, n, true, s.dir), Color::BLACK);
     }
 
     #[test]
     fn dielectric_chooses_by_fresnel_and_obeys_snell() {
-        let g = Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5 };
+        let g = Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5, roughness: 0.0 };
         let th = 30f64.to_radians();
         let d = DVec3::new(th.sin(), 0.0, -th.cos());
         let n = DVec3::Z;

@@ -26,10 +26,13 @@ pub use world::World;
 // Shading: BSDFs, lights, integrators and the render loop.
 pub mod area_light;
 pub mod bsdf;
+#[cfg(test)]
+mod chi_square;
 pub mod context;
 pub mod env_light;
-pub mod fresnel;
+pub use crate::optics::fresnel;
 pub mod lights;
+pub mod microfacet;
 pub mod path_tracer;
 pub mod point_lights;
 mod render;

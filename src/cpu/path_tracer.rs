@@ -54,13 +54,13 @@ pub fn path_radiance(
         if bounce == settings.max_depth {
             break;
         }
+        let d = ray.dir.normalize();
         if !material.brdf.is_delta() {
-            add_point_lights(ctx, &hit, &material.brdf, color, beta, &mut radiance, counters);
+            add_point_lights(ctx, &hit, &material.brdf, color, d, beta, &mut radiance, counters);
             if settings.nee {
-                radiance += beta * sample_light(ctx, &hit, &material.brdf, color, &xi, counters);
+                radiance += beta * sample_light(ctx, &hit, &material.brdf, color, d, &xi, counters);
             }
         }
-        let d = ray.dir.normalize();
         let Some(s) = sample_bsdf(&material.brdf, color, d, hit.normal, hit.front_face, xi.lobe, xi.direction) else {
             break;
         };
@@ -126,19 +126,22 @@ fn escaped(ctx: &Context, settings: &PathTracerSettings, prev: &Previous, dir: D
 
 /// Direct light from every point light (always on: point lights cannot be hit), each one's
 /// throughput-weighted contribution added on its own, as the GPU's shadow stage adds each
-/// shadow ray's (`shaders/wf_shade.wgsl`, `wf_shadow.wgsl`).
+/// shadow ray's (`shaders/wf_shade.wgsl`, `wf_shadow.wgsl`). (The vertex's state is passed
+/// apart rather than bundled, to keep that per-light order of additions visible.)
+#[allow(clippy::too_many_arguments)]
 fn add_point_lights(
     ctx: &Context,
     hit: &Hit,
     brdf: &Brdf,
     color: Color,
+    d: DVec3,
     beta: Color,
     radiance: &mut Color,
     counters: &mut Counters,
 ) {
     for light in &ctx.scene.point_lights {
         if let Some((dir, factor)) = point_light_factor(ctx, hit, light, counters) {
-            *radiance += beta * (eval_bsdf(brdf, color, hit.normal, dir) * light.color * factor);
+            *radiance += beta * (eval_bsdf(brdf, color, d, hit.normal, hit.front_face, dir) * light.color * factor);
         }
     }
 }
@@ -162,13 +165,14 @@ fn sample_light(
     hit: &Hit,
     brdf: &Brdf,
     color: Color,
+    d: DVec3,
     xi: &VertexDraws,
     counters: &mut Counters,
 ) -> Color {
     let Some(ls) = choose_and_sample_light(ctx, hit, xi) else {
         return Color::BLACK;
     };
-    let f = eval_bsdf(brdf, color, hit.normal, ls.dir);
+    let f = eval_bsdf(brdf, color, d, hit.normal, hit.front_face, ls.dir);
     if f.is_black() || ls.radiance.is_black() {
         return Color::BLACK;
     }
@@ -179,8 +183,9 @@ fn sample_light(
     if !clear {
         return Color::BLACK;
     }
-    let weight = power_heuristic(ls.pdf, pdf_bsdf(brdf, hit.normal, ls.dir));
-    f * ls.radiance * (hit.normal.dot(ls.dir) * weight / ls.pdf)
+    let weight = power_heuristic(ls.pdf, pdf_bsdf(brdf, d, hit.normal, hit.front_face, ls.dir));
+    // |cos|: a rough dielectric also receives light from behind (transmission).
+    f * ls.radiance * (hit.normal.dot(ls.dir).abs() * weight / ls.pdf)
 }
 
 fn choose_and_sample_light(ctx: &Context, hit: &Hit, xi: &VertexDraws) -> Option<LightSample> {

@@ -38,7 +38,9 @@ pub fn point_light_radiance(ctx: &Context, ray: &Ray, ambient: Color, counters: 
     let mut radiance = ambient;
     for light in &ctx.scene.point_lights {
         if let Some((dir, factor)) = point_light_factor(ctx, &hit, light, counters) {
-            radiance += (emitted + eval_bsdf(&m.brdf, color, hit.normal, dir)) * light.color * factor;
+            radiance += (emitted + eval_bsdf(&m.brdf, color, ray.dir.normalize(), hit.normal, hit.front_face, dir))
+                * light.color
+                * factor;
         }
     }
     radiance

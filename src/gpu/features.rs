@@ -131,6 +131,8 @@ impl FeatureSet {
                 Brdf::Diffuse { .. } => f.diffuse = true,
                 Brdf::Specular { .. } => f.specular = true,
                 Brdf::Dielectric { .. } => f.dielectric = true,
+                // Not yet on the GPU: the packer refuses them (pack::PackError::Unsupported).
+                Brdf::Conductor { .. } | Brdf::Plastic { .. } => {}
             }
         }
         // Only integrators that scatter need BRDF code.
@@ -364,7 +366,11 @@ mod tests {
         let mut b = SceneBuilder::new(4, 4);
         let diffuse = b.diffuse(Color::gray(0.5));
         let glass = b.material(Material::new(
-            Brdf::Dielectric { pigment: Pigment::Checkered { n: 2, on: Color::WHITE, off: Color::BLACK }, ior: 1.5 },
+            Brdf::Dielectric {
+                pigment: Pigment::Checkered { n: 2, on: Color::WHITE, off: Color::BLACK },
+                ior: 1.5,
+                roughness: 0.0,
+            },
             Pigment::Uniform(Color::BLACK),
         ));
         // A material nobody uses does not count.

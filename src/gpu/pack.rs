@@ -89,6 +89,9 @@ pub enum PackError {
          (±3.4e38) that the GPU computes in"
     )]
     OutOfRange { shape: usize, kind: ShapeKind, magnitude: f64 },
+    /// The rough materials of issue 14 render on the CPU reference only, so far.
+    #[error("material {material}: {what} is not yet supported by the GPU renderer (render it with the CPU)")]
+    Unsupported { material: usize, what: &'static str },
 }
 
 /// The camera's position in the world: where the packed frame's origin goes. For a
@@ -213,11 +216,15 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
 
     // Appearance.
     let mut textures: HashMap<*const HdrImage, u32> = HashMap::new();
-    for m in &scene.materials {
+    for (index, m) in scene.materials.iter().enumerate() {
+        let unsupported = |what| PackError::Unsupported { material: index, what };
         let (brdf, ior) = match m.brdf {
             Brdf::Diffuse { .. } => (layout::brdf_kind::DIFFUSE, 1.0),
             Brdf::Specular { .. } => (layout::brdf_kind::SPECULAR, 1.0),
-            Brdf::Dielectric { ior, .. } => (layout::brdf_kind::DIELECTRIC, ior as f32),
+            Brdf::Dielectric { ior, roughness: 0.0, .. } => (layout::brdf_kind::DIELECTRIC, ior as f32),
+            Brdf::Dielectric { .. } => return Err(unsupported("a rough Brdf.Dielectric")),
+            Brdf::Conductor { .. } => return Err(unsupported("Brdf.Conductor")),
+            Brdf::Plastic { .. } => return Err(unsupported("Brdf.Plastic")),
         };
         let pigment = push_pigment(&mut p, &mut textures, m.brdf.pigment())?;
         let emitted = push_pigment(&mut p, &mut textures, &m.emitted)?;
@@ -550,6 +557,33 @@ mod tests {
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
         assert!(err.to_string().contains("CSG interval slots"), "{err}");
+    }
+
+    /// Rough materials render on the CPU only (issue 14, GPU kernels not yet written): the
+    /// packer says so instead of rendering them as something else; smooth glass still packs.
+    #[test]
+    fn rough_materials_are_a_clear_error() {
+        let white = crate::scene::Pigment::Uniform(Color::WHITE);
+        let rough = [
+            Brdf::Conductor { pigment: white.clone(), roughness: 0.0, fresnel: None },
+            Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.2 },
+            Brdf::Plastic { pigment: white.clone(), ior: 1.5, roughness: 0.1 },
+        ];
+        for brdf in rough {
+            let mut b = SceneBuilder::new(4, 4);
+            let m = b.material(crate::scene::Material::new(brdf, crate::scene::Pigment::Uniform(Color::BLACK)));
+            b.sphere(Transform::IDENTITY, m);
+            let err = pack(&b.build().unwrap(), None).unwrap_err();
+            assert!(matches!(err, PackError::Unsupported { material: 0, .. }), "{err}");
+            assert!(err.to_string().contains("not yet supported by the GPU"), "{err}");
+        }
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.material(crate::scene::Material::new(
+            Brdf::smooth_dielectric(white, 1.5),
+            crate::scene::Pigment::Uniform(Color::BLACK),
+        ));
+        b.sphere(Transform::IDENTITY, m);
+        assert!(pack(&b.build().unwrap(), None).is_ok());
     }
 
     #[test]

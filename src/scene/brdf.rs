@@ -1,6 +1,7 @@
 //! Surface scattering models (the description; sampling lives with each renderer).
 
 use super::Pigment;
+use crate::color::Color;
 
 /// How a surface scatters light. Each variant carries the pigment that tints it.
 #[derive(Debug, Clone, PartialEq)]
@@ -11,9 +12,16 @@ pub enum Brdf {
     /// Raytracer.jl for DUMP and round-trips; like Raytracer.jl's own sampler, lumen reflects
     /// exactly.
     Specular { pigment: Pigment, threshold_angle_rad: f64 },
-    /// Smooth dielectric interface (ext): exact Fresnel reflection and refraction with
-    /// total internal reflection; `ior` is the inside index relative to the outside.
-    Dielectric { pigment: Pigment, ior: f64 },
+    /// Dielectric interface (ext): exact Fresnel reflection and refraction with total
+    /// internal reflection; `ior` is the inside index relative to the outside. Roughness 0
+    /// is smooth glass; above, GGX reflection and transmission (Walter et al. 2007) with
+    /// energy compensation.
+    Dielectric { pigment: Pigment, ior: f64, roughness: f64 },
+    /// GGX metal (ext): `roughness` is α (0: a perfect mirror); `fresnel` the complex index
+    /// (η, k) per channel, or `None` for F = 1. Multiple scattering is compensated.
+    Conductor { pigment: Pigment, roughness: f64, fresnel: Option<(Color, Color)> },
+    /// A diffuse base (the pigment) under a GGX dielectric coat of index `ior` (ext).
+    Plastic { pigment: Pigment, ior: f64, roughness: f64 },
 }
 
 impl Default for Brdf {
@@ -28,11 +36,23 @@ pub const DEFAULT_THRESHOLD_ANGLE_RAD: f64 = 0.0017453294;
 impl Brdf {
     pub fn pigment(&self) -> &Pigment {
         match self {
-            Brdf::Diffuse { pigment } | Brdf::Specular { pigment, .. } | Brdf::Dielectric { pigment, .. } => pigment,
+            Brdf::Diffuse { pigment }
+            | Brdf::Specular { pigment, .. }
+            | Brdf::Dielectric { pigment, .. }
+            | Brdf::Conductor { pigment, .. }
+            | Brdf::Plastic { pigment, .. } => pigment,
         }
     }
     /// True for BRDFs whose scattering is a Dirac delta (no light sampling through them).
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Brdf::Diffuse { .. })
+        match self {
+            Brdf::Diffuse { .. } | Brdf::Plastic { .. } => false,
+            Brdf::Specular { .. } => true,
+            Brdf::Dielectric { roughness, .. } | Brdf::Conductor { roughness, .. } => *roughness == 0.0,
+        }
+    }
+    /// The smooth glass of Raytracer.jl scripts' `Brdf.Dielectric` (roughness 0).
+    pub fn smooth_dielectric(pigment: Pigment, ior: f64) -> Self {
+        Brdf::Dielectric { pigment, ior, roughness: 0.0 }
     }
 }

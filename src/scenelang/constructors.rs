@@ -202,6 +202,30 @@ impl Interp<'_> {
     }
 
     /// A finite number `> 0` (or `>= 0` when `allow_zero`) from argument `i`, or `default`.
+    /// A relative index of refraction: finite and > 0.
+    fn ior(&self, a: &Args, i: usize) -> Res<f64> {
+        let v = self.positive(a, i, "ior", 1.5, false)?;
+        if !v.is_finite() {
+            let span = a.span(i).unwrap_or_default();
+            return Err(self
+                .err(span, ErrorKind::BadValue, format!("`.ior` must be finite, got {v}"))
+                .with_expected("a finite number > 0"));
+        }
+        Ok(v)
+    }
+
+    /// A GGX roughness (α): finite, 0 ≤ r ≤ 1.
+    fn roughness(&self, a: &Args, i: usize, default: f64) -> Res<f64> {
+        let v = a.num(i, default);
+        if !(0.0..=1.0).contains(&v) {
+            let span = a.span(i).unwrap_or_default();
+            return Err(self
+                .err(span, ErrorKind::BadValue, format!("`.roughness` must be in [0, 1], got {v}"))
+                .with_expected("a number 0 ≤ r ≤ 1"));
+        }
+        Ok(v)
+    }
+
     fn positive(&self, a: &Args, i: usize, name: &str, default: f64, allow_zero: bool) -> Res<f64> {
         let v = a.num(i, default);
         let ok = if allow_zero { v >= 0.0 } else { v > 0.0 };
@@ -481,7 +505,7 @@ impl Interp<'_> {
                 })
             }
             Ty::Brdf => {
-                let kind = self.subtype(ty, &["Diffuse", "Specular", "Dielectric"])?;
+                let kind = self.subtype(ty, &["Diffuse", "Specular", "Dielectric", "Conductor", "Plastic"])?;
                 Value::Brdf(match kind {
                     "Diffuse" => {
                         Brdf::Diffuse { pigment: self.args("Brdf.Diffuse", &[p("pigment", T::Pigment)])?.pigment(0) }
@@ -493,10 +517,62 @@ impl Interp<'_> {
                             self.positive(&a, 1, "threshold_angle_rad", DEFAULT_THRESHOLD_ANGLE_RAD, true)?;
                         Brdf::Specular { pigment: a.pigment(0), threshold_angle_rad }
                     }
+                    "Conductor" => {
+                        let a = self.args(
+                            "Brdf.Conductor",
+                            &[
+                                p("pigment", T::Pigment),
+                                p("roughness", T::Number),
+                                p("eta", T::Color),
+                                p("k", T::Color),
+                            ],
+                        )?;
+                        let roughness = self.roughness(&a, 1, 0.0)?;
+                        let fresnel = match (a.span(2), a.span(3)) {
+                            (None, None) => None,
+                            _ => {
+                                let (eta, k) = (a.color(2, Color::WHITE), a.color(3, Color::BLACK));
+                                for (i, name, c) in [(2, "eta", eta), (3, "k", k)] {
+                                    let ok = c.is_finite()
+                                        && c.min_component() >= 0.0
+                                        && (i == 3 || c.min_component() > 0.0);
+                                    if !ok {
+                                        let span = a.span(i).unwrap_or_default();
+                                        return Err(self
+                                            .err(
+                                                span,
+                                                ErrorKind::BadValue,
+                                                format!("`.{name}` must be finite and positive, got {c:?}"),
+                                            )
+                                            .with_expected(if i == 2 {
+                                                "a colour of numbers > 0"
+                                            } else {
+                                                "a colour of numbers ≥ 0"
+                                            }));
+                                    }
+                                }
+                                Some((eta, k))
+                            }
+                        };
+                        Brdf::Conductor { pigment: a.pigment(0), roughness, fresnel }
+                    }
+                    "Plastic" => {
+                        let a = self.args(
+                            "Brdf.Plastic",
+                            &[p("pigment", T::Pigment), p("ior", T::Number), p("roughness", T::Number)],
+                        )?;
+                        let ior = self.ior(&a, 1)?;
+                        let roughness = self.roughness(&a, 2, 0.1)?;
+                        Brdf::Plastic { pigment: a.pigment(0), ior, roughness }
+                    }
                     _ => {
-                        let a = self.args("Brdf.Dielectric", &[p("pigment", T::Pigment), p("ior", T::Number)])?;
-                        let ior = self.positive(&a, 1, "ior", 1.5, false)?;
-                        Brdf::Dielectric { pigment: a.pigment(0), ior }
+                        let a = self.args(
+                            "Brdf.Dielectric",
+                            &[p("pigment", T::Pigment), p("ior", T::Number), p("roughness", T::Number)],
+                        )?;
+                        let ior = self.ior(&a, 1)?;
+                        let roughness = self.roughness(&a, 2, 0.0)?;
+                        Brdf::Dielectric { pigment: a.pigment(0), ior, roughness }
                     }
                 })
             }

@@ -1,5 +1,5 @@
 //! Mirror reflection, Snell refraction and the exact unpolarised Fresnel reflectance of a
-//! smooth dielectric interface.
+//! smooth dielectric interface and of a conductor (complex index).
 
 use glam::DVec3;
 
@@ -36,9 +36,58 @@ pub fn fresnel_dielectric(cos_i: f64, eta: f64) -> f64 {
     0.5 * (rs * rs + rp * rp)
 }
 
+/// Unpolarised Fresnel reflectance of a conductor of complex index `eta + i·k` (relative to
+/// the outside) for the incident cosine `cos_i`: the exact s and p reflectances of an
+/// absorbing medium, written with the real and imaginary parts a, b of √(ñ² − sin²θ).
+pub fn fresnel_conductor(cos_i: f64, eta: f64, k: f64) -> f64 {
+    let c = cos_i.clamp(0.0, 1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let t0 = eta * eta - k * k - s2;
+    let a2b2 = (t0 * t0 + 4.0 * eta * eta * k * k).sqrt();
+    let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
+    let rs = (a2b2 - 2.0 * a * c + c2) / (a2b2 + 2.0 * a * c + c2);
+    let rp = rs * (c2 * a2b2 - 2.0 * a * c * s2 + s2 * s2) / (c2 * a2b2 + 2.0 * a * c * s2 + s2 * s2);
+    let f = 0.5 * (rs + rp);
+    if f.is_finite() {
+        f.clamp(0.0, 1.0)
+    } else {
+        1.0
+    }
+}
+
+/// Hemispherical average 2∫F(μ)μ dμ of a conductor's Fresnel reflectance (Kulla & Conty's
+/// F_avg, which tints the multiple-scattering lobe), by a fixed midpoint rule so that both
+/// renderers get the same value.
+pub fn conductor_fresnel_average(eta: f64, k: f64) -> f64 {
+    const N: usize = 64;
+    let mut sum = 0.0;
+    for j in 0..N {
+        let mu = (j as f64 + 0.5) / N as f64;
+        sum += fresnel_conductor(mu, eta, k) * mu;
+    }
+    2.0 * sum / N as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn conductor_fresnel_closed_forms() {
+        // Normal incidence: ((η − 1)² + k²) / ((η + 1)² + k²).
+        let (eta, k) = (0.2, 3.0);
+        let f0 = ((eta - 1.0f64).powi(2) + k * k) / ((eta + 1.0f64).powi(2) + k * k);
+        assert!((fresnel_conductor(1.0, eta, k) - f0).abs() < 1e-14);
+        // k = 0 is a dielectric.
+        for c in [0.1, 0.4, 0.9] {
+            assert!((fresnel_conductor(c, 1.5, 0.0) - fresnel_dielectric(c, 1.5)).abs() < 1e-13);
+        }
+        // Grazing incidence reflects everything; the average of F ≡ 1 would be 1.
+        assert!((fresnel_conductor(0.0, eta, k) - 1.0).abs() < 1e-12);
+        let avg = conductor_fresnel_average(eta, k);
+        assert!(avg > 0.9 * f0 && avg < 1.0, "{avg}");
+    }
 
     #[test]
     fn reflection_is_exact() {
