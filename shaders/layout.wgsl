@@ -61,8 +61,11 @@ struct AreaLight {
     sphere: vec4<f32>,
     shape: u32,
     det: f32,
+    face_cdf: vec2<f32>,
+    area: f32,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 // position.w = linear_radius.

@@ -66,25 +66,37 @@ fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>
     let s = shapes[light.shape];
     let n_world = affine_normal(s.to_object, n_obj);
     let jacobian = light.det * length(n_world);
-    let area_obj = select(6.0, 2.0 * TAU, s.kind == SHAPE_SPHERE);
+    let area = select(light.area, 2.0 * TAU * jacobian, s.kind == SHAPE_SPHERE);
     let to_light = y - x;
     let dist2 = dot(to_light, to_light);
     let cos_light = abs(dot(normalize_or(n_world, vec3<f32>(0.0)), to_light)) / sqrt(dist2);
     if (!(cos_light > 0.0) || !(dist2 > 0.0)) {
         return 0.0;
     }
-    return dist2 / (cos_light * area_obj * jacobian);
+    return dist2 / (cos_light * area);
 }
 
 // #if DIFFUSE
-// area_light::sample_cube_surface.
-fn sample_cube_surface(xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
-    let f = min(floor(xi0 * 6.0), 5.0);
-    let a = xi0 * 6.0 - f - 0.5;
+// area_light::sample_cube_surface: the face pair by its world-area share, then uniform.
+fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
+    var axis = 2u;
+    var lo = cdf.y;
+    var hi = 1.0;
+    if (xi0 < cdf.x) {
+        axis = 0u;
+        lo = 0.0;
+        hi = cdf.x;
+    } else if (xi0 < cdf.y) {
+        axis = 1u;
+        lo = cdf.x;
+        hi = cdf.y;
+    }
+    let v = clamp(2.0 * (xi0 - lo) / (hi - lo), 0.0, 1.9999999);
+    let side = floor(v);
+    let a = v - side - 0.5;
     let b = xi1 - 0.5;
-    let face = u32(f);
-    let s = select(-0.5, 0.5, face % 2u == 0u);
-    switch face / 2u {
+    let s = select(-0.5, 0.5, side == 0.0);
+    switch axis {
         case 0u: {
             return array<vec3<f32>, 2>(vec3<f32>(s, a, b), vec3<f32>(2.0 * s, 0.0, 0.0));
         }
@@ -147,7 +159,7 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
         p_obj = uniform_sphere(xi0, xi1);
         n_obj = p_obj;
     } else {
-        let pn = sample_cube_surface(xi0, xi1);
+        let pn = sample_cube_surface(light.face_cdf, xi0, xi1);
         p_obj = pn[0];
         n_obj = pn[1];
     }

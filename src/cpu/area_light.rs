@@ -6,10 +6,12 @@
 //! - **cone**: a sphere whose transform is a similarity (a true sphere in world space),
 //!   seen from a point outside it that does not lie on it: directions uniform in the cone
 //!   it subtends (pdf 1 / (2π(1 − cos θmax))).
-//! - **area**: otherwise (cubes, ellipsoids, points inside or on the light), a point uniform
-//!   in object space on the unit shape's surface (4π for the sphere, 6 unit faces for the
-//!   cube), mapped to the world. Nanson's formula gives the world area density
-//!   `1 / (A_obj · |det M| · |M⁻ᵀ n_obj|)`, converted to solid angle by `d² / |cos θ_light|`.
+//! - **area**: otherwise (cubes, ellipsoids, points inside or on the light). Spheres: a
+//!   point uniform in object space on the unit sphere, mapped to the world; Nanson's formula
+//!   gives the world area density `1 / (4π · |det M| · |M⁻ᵀ n_obj|)`. Cubes: a face pair
+//!   chosen by world area, a point uniform on it, so the density is `1 / A_world` (uniform
+//!   over the world surface: a flat panel's broad faces get nearly every sample). Either is
+//!   converted to solid angle by `d² / |cos θ_light|`.
 
 use std::f64::consts::PI;
 
@@ -98,7 +100,7 @@ impl AreaLight {
                 let p = uniform_sphere(xi0, xi1);
                 (p, p)
             }
-            _ => sample_cube_surface(xi0, xi1),
+            _ => sample_cube_surface(self.face_cdf, xi0, xi1),
         };
         let y = self.transform.point(p_obj);
         let pdf = self.area_pdf_solid_angle(x, y, n_obj);
@@ -115,14 +117,14 @@ impl AreaLight {
     fn area_pdf_solid_angle(&self, x: DVec3, y: DVec3, n_obj: DVec3) -> f64 {
         let n_world = self.transform.normal(n_obj);
         let jacobian = self.det * n_world.length();
-        let area_obj = if self.kind == ShapeKind::Sphere { 4.0 * PI } else { 6.0 };
+        let area = if self.kind == ShapeKind::Sphere { 4.0 * PI * jacobian } else { self.area };
         let to_light = y - x;
         let dist2 = to_light.length_squared();
         let cos_light = normalize_scaled(n_world).dot(to_light).abs() / dist2.sqrt();
         if cos_light <= 0.0 || dist2 <= 0.0 {
             return 0.0;
         }
-        dist2 / (cos_light * area_obj * jacobian)
+        dist2 / (cos_light * area)
     }
 }
 
@@ -143,15 +145,24 @@ pub fn object_normal(kind: ShapeKind, p: DVec3) -> DVec3 {
     }
 }
 
-/// A point uniform on the surface of the cube [−0.5, 0.5]³: face ⌊6ξ0⌋ (+x −x +y −y +z −z),
-/// the rest of ξ0 and ξ1 across it. Returns (point, outward normal).
-fn sample_cube_surface(xi0: f64, xi1: f64) -> (DVec3, DVec3) {
-    let f = (xi0 * 6.0).floor().min(5.0);
-    let a = xi0 * 6.0 - f - 0.5;
+/// A point on the surface of the cube [−0.5, 0.5]³: the face pair ±x, ±y or ±z by ξ0
+/// against `cdf` (their world-area shares), the side and one coordinate from the rest of
+/// ξ0, the other from ξ1; uniform on each face. Returns (point, outward normal).
+fn sample_cube_surface(cdf: [f64; 2], xi0: f64, xi1: f64) -> (DVec3, DVec3) {
+    let (axis, lo, hi) = if xi0 < cdf[0] {
+        (0, 0.0, cdf[0])
+    } else if xi0 < cdf[1] {
+        (1, cdf[0], cdf[1])
+    } else {
+        (2, cdf[1], 1.0)
+    };
+    // ξ0 rescaled to [0, 2): the side (0: +, 1: −), then a coordinate on the face.
+    let v = (2.0 * (xi0 - lo) / (hi - lo)).clamp(0.0, 2.0 - f64::EPSILON);
+    let side = v.floor();
+    let a = v - side - 0.5;
     let b = xi1 - 0.5;
-    let face = f as u32;
-    let s = if face % 2 == 0 { 0.5 } else { -0.5 };
-    match face / 2 {
+    let s = if side == 0.0 { 0.5 } else { -0.5 };
+    match axis {
         0 => (DVec3::new(s, a, b), DVec3::new(2.0 * s, 0.0, 0.0)),
         1 => (DVec3::new(b, s, a), DVec3::new(0.0, 2.0 * s, 0.0)),
         _ => (DVec3::new(a, b, s), DVec3::new(0.0, 0.0, 2.0 * s)),
@@ -278,6 +289,37 @@ mod tests {
         let omega = 4.0 * (a * b / (2.0 * h * (4.0 * h * h + a * a + b * b).sqrt())).atan();
         let est = solid_angle_estimate(&light, x, false, 400_000);
         assert!((est / omega - 1.0).abs() < 0.02, "{est} vs {omega}");
+    }
+
+    /// Cube samples are uniform over the world surface: each face gets its area's share (a
+    /// flat 1 × 1 × 0.02 panel: the two broad faces 1/1.04 of them), and the density is
+    /// 1 / area on every face.
+    #[test]
+    fn cube_faces_are_chosen_by_world_area() {
+        let t = Transform::rotation_z(30.0) * Transform::scaling(DVec3::new(1.0, 1.0, 0.02));
+        let scene = scene_with(ShapeKind::Cube, t);
+        let light = AreaLight::new(&scene, 0).unwrap();
+        assert!((light.area - 2.08).abs() < 1e-12, "{}", light.area);
+        let mut rng = Pcg32::new(1, 2);
+        let (n, mut broad) = (100_000, 0);
+        for _ in 0..n {
+            let (p_obj, n_obj) = sample_cube_surface(light.face_cdf, rng.next_f64(), rng.next_f64());
+            assert!(p_obj.abs().max_element() <= 0.5 + 1e-15 && (p_obj.abs().max_element() - 0.5).abs() < 1e-15);
+            assert_eq!(object_normal(ShapeKind::Cube, p_obj), n_obj.normalize());
+            broad += usize::from(n_obj.z != 0.0);
+        }
+        let share = broad as f64 / f64::from(n);
+        let expected = 2.0 / 2.08;
+        assert!((share - expected).abs() < 5.0 * (expected * (1.0 - expected) / f64::from(n)).sqrt(), "{share}");
+        // The density at x of a point y, times d²/cos, is 1/area whichever face y is on.
+        let x = DVec3::new(0.3, -2.0, 1.5);
+        for (p_obj, n_obj) in [(DVec3::new(0.1, 0.2, 0.5), DVec3::Z), (DVec3::new(-0.5, 0.1, 0.0), DVec3::NEG_X)] {
+            let y = light.transform.point(p_obj);
+            let nw = light.transform.normal(n_obj).normalize();
+            let d = y - x;
+            let expect = d.length_squared() / (nw.dot(d).abs() / d.length() * light.area);
+            assert!((light.area_pdf_solid_angle(x, y, n_obj) / expect - 1.0).abs() < 1e-12);
+        }
     }
 
     #[test]

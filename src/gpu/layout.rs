@@ -141,8 +141,13 @@ pub struct AreaLight {
     pub sphere: [f32; 4],
     pub shape: u32,
     pub det: f32,
+    /// Cubes: `prepare::AreaLight::face_cdf` (the face pairs' world-area shares, summed).
+    pub face_cdf: [f32; 2],
+    /// Cubes: the world surface area.
+    pub area: f32,
     pub _pad0: u32,
     pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 #[repr(C)]
@@ -311,7 +316,7 @@ mod tests {
             expect!(Material, "Material", [brdf, pigment, emitted, ior]),
             expect!(Pigment, "Pigment", [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]),
             expect!(PointLight, "PointLight", [position, color]),
-            expect!(AreaLight, "AreaLight", [sphere, shape, det, _pad0, _pad1]),
+            expect!(AreaLight, "AreaLight", [sphere, shape, det, face_cdf, area, _pad0, _pad1, _pad2]),
             expect!(
                 Environment,
                 "Environment",

@@ -304,7 +304,16 @@ fn packed_area_light(scene: &Scene, shape: usize, shape_ref: u32, origin: DVec3)
         }
         None => [0.0; 4],
     };
-    layout::AreaLight { sphere, shape: shape_ref, det: light.det as f32, _pad0: 0, _pad1: 0 }
+    layout::AreaLight {
+        sphere,
+        shape: shape_ref,
+        det: light.det as f32,
+        face_cdf: light.face_cdf.map(|c| c as f32),
+        area: light.area as f32,
+        _pad0: 0,
+        _pad1: 0,
+        _pad2: 0,
+    }
 }
 
 /// `s` with `shift` applied after its own transformation.

@@ -68,6 +68,12 @@ pub struct AreaLight {
     pub det: f64,
     /// World centre and radius when the shape is a sphere under a similarity transform.
     pub sphere: Option<(DVec3, f64)>,
+    /// Cubes: the cumulative probabilities of choosing a face pair (±x, then ±y; ±z takes
+    /// the rest), proportional to their world areas, so that area sampling is uniform over
+    /// the world surface (a flat panel's broad faces get nearly all the samples).
+    pub face_cdf: [f64; 2],
+    /// Cubes: the world surface area (sampling density 1 / area).
+    pub area: f64,
 }
 
 impl AreaLight {
@@ -79,6 +85,12 @@ impl AreaLight {
         }
         let lin = DMat3::from_mat4(p.transform.matrix());
         let sphere = (p.kind == ShapeKind::Sphere).then(|| similarity_scale(lin)).flatten();
+        // World area of one unit face per axis (Nanson: |det M| · |M⁻ᵀ e_i|).
+        let det = lin.determinant().abs();
+        let faces = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| det * p.transform.normal(e).length());
+        let total: f64 = faces.iter().sum();
+        let face_cdf =
+            if total > 0.0 { [faces[0] / total, (faces[0] + faces[1]) / total] } else { [1.0 / 3.0, 2.0 / 3.0] };
         Some(Self {
             shape: shape as u32,
             kind: p.kind,
@@ -86,6 +98,8 @@ impl AreaLight {
             material: p.material,
             det: lin.determinant().abs(),
             sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
+            face_cdf,
+            area: 2.0 * faces.iter().sum::<f64>(),
         })
     }
 }
