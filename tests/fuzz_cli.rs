@@ -732,14 +732,15 @@ USING Camera.Perspective() Image(3, 2) Renderer.PathTracer(.n 1, .max_depth 2) T
 // ---------------------------------------------------------------------- command lines
 
 /// Command lines: a subcommand, then flags of every subcommand with hostile values and
-/// paths (an existing script and image, missing files, a directory). `converge`, `bench`
+/// paths (an existing script and image, missing files, a directory; `merge` gets them as
+/// parts, none of them a lumen render). `converge`, `bench`
 /// and `devices` are left out (they measure the machine's devices and take seconds), as
 /// are GPU devices. Sizes, sample and frame counts stay small: a huge size is issue 16's
 /// "huge Image sizes" item (fixed elsewhere), and billions of samples are a long render,
 /// not an error.
 fn command_line() -> impl Strategy<Value = Case> {
     let sub = prop::sample::select(vec![
-        "render", "render", "render", "check", "tonemap", "shader", "", "nope", "--help", "-V",
+        "render", "render", "render", "check", "tonemap", "shader", "merge", "", "nope", "--help", "-V",
     ]);
     let path = prop::sample::select(vec!["s.sl", "s.sl", "img.pfm", "missing.sl", ".", "", "-", "sub/x.sl", "s.sl/"]);
     let out = prop::sample::select(vec![
@@ -777,6 +778,10 @@ fn command_line() -> impl Strategy<Value = Case> {
             .prop_map(|v| vec!["--curve".into(), v.to_string()]),
         prop::sample::select(vec!["0:1:2", "0:0:1", "1:0:3", "0:1:0", "0:1", "a:b:c", "nan:1:2", "0:1:-1", "0:1:2:3"])
             .prop_map(|v| vec!["--frames".into(), v.to_string()]),
+        prop::sample::select(vec!["0:1", "1:0", "0:0", "0:4294967295", "-1:2", "a:b", "1", "", ":", "0:1:2"])
+            .prop_map(|v| vec!["--samples".into(), v.to_string()]),
+        prop::sample::select(vec!["0/1", "0/2", "1/1", "2/1", "0/0", "-1/2", "0/4294967295", "a/b", "1", ""])
+            .prop_map(|v| vec!["--shard".into(), v.to_string()]),
         prop::sample::select(vec!["r 1", "m0 <1, 0, 0>", "r", "r $0/0$", "1 2", "r 1, r 2", "", ",,,", "TIME 3"])
             .prop_map(|v| vec!["--vars".into(), v.to_string()]),
         prop::sample::select(vec!["--", "-", "--unknown", "-x", "--help"]).prop_map(|v| vec![v.to_string()]),
