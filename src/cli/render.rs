@@ -93,10 +93,9 @@ impl Part {
         })
     }
 
-    /// The camera samples to take of a layout of `total` per pixel (frames: all of them).
-    fn samples(self, total: u32, frames: bool) -> anyhow::Result<SampleRange> {
+    /// The camera samples to take of a layout of `total` per pixel.
+    fn samples(self, total: u32) -> anyhow::Result<SampleRange> {
         match self {
-            Part::Shard { .. } | Part::All if frames => Ok(SampleRange::all(total)),
             Part::All => Ok(SampleRange::all(total)),
             Part::Samples(r) => Ok(r.within(total).context("--samples")?),
             Part::Shard { index, count } => Ok(SampleRange::shard(index, count, total).context("--shard")?),
@@ -322,7 +321,7 @@ fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, 
 
 /// Samples per pixel of the scene's layout: `--spp`, else the tracer's.
 fn layout_spp(args: &RenderArgs, scene: &Scene) -> u32 {
-    args.spp.spp.unwrap_or_else(|| crate::prepare::PixelSamples::new(&scene.tracer, None).count() as u32)
+    u32::try_from(crate::prepare::PixelSamples::new(&scene.tracer, args.spp.spp).count()).unwrap_or(u32::MAX)
 }
 
 /// Loads the scene at `time` and applies the command-line overrides.
@@ -352,7 +351,7 @@ fn render_one(
 ) -> anyhow::Result<bool> {
     let scene = load(args, time)?;
     let total = layout_spp(args, &scene);
-    let range = part.samples(total, args.frames.is_some())?;
+    let range = part.samples(total)?;
     let out = render_on(device, args, &scene, range)?;
     if out.non_finite_samples > 0 {
         eprintln!("warning: {} NaN or infinite radiance samples were counted as black", out.non_finite_samples);
@@ -390,7 +389,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     for k in mine.begin..mine.end {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
         eprintln!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
-        if render_one(&device, &args, frames.time(k), &paths, &tm, part)? {
+        // The shard applies to the frames: each frame takes all its samples.
+        if render_one(&device, &args, frames.time(k), &paths, &tm, Part::All)? {
             eprintln!("note: stopping the animation after frame {}", k + 1);
             return Ok(());
         }

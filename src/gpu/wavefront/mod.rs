@@ -77,11 +77,12 @@ pub fn capacity(
     // The largest per-slot array must fit one binding and one buffer.
     let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
     let per_slot = |b| state_bytes(b, shadow_rays, features);
-    let widest = scene_buffers(features).into_iter().map(per_slot).max().unwrap_or(1).max(1);
+    let used = scene_buffers(features);
+    let widest = used.iter().copied().map(per_slot).max().unwrap_or(1).max(1);
     slots = slots.min(limit / widest).max(1);
     // CSG interval lists (per slot, sized by the trees' bound) within their budget: a tree
     // with a large bound makes batches smaller, never the kernels larger.
-    if scene_buffers(features).contains(&StateBuffer::CsgPool) {
+    if used.contains(&StateBuffer::CsgPool) {
         slots = slots.min(csg_pool_budget(gpu) / per_slot(StateBuffer::CsgPool)).max(1);
     }
     slots.min(u64::from(u32::MAX / 2)) as u32
