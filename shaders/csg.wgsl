@@ -7,9 +7,9 @@
 // depth f) keeps its accumulated list in slot 2f and, for DIFF, the list to cut in slot
 // 2f + 1; a child's result arrives in slot 2(f + 1); the last slot is scratch.
 //
-// The slots live in the `csg_pool` storage buffer, CSG_POOL_SIZE intervals per path slot,
-// not in private arrays: the kernel's code and private memory stay the same whatever the
-// scene's bound (a UNITE of 1,000 spheres compiles like one of two), and the host keeps
+// Large lists live in the `csg_pool` storage buffer, CSG_POOL_SIZE intervals per path
+// slot, not in private arrays: the kernel's code and private memory stay bounded whatever
+// the scene's bound (a UNITE of 1,000 spheres compiles like one of 100), and the host keeps
 // the pool within a memory budget by the number of slots per batch.
 
 const CSG_SLOTS: u32 = 2u * CSG_MAX_DEPTH + 2u;
@@ -34,13 +34,22 @@ struct Interval {
     exit: End,
 }
 
-// This invocation's first interval in `csg_pool`: set by the stage (csg_use_slot).
+// Small lists (CSG_POOL_PRIVATE: at most wavefront::CSG_PRIVATE_POOL_MAX intervals per
+// path) stay in private memory, which llvmpipe accesses far faster than a storage buffer.
+// #if CSG_POOL_PRIVATE
+var<private> csg_pool: array<Interval, CSG_POOL_SIZE>;
+// #endif
+
+// This invocation's first interval in `csg_pool`: set by the stage (csg_use_slot); 0 for
+// the private pool.
 var<private> csg_base: u32;
 var<private> csg_len: array<u32, CSG_SLOTS>;
 
 // The stages that evaluate trees call this first, for the path slot they work on.
 fn csg_use_slot(slot: u32) {
+// #if !CSG_POOL_PRIVATE
     csg_base = slot * CSG_POOL_SIZE;
+// #endif
 }
 
 // The pool index of entry i of a list slot.

@@ -592,9 +592,10 @@ mod tests {
     /// `shaders/angles.wgsl` against f64 atan2 on the device: every octant, both signed
     /// zeros, tiny and huge magnitudes, and the polar angle near the poles.
     /// Issue 12, goal 3: kernel code and private memory must not grow with a scene's size.
-    /// A UNITE of 1,000 spheres gets the same kernels as a UNITE of 2 but for the values of
+    /// A UNITE of 1,000 spheres gets the same kernels as a UNITE of 100 but for the values of
     /// the two interval-bound constants, and neither sizes an array (the lists live in the
-    /// storage pool, whose size the host picks).
+    /// storage pool, whose size the host picks); only lists of at most
+    /// `CSG_PRIVATE_POOL_MAX` intervals stay in a private array.
     #[test]
     fn csg_kernels_do_not_grow_with_the_interval_bound() {
         use crate::scene::{CsgOp, Shape, ShapeKind, Transform};
@@ -615,8 +616,17 @@ mod tests {
             });
             FeatureSet::of(&b.build().unwrap())
         };
-        let (small, large) = (unite(2), unite(1000));
-        assert_eq!((small.csg_max_intervals, large.csg_max_intervals), (2, 1000));
+        // A small tree's lists stay in a bounded private array (no pool binding).
+        let tiny = assemble_stages(&unite(2)).unwrap();
+        let (csg_stage, private) = tiny.iter().find(|(s, _)| *s == Stage::Csg).unwrap();
+        assert!(
+            private.source.contains("var<private> csg_pool")
+                && !private.source.contains("var<storage, read_write> csg_pool"),
+            "{csg_stage:?}"
+        );
+        assert!(wavefront::csg_pool_intervals(&unite(2)) <= wavefront::CSG_PRIVATE_POOL_MAX);
+        let (small, large) = (unite(100), unite(1000));
+        assert_eq!((small.csg_max_intervals, large.csg_max_intervals), (100, 1000));
         let bound_free = |src: &str| -> String {
             src.lines()
                 .filter(|l| !l.starts_with("const CSG_MAX_INTERVALS") && !l.starts_with("const CSG_POOL_SIZE"))

@@ -184,6 +184,11 @@ impl StateBuffer {
 /// the WGSL struct).
 pub const CSG_INTERVAL_BYTES: u64 = 32;
 
+/// Most intervals per path kept in private memory instead of the storage pool (2 KiB):
+/// csg.sl's trees need 48; beyond this the lists go to the pool, so that private memory,
+/// and with it compile time, stay bounded whatever a tree's bound.
+pub const CSG_PRIVATE_POOL_MAX: u64 = 64;
+
 /// Intervals of `csg_pool` one lane needs for the scene's trees (features `f`): 2·depth + 2
 /// slots (two per frame, the leaf's, and the scratch slot) of the lists' bound each.
 pub fn csg_pool_intervals(f: &FeatureSet) -> u64 {

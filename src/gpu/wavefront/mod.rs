@@ -32,7 +32,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use contract::{control, path_field, word_field, MAX_GRID, WORKGROUP};
-pub use contract::{csg_pool_intervals, CSG_INTERVAL_BYTES};
+pub use contract::{csg_pool_intervals, CSG_INTERVAL_BYTES, CSG_PRIVATE_POOL_MAX};
 use schedule::BatchRunner;
 
 use crate::gpu::compute::ComputeKernel;

@@ -89,6 +89,15 @@ impl Stage {
     /// The group-0 buffers the stage binds.
     pub fn buffers(self, f: &FeatureSet) -> Vec<StateBuffer> {
         use StateBuffer::*;
+        let mut buffers = self.buffers_with_pool(f);
+        if csg_pool_private(f) {
+            buffers.retain(|b| *b != CsgPool);
+        }
+        buffers
+    }
+
+    fn buffers_with_pool(self, f: &FeatureSet) -> Vec<StateBuffer> {
+        use StateBuffer::*;
         match self {
             Stage::Camera => vec![Batch, Queues, Paths, Words],
             Stage::FirstHit if f.csg => vec![Batch, Control, Paths, CsgPool],
@@ -241,6 +250,9 @@ impl Stage {
         if f.renderer == RendererKind::PathTracer && self != Stage::FirstHit {
             names.push("PATHTRACER");
         }
+        if names.contains(&"CSG") && csg_pool_private(f) {
+            names.push("CSG_POOL_PRIVATE");
+        }
         names.sort();
         names.dedup();
         names
@@ -261,7 +273,8 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 26] = [
+    pub const NAMES: [&'static str; 27] = [
+        "CSG_POOL_PRIVATE",
         "WF_HIT_STORE",
         "WF_HIT_LOAD",
         "AFFINE",
@@ -304,6 +317,13 @@ impl Stage {
 /// Whether CSG trees are evaluated in a stage of their own: the scene has CSG and few
 /// enough trees to defer them (`prepare::CSG_DEFER_MAX`, as `cpu::World` decides); otherwise
 /// the traversal evaluates each tree where it meets it.
+/// Whether a scene's CSG interval lists are small enough for private memory (at most
+/// [`super::contract::CSG_PRIVATE_POOL_MAX`] intervals per path): faster than the storage
+/// pool on SIMD software GPUs, and bounded, so kernels still do not grow with a scene.
+pub fn csg_pool_private(f: &FeatureSet) -> bool {
+    f.csg && super::contract::csg_pool_intervals(f) <= super::contract::CSG_PRIVATE_POOL_MAX
+}
+
 pub fn csg_queue(f: &FeatureSet) -> bool {
     f.csg && f.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX
 }
