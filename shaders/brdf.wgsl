@@ -1,11 +1,25 @@
 // #requires ray
 // #if PATHTRACER
 // #if DIFFUSE
-// #requires onb
+// #requires onb warp
 // #endif
 // #endif
-// BRDF sampling, evaluation and densities: mirrors cpu::{bsdf, fresnel, warp}.
-// `d` is the unit direction the incoming ray travels along, `n` the unit normal facing it.
+// #if DIELECTRIC
+// #requires fresnel
+// #endif
+// #if CONDUCTOR
+// #requires conductor
+// #endif
+// #if ROUGH_DIELECTRIC
+// #requires rough_dielectric
+// #endif
+// #if PLASTIC
+// #requires plastic
+// #endif
+// BSDF sampling, evaluation and densities in the world frame: mirrors cpu::bsdf, with the
+// microfacet kinds' local-frame code in conductor.wgsl, rough_dielectric.wgsl and
+// plastic.wgsl. `d` is the unit direction the incoming ray travels along, `n` the unit
+// normal facing it, `l` a light direction pointing away from the surface.
 
 // #if PATHTRACER
 
@@ -19,30 +33,7 @@ struct BsdfSample {
     valid: bool,
 }
 
-// #if SPECULAR
-fn reflect_dir(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return d - 2.0 * dot(d, n) * n;
-}
-// #endif
-
 // #if DIELECTRIC
-fn reflect_dir_dielectric(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return d - 2.0 * dot(d, n) * n;
-}
-
-// Unpolarised Fresnel reflectance: fresnel::fresnel_dielectric.
-fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
-    let cos_i = clamp(cos_i_in, 0.0, 1.0);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if (sin2_t >= 1.0) {
-        return 1.0;
-    }
-    let cos_t = sqrt(1.0 - sin2_t);
-    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
 // Refraction, or a zero vector on total internal reflection: fresnel::refract.
 fn refract_dir(d: vec3<f32>, n: vec3<f32>, eta: f32) -> vec3<f32> {
     let cos_i = -dot(d, n);
@@ -56,7 +47,7 @@ fn refract_dir(d: vec3<f32>, n: vec3<f32>, eta: f32) -> vec3<f32> {
 
 fn sample_dielectric(color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, eta: f32, xi_lobe: f32) -> BsdfSample {
     let f = fresnel_dielectric(-dot(d, n), eta);
-    let reflected = BsdfSample(reflect_dir_dielectric(d, n), color, 0.0, true, true);
+    let reflected = BsdfSample(reflect(d, n), color, 0.0, true, true);
     if (xi_lobe < f) {
         return reflected;
     }
@@ -69,17 +60,6 @@ fn sample_dielectric(color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, eta: f32, xi_
 // #endif
 
 // #if DIFFUSE
-// Cosine-weighted hemisphere about +z: warp::cosine_hemisphere.
-fn cosine_hemisphere(xi0: f32, xi1: f32) -> vec3<f32> {
-    let r = sqrt(xi0);
-    let phi = TAU * xi1;
-    return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - xi0, 0.0)));
-}
-
-fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
-    return max(cos_theta, 0.0) * INV_PI;
-}
-
 fn sample_diffuse(color: vec3<f32>, n: vec3<f32>, xi0: f32, xi1: f32) -> BsdfSample {
     let local = cosine_hemisphere(xi0, xi1);
     let frame = onb(n);
@@ -94,7 +74,7 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
                xi1: f32) -> BsdfSample {
 // #if SPECULAR
     if (m.brdf == BRDF_SPECULAR) {
-        return BsdfSample(reflect_dir(d, n), color, 0.0, true, true);
+        return BsdfSample(reflect(d, n), color, 0.0, true, true);
     }
 // #endif
 // #if DIELECTRIC
@@ -107,28 +87,106 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
         return sample_diffuse(color, n, xi0, xi1);
     }
 // #endif
+// #if CONDUCTOR
+    if (m.brdf == BRDF_CONDUCTOR) {
+        if (m.alpha == 0.0) {
+            return BsdfSample(reflect(d, n), color * conductor_fresnel(m, -dot(d, n)), 0.0, true, true);
+        }
+        let f = frame_of(n);
+        let s = conductor_sample(m, to_local(f, -d), xi_lobe, xi0, xi1);
+        return BsdfSample(normalize(to_world(f, s.dir)), s.weight * color, s.pdf, s.delta, s.valid);
+    }
+// #endif
+// #if ROUGH_DIELECTRIC
+    if (m.brdf == BRDF_ROUGH_DIELECTRIC) {
+        let f = frame_of(n);
+        let s = rough_dielectric_sample(m, dielectric_side(m, front_face), to_local(f, -d), xi_lobe, xi0, xi1);
+        return BsdfSample(normalize(to_world(f, s.dir)), s.weight * color, s.pdf, s.delta, s.valid);
+    }
+// #endif
+// #if PLASTIC
+    if (m.brdf == BRDF_PLASTIC) {
+        let f = frame_of(n);
+        let s = plastic_sample(m, color, to_local(f, -d), xi_lobe, xi0, xi1);
+        return BsdfSample(normalize(to_world(f, s.dir)), s.weight, s.pdf, s.delta, s.valid);
+    }
+// #endif
     return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true, false);
 }
+
+// #if SHADOWS
+// Whether the vertex's scattering is a Dirac delta (no light sampling there): among the
+// kinds whose kernels sample lights, only a smooth conductor.
+fn bsdf_is_delta(m: Material) -> bool {
+// #if CONDUCTOR
+    if (m.brdf == BRDF_CONDUCTOR) {
+        return m.alpha == 0.0;
+    }
+// #endif
+    return false;
+}
+// #endif
 
 // #endif
 
 // #if SHADOWS
-// bsdf::eval_bsdf: f for light from `l` (0 for delta BRDFs).
-fn eval_bsdf(m: Material, color: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
-    if (m.brdf == BRDF_DIFFUSE && dot(n, l) > 0.0) {
-        return color * INV_PI;
+// bsdf::eval_bsdf: f for light from `l` seen along −d (0 for delta BSDFs).
+fn eval_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_face: bool, l: vec3<f32>)
+    -> vec3<f32> {
+// #if DIFFUSE
+    if (m.brdf == BRDF_DIFFUSE) {
+        return select(vec3<f32>(0.0), color * INV_PI, dot(n, l) > 0.0);
     }
+// #endif
+// #if CONDUCTOR
+    if (m.brdf == BRDF_CONDUCTOR && m.alpha > 0.0) {
+        let f = frame_of(n);
+        return color * conductor_eval(m, to_local(f, -d), to_local(f, l));
+    }
+// #endif
+// #if ROUGH_DIELECTRIC
+    if (m.brdf == BRDF_ROUGH_DIELECTRIC) {
+        let f = frame_of(n);
+        return color * rough_dielectric_eval(m, dielectric_side(m, front_face), to_local(f, -d), to_local(f, l));
+    }
+// #endif
+// #if PLASTIC
+    if (m.brdf == BRDF_PLASTIC) {
+        let f = frame_of(n);
+        return plastic_eval(m, color, to_local(f, -d), to_local(f, l));
+    }
+// #endif
     return vec3<f32>(0.0);
 }
 // #endif
 
 // #if NEE
+// #if SHADOWS
+// bsdf::pdf_bsdf: the density with which sample_bsdf produces `l` (0 for delta BSDFs).
+fn pdf_bsdf(m: Material, d: vec3<f32>, n: vec3<f32>, front_face: bool, l: vec3<f32>) -> f32 {
 // #if DIFFUSE
-// bsdf::pdf_bsdf.
-fn pdf_bsdf(m: Material, n: vec3<f32>, l: vec3<f32>) -> f32 {
     if (m.brdf == BRDF_DIFFUSE) {
         return cosine_hemisphere_pdf(dot(n, l));
     }
+// #endif
+// #if CONDUCTOR
+    if (m.brdf == BRDF_CONDUCTOR && m.alpha > 0.0) {
+        let f = frame_of(n);
+        return conductor_pdf(m, to_local(f, -d), to_local(f, l));
+    }
+// #endif
+// #if ROUGH_DIELECTRIC
+    if (m.brdf == BRDF_ROUGH_DIELECTRIC) {
+        let f = frame_of(n);
+        return rough_dielectric_pdf(m, dielectric_side(m, front_face), to_local(f, -d), to_local(f, l));
+    }
+// #endif
+// #if PLASTIC
+    if (m.brdf == BRDF_PLASTIC) {
+        let f = frame_of(n);
+        return plastic_pdf(m, to_local(f, -d), to_local(f, l));
+    }
+// #endif
     return 0.0;
 }
 // #endif

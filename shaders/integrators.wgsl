@@ -47,7 +47,8 @@ fn radiance_point_light(ray: Ray) -> vec3<f32> {
         // The shadow ray is traced only for lights in front (as cpu::point_light_factor).
         if (s.lit && !occluded(s.ray)) {
             let cos_theta = max(dot(hit.normal, s.l), 0.0);
-            result += (emitted + eval_bsdf(m, color, hit.normal, s.l)) * s.radiance * cos_theta;
+            let f = eval_bsdf(m, color, normalize(ray.dir), hit.normal, hit.front_face, s.l);
+            result += (emitted + f) * s.radiance * cos_theta;
         }
     }
 // #endif

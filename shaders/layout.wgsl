@@ -32,11 +32,21 @@ struct CsgNode {
     _pad: u32,
 }
 
+// The microfacet kinds' α, energy rows (offset in `floats`), conductor index and
+// compensation constants: src/gpu/layout.rs.
 struct Material {
     brdf: u32,
     pigment: u32,
     emitted: u32,
     ior: f32,
+    alpha: f32,
+    rows: u32,
+    _pad0: u32,
+    _pad1: u32,
+    eta: vec4<f32>,
+    k: vec4<f32>,
+    lobe: vec4<f32>,
+    lobe_back: vec4<f32>,
 }
 
 // Uniform: a = colour. Checkered: a = on, b = off, n. Image: texels at tex_offset

@@ -2,7 +2,7 @@
 // #if AREA_LIGHTS
 // #requires shapes
 // #endif
-// #if DIFFUSE
+// #if SHADOWS
 // #requires onb pigment
 // #endif
 // Area lights for next-event estimation: mirrors cpu::area_light and cpu::warp (cone and
@@ -19,7 +19,7 @@ struct LightPoint {
 
 const UNIFORM_SPHERE_PDF: f32 = 0.0795774715459477;
 
-// #if DIFFUSE
+// #if SHADOWS
 // warp::uniform_sphere.
 fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
     let z = 1.0 - 2.0 * xi0;
@@ -76,7 +76,7 @@ fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>
     return dist2 / (cos_light * area);
 }
 
-// #if DIFFUSE
+// #if SHADOWS
 // area_light::sample_cube_surface: the face pair by its world-area share, then uniform.
 fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
     var axis = 2u;
@@ -110,7 +110,7 @@ fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2
 }
 // #endif
 
-// #if DIFFUSE
+// #if SHADOWS
 // area_light::sample_cone: a point on the sphere's visible cap, uniform in the cone of
 // directions it subtends from x.
 fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
@@ -146,7 +146,7 @@ fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
 }
 // #endif
 
-// #if DIFFUSE
+// #if SHADOWS
 // AreaLight::sample.
 fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32) -> LightPoint {
     if (light_uses_cone(light, x, x_object)) {
@@ -180,7 +180,7 @@ fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>) -> f32
     return light_area_pdf(light, x, y, light_object_normal(s.kind, p_obj));
 }
 
-// #if DIFFUSE
+// #if SHADOWS
 // AreaLight::emission at a sampled point.
 fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
     let s = shapes[light.shape];

@@ -1,4 +1,4 @@
-// #requires wf_path
+// #requires wf_path finite
 // Film stage: one invocation per pixel of the batch sums its paths' radiance in a fixed
 // order (camera sample j, then path i), whatever order the queues ran them in, so images
 // are bitwise reproducible: the pixel's value is the sum over its camera samples of the
@@ -7,12 +7,6 @@
 // `film[2p + 1]` its exact rounding error, added in f64 on the host), so a pixel's sum is
 // the exact sum of its sample means to about 2⁻⁴⁸ whatever the round sizes: renders of
 // sample ranges (shards) then merge into the one-render image to the last f32 bit.
-
-// Whether any channel is NaN or infinite (by bits: immune to fast-math folding).
-fn non_finite(v: vec3<f32>) -> bool {
-    let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7F800000u);
-    return any(e == vec3<u32>(0x7F800000u));
-}
 
 @compute @workgroup_size(64)
 fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {

@@ -2,7 +2,7 @@
 // #if POINT_LIGHTS
 // #requires point_lights
 // #endif
-// #if DIFFUSE
+// #if SHADOWS
 // #if NEE
 // #requires env_light
 // #endif
@@ -10,7 +10,7 @@
 // Shading stage of one BRDF kind (SHADE_QUEUE; src/gpu/wavefront/stages.rs compiles one per
 // kind the scene uses, each with only its BRDF's code): one path vertex of
 // cpu::path_tracer per invocation. Seven draws, emission MIS-weighted against NEE; at
-// diffuse vertices the point lights and NEE become shadow rays with their contribution
+// non-delta vertices the point lights and NEE become shadow rays with their contribution
 // (traced by the shadow stage, pbrt-v4's deferred scheme); then BSDF sampling, Russian
 // roulette and the next ray.
 
@@ -50,7 +50,7 @@ fn queue_shadow(slot: u32, k: u32, ray: Ray, value: vec3<f32>) {
 
 // #if NEE
 // #if SHADOWS
-// Next-event estimation at a diffuse vertex: one light chosen by ξ0, a point by ξ1 ξ2.
+// Next-event estimation at a non-delta vertex: one light chosen by ξ0, a point by ξ1 ξ2.
 // Returns the shadow ray and its contribution f·Le·cosθ·w/p (valid = false: nothing to
 // trace).
 struct LightRay {
@@ -59,7 +59,7 @@ struct LightRay {
     valid: bool,
 }
 
-fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, xi0: f32, xi1: f32, xi2: f32) -> LightRay {
+fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, d: vec3<f32>, xi0: f32, xi1: f32, xi2: f32) -> LightRay {
     let none = LightRay(Ray(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0), vec3<f32>(0.0), false);
     let n = light_count();
     if (n == 0u) {
@@ -101,7 +101,7 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, xi0: f32, xi1: f32, 
         radiance = escape_radiance(dir);
         pdf = select_pdf * s.w;
     }
-    let f = eval_bsdf(m, color, hit.normal, dir);
+    let f = eval_bsdf(m, color, d, hit.normal, hit.front_face, dir);
     if (all(f == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) {
         return none;
     }
@@ -111,8 +111,9 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, xi0: f32, xi1: f32, 
         let e = offset_origin(y, sy, ny, hit.point - y);
         ray = Ray(o, e - o, 0.0, 1.0);
     }
-    let weight = power_heuristic(pdf, pdf_bsdf(m, hit.normal, dir));
-    return LightRay(ray, f * radiance * (dot(hit.normal, dir) * weight / pdf), true);
+    let weight = power_heuristic(pdf, pdf_bsdf(m, d, hit.normal, hit.front_face, dir));
+    // |cos|: a rough dielectric also receives light from behind (transmission).
+    return LightRay(ray, f * radiance * (abs(dot(hit.normal, dir)) * weight / pdf), true);
 }
 // #endif
 // #endif
@@ -143,28 +144,32 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     if (bounce == settings.max_depth) {
         return;
     }
+    let d = normalize(ray.dir);
 // #if SHADOWS
-    // Diffuse vertex: every point light in front, then NEE, as shadow rays.
+    // Non-delta vertex: every point light in front, then NEE, as shadow rays.
     var shadows = 0u;
+    if (!bsdf_is_delta(m)) {
 // #if POINT_LIGHTS
-    for (var i = 0u; i < settings.point_light_count; i++) {
-        let s = point_light_sample(i, hit);
-        if (s.lit) {
-            let cos_theta = dot(hit.normal, s.l);
-            queue_shadow(slot, shadows, s.ray, beta * (eval_bsdf(m, color, hit.normal, s.l) * s.radiance * cos_theta));
-            shadows++;
+        for (var i = 0u; i < settings.point_light_count; i++) {
+            let s = point_light_sample(i, hit);
+            if (s.lit) {
+                let cos_theta = dot(hit.normal, s.l);
+                let f = eval_bsdf(m, color, d, hit.normal, hit.front_face, s.l);
+                queue_shadow(slot, shadows, s.ray, beta * (f * s.radiance * cos_theta));
+                shadows++;
+            }
         }
-    }
 // #endif
 // #if NEE
-    if (settings.nee != 0u) {
-        let lr = pt_sample_light(hit, m, color, xi[0], xi[1], xi[2]);
-        if (lr.valid) {
-            queue_shadow(slot, shadows, lr.ray, beta * lr.value);
-            shadows++;
+        if (settings.nee != 0u) {
+            let lr = pt_sample_light(hit, m, color, d, xi[0], xi[1], xi[2]);
+            if (lr.valid) {
+                queue_shadow(slot, shadows, lr.ray, beta * lr.value);
+                shadows++;
+            }
         }
-    }
 // #endif
+    }
     if (shadows > 0u) {
         if (shadows < batch.shadow_rays) {
             shadow[3u * (slot * batch.shadow_rays + shadows) + 2u] = vec4<f32>(0.0);
@@ -172,7 +177,6 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         wf_push(Q_SHADOW, slot);
     }
 // #endif
-    let d = normalize(ray.dir);
     let s = sample_bsdf(m, color, d, hit.normal, hit.front_face, xi[3], xi[4], xi[5]);
     if (!s.valid) {
         return;

@@ -109,7 +109,12 @@ fn glass_sphere_under_uniform_sky_conserves_energy() {
     // inside only with probability ≲ F⁶⁴.
     let sky = 1.5;
     for nee in [false, true] {
-        let brdf = Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior: 1.5, roughness: 0.0 };
+        let brdf = Brdf::Dielectric {
+            pigment: Pigment::Uniform(Color::WHITE),
+            ior: 1.5,
+            roughness: 0.0,
+            multiple_scattering: true,
+        };
         let (scene, mask) = object_under_sky(brdf, sky, pt(16, 64, 1000, nee));
         let out = run(&scene, None);
         let (mean, se) = mean_and_stderr(&out.image, |c, r| mask.get(c, r).g > 0.5);
@@ -706,8 +711,8 @@ fn rough_materials_under_uniform_sky_conserve_energy() {
     let sky = 1.5;
     let white = Pigment::Uniform(Color::WHITE);
     let brdfs = [
-        Brdf::Conductor { pigment: white.clone(), roughness: 0.8, fresnel: None },
-        Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.5 },
+        Brdf::Conductor { pigment: white.clone(), roughness: 0.8, fresnel: None, multiple_scattering: true },
+        Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.5, multiple_scattering: true },
         Brdf::Plastic { pigment: white, ior: 1.5, roughness: 0.3 },
     ];
     for brdf in brdfs {

@@ -14,7 +14,7 @@ use lumen::gpu::Gpu;
 use lumen::scene::{CsgOp, Environment, Renderer, Scene, SceneBuilder, Shape, ShapeKind, Transform};
 
 fn example_scenes() -> Vec<(String, Scene)> {
-    common::gpu_example_scene_files()
+    common::example_scene_files()
         .into_iter()
         .map(|path| (path.file_name().unwrap().to_string_lossy().into_owned(), common::thumbnail(&path, 16, 24)))
         .collect()

@@ -84,9 +84,11 @@ pub fn pdf_bsdf(brdf: &Brdf, d: DVec3, n: DVec3, front_face: bool, l: DVec3) -> 
             let frame = Frame::new(n);
             let (o, i) = (frame.local(-d), frame.local(l));
             match brdf {
-                Brdf::Conductor { roughness, .. } => mf::conductor_pdf(rough(*roughness), o, i),
-                Brdf::Dielectric { ior, roughness, .. } => {
-                    mf::dielectric_pdf(rough(*roughness), relative_ior(*ior, front_face), o, i)
+                Brdf::Conductor { roughness, multiple_scattering, .. } => {
+                    mf::conductor_pdf(rough(*roughness, *multiple_scattering), o, i)
+                }
+                Brdf::Dielectric { ior, roughness, multiple_scattering, .. } => {
+                    mf::dielectric_pdf(rough(*roughness, *multiple_scattering), relative_ior(*ior, front_face), o, i)
                 }
                 Brdf::Plastic { ior, roughness, .. } => mf::plastic_pdf(coat(*roughness), *ior, o, i),
                 _ => 0.0,
@@ -115,9 +117,9 @@ impl Frame {
     }
 }
 
-/// The rough lobe of a roughness > 0, compensated.
-fn rough(roughness: f64) -> Rough {
-    Rough { alpha: alpha_of(roughness), compensate: true }
+/// The rough lobe of a roughness > 0, compensated unless single scattering is asked for.
+fn rough(roughness: f64, multiple_scattering: bool) -> Rough {
+    Rough { alpha: alpha_of(roughness), compensate: multiple_scattering }
 }
 
 /// The plastic's coat: `None` when smooth.
@@ -127,9 +129,11 @@ fn coat(roughness: f64) -> Option<f64> {
 
 fn eval_rough(brdf: &Brdf, color: Color, front_face: bool, o: DVec3, i: DVec3) -> Color {
     match brdf {
-        Brdf::Conductor { roughness, fresnel, .. } => color * mf::conductor_eval(rough(*roughness), *fresnel, o, i),
-        Brdf::Dielectric { ior, roughness, .. } => {
-            color * mf::dielectric_eval(rough(*roughness), relative_ior(*ior, front_face), o, i)
+        Brdf::Conductor { roughness, fresnel, multiple_scattering, .. } => {
+            color * mf::conductor_eval(rough(*roughness, *multiple_scattering), *fresnel, o, i)
+        }
+        Brdf::Dielectric { ior, roughness, multiple_scattering, .. } => {
+            color * mf::dielectric_eval(rough(*roughness, *multiple_scattering), relative_ior(*ior, front_face), o, i)
         }
         Brdf::Plastic { ior, roughness, .. } => mf::plastic_eval(coat(*roughness), *ior, color, o, i),
         _ => Color::BLACK,
@@ -145,9 +149,12 @@ fn sample_rough(
     xi: [f64; 2],
 ) -> Option<LocalSample> {
     let s = match brdf {
-        Brdf::Conductor { roughness, fresnel, .. } => mf::conductor_sample(rough(*roughness), *fresnel, o, xi_lobe, xi),
-        Brdf::Dielectric { ior, roughness, .. } => {
-            mf::dielectric_sample(rough(*roughness), relative_ior(*ior, front_face), o, xi_lobe, xi)
+        Brdf::Conductor { roughness, fresnel, multiple_scattering, .. } => {
+            mf::conductor_sample(rough(*roughness, *multiple_scattering), *fresnel, o, xi_lobe, xi)
+        }
+        Brdf::Dielectric { ior, roughness, multiple_scattering, .. } => {
+            let r = rough(*roughness, *multiple_scattering);
+            mf::dielectric_sample(r, relative_ior(*ior, front_face), o, xi_lobe, xi)
         }
         Brdf::Plastic { ior, roughness, .. } => {
             return mf::plastic_sample(coat(*roughness), *ior, color, o, xi_lobe, xi);
@@ -253,7 +260,7 @@ mod tests {
 
     #[test]
     fn dielectric_chooses_by_fresnel_and_obeys_snell() {
-        let g = Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5, roughness: 0.0 };
+        let g = Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5, roughness: 0.0, multiple_scattering: true };
         let th = 30f64.to_radians();
         let d = DVec3::new(th.sin(), 0.0, -th.cos());
         let n = DVec3::Z;

@@ -9,19 +9,15 @@
 //! MIS with light sampling are consistent. Transmitted radiance carries the 1/η² of
 //! crossing the interface, as the smooth dielectric's does.
 
-use std::f64::consts::FRAC_1_PI;
-
 use glam::DVec3;
 
 use crate::color::Color;
+use crate::optics::compensation::{conductor_ms, dielectric_lobes, ms_lobe, plastic_base_albedo, plastic_coat};
 use crate::optics::energy_tables::{energy_tables, EnergyTables};
-use crate::optics::fresnel::{conductor_fresnel_average, fresnel_conductor, fresnel_dielectric, reflect, refract};
+use crate::optics::fresnel::{fresnel_conductor, fresnel_dielectric, reflect, refract};
 use crate::optics::ggx::{distribution, masking_shadowing, sample_visible_normal, visible_normal_pdf};
 
 use super::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
-
-/// Below this, 1 − E_avg is treated as 0 (no multiple scattering to return).
-const MS_EPSILON: f64 = 1e-6;
 
 /// A rough lobe: GGX α and whether multiple scattering is compensated (off only for
 /// single-scattering comparisons).
@@ -38,15 +34,6 @@ pub struct LocalSample {
     pub weight: Color,
     pub pdf: f64,
     pub delta: bool,
-}
-
-/// The multiple-scattering shape (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg)), 0 when the
-/// lobe loses nothing.
-fn ms_shape(e_o: f64, e_i: f64, e_avg: f64) -> f64 {
-    if 1.0 - e_avg < MS_EPSILON {
-        return 0.0;
-    }
-    (1.0 - e_o).max(0.0) * (1.0 - e_i).max(0.0) * FRAC_1_PI / (1.0 - e_avg)
 }
 
 fn single_scattering_probability(r: Rough, e_o: f64) -> f64 {
@@ -67,18 +54,6 @@ pub fn conductor_fresnel(cos: f64, fresnel: Option<(Color, Color)>) -> Color {
     }
 }
 
-/// Kulla & Conty's tint of the multiple-scattering lobe, F_avg² E_avg / (1 − F_avg (1 − E_avg)):
-/// the energy that leaves after two or more bounces, each reflecting F_avg (1 for F = 1).
-fn conductor_ms_tint(fresnel: Option<(Color, Color)>, e_avg: f64) -> Color {
-    match fresnel {
-        None => Color::WHITE,
-        Some((eta, k)) => eta.zip_with(k, |e, k| {
-            let f = conductor_fresnel_average(e, k);
-            f * f * e_avg / (1.0 - f * (1.0 - e_avg))
-        }),
-    }
-}
-
 /// f(o, i) of a GGX conductor, untinted.
 pub fn conductor_eval(r: Rough, fresnel: Option<(Color, Color)>, o: DVec3, i: DVec3) -> Color {
     if o.z <= 0.0 || i.z <= 0.0 {
@@ -89,9 +64,8 @@ pub fn conductor_eval(r: Rough, fresnel: Option<(Color, Color)>, o: DVec3, i: DV
     let mut f = conductor_fresnel(o.dot(h), fresnel) * ss;
     if r.compensate {
         let t = energy_tables();
-        let e_avg = t.conductor_average(r.alpha);
-        let shape = ms_shape(t.conductor_albedo(o.z, r.alpha), t.conductor_albedo(i.z, r.alpha), e_avg);
-        f += conductor_ms_tint(fresnel, e_avg) * shape;
+        let shape = ms_lobe(t.conductor_albedo(o.z, r.alpha), t.conductor_albedo(i.z, r.alpha), 1.0);
+        f += conductor_ms(t, r.alpha, fresnel) * shape;
     }
     f
 }
@@ -132,38 +106,16 @@ fn finish(i: DVec3, f: Color, pdf: f64, delta: bool) -> Option<LocalSample> {
 
 // ---- Dielectric ----------------------------------------------------------------------
 
-/// What the compensation of an interface of relative index `eta` needs for a view μo: the
-/// albedo E_o(μo) on this side, its average, the other side's average, and k_T, the share
-/// of the lost energy that is transmitted.
-struct DielectricEnergy {
-    e_o: f64,
-    avg_o: f64,
-    avg_t: f64,
-    k_t: f64,
-}
-
-/// k_T: the single-scattering transmitted share T_avg/E_avg on the entering side; on the
-/// leaving side the share that balances it, k_T^o (1 − E_avg^o) = η² k_T^t (1 − E_avg^t),
-/// which makes the lobes reciprocal (f(o→i)/n_o² = f(i→o)/n_i²); capped at 1, the
-/// entering side's share is lowered to match.
-fn dielectric_energy(t: &EnergyTables, alpha: f64, eta: f64, mu_o: f64) -> DielectricEnergy {
+/// The compensation of an interface of relative index `eta` for a view μo: the albedo
+/// E_o(μo) on this side and the lobes' constants.
+fn dielectric_energy(
+    t: &EnergyTables,
+    alpha: f64,
+    eta: f64,
+    mu_o: f64,
+) -> (f64, crate::optics::compensation::DielectricLobes) {
     let [r_o, t_o] = t.dielectric_albedo(mu_o, alpha, eta);
-    let [ar_o, at_o] = t.dielectric_average(alpha, eta);
-    let [ar_t, at_t] = t.dielectric_average(alpha, 1.0 / eta);
-    let (avg_o, avg_t) = (ar_o + at_o, ar_t + at_t);
-    // Entering side A (η_A→B = e ≥ 1) and leaving side B.
-    let (e, avg_a, avg_b, share_a) =
-        if eta >= 1.0 { (eta, avg_o, avg_t, at_o / avg_o) } else { (1.0 / eta, avg_t, avg_o, at_t / avg_t) };
-    let (lost_a, lost_b) = ((1.0 - avg_a).max(0.0), (1.0 - avg_b).max(0.0));
-    let (mut k_a, mut k_b) = (share_a, 0.0);
-    if lost_a >= MS_EPSILON && lost_b >= MS_EPSILON {
-        k_b = k_a * lost_a / (e * e * lost_b);
-        if k_b > 1.0 {
-            k_b = 1.0;
-            k_a = e * e * lost_b / lost_a;
-        }
-    }
-    DielectricEnergy { e_o: r_o + t_o, avg_o, avg_t, k_t: if eta >= 1.0 { k_a } else { k_b } }
+    (r_o + t_o, dielectric_lobes(t, alpha, eta))
 }
 
 /// The generalised half vector of a refraction o → i (Walter et al. 2007), facing +z.
@@ -202,13 +154,13 @@ pub fn dielectric_eval(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
         return ss;
     }
     let t = energy_tables();
-    let en = dielectric_energy(t, a, eta, o.z);
+    let (e_o, lobes) = dielectric_energy(t, a, eta, o.z);
     let ms = if i.z > 0.0 {
         let [ri, ti] = t.dielectric_albedo(i.z, a, eta);
-        (1.0 - en.k_t) * ms_shape(en.e_o, ri + ti, en.avg_o)
+        ms_lobe(e_o, ri + ti, lobes.reflect)
     } else {
         let [ri, ti] = t.dielectric_albedo(-i.z, a, 1.0 / eta);
-        en.k_t * ms_shape(en.e_o, ri + ti, en.avg_t) / (eta * eta)
+        ms_lobe(e_o, ri + ti, lobes.transmit)
     };
     ss + ms
 }
@@ -218,8 +170,8 @@ pub fn dielectric_pdf(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
         return 0.0;
     }
     let (p, k_t) = if r.compensate {
-        let en = dielectric_energy(energy_tables(), r.alpha, eta, o.z);
-        (en.e_o.clamp(0.0, 1.0), en.k_t)
+        let (e_o, lobes) = dielectric_energy(energy_tables(), r.alpha, eta, o.z);
+        (e_o.clamp(0.0, 1.0), lobes.k_t)
     } else {
         (1.0, 0.0)
     };
@@ -243,8 +195,8 @@ pub fn dielectric_pdf(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
 
 pub fn dielectric_sample(r: Rough, eta: f64, o: DVec3, xi_lobe: f64, xi: [f64; 2]) -> Option<LocalSample> {
     let (p, k_t) = if r.compensate {
-        let en = dielectric_energy(energy_tables(), r.alpha, eta, o.z);
-        (en.e_o.clamp(0.0, 1.0), en.k_t)
+        let (e_o, lobes) = dielectric_energy(energy_tables(), r.alpha, eta, o.z);
+        (e_o.clamp(0.0, 1.0), lobes.k_t)
     } else {
         (1.0, 0.0)
     };
@@ -281,19 +233,13 @@ fn coat_albedo(t: &EnergyTables, alpha: Option<f64>, eta: f64, mu: f64) -> f64 {
     }
 }
 
-/// The diffuse base seen through the coat: ρ (1 − r_i)/(1 − ρ r_i) · (1 − E_R(μo))(1 −
-/// E_R(μi)) / (π (1 − E_R,avg)), where r_i = 1 − (1 − E_R,avg)/η² is the coat's internal
-/// diffuse reflectance (light leaves the base and bounces between base and coat). For a
-/// white base it returns exactly what the coat does not reflect; for a smooth coat it is
-/// the classic ρ(1 − F(μo))(1 − F(μi)) / (π η² (1 − ρ r_i)).
+/// The diffuse base seen through the coat (see [`plastic_coat`]): for a white base it
+/// returns exactly what the coat does not reflect; for a smooth coat it is the classic
+/// ρ(1 − F(μo))(1 − F(μi)) / (π η² (1 − ρ r_i)).
 fn plastic_base(t: &EnergyTables, alpha: Option<f64>, eta: f64, rho: Color, mu_o: f64, mu_i: f64) -> Color {
-    let avg = match alpha {
-        None => t.dielectric_average(0.0, eta)[0],
-        Some(a) => t.dielectric_average(a, eta)[0],
-    };
-    let shape = ms_shape(coat_albedo(t, alpha, eta, mu_o), coat_albedo(t, alpha, eta, mu_i), avg);
-    let r_i = 1.0 - (1.0 - avg) / (eta * eta);
-    rho.map(|p| p * (1.0 - r_i) / (1.0 - p * r_i) * shape)
+    let coat = plastic_coat(t, alpha, eta);
+    let shape = ms_lobe(coat_albedo(t, alpha, eta, mu_o), coat_albedo(t, alpha, eta, mu_i), coat.base);
+    rho.map(|p| plastic_base_albedo(p, coat.internal) * shape)
 }
 
 /// f(o, i) of the plastic: the coat's GGX reflection (none for a smooth coat, a delta) and

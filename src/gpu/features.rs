@@ -70,14 +70,20 @@ pub struct FeatureSet {
     pub diffuse: bool,
     pub specular: bool,
     pub dielectric: bool,
+    /// GGX conductors (rough or smooth).
+    pub conductor: bool,
+    /// GGX dielectrics of roughness > 0.
+    pub rough_dielectric: bool,
+    /// Plastics (rough or smooth coat).
+    pub plastic: bool,
     pub point_lights: bool,
     pub area_lights: bool,
     pub environment: EnvKind,
     pub renderer: RendererKind,
     /// Finite objects exist, traversed through the BVH (planes are tested separately).
     pub bvh: bool,
-    /// Next-event estimation with MIS (path tracer with some diffuse material only: light
-    /// sampling happens at diffuse vertices).
+    /// Next-event estimation with MIS (path tracer with some non-delta material only: light
+    /// sampling happens at diffuse and microfacet vertices).
     pub nee: bool,
 }
 
@@ -130,9 +136,10 @@ impl FeatureSet {
             match m.brdf {
                 Brdf::Diffuse { .. } => f.diffuse = true,
                 Brdf::Specular { .. } => f.specular = true,
-                Brdf::Dielectric { .. } => f.dielectric = true,
-                // Not yet on the GPU: the packer refuses them (pack::PackError::Unsupported).
-                Brdf::Conductor { .. } | Brdf::Plastic { .. } => {}
+                Brdf::Dielectric { roughness: 0.0, .. } => f.dielectric = true,
+                Brdf::Dielectric { .. } => f.rough_dielectric = true,
+                Brdf::Conductor { .. } => f.conductor = true,
+                Brdf::Plastic { .. } => f.plastic = true,
             }
         }
         // Only integrators that scatter need BRDF code.
@@ -140,17 +147,20 @@ impl FeatureSet {
             f.diffuse = false;
             f.specular = false;
             f.dielectric = false;
+            f.conductor = false;
+            f.rough_dielectric = false;
+            f.plastic = false;
         }
         if f.renderer == RendererKind::PointLight {
-            // Only the diffuse BRDF value is evaluated; delta BRDFs contribute 0.
+            // Only BRDF values are evaluated; delta BRDFs contribute 0.
             f.specular = false;
             f.dielectric = false;
         }
         f.point_lights =
             !scene.point_lights.is_empty() && matches!(f.renderer, RendererKind::PointLight | RendererKind::PathTracer);
         if let Renderer::PathTracer(p) = &scene.renderer {
-            // Light sampling happens only at diffuse vertices.
-            f.nee = p.nee && f.diffuse;
+            // Light sampling happens only at non-delta vertices.
+            f.nee = p.nee && f.non_delta();
             f.area_lights = f.nee && !scene.area_lights().is_empty();
         }
         if f.renderer != RendererKind::OnOff {
@@ -172,9 +182,20 @@ impl FeatureSet {
         }
     }
 
-    /// True when some texel buffer is read (image pigments or an image environment).
+    /// True when the `floats` buffer is read: texels (image pigments or an image
+    /// environment), or the energy rows of microfacet materials.
     pub fn textures(&self) -> bool {
-        self.pigment_image || self.env_image()
+        self.pigment_image || self.env_image() || (self.microfacet() && self.materials())
+    }
+
+    /// Some BRDF kind that uses GGX microfacets.
+    pub fn microfacet(&self) -> bool {
+        self.conductor || self.rough_dielectric || self.plastic
+    }
+
+    /// Some BRDF kind whose vertices sample lights (not a Dirac delta, or not always).
+    pub fn non_delta(&self) -> bool {
+        self.diffuse || self.microfacet()
     }
 
     fn env_image(&self) -> bool {
@@ -212,6 +233,9 @@ impl FeatureSet {
             diffuse: scatters,
             specular: path,
             dielectric: path,
+            conductor: scatters,
+            rough_dielectric: scatters,
+            plastic: scatters,
             point_lights: scatters,
             area_lights: path,
             environment: if shading { EnvKind::All } else { EnvKind::Background },
@@ -269,7 +293,7 @@ impl FeatureSet {
     }
 
     /// Every feature name a shader may test (see [`Self::names`]).
-    pub const ALL_NAMES: [&'static str; 27] = [
+    pub const ALL_NAMES: [&'static str; 30] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -287,6 +311,9 @@ impl FeatureSet {
         "DIFFUSE",
         "SPECULAR",
         "DIELECTRIC",
+        "CONDUCTOR",
+        "ROUGH_DIELECTRIC",
+        "PLASTIC",
         "POINT_LIGHTS",
         "AREA_LIGHTS",
         "NEE",
@@ -319,6 +346,9 @@ impl FeatureSet {
             (self.diffuse, "DIFFUSE"),
             (self.specular, "SPECULAR"),
             (self.dielectric, "DIELECTRIC"),
+            (self.conductor, "CONDUCTOR"),
+            (self.rough_dielectric, "ROUGH_DIELECTRIC"),
+            (self.plastic, "PLASTIC"),
             (self.point_lights, "POINT_LIGHTS"),
             (self.area_lights, "AREA_LIGHTS"),
             (self.nee, "NEE"),
@@ -370,6 +400,7 @@ mod tests {
                 pigment: Pigment::Checkered { n: 2, on: Color::WHITE, off: Color::BLACK },
                 ior: 1.5,
                 roughness: 0.0,
+                multiple_scattering: true,
             },
             Pigment::Uniform(Color::BLACK),
         ));

@@ -38,6 +38,14 @@ pub mod brdf_kind {
     pub const DIFFUSE: u32 = 0;
     pub const SPECULAR: u32 = 1;
     pub const DIELECTRIC: u32 = 2;
+    /// GGX conductor, rough or smooth (α = 0: a delta reflection with its Fresnel).
+    pub const CONDUCTOR: u32 = 3;
+    /// GGX dielectric of roughness > 0 (smooth glass is `DIELECTRIC`).
+    pub const ROUGH_DIELECTRIC: u32 = 4;
+    /// Diffuse base under a dielectric coat, rough or smooth.
+    pub const PLASTIC: u32 = 5;
+    /// Number of kinds (one shading queue and kernel each).
+    pub const COUNT: u32 = 6;
 }
 /// `Pigment::kind` values.
 pub mod pigment_kind {
@@ -116,6 +124,21 @@ pub struct Material {
     pub pigment: u32,
     pub emitted: u32,
     pub ior: f32,
+    /// GGX α of the microfacet kinds (0: smooth).
+    pub alpha: f32,
+    /// Offset in `floats` of the material's energy-table rows (`pack::pack_material`).
+    pub rows: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    /// Conductor: complex index η and k per channel; `eta[3]` is 1 when given (else F = 1).
+    pub eta: [f32; 4],
+    pub k: [f32; 4],
+    /// Compensation constants (`optics::compensation`): conductor, the lobe scale per
+    /// channel; rough dielectric entering (η = ior), (k_t, reflect, transmit); plastic,
+    /// (internal, base).
+    pub lobe: [f32; 4],
+    /// Rough dielectric leaving (η = 1/ior): (k_t, reflect, transmit).
+    pub lobe_back: [f32; 4],
 }
 
 #[repr(C)]
@@ -224,6 +247,9 @@ pub fn tags_wgsl() -> String {
                 ("DIFFUSE", brdf_kind::DIFFUSE),
                 ("SPECULAR", brdf_kind::SPECULAR),
                 ("DIELECTRIC", brdf_kind::DIELECTRIC),
+                ("CONDUCTOR", brdf_kind::CONDUCTOR),
+                ("ROUGH_DIELECTRIC", brdf_kind::ROUGH_DIELECTRIC),
+                ("PLASTIC", brdf_kind::PLASTIC),
             ],
         ),
         (
@@ -313,7 +339,11 @@ mod tests {
             expect!(Affine, "Affine", [r0, r1, r2]),
             expect!(Shape, "Shape", [to_object, to_world, kind, material, light, _pad]),
             expect!(CsgNode, "CsgNode", [op, first_child, child_count, _pad]),
-            expect!(Material, "Material", [brdf, pigment, emitted, ior]),
+            expect!(
+                Material,
+                "Material",
+                [brdf, pigment, emitted, ior, alpha, rows, _pad0, _pad1, eta, k, lobe, lobe_back]
+            ),
             expect!(Pigment, "Pigment", [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]),
             expect!(PointLight, "PointLight", [position, color]),
             expect!(AreaLight, "AreaLight", [sphere, shape, det, face_cdf, area, _pad0, _pad1, _pad2]),

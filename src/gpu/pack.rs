@@ -11,6 +11,8 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use bytemuck::Zeroable;
+
 use glam::DVec3;
 
 use super::features::FeatureSet;
@@ -18,6 +20,9 @@ use super::layout::{self, Affine, NONE};
 use crate::accel::BvhNode;
 use crate::color::Color;
 use crate::image::HdrImage;
+use crate::optics::compensation::{conductor_ms, dielectric_lobes, plastic_coat};
+use crate::optics::energy_tables::{energy_tables, CONDUCTOR_NODES, DIELECTRIC_NODES};
+use crate::optics::ggx::alpha_of;
 use crate::prepare::image_distribution;
 use crate::prepare::pixel_samples::PixelSamples;
 use crate::prepare::AreaLight;
@@ -89,9 +94,6 @@ pub enum PackError {
          (±3.4e38) that the GPU computes in"
     )]
     OutOfRange { shape: usize, kind: ShapeKind, magnitude: f64 },
-    /// The rough materials of issue 14 render on the CPU reference only, so far.
-    #[error("material {material}: {what} is not yet supported by the GPU renderer (render it with the CPU)")]
-    Unsupported { material: usize, what: &'static str },
 }
 
 /// The camera's position in the world: where the packed frame's origin goes. For a
@@ -216,19 +218,11 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
 
     // Appearance.
     let mut textures: HashMap<*const HdrImage, u32> = HashMap::new();
-    for (index, m) in scene.materials.iter().enumerate() {
-        let unsupported = |what| PackError::Unsupported { material: index, what };
-        let (brdf, ior) = match m.brdf {
-            Brdf::Diffuse { .. } => (layout::brdf_kind::DIFFUSE, 1.0),
-            Brdf::Specular { .. } => (layout::brdf_kind::SPECULAR, 1.0),
-            Brdf::Dielectric { ior, roughness: 0.0, .. } => (layout::brdf_kind::DIELECTRIC, ior as f32),
-            Brdf::Dielectric { .. } => return Err(unsupported("a rough Brdf.Dielectric")),
-            Brdf::Conductor { .. } => return Err(unsupported("Brdf.Conductor")),
-            Brdf::Plastic { .. } => return Err(unsupported("Brdf.Plastic")),
-        };
+    for m in &scene.materials {
         let pigment = push_pigment(&mut p, &mut textures, m.brdf.pigment())?;
         let emitted = push_pigment(&mut p, &mut textures, &m.emitted)?;
-        p.materials.push(layout::Material { brdf, pigment, emitted, ior });
+        let material = pack_material(&m.brdf, pigment, emitted, &mut p.floats);
+        p.materials.push(material);
     }
     p.environment = pack_environment(scene, &mut p.floats, &mut textures)?;
 
@@ -292,6 +286,76 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         bvh_node_count: count_u32("BVH nodes", p.bvh_nodes.len())?,
     };
     Ok(p)
+}
+
+/// The rows of a single-scattering lobe: an albedo of 1 everywhere makes the kernels choose
+/// single scattering with probability 1 and return nothing through the (zero-scaled)
+/// compensating lobes, which is exactly the uncompensated BSDF.
+const UNCOMPENSATED: [f64; CONDUCTOR_NODES] = [1.0; CONDUCTOR_NODES];
+
+/// A material's kind and constants. The microfacet kinds get what depends on their α and η
+/// only, computed here in f64 once (the CPU reference computes the same per query through
+/// the same functions): the compensation constants, and the energy tables' rows at the
+/// material's α and η, appended to `floats`, so the kernel interpolates in μ alone.
+fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, floats: &mut Vec<f32>) -> layout::Material {
+    let mut m = layout::Material { pigment, emitted, ior: 1.0, rows: floats.len() as u32, ..Zeroable::zeroed() };
+    let tables = energy_tables();
+    let mut push_row = |row: &[f64]| floats.extend(row.iter().map(|&v| v as f32));
+    let three = |c: Color, w: f64| [c.r as f32, c.g as f32, c.b as f32, w as f32];
+    match *brdf {
+        Brdf::Diffuse { .. } => m.brdf = layout::brdf_kind::DIFFUSE,
+        Brdf::Specular { .. } => m.brdf = layout::brdf_kind::SPECULAR,
+        Brdf::Dielectric { ior, roughness, multiple_scattering, .. } => {
+            m.ior = ior as f32;
+            if roughness == 0.0 {
+                m.brdf = layout::brdf_kind::DIELECTRIC;
+            } else {
+                m.brdf = layout::brdf_kind::ROUGH_DIELECTRIC;
+                let alpha = alpha_of(roughness);
+                m.alpha = alpha as f32;
+                for eta in [ior, 1.0 / ior] {
+                    let [r, t] = tables.dielectric_rows(alpha, eta);
+                    let total: Vec<f64> = r.iter().zip(&t).map(|(r, t)| r + t).collect();
+                    push_row(if multiple_scattering { &total } else { &UNCOMPENSATED[..DIELECTRIC_NODES] });
+                }
+                let side = |eta: f64| {
+                    let l = dielectric_lobes(tables, alpha, eta);
+                    [l.k_t as f32, l.reflect as f32, l.transmit as f32, 0.0]
+                };
+                if multiple_scattering {
+                    (m.lobe, m.lobe_back) = (side(ior), side(1.0 / ior));
+                }
+            }
+        }
+        Brdf::Conductor { roughness, fresnel, multiple_scattering, .. } => {
+            m.brdf = layout::brdf_kind::CONDUCTOR;
+            if let Some((eta, k)) = fresnel {
+                (m.eta, m.k) = (three(eta, 1.0), three(k, 0.0));
+            }
+            if roughness > 0.0 {
+                let alpha = alpha_of(roughness);
+                m.alpha = alpha as f32;
+                if multiple_scattering {
+                    push_row(&tables.conductor_row(alpha));
+                    m.lobe = three(conductor_ms(tables, alpha, fresnel), 0.0);
+                } else {
+                    push_row(&UNCOMPENSATED);
+                }
+            }
+        }
+        Brdf::Plastic { ior, roughness, .. } => {
+            m.brdf = layout::brdf_kind::PLASTIC;
+            m.ior = ior as f32;
+            let alpha = (roughness > 0.0).then(|| alpha_of(roughness));
+            if let Some(a) = alpha {
+                m.alpha = a as f32;
+                push_row(&tables.dielectric_rows(a, ior)[0]);
+            }
+            let coat = plastic_coat(tables, alpha, ior);
+            m.lobe = [coat.internal as f32, coat.base as f32, 0.0, 0.0];
+        }
+    }
+    m
 }
 
 /// Area light data as `cpu::area_light::AreaLight` computes it, in the camera frame.
@@ -568,31 +632,51 @@ mod tests {
         assert!(err.to_string().contains("CSG interval slots"), "{err}");
     }
 
-    /// Rough materials render on the CPU only (issue 14, GPU kernels not yet written): the
-    /// packer says so instead of rendering them as something else; smooth glass still packs.
+    /// Microfacet materials get their kind, α and rows of the energy tables at their α and
+    /// η, which read back the tables' own lookups; smooth ones get no rows.
     #[test]
-    fn rough_materials_are_a_clear_error() {
+    fn microfacet_materials_carry_their_table_rows() {
+        use crate::optics::energy_tables::{row_value, CONDUCTOR_NODES, DIELECTRIC_NODES};
         let white = crate::scene::Pigment::Uniform(Color::WHITE);
-        let rough = [
-            Brdf::Conductor { pigment: white.clone(), roughness: 0.0, fresnel: None },
-            Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.2 },
-            Brdf::Plastic { pigment: white.clone(), ior: 1.5, roughness: 0.1 },
+        let fresnel = Some((Color::new(0.2, 0.9, 1.1), Color::new(3.9, 2.4, 1.6)));
+        let brdfs = [
+            Brdf::Conductor { pigment: white.clone(), roughness: 0.0, fresnel: None, multiple_scattering: true },
+            Brdf::Conductor { pigment: white.clone(), roughness: 0.3, fresnel, multiple_scattering: true },
+            Brdf::Dielectric { pigment: white.clone(), ior: 1.5, roughness: 0.2, multiple_scattering: true },
+            Brdf::Plastic { pigment: white.clone(), ior: 1.4, roughness: 0.1 },
+            Brdf::Plastic { pigment: white.clone(), ior: 1.4, roughness: 0.0 },
+            Brdf::smooth_dielectric(white.clone(), 1.5),
         ];
-        for brdf in rough {
-            let mut b = SceneBuilder::new(4, 4);
-            let m = b.material(crate::scene::Material::new(brdf, crate::scene::Pigment::Uniform(Color::BLACK)));
-            b.sphere(Transform::IDENTITY, m);
-            let err = pack(&b.build().unwrap(), None).unwrap_err();
-            assert!(matches!(err, PackError::Unsupported { material: 0, .. }), "{err}");
-            assert!(err.to_string().contains("not yet supported by the GPU"), "{err}");
-        }
         let mut b = SceneBuilder::new(4, 4);
-        let m = b.material(crate::scene::Material::new(
-            Brdf::smooth_dielectric(white, 1.5),
-            crate::scene::Pigment::Uniform(Color::BLACK),
-        ));
-        b.sphere(Transform::IDENTITY, m);
-        assert!(pack(&b.build().unwrap(), None).is_ok());
+        for brdf in &brdfs {
+            let m = b.material(crate::scene::Material::new(brdf.clone(), crate::scene::Pigment::Uniform(Color::BLACK)));
+            b.sphere(Transform::IDENTITY, m);
+        }
+        let p = pack(&b.build().unwrap(), None).unwrap();
+        let kinds: Vec<u32> = p.materials.iter().map(|m| m.brdf).collect();
+        use layout::brdf_kind::*;
+        assert_eq!(kinds, [CONDUCTOR, CONDUCTOR, ROUGH_DIELECTRIC, PLASTIC, PLASTIC, DIELECTRIC]);
+        let rows = |i: usize, n: usize| {
+            let start = p.materials[i].rows as usize;
+            p.floats[start..start + n].iter().map(|&v| f64::from(v)).collect::<Vec<f64>>()
+        };
+        let t = energy_tables();
+        let (m0, m1) = (p.materials[0], p.materials[1]);
+        assert_eq!((m0.alpha, m0.eta[3], m1.alpha, m1.eta[3]), (0.0, 0.0, 0.3, 1.0));
+        // Rows are stored back to back: smooth materials add none.
+        assert_eq!(m1.rows, m0.rows);
+        assert_eq!(p.materials[2].rows as usize, m1.rows as usize + CONDUCTOR_NODES);
+        assert_eq!(p.materials[3].rows as usize, p.materials[2].rows as usize + 2 * DIELECTRIC_NODES);
+        for mu in [0.05, 0.5, 0.9] {
+            let close = |a: f64, b: f64| (a - b).abs() < 1e-6;
+            assert!(close(row_value(&rows(1, CONDUCTOR_NODES), mu), t.conductor_albedo(mu, 0.3)));
+            let [r, tr] = t.dielectric_albedo(mu, 0.2, 1.0 / 1.5);
+            let leaving = rows(2, 2 * DIELECTRIC_NODES)[DIELECTRIC_NODES..].to_vec();
+            assert!(close(row_value(&leaving, mu), r + tr));
+            assert!(close(row_value(&rows(3, DIELECTRIC_NODES), mu), t.dielectric_albedo(mu, 0.1, 1.4)[0]));
+        }
+        let lobes = dielectric_lobes(t, 0.2, 1.0 / 1.5);
+        assert_eq!(p.materials[2].lobe_back[0], lobes.k_t as f32);
     }
 
     #[test]

@@ -18,7 +18,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 39] = [
+const MODULES: [(&str, &str); 46] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -39,6 +39,13 @@ const MODULES: [(&str, &str); 39] = [
     ("shaders/textures.wgsl", include_str!("../../shaders/textures.wgsl")),
     ("shaders/pigment.wgsl", include_str!("../../shaders/pigment.wgsl")),
     ("shaders/environment.wgsl", include_str!("../../shaders/environment.wgsl")),
+    ("shaders/finite.wgsl", include_str!("../../shaders/finite.wgsl")),
+    ("shaders/warp.wgsl", include_str!("../../shaders/warp.wgsl")),
+    ("shaders/fresnel.wgsl", include_str!("../../shaders/fresnel.wgsl")),
+    ("shaders/ggx.wgsl", include_str!("../../shaders/ggx.wgsl")),
+    ("shaders/conductor.wgsl", include_str!("../../shaders/conductor.wgsl")),
+    ("shaders/rough_dielectric.wgsl", include_str!("../../shaders/rough_dielectric.wgsl")),
+    ("shaders/plastic.wgsl", include_str!("../../shaders/plastic.wgsl")),
     ("shaders/brdf.wgsl", include_str!("../../shaders/brdf.wgsl")),
     ("shaders/integrators.wgsl", include_str!("../../shaders/integrators.wgsl")),
     ("shaders/point_lights.wgsl", include_str!("../../shaders/point_lights.wgsl")),
@@ -138,7 +145,9 @@ fn constants_module(features: &FeatureSet) -> String {
          const CSG_MAX_DEPTH: u32 = {}u;\n\
          const CSG_POOL_SIZE: u32 = {}u;\n\
          const CSG_DEFER: bool = {};\n\
-         const CSG_DEFER_SLOTS: u32 = {}u;\n",
+         const CSG_DEFER_SLOTS: u32 = {}u;\n\
+         const CONDUCTOR_NODES: u32 = {}u;\n\
+         const DIELECTRIC_NODES: u32 = {}u;\n",
         crate::accel::MAX_DEPTH + 1,
         super::layout::CSG_NODE_BIT,
         intervals,
@@ -146,6 +155,8 @@ fn constants_module(features: &FeatureSet) -> String {
         wavefront::csg_pool_intervals(features),
         features.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX,
         features.csg_trees.clamp(1, crate::prepare::CSG_DEFER_MAX as u32),
+        crate::optics::energy_tables::CONDUCTOR_NODES,
+        crate::optics::energy_tables::DIELECTRIC_NODES,
     )
 }
 
@@ -494,6 +505,9 @@ mod tests {
             diffuse: b(),
             specular: b(),
             dielectric: b(),
+            conductor: b(),
+            rough_dielectric: b(),
+            plastic: b(),
             point_lights: b(),
             area_lights: b(),
             nee: b(),
@@ -502,6 +516,11 @@ mod tests {
             ..FeatureSet::default()
         };
         f.bvh = f.csg || f.sphere || f.cube || f.cylinder;
+        if !f.bvh && !f.plane {
+            // Only materials of some shape count.
+            (f.diffuse, f.specular, f.dielectric) = (false, false, false);
+            (f.conductor, f.rough_dielectric, f.plastic) = (false, false, false);
+        }
         if f.csg {
             f.csg_max_intervals = 1 + rng.next_u32() % 6;
             f.csg_max_depth = 1 + rng.next_u32() % 3;
@@ -516,11 +535,12 @@ mod tests {
         }
         if !matches!(renderer, RendererKind::PathTracer | RendererKind::PointLight) {
             (f.diffuse, f.specular, f.dielectric, f.point_lights) = (false, false, false, false);
+            (f.conductor, f.rough_dielectric, f.plastic) = (false, false, false);
         }
         if renderer == RendererKind::PointLight {
             (f.specular, f.dielectric) = (false, false);
         }
-        f.nee = f.nee && f.diffuse && renderer == RendererKind::PathTracer;
+        f.nee = f.nee && f.non_delta() && renderer == RendererKind::PathTracer;
         f.area_lights = f.area_lights && f.nee;
         f
     }
@@ -565,9 +585,22 @@ mod tests {
         let mut all = BTreeSet::new();
         for (stage, module) in &modules {
             let names = function_names(module);
-            for bad in
-                ["csg", "cylinder", "cube", "plane", "texel", "image", "dielectric", "fresnel", "refract", "checker"]
-            {
+            for bad in [
+                "csg",
+                "cylinder",
+                "cube",
+                "plane",
+                "texel",
+                "image",
+                "dielectric",
+                "fresnel",
+                "refract",
+                "checker",
+                "ggx",
+                "conductor",
+                "plastic",
+                "albedo_row",
+            ] {
                 assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in the {} stage: {names:?}", stage.label());
             }
             let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();

@@ -231,6 +231,43 @@ impl EnergyTables {
             self.dielectric_lookup(&self.transmitted_average, 1, eta, |b| linear(b, alpha)),
         ]
     }
+
+    /// The conductor table interpolated to one α: its μ-row, which [`row_value`] reads as
+    /// [`Self::conductor_albedo`] does (bilinear interpolation is separable, so fixing α
+    /// first changes only rounding). The GPU gets one such row per material: its α is a
+    /// material constant, so only μ is interpolated per query.
+    pub fn conductor_row(&self, alpha: f64) -> Vec<f64> {
+        alpha_row(&self.conductor, CONDUCTOR_NODES, alpha)
+    }
+
+    /// The dielectric tables at one α and η: the μ-rows of E_R and E_T (see
+    /// [`Self::conductor_row`]).
+    pub fn dielectric_rows(&self, alpha: f64, eta: f64) -> [Vec<f64>; 2] {
+        let n = DIELECTRIC_NODES;
+        let (side, x) = side_and_x(eta);
+        let (k, t) = position(x, ETA_NODES);
+        let rows = |table: &[f64]| {
+            let block = |k: usize| {
+                let start = (side * ETA_NODES + k) * n * n;
+                alpha_row(&table[start..start + n * n], n, alpha)
+            };
+            let (a, b) = (block(k), block(k + 1));
+            a.iter().zip(&b).map(|(a, b)| a * (1.0 - t) + b * t).collect()
+        };
+        [rows(&self.reflected), rows(&self.transmitted)]
+    }
+}
+
+/// The value at μ of a μ-row (nodes uniform in √μ over [0, 1]), interpolated linearly in √μ.
+pub fn row_value(row: &[f64], mu: f64) -> f64 {
+    let (j, t) = position(mu.max(0.0).sqrt(), row.len());
+    row[j] * (1.0 - t) + row[j + 1] * t
+}
+
+/// Row α of an `[α][μ]` block of `n`×`n` nodes, interpolated linearly in √α.
+fn alpha_row(block: &[f64], n: usize, alpha: f64) -> Vec<f64> {
+    let (i, t) = position(alpha.max(0.0).sqrt(), n);
+    (0..n).map(|j| block[i * n + j] * (1.0 - t) + block[(i + 1) * n + j] * t).collect()
 }
 
 #[cfg(test)]
@@ -278,6 +315,23 @@ mod tests {
                     let [r, tr] = dielectric_albedo_integral(alpha, eta, o, 96);
                     let [tr_, tt_] = t.dielectric_albedo(mu, alpha, eta);
                     assert!((r + tr - tr_ - tt_).abs() < 6e-3, "α {alpha} μ {mu} η {eta}: {} vs {}", r + tr, tr_ + tt_);
+                }
+            }
+        }
+    }
+
+    /// Rows fixed at a material's α (and η) read back the bilinear (trilinear) lookups.
+    #[test]
+    fn material_rows_equal_the_table_lookups() {
+        let t = energy_tables();
+        for alpha in [0.001, 0.05, 0.3, 0.77, 1.0] {
+            let row = t.conductor_row(alpha);
+            for eta in [1.0, 1.33, 1.5, 1.0 / 1.5, 2.4, 5.0] {
+                let [r, tr] = t.dielectric_rows(alpha, eta);
+                for mu in [0.0, 1e-4, 0.1, 0.37, 0.5, 0.93, 1.0] {
+                    let [er, et] = t.dielectric_albedo(mu, alpha, eta);
+                    assert!((row_value(&r, mu) - er).abs() < 1e-12 && (row_value(&tr, mu) - et).abs() < 1e-12);
+                    assert!((row_value(&row, mu) - t.conductor_albedo(mu, alpha)).abs() < 1e-12);
                 }
             }
         }

@@ -3,6 +3,8 @@
 //! reference evaluates these directly; the GPU packer uploads the tables, so the two
 //! renderers compensate with the same numbers.
 
+pub mod compensation;
 pub mod energy_tables;
 pub mod fresnel;
 pub mod ggx;
+pub mod metals;

@@ -14,12 +14,14 @@ pub enum Brdf {
     Specular { pigment: Pigment, threshold_angle_rad: f64 },
     /// Dielectric interface (ext): exact Fresnel reflection and refraction with total
     /// internal reflection; `ior` is the inside index relative to the outside. Roughness 0
-    /// is smooth glass; above, GGX reflection and transmission (Walter et al. 2007) with
-    /// energy compensation.
-    Dielectric { pigment: Pigment, ior: f64, roughness: f64 },
+    /// is smooth glass; above, GGX reflection and transmission (Walter et al. 2007), with
+    /// energy compensation unless `multiple_scattering` is false.
+    Dielectric { pigment: Pigment, ior: f64, roughness: f64, multiple_scattering: bool },
     /// GGX metal (ext): `roughness` is α (0: a perfect mirror); `fresnel` the complex index
-    /// (η, k) per channel, or `None` for F = 1. Multiple scattering is compensated.
-    Conductor { pigment: Pigment, roughness: f64, fresnel: Option<(Color, Color)> },
+    /// (η, k) per channel, or `None` for F = 1. Multiple scattering is compensated unless
+    /// `multiple_scattering` is false (single scattering only, as most renderers do: for
+    /// comparisons with them).
+    Conductor { pigment: Pigment, roughness: f64, fresnel: Option<(Color, Color)>, multiple_scattering: bool },
     /// A diffuse base (the pigment) under a GGX dielectric coat of index `ior` (ext).
     Plastic { pigment: Pigment, ior: f64, roughness: f64 },
 }
@@ -53,6 +55,6 @@ impl Brdf {
     }
     /// The smooth glass of Raytracer.jl scripts' `Brdf.Dielectric` (roughness 0).
     pub fn smooth_dielectric(pigment: Pigment, ior: f64) -> Self {
-        Brdf::Dielectric { pigment, ior, roughness: 0.0 }
+        Brdf::Dielectric { pigment, ior, roughness: 0.0, multiple_scattering: true }
     }
 }

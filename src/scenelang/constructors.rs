@@ -518,17 +518,43 @@ impl Interp<'_> {
                         Brdf::Specular { pigment: a.pigment(0), threshold_angle_rad }
                     }
                     "Conductor" => {
-                        let a = self.args(
+                        let mut a = self.args(
                             "Brdf.Conductor",
                             &[
                                 p("pigment", T::Pigment),
                                 p("roughness", T::Number),
                                 p("eta", T::Color),
                                 p("k", T::Color),
+                                p("metal", T::Str),
+                                p("multiple_scattering", T::Number),
                             ],
                         )?;
                         let roughness = self.roughness(&a, 1, 0.0)?;
+                        let multiple_scattering = self.int(&a, 5, "multiple_scattering", 1, 0, 1)? == 1;
+                        let metal = match a.take(4) {
+                            Some((Value::Str(s), span)) => {
+                                if let Some(other) = a.span(2).or(a.span(3)) {
+                                    return Err(self
+                                        .err(
+                                            other,
+                                            ErrorKind::BadArguments,
+                                            "`.metal` already gives `.eta` and `.k`: give one or the other",
+                                        )
+                                        .with_expected("either `.metal \"Au\"` or `.eta <..>, .k <..>`"));
+                                }
+                                match crate::optics::metals::metal(&s) {
+                                    Some(m) => Some((m.eta, m.k)),
+                                    None => {
+                                        return Err(self
+                                            .err(span, ErrorKind::BadValue, format!("unknown metal {s:?}"))
+                                            .with_expected("\"Au\", \"Ag\", \"Cu\" or \"Al\""))
+                                    }
+                                }
+                            }
+                            _ => None,
+                        };
                         let fresnel = match (a.span(2), a.span(3)) {
+                            _ if metal.is_some() => metal,
                             (None, None) => None,
                             _ => {
                                 let (eta, k) = (a.color(2, Color::WHITE), a.color(3, Color::BLACK));
@@ -554,7 +580,7 @@ impl Interp<'_> {
                                 Some((eta, k))
                             }
                         };
-                        Brdf::Conductor { pigment: a.pigment(0), roughness, fresnel }
+                        Brdf::Conductor { pigment: a.pigment(0), roughness, fresnel, multiple_scattering }
                     }
                     "Plastic" => {
                         let a = self.args(
@@ -568,11 +594,17 @@ impl Interp<'_> {
                     _ => {
                         let a = self.args(
                             "Brdf.Dielectric",
-                            &[p("pigment", T::Pigment), p("ior", T::Number), p("roughness", T::Number)],
+                            &[
+                                p("pigment", T::Pigment),
+                                p("ior", T::Number),
+                                p("roughness", T::Number),
+                                p("multiple_scattering", T::Number),
+                            ],
                         )?;
                         let ior = self.ior(&a, 1)?;
                         let roughness = self.roughness(&a, 2, 0.0)?;
-                        Brdf::Dielectric { pigment: a.pigment(0), ior, roughness }
+                        let multiple_scattering = self.int(&a, 3, "multiple_scattering", 1, 0, 1)? == 1;
+                        Brdf::Dielectric { pigment: a.pigment(0), ior, roughness, multiple_scattering }
                     }
                 })
             }

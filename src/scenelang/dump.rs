@@ -37,19 +37,33 @@ fn brdf(b: &Brdf) -> String {
         Brdf::Specular { pigment: p, threshold_angle_rad } => {
             format!("Brdf.Specular({}, {threshold_angle_rad})", pigment(p))
         }
-        Brdf::Dielectric { pigment: p, ior, roughness: r } if *r == 0.0 => {
+        Brdf::Dielectric { pigment: p, ior, roughness: r, .. } if *r == 0.0 => {
             format!("Brdf.Dielectric({}, {ior})", pigment(p))
         }
-        Brdf::Dielectric { pigment: p, ior, roughness } => {
-            format!("Brdf.Dielectric({}, {ior}, {roughness})", pigment(p))
+        Brdf::Dielectric { pigment: p, ior, roughness, multiple_scattering } => {
+            format!("Brdf.Dielectric({}, {ior}, {roughness}{})", pigment(p), single_scattering(*multiple_scattering))
         }
-        Brdf::Conductor { pigment: p, roughness, fresnel: None } => {
-            format!("Brdf.Conductor({}, {roughness})", pigment(p))
+        Brdf::Conductor { pigment: p, roughness, fresnel: None, multiple_scattering } => {
+            format!("Brdf.Conductor({}, {roughness}{})", pigment(p), single_scattering(*multiple_scattering))
         }
-        Brdf::Conductor { pigment: p, roughness, fresnel: Some((eta, k)) } => {
-            format!("Brdf.Conductor({}, {roughness}, {}, {})", pigment(p), color(eta), color(k))
-        }
+        Brdf::Conductor { pigment: p, roughness, fresnel: Some((eta, k)), multiple_scattering } => format!(
+            "Brdf.Conductor({}, {roughness}, {}, {}{})",
+            pigment(p),
+            color(eta),
+            color(k),
+            single_scattering(*multiple_scattering)
+        ),
         Brdf::Plastic { pigment: p, ior, roughness } => format!("Brdf.Plastic({}, {ior}, {roughness})", pigment(p)),
+    }
+}
+
+/// The `.multiple_scattering 0` of a single-scattering microfacet BRDF (named: it follows
+/// optional arguments that may be absent).
+fn single_scattering(multiple_scattering: bool) -> &'static str {
+    if multiple_scattering {
+        ""
+    } else {
+        ", .multiple_scattering 0"
     }
 }
 

@@ -185,7 +185,7 @@ mod tests {
         let mut b = SceneBuilder::new(8, 4);
         let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::WHITE)));
         let glass = b.material(Material::new(
-            Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5, roughness: 0.0 },
+            Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5, roughness: 0.0, multiple_scattering: true },
             Pigment::Uniform(Color::BLACK),
         ));
         let t = |x: f64| Transform::translation(DVec3::new(x, 0.0, 0.0));

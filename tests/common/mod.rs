@@ -43,13 +43,6 @@ pub fn example_scene_files() -> Vec<PathBuf> {
     files
 }
 
-/// The example scenes the GPU renders: all but those with rough materials (issue 14), which
-/// only the CPU renders until their WGSL kernels exist (the packer refuses them).
-pub fn gpu_example_scene_files() -> Vec<PathBuf> {
-    let cpu_only = ["materials.sl"];
-    example_scene_files().into_iter().filter(|p| !cpu_only.iter().any(|n| p.ends_with(n))).collect()
-}
-
 /// `path` loaded and shrunk to a thumbnail `width` wide (its aspect ratio kept, at most
 /// `max_height` tall), with one path per camera sample, so that GPU tests stay short.
 pub fn thumbnail(path: &Path, width: u32, max_height: u32) -> Scene {
@@ -80,7 +73,7 @@ pub fn glass(b: &mut SceneBuilder) -> MaterialId {
 /// Clear glass of index `ior`.
 pub fn dielectric(b: &mut SceneBuilder, ior: f64) -> MaterialId {
     b.material(Material::new(
-        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior, roughness: 0.0 },
+        Brdf::Dielectric { pigment: Pigment::Uniform(Color::WHITE), ior, roughness: 0.0, multiple_scattering: true },
         Pigment::Uniform(Color::BLACK),
     ))
 }

@@ -51,7 +51,7 @@ pub mod queue {
         SHADE + brdf
     }
     /// Number of queues.
-    pub const COUNT: u32 = SHADE + 1 + brdf_kind::DIELECTRIC;
+    pub const COUNT: u32 = SHADE + brdf_kind::COUNT;
 }
 
 /// Words of the control buffer.
@@ -273,11 +273,11 @@ mod tests {
     #[test]
     fn queues_and_control_words_do_not_overlap() {
         // One shading queue per BRDF kind, after the fixed queues.
-        for brdf in [brdf_kind::DIFFUSE, brdf_kind::SPECULAR, brdf_kind::DIELECTRIC] {
+        for brdf in 0..brdf_kind::COUNT {
             let q = queue::shade(brdf);
             assert!(q > queue::SHADOW && q < queue::COUNT);
         }
-        assert_eq!(queue::COUNT, 8);
+        assert_eq!(queue::COUNT, 11);
         const { assert!(control::COUNT + queue::COUNT <= control::RAYS) };
         const { assert!(control::RAYS + 2 <= control::SHADOW_RAYS && control::SHADOW_RAYS + 2 <= control::NAN) };
     }

@@ -48,13 +48,7 @@ impl Stage {
         if csg_queue(f) {
             stages.push(Stage::Csg);
         }
-        for (on, kind) in
-            [(f.diffuse, brdf_kind::DIFFUSE), (f.specular, brdf_kind::SPECULAR), (f.dielectric, brdf_kind::DIELECTRIC)]
-        {
-            if on {
-                stages.push(Stage::Shade(kind));
-            }
-        }
+        stages.extend(shade_kinds(f).into_iter().map(Stage::Shade));
         if has_shadow_rays(f) {
             stages.push(Stage::Shadow);
         }
@@ -110,7 +104,7 @@ impl Stage {
             Stage::Intersect => vec![Batch, Control, Queues, Paths],
             Stage::Csg => vec![Batch, Control, Queues, Paths, Words, DeferredRefs, CsgPool],
             Stage::Escape => vec![Batch, Control, Queues, Paths, Words],
-            Stage::Shade(kind) if kind == brdf_kind::DIFFUSE && has_shadow_rays(f) => {
+            Stage::Shade(kind) if casts_shadow_rays(kind) && has_shadow_rays(f) => {
                 vec![Batch, Control, Queues, Paths, Words, Shadow]
             }
             Stage::Shade(_) => vec![Batch, Control, Queues, Paths, Words],
@@ -173,25 +167,22 @@ impl Stage {
                     "NEE",
                 ];
                 allowed.extend(SHAPES);
-                match kind {
-                    brdf_kind::DIFFUSE => {
-                        allowed.extend(["DIFFUSE", "POINT_LIGHTS"]);
-                        if f.nee {
-                            allowed.extend(["ENV_UNIFORM", "ENV_GRADIENT", "ENV_IMAGE"]);
-                        }
-                        if has_shadow_rays(f) {
-                            allowed.push("SHADOWS");
-                        }
+                allowed.push(kind_name(kind));
+                if casts_shadow_rays(kind) {
+                    allowed.push("POINT_LIGHTS");
+                    if f.nee {
+                        allowed.extend(["ENV_UNIFORM", "ENV_GRADIENT", "ENV_IMAGE"]);
                     }
-                    brdf_kind::SPECULAR => allowed.push("SPECULAR"),
-                    _ => allowed.push("DIELECTRIC"),
+                    if has_shadow_rays(f) {
+                        allowed.push("SHADOWS");
+                    }
                 }
                 let mut n = keep(&allowed);
-                if kind != brdf_kind::DIFFUSE && !n.contains(&"AREA_LIGHTS") {
+                if !casts_shadow_rays(kind) && !n.contains(&"AREA_LIGHTS") {
                     // Only emitters hit after a non-delta vertex need NEE's densities here.
                     n.retain(|x| *x != "NEE");
                 }
-                if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") {
+                if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") || microfacet_kind(kind) {
                     n.push("TEXTURES");
                 }
                 n.extend(["PIGMENTS", "WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "WF_RAY_STORE", "WF_PATH_ID"]);
@@ -306,9 +297,7 @@ impl Stage {
     /// A short name for labels and reports.
     pub fn label(self) -> String {
         match self {
-            Stage::Shade(k) => {
-                format!("shade[{}]", ["diffuse", "specular", "dielectric"].get(k as usize).unwrap_or(&"?"))
-            }
+            Stage::Shade(k) => format!("shade[{}]", kind_name(k).to_lowercase()),
             other => format!("{other:?}").to_lowercase(),
         }
     }
@@ -328,9 +317,47 @@ pub fn csg_queue(f: &FeatureSet) -> bool {
     f.csg && f.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX
 }
 
-/// Whether path vertices queue shadow rays (point lights or NEE, at diffuse vertices); how
-/// many per vertex is a run-time value (`BatchUniform::shadow_rays`), so kernel code does
-/// not grow with the number of lights.
+/// Whether path vertices queue shadow rays (point lights or NEE, at non-delta vertices);
+/// how many per vertex is a run-time value (`BatchUniform::shadow_rays`), so kernel code
+/// does not grow with the number of lights.
 pub fn has_shadow_rays(f: &FeatureSet) -> bool {
-    f.renderer == RendererKind::PathTracer && f.diffuse && (f.point_lights || f.nee)
+    f.renderer == RendererKind::PathTracer && f.non_delta() && (f.point_lights || f.nee)
+}
+
+/// The BRDF kinds a scene shades, each with its own kernel and queue.
+pub fn shade_kinds(f: &FeatureSet) -> Vec<u32> {
+    use brdf_kind::*;
+    [
+        (f.diffuse, DIFFUSE),
+        (f.specular, SPECULAR),
+        (f.dielectric, DIELECTRIC),
+        (f.conductor, CONDUCTOR),
+        (f.rough_dielectric, ROUGH_DIELECTRIC),
+        (f.plastic, PLASTIC),
+    ]
+    .into_iter()
+    .filter_map(|(on, kind)| on.then_some(kind))
+    .collect()
+}
+
+/// The assembly name of a BRDF kind's code.
+pub fn kind_name(kind: u32) -> &'static str {
+    match kind {
+        brdf_kind::DIFFUSE => "DIFFUSE",
+        brdf_kind::SPECULAR => "SPECULAR",
+        brdf_kind::DIELECTRIC => "DIELECTRIC",
+        brdf_kind::CONDUCTOR => "CONDUCTOR",
+        brdf_kind::ROUGH_DIELECTRIC => "ROUGH_DIELECTRIC",
+        _ => "PLASTIC",
+    }
+}
+
+/// Kinds whose vertices may sample lights (a smooth conductor is a delta, decided per
+/// material at run time; the mirror and smooth glass never).
+fn casts_shadow_rays(kind: u32) -> bool {
+    !matches!(kind, brdf_kind::SPECULAR | brdf_kind::DIELECTRIC)
+}
+
+fn microfacet_kind(kind: u32) -> bool {
+    matches!(kind, brdf_kind::CONDUCTOR | brdf_kind::ROUGH_DIELECTRIC | brdf_kind::PLASTIC)
 }
