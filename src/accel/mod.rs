@@ -27,7 +27,9 @@
 mod build;
 mod node;
 mod traverse;
+mod triangle;
 
 pub use build::{Bvh, BvhItem, MAX_DEPTH, MAX_LEAF_SIZE};
 pub use node::BvhNode;
 pub use traverse::{RayBox, Visit};
+pub use triangle::{intersect_triangle, ShearedRay, TriangleHit};
