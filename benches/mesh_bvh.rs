@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{Criterion, SamplingMode};
 use glam::DVec3;
-use lumen::accel::{Bvh, BvhItem, BvhNode};
+use lumen::accel::{Bvh, BvhItem};
 use lumen::scene::Aabb;
 
 /// (triangles, rings, sides): triangles = 2 · rings · sides.
@@ -53,7 +53,7 @@ fn items(tris: &[[DVec3; 3]]) -> Vec<BvhItem> {
 
 /// Bytes of the BVH's nodes and primitive indices.
 fn bvh_bytes(bvh: &Bvh) -> usize {
-    bvh.nodes().len() * size_of::<BvhNode>() + bvh.prim_indices().len() * size_of::<u32>()
+    std::mem::size_of_val(bvh.nodes()) + std::mem::size_of_val(bvh.prim_indices())
 }
 
 /// One timed build: (seconds, the BVH).

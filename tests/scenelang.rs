@@ -39,6 +39,7 @@ fn check_err(src: &str, kind: ErrorKind, line: usize, col: usize, needle: &str) 
 fn material(scene: &Scene, shape: usize) -> &Material {
     match &scene.shapes[shape] {
         Shape::Primitive(p) => scene.material(p.material),
+        Shape::Mesh(m) => scene.material(m.material),
         Shape::Csg(_) => panic!("not a primitive"),
     }
 }
@@ -46,6 +47,7 @@ fn transform(scene: &Scene, shape: usize) -> Transform {
     match &scene.shapes[shape] {
         Shape::Primitive(p) => p.transform,
         Shape::Csg(c) => c.transform,
+        Shape::Mesh(m) => m.transform,
     }
 }
 fn close(a: DVec3, b: DVec3) -> bool {
@@ -125,7 +127,7 @@ fn shapes_and_their_defaults() {
         .iter()
         .map(|x| match x {
             Shape::Primitive(p) => p.kind,
-            Shape::Csg(_) => panic!(),
+            _ => panic!(),
         })
         .collect();
     assert_eq!(kinds, ShapeKind::ALL);
@@ -323,7 +325,7 @@ fn csg_nodes_take_their_own_transformation() {
         .iter()
         .map(|x| match x {
             Shape::Csg(c) => (c.op, c.children.len()),
-            Shape::Primitive(_) => panic!(),
+            _ => panic!(),
         })
         .collect();
     assert_eq!(ops, [(CsgOp::Unite, 2), (CsgOp::Intersect, 2), (CsgOp::Diff, 3), (CsgOp::Fuse, 2)]);

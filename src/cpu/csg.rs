@@ -156,6 +156,8 @@ fn build(shape: &Shape, parent: &Transform, leaves: &mut Vec<Instance>) -> Node 
             Node::Leaf((leaves.len() - 1) as u32)
         }
         Shape::Csg(c) => build_csg(c, parent, leaves),
+        // `Scene::validate` refuses meshes inside CSG; an empty leaf set if one got here.
+        Shape::Mesh(_) => Node::Leaf(u32::MAX),
     }
 }
 

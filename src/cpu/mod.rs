@@ -11,6 +11,7 @@
 
 pub mod csg;
 mod hit;
+pub mod mesh;
 pub mod offset;
 mod onb;
 pub(crate) mod ray;

@@ -64,6 +64,9 @@ pub fn path_radiance(
         let Some(s) = sample_bsdf(&material.brdf, color, d, hit.normal, hit.front_face, xi.lobe, xi.direction) else {
             break;
         };
+        if !hit.consistent(s.dir) {
+            break;
+        }
         beta *= s.weight;
         if bounce >= settings.roulette_depth {
             let q = roulette_probability(color);
@@ -76,7 +79,7 @@ pub fn path_radiance(
             break;
         }
         prev = Previous { point: hit.point, shape: hit.shape, delta: s.delta, pdf: s.pdf };
-        ray = Ray::new(offset_origin(hit.point, hit.scale, hit.normal, s.dir), s.dir, 0.0, f64::INFINITY);
+        ray = Ray::new(offset_origin(hit.point, hit.scale, hit.geometric, s.dir), s.dir, 0.0, f64::INFINITY);
     }
     radiance
 }
@@ -173,12 +176,12 @@ fn sample_light(
         return Color::BLACK;
     };
     let f = eval_bsdf(brdf, color, d, hit.normal, hit.front_face, ls.dir);
-    if f.is_black() || ls.radiance.is_black() {
+    if f.is_black() || ls.radiance.is_black() || !hit.consistent(ls.dir) {
         return Color::BLACK;
     }
     let clear = match ls.end {
-        Some((y, ny, sy)) => ctx.segment_clear(hit.point, hit.scale, hit.normal, y, Some((ny, sy)), counters),
-        None => ctx.direction_clear(hit.point, hit.scale, hit.normal, ls.dir, counters),
+        Some((y, ny, sy)) => ctx.segment_clear(hit.point, hit.scale, hit.geometric, y, Some((ny, sy)), counters),
+        None => ctx.direction_clear(hit.point, hit.scale, hit.geometric, ls.dir, counters),
     };
     if !clear {
         return Color::BLACK;

@@ -23,10 +23,10 @@ pub fn point_light_factor(
     }
     let dir = to_light / dist;
     let cos = hit.normal.dot(dir);
-    if cos <= 0.0 {
+    if cos <= 0.0 || hit.geometric.dot(dir) <= 0.0 {
         return None;
     }
-    if !ctx.segment_clear(hit.point, hit.scale, hit.normal, light.position, None, counters) {
+    if !ctx.segment_clear(hit.point, hit.scale, hit.geometric, light.position, None, counters) {
         return None;
     }
     Some((dir, cos * light.falloff(dist)))

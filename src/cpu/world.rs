@@ -2,9 +2,10 @@
 
 use crate::accel::{Bvh, Visit};
 use crate::cpu::csg::{CsgHit, CsgTree};
+use crate::cpu::mesh::{MeshCrossing, MeshObject};
 use crate::cpu::shapes::{Crossing, Instance};
 use crate::cpu::{Hit, Ray};
-use crate::prepare::{SceneBvh, CSG_DEFER_MAX};
+use crate::prepare::{MeshBvhs, SceneBvh, CSG_DEFER_MAX};
 use crate::scene::{Scene, Shape};
 
 /// One top-level shape, prepared. Primitives (the common case) stay inline for locality.
@@ -13,6 +14,7 @@ use crate::scene::{Scene, Shape};
 enum Object {
     Primitive(Instance),
     Csg(CsgTree),
+    Mesh(MeshObject),
 }
 
 /// What an object reports before the full hit record is computed (only for the winner).
@@ -20,6 +22,7 @@ enum Object {
 enum Found {
     Primitive(Crossing),
     Csg(CsgHit),
+    Mesh(MeshCrossing),
 }
 
 impl Found {
@@ -27,6 +30,7 @@ impl Found {
         match self {
             Found::Primitive(c) => c.t,
             Found::Csg(h) => h.end.t,
+            Found::Mesh(c) => c.t,
         }
     }
 }
@@ -36,6 +40,7 @@ impl Object {
         match self {
             Object::Primitive(p) => p.first_crossing(ray).map(Found::Primitive),
             Object::Csg(c) => c.closest(ray).map(Found::Csg),
+            Object::Mesh(m) => m.closest(ray).map(Found::Mesh),
         }
     }
 
@@ -43,6 +48,7 @@ impl Object {
         match self {
             Object::Primitive(p) => p.first_crossing(ray).is_some(),
             Object::Csg(c) => c.occluded(ray),
+            Object::Mesh(m) => m.occludes(ray),
         }
     }
 }
@@ -85,6 +91,7 @@ impl World {
 
     /// Prepares a list of top-level shapes (index i is reported as `Hit::shape = i`).
     pub fn from_shapes(shapes: &[Shape]) -> World {
+        let meshes = MeshBvhs::of(shapes);
         let objects = shapes
             .iter()
             .map(|s| match s {
@@ -92,6 +99,10 @@ impl World {
                     Object::Primitive(Instance { kind: p.kind, to_world: p.transform, material: p.material })
                 }
                 Shape::Csg(c) => Object::Csg(CsgTree::from_csg(c)),
+                Shape::Mesh(m) => {
+                    let bvh = meshes.get(&m.mesh).cloned().unwrap_or_default();
+                    Object::Mesh(MeshObject::new(m, bvh))
+                }
             })
             .collect();
         let csg_trees = shapes.iter().filter(|s| matches!(s, Shape::Csg(_))).count();
@@ -152,6 +163,7 @@ impl World {
         let (s, material) = match (&self.objects[id as usize], found) {
             (Object::Primitive(p), Found::Primitive(c)) => (p.surface_hit(ray, c, false), p.material),
             (Object::Csg(c), Found::Csg(h)) => c.surface_hit(ray, h),
+            (Object::Mesh(m), Found::Mesh(c)) => (m.surface_hit(ray, c), m.material),
             _ => unreachable!("objects report their own kind of hit"),
         };
         Some(Hit {
@@ -159,6 +171,7 @@ impl World {
             point: s.point,
             scale: s.scale,
             normal: s.normal,
+            geometric: s.geometric,
             front_face: s.front_face,
             uv: s.uv,
             material,

@@ -94,6 +94,12 @@ impl FeatureSet {
         let mut used = vec![false; scene.materials.len()];
         for shape in &scene.shapes {
             match shape {
+                Shape::Mesh(m) => {
+                    f.bvh = true;
+                    if let Some(u) = used.get_mut(m.material.0 as usize) {
+                        *u = true;
+                    }
+                }
                 Shape::Primitive(p) => {
                     if p.kind != ShapeKind::Plane {
                         f.bvh = true;

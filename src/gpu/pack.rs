@@ -193,6 +193,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     let mut csg_children: Vec<(usize, Vec<u32>)> = Vec::new();
     for (i, s) in shifted.iter().enumerate() {
         object_ref[i] = match s {
+            Shape::Mesh(_) => return Err(PackError::TooMany { what: "meshes", count: 1, limit: 0 }),
             Shape::Primitive(prim) => {
                 check_range(i, prim.kind, &prim.transform)?;
                 p.shapes.push(packed_shape(prim.kind, &prim.transform, prim.material.0, area_of_shape[i]));
@@ -385,6 +386,7 @@ fn shifted_shape(s: &Shape, shift: &Transform) -> Shape {
     match s {
         Shape::Primitive(p) => Shape::primitive(p.kind, *shift * p.transform, p.material),
         Shape::Csg(c) => Shape::csg(c.op, c.children.clone(), *shift * c.transform),
+        Shape::Mesh(m) => Shape::mesh(m.mesh.clone(), &m.name, *shift * m.transform, m.material, m.smooth),
     }
 }
 
@@ -444,6 +446,11 @@ fn pack_csg(
     let mut refs = Vec::with_capacity(c.children.len());
     for ch in &c.children {
         refs.push(match ch {
+            Shape::Mesh(_) => {
+                return Err(PackError::Scene(crate::scene::SceneError::Invalid(
+                    "a mesh cannot be a CSG operand".into(),
+                )))
+            }
             Shape::Primitive(prim) => {
                 let to_world = t * prim.transform;
                 check_range(top, prim.kind, &to_world)?;

@@ -81,6 +81,25 @@ impl Fnv {
                 self.f64s(&c.transform.matrix().to_cols_array());
                 c.children.iter().for_each(|child| self.shape(child));
             }
+            Shape::Mesh(m) => {
+                self.bytes(&[2, u8::from(m.smooth)]);
+                self.f64s(&m.transform.matrix().to_cols_array());
+                self.bytes(&m.material.0.to_le_bytes());
+                let mesh = &m.mesh;
+                self.bytes(&(mesh.triangle_count() as u64).to_le_bytes());
+                for p in mesh.positions() {
+                    self.f64s(&p.to_array());
+                }
+                for t in mesh.triangles() {
+                    t.iter().for_each(|i| self.bytes(&i.to_le_bytes()));
+                }
+                for n in mesh.normals().unwrap_or_default() {
+                    self.f64s(&n.to_array());
+                }
+                for uv in mesh.uvs().unwrap_or_default() {
+                    self.f64s(&uv.to_array());
+                }
+            }
         }
     }
 }

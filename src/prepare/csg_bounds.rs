@@ -41,7 +41,7 @@ impl IntervalBound {
     /// The bound of a whole shape.
     pub fn of(shape: &Shape) -> Self {
         match shape {
-            Shape::Primitive(_) => Self::LEAF,
+            Shape::Primitive(_) | Shape::Mesh(_) => Self::LEAF,
             Shape::Csg(c) => {
                 let children: Vec<Self> = c.children.iter().map(Self::of).collect();
                 Self::combine(c.op, &children)

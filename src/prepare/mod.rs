@@ -5,6 +5,7 @@
 //! CSG bounds by construction, not by two implementations kept alike.
 
 pub mod csg_bounds;
+pub mod mesh_bvh;
 pub mod pixel_samples;
 pub mod sample_range;
 
@@ -16,6 +17,7 @@ use crate::sampling::Distribution2D;
 use crate::scene::{Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
 
 pub use csg_bounds::{max_intervals, IntervalBound};
+pub use mesh_bvh::{mesh_bvh, MeshBvhs};
 pub use pixel_samples::PixelSamples;
 pub use sample_range::{SampleRange, SampleRangeError};
 

@@ -27,7 +27,9 @@ pub use material::{Material, MaterialId};
 pub use mesh::{MeshError, MeshErrorKind, MeshFormat, MeshLocation, MeshParts, TriangleMesh, MAX_MESH_ELEMENTS};
 pub use pigment::{ImageFilter, Pigment};
 pub use settings::{PathTracerSettings, PcgSeed, Renderer, Tracer};
-pub use shape::{Csg, CsgOp, Primitive, Shape, ShapeKind, MAX_CSG_DEPTH, MAX_CSG_INTERVALS, MAX_PRIMITIVES};
+pub use shape::{
+    Csg, CsgOp, MeshInstance, Primitive, Shape, ShapeKind, MAX_CSG_DEPTH, MAX_CSG_INTERVALS, MAX_PRIMITIVES,
+};
 pub use transform::Transform;
 
 /// Largest image side lumen accepts; larger sizes are input errors, not allocations.
@@ -121,9 +123,9 @@ impl Scene {
         let n = self.materials.len();
         let mut bad = None;
         for s in &self.shapes {
-            s.for_each_primitive(&mut |p, _| {
-                if p.material.0 as usize >= n {
-                    bad = Some(p.material.0);
+            s.for_each_material(&mut |m| {
+                if m.0 as usize >= n {
+                    bad = Some(m.0);
                 }
             });
         }
@@ -131,6 +133,15 @@ impl Scene {
             return Err(SceneError::Invalid(format!(
                 "shape refers to material #{id}, but the scene has {n} materials"
             )));
+        }
+        fn mesh_in_csg(s: &Shape) -> bool {
+            match s {
+                Shape::Csg(c) => c.children.iter().any(|c| matches!(c, Shape::Mesh(_)) || mesh_in_csg(c)),
+                _ => false,
+            }
+        }
+        if self.shapes.iter().any(mesh_in_csg) {
+            return Err(SceneError::Invalid("a mesh cannot be a CSG operand".into()));
         }
         if !(self.camera.aspect_ratio.is_finite() && self.camera.aspect_ratio > 0.0) {
             return Err(SceneError::Invalid(format!(

@@ -1,8 +1,11 @@
-//! Shapes: unit primitives placed by a transformation, and CSG trees of them.
+//! Shapes: unit primitives placed by a transformation, CSG trees of them, and triangle
+//! meshes.
+
+use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::{Aabb, MaterialId, Transform};
+use super::{Aabb, MaterialId, Transform, TriangleMesh};
 
 /// The four unit primitives of SceneLang (see SCENELANG.md for their extents and uv).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -113,15 +116,55 @@ pub struct Csg {
     pub transform: Transform,
 }
 
+/// A triangle mesh placed in the world (ext `Shape.Mesh`). Every instance of one file
+/// shares the file's `Arc` (loaded and stored once; the renderers build one bottom-level
+/// BVH per distinct mesh); only the transformation differs. One material per mesh; meshes
+/// are not CSG operands.
+#[derive(Clone, PartialEq)]
+pub struct MeshInstance {
+    pub mesh: Arc<TriangleMesh>,
+    /// The file as the script named it, for messages and `lumen check`.
+    pub name: Arc<str>,
+    /// Object to world.
+    pub transform: Transform,
+    pub material: MaterialId,
+    /// Interpolate the file's vertex normals (flat facets when false or when the file has
+    /// none).
+    pub smooth: bool,
+}
+
+impl MeshInstance {
+    /// Whether shading uses interpolated vertex normals.
+    pub fn shades_smooth(&self) -> bool {
+        self.smooth && self.mesh.normals().is_some()
+    }
+}
+
+/// Triangles are summarised: a scene's Debug text (which `lumen merge` fingerprints hash)
+/// would otherwise hold every vertex.
+impl std::fmt::Debug for MeshInstance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MeshInstance")
+            .field("name", &self.name)
+            .field("triangles", &self.mesh.triangle_count())
+            .field("vertices", &self.mesh.vertex_count())
+            .field("transform", &self.transform)
+            .field("material", &self.material)
+            .field("smooth", &self.smooth)
+            .finish()
+    }
+}
+
 /// Anything that can be spawned into the world.
 ///
 /// Primitives are stored inline (they are the common case, and scenes of 100k spheres
-/// should not pay an allocation each); CSG nodes are boxed to keep the enum from recursing.
+/// should not pay an allocation each); CSG nodes and meshes are boxed to keep the enum small.
 #[derive(Debug, Clone, PartialEq)]
 #[allow(clippy::large_enum_variant)]
 pub enum Shape {
     Primitive(Primitive),
     Csg(Box<Csg>),
+    Mesh(Box<MeshInstance>),
 }
 
 impl Shape {
@@ -133,13 +176,27 @@ impl Shape {
         Shape::Csg(Box::new(Csg { op, children, transform }))
     }
 
+    pub fn mesh(mesh: Arc<TriangleMesh>, name: &str, transform: Transform, material: MaterialId, smooth: bool) -> Self {
+        Shape::Mesh(Box::new(MeshInstance { mesh, name: name.into(), transform, material, smooth }))
+    }
+
     /// World-space bounds of the visible surface. A lone plane is infinite. CSG: union of
     /// the children for UNITE/FUSE, their intersection for INTERSECT (planes' half-spaces
     /// make this finite where a bounded child cuts them), the first child's for DIFF.
+    /// A mesh: its vertices' box, transformed.
     pub fn bounds(&self) -> Aabb {
         match self {
             Shape::Primitive(p) => p.kind.object_bounds().transformed(&p.transform),
             Shape::Csg(c) => c.solid_bounds_local().transformed(&c.transform),
+            Shape::Mesh(m) => m.mesh.bounds().transformed(&m.transform),
+        }
+    }
+
+    /// Visits the material of every surface: primitives (CSG leaves included) and meshes.
+    pub fn for_each_material(&self, f: &mut impl FnMut(MaterialId)) {
+        match self {
+            Shape::Mesh(m) => f(m.material),
+            s => s.for_each_primitive(&mut |p, _| f(p.material)),
         }
     }
 
@@ -148,18 +205,21 @@ impl Shape {
         match self {
             Shape::Primitive(p) => p.kind.solid_bounds().transformed(&p.transform),
             Shape::Csg(c) => c.solid_bounds_local().transformed(&c.transform),
+            // Not a CSG operand (SceneLang refuses it); its surface's box.
+            Shape::Mesh(_) => self.bounds(),
         }
     }
 
-    /// Depth of the CSG tree (0 for a primitive).
+    /// Depth of the CSG tree (0 for a primitive or a mesh).
     pub fn csg_depth(&self) -> usize {
         match self {
-            Shape::Primitive(_) => 0,
+            Shape::Primitive(_) | Shape::Mesh(_) => 0,
             Shape::Csg(c) => 1 + c.children.iter().map(Shape::csg_depth).max().unwrap_or(0),
         }
     }
 
-    /// Visits every primitive with its full object-to-world transformation.
+    /// Visits every primitive with its full object-to-world transformation (meshes are not
+    /// primitives).
     pub fn for_each_primitive(&self, f: &mut impl FnMut(&Primitive, &Transform)) {
         fn walk(s: &Shape, parent: &Transform, f: &mut impl FnMut(&Primitive, &Transform)) {
             match s {
@@ -170,6 +230,7 @@ impl Shape {
                         walk(ch, &t, f);
                     }
                 }
+                Shape::Mesh(_) => {}
             }
         }
         walk(self, &Transform::IDENTITY, f);
@@ -178,7 +239,7 @@ impl Shape {
     /// Number of CSG nodes in this tree.
     pub fn csg_node_count(&self) -> usize {
         match self {
-            Shape::Primitive(_) => 0,
+            Shape::Primitive(_) | Shape::Mesh(_) => 0,
             Shape::Csg(c) => 1 + c.children.iter().map(Shape::csg_node_count).sum::<usize>(),
         }
     }

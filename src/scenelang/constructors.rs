@@ -356,6 +356,12 @@ impl Interp<'_> {
                     .err(s, ErrorKind::WrongType, format!("{name} combines shapes, found {}", v.ty().article()))
                     .with_expected("a Shape"));
             };
+            if let ShapeNode::Mesh { file, .. } = shape.node() {
+                return Err(self
+                    .err(s, ErrorKind::WrongType, format!("a mesh ({file}) cannot be a CSG operand"))
+                    .with_expected("spheres, planes, cubes, cylinders or CSG nodes of them")
+                    .with_note("triangle meshes have no inside for CSG's interval logic; spawn the mesh on its own"));
+            }
             children.push((shape, s));
             if !self.separator(',', Some(')'), &format!(" in {name}"), "`,` or `)`")? {
                 break;
@@ -379,7 +385,7 @@ impl Interp<'_> {
         let size = shape.size();
         let name = match shape.node() {
             ShapeNode::Csg { op, .. } => op.keyword(),
-            ShapeNode::Primitive { .. } => return Ok(()),
+            ShapeNode::Primitive { .. } | ShapeNode::Mesh { .. } => return Ok(()),
         };
         if size.depth > MAX_CSG_DEPTH {
             let msg =
@@ -621,7 +627,10 @@ impl Interp<'_> {
                 Value::Material(Material::new(brdf, emitted))
             }
             Ty::Shape => {
-                let kind = self.subtype(ty, &["Sphere", "Plane", "Cube", "Cylinder"])?;
+                let kind = self.subtype(ty, &["Sphere", "Plane", "Cube", "Cylinder", "Mesh"])?;
+                if kind == "Mesh" {
+                    return self.mesh_constructor();
+                }
                 let kind = match kind {
                     "Sphere" => ShapeKind::Sphere,
                     "Plane" => ShapeKind::Plane,
@@ -843,6 +852,48 @@ impl Interp<'_> {
                 )
                 .with_expected("`Image(width, height)` or `Image(\"file\")`")),
         }
+    }
+
+    /// `Shape.Mesh(.file "model.obj", .material m, .transformation T, .smooth 1)`: the file
+    /// relative to the script's directory, loaded once however many shapes use it.
+    fn mesh_constructor(&mut self) -> Res<Value> {
+        use Ty as T;
+        let mut a = self.args(
+            "Shape.Mesh",
+            &[
+                p("file", T::Str),
+                p("material", T::Material),
+                p("transformation", T::Transformation),
+                p("smooth", T::Number),
+            ],
+        )?;
+        let transform = a.transform(2);
+        let smooth = self.int(&a, 3, "smooth", 1, 0, 1)? == 1;
+        let material = match a.take(1) {
+            Some((Value::Material(m), _)) => m,
+            _ => Material::default(),
+        };
+        let Some((Value::Str(file), span)) = a.take(0) else {
+            let span = Span::new(self.lx.last_end, 1);
+            return Err(self
+                .err(span, ErrorKind::BadArguments, "Shape.Mesh needs a `.file`")
+                .with_expected("`Shape.Mesh(.file \"model.obj\", ...)`"));
+        };
+        let path = Path::new(&file);
+        let full: PathBuf = if path.is_absolute() { path.to_path_buf() } else { self.base_dir.join(path) };
+        let mesh = match self.meshes.get(&full) {
+            Some(m) => m.clone(),
+            None => {
+                let m = crate::scene::TriangleMesh::load(&full).map_err(|e| {
+                    self.err(span, ErrorKind::MeshFile, format!("cannot load mesh: {e}"))
+                        .with_expected("a readable .obj or .ply file (relative paths start at the script's folder)")
+                })?;
+                let m = Arc::new(m);
+                self.meshes.insert(full, m.clone());
+                m
+            }
+        };
+        Ok(Value::Shape(ShapeValue::mesh(&file, mesh, transform, material, smooth)))
     }
 
     /// Loads an image file, relative to the script's directory.

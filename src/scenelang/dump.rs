@@ -111,6 +111,13 @@ fn shape_value(s: &ShapeValue) -> String {
         ShapeNode::Primitive { kind, transform: t, material: m } => {
             format!("Shape.{kind:?}(.material {}, .transformation {})", material(m), transform(t))
         }
+        ShapeNode::Mesh { file, mesh, transform: t, material: m, smooth } => format!(
+            "Shape.Mesh(.file {file:?}, .material {}, .transformation {}, .smooth {}) ({} triangles)",
+            material(m),
+            transform(t),
+            u8::from(*smooth),
+            mesh.triangle_count()
+        ),
         ShapeNode::Csg { op, children, transform: t, size } => {
             let inner = if size.primitives > MAX_DUMPED_PRIMITIVES {
                 format!("<{} shapes: {} primitives, depth {}>", children.len(), size.primitives, size.depth)
@@ -133,6 +140,16 @@ fn shape(s: &Shape, out: &mut String, indent: usize) {
             for ch in &c.children {
                 shape(ch, out, indent + 1);
             }
+        }
+        Shape::Mesh(m) => {
+            let _ = writeln!(
+                out,
+                "{pad}Mesh {:?} ({} triangles) material #{} {}",
+                m.name,
+                m.mesh.triangle_count(),
+                m.material.0,
+                transform(&m.transform)
+            );
         }
     }
 }
@@ -224,7 +241,7 @@ mod tests {
             .iter()
             .map(|sh| match sh {
                 Shape::Primitive(p) => s.materials[p.material.0 as usize].brdf.clone(),
-                Shape::Csg(_) => unreachable!(),
+                _ => unreachable!(),
             })
             .collect()
     }

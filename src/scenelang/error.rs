@@ -40,6 +40,8 @@ pub enum ErrorKind {
     NonFinite,
     /// An image file that is missing or cannot be decoded.
     ImageFile,
+    /// A mesh file (`Shape.Mesh`) that is missing, malformed or unusable.
+    MeshFile,
     /// An image size that is zero, fractional or larger than [`crate::scene::MAX_IMAGE_SIDE`].
     BadImageSize,
     /// The scene model refused the value (singular transformation, …).

@@ -71,6 +71,9 @@ pub struct Interp<'a> {
     pub(super) base_dir: &'a Path,
     out: &'a mut dyn Write,
     depth: usize,
+    /// Meshes loaded so far, by their path: a file used by several `Shape.Mesh` is read and
+    /// stored once.
+    pub(super) meshes: std::collections::HashMap<std::path::PathBuf, Arc<crate::scene::TriangleMesh>>,
 }
 
 impl<'a> Interp<'a> {
@@ -82,7 +85,16 @@ impl<'a> Interp<'a> {
         out: &'a mut dyn Write,
         vars: Vars,
     ) -> Self {
-        Self { lx: Lexer::new(source, file), vars, world: World::new(), time, base_dir, out, depth: 0 }
+        Self {
+            lx: Lexer::new(source, file),
+            vars,
+            world: World::new(),
+            time,
+            base_dir,
+            out,
+            depth: 0,
+            meshes: Default::default(),
+        }
     }
 
     pub(super) fn err(&self, span: Span, kind: ErrorKind, msg: impl Into<String>) -> SceneLangError {
@@ -296,6 +308,11 @@ impl<'a> Interp<'a> {
             ShapeNode::Csg { op, children, transform, .. } => {
                 let children = children.iter().map(|c| self.place_shape(c, materials)).collect();
                 Shape::csg(*op, children, *transform)
+            }
+            ShapeNode::Mesh { file, mesh, transform, material, smooth } => {
+                let builder = &mut self.world.builder;
+                let id = *materials.entry(s.key()).or_insert_with(|| builder.material(material.clone()));
+                Shape::mesh(mesh.clone(), file, *transform, id, *smooth)
             }
         }
     }

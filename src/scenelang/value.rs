@@ -40,8 +40,26 @@ pub struct ShapeValue(Arc<ShapeNode>);
 
 #[derive(Debug)]
 pub enum ShapeNode {
-    Primitive { kind: ShapeKind, transform: Transform, material: Material },
-    Csg { op: CsgOp, children: Vec<ShapeValue>, transform: Transform, size: TreeSize },
+    Primitive {
+        kind: ShapeKind,
+        transform: Transform,
+        material: Material,
+    },
+    Csg {
+        op: CsgOp,
+        children: Vec<ShapeValue>,
+        transform: Transform,
+        size: TreeSize,
+    },
+    /// A triangle mesh (ext `Shape.Mesh`): `file` as the script wrote it, the mesh shared
+    /// by every use of the same file.
+    Mesh {
+        file: Arc<str>,
+        mesh: Arc<crate::scene::TriangleMesh>,
+        transform: Transform,
+        material: Material,
+        smooth: bool,
+    },
 }
 
 /// How limit errors explain the count of primitives.
@@ -59,6 +77,16 @@ pub struct TreeSize {
 impl ShapeValue {
     pub fn primitive(kind: ShapeKind, transform: Transform, material: Material) -> Self {
         Self(Arc::new(ShapeNode::Primitive { kind, transform, material }))
+    }
+
+    pub fn mesh(
+        file: &str,
+        mesh: Arc<crate::scene::TriangleMesh>,
+        transform: Transform,
+        material: Material,
+        smooth: bool,
+    ) -> Self {
+        Self(Arc::new(ShapeNode::Mesh { file: file.into(), mesh, transform, material, smooth }))
     }
 
     /// A CSG node; its size comes from its children's in O(number of children).
@@ -86,6 +114,8 @@ impl ShapeValue {
         match &*self.0 {
             ShapeNode::Primitive { .. } => TreeSize { primitives: 1, depth: 0, intervals: IntervalBound::LEAF },
             ShapeNode::Csg { size, .. } => *size,
+            // Not a CSG operand: the size is never combined.
+            ShapeNode::Mesh { .. } => TreeSize { primitives: 1, depth: 0, intervals: IntervalBound::LEAF },
         }
     }
 }
@@ -103,6 +133,10 @@ impl PartialEq for ShapeValue {
                     ShapeNode::Csg { op: o1, children: c1, transform: t1, .. },
                     ShapeNode::Csg { op: o2, children: c2, transform: t2, .. },
                 ) => o1 == o2 && t1 == t2 && c1 == c2,
+                (
+                    ShapeNode::Mesh { mesh: a, transform: t1, material: m1, smooth: s1, .. },
+                    ShapeNode::Mesh { mesh: b, transform: t2, material: m2, smooth: s2, .. },
+                ) => Arc::ptr_eq(a, b) && t1 == t2 && m1 == m2 && s1 == s2,
                 _ => false,
             }
     }

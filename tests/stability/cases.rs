@@ -245,6 +245,7 @@ fn leaf_contains(kind: ShapeKind, to_world: &Transform, p: DVec3) -> bool {
 fn contains(shape: &Shape, parent: &Transform, p: DVec3) -> bool {
     match shape {
         Shape::Primitive(pr) => leaf_contains(pr.kind, &(*parent * pr.transform), p),
+        Shape::Mesh(_) => panic!("analytic membership of meshes is not needed here"),
         Shape::Csg(c) => {
             let t = *parent * c.transform;
             let mut inside = c.children.iter().map(|ch| contains(ch, &t, p));
@@ -358,6 +359,7 @@ pub fn placed(scene: &Scene, t: Transform, s: f64) -> Scene {
         match sh {
             Shape::Primitive(p) => p.transform = t * p.transform,
             Shape::Csg(c) => c.transform = t * c.transform,
+            Shape::Mesh(m) => m.transform = t * m.transform,
         }
     }
     out.camera.transform = t * out.camera.transform;

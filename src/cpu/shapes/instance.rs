@@ -22,8 +22,12 @@ pub struct SurfaceHit {
     pub point: DVec3,
     /// Error scale of `point` (`offset::error_scale`).
     pub scale: f64,
-    /// Unit normal with `normal · dir ≤ 0`.
+    /// Unit shading normal, on the side the ray comes from (`normal · dir ≤ 0` but for
+    /// interpolated mesh normals at grazing angles).
     pub normal: DVec3,
+    /// Unit geometric normal with `geometric · dir ≤ 0`: it decides sidedness and offsets.
+    /// Equal to `normal` but on smooth meshes.
+    pub geometric: DVec3,
     /// The outward normal faced the ray (`outward · dir < 0`).
     pub front_face: bool,
     pub uv: DVec2,
@@ -60,6 +64,6 @@ impl Instance {
         let outward = if flip { -n } else { n };
         let front_face = outward.dot(ray.dir) < 0.0;
         let normal = if front_face { outward } else { -outward };
-        SurfaceHit { point, scale, normal, front_face, uv: s.uv }
+        SurfaceHit { point, scale, normal, geometric: normal, front_face, uv: s.uv }
     }
 }

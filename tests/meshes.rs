@@ -1,0 +1,215 @@
+//! Triangle meshes (issue 13) against closed forms and the analytic sphere, on the CPU
+//! reference and (where an adapter exists) the GPU.
+
+mod common;
+
+use std::path::Path;
+
+use common::{icosphere, inscribed_radius, mean_and_stderr, obj_text};
+use glam::DVec3;
+use lumen::cpu::{render, Progress, RenderOptions};
+use lumen::scene::*;
+use lumen::scenelang::{load_str, ErrorKind, LoadOptions};
+
+/// The icosphere of `subdivisions` written as `name` into `dir` (with vertex normals when
+/// `normals`).
+fn write_icosphere(dir: &Path, name: &str, subdivisions: u32, normals: bool) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let (v, f) = icosphere(subdivisions);
+    std::fs::write(dir.join(name), obj_text(&v, &f, normals)).unwrap();
+    (v, f)
+}
+
+fn load(dir: &Path, src: &str) -> Scene {
+    load_str(src, "t.sl", dir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+const ONOFF: &str = "USING Camera.Perspective() Image(48, 48) Renderer.OnOff() Tracer(.samples_per_side 0)\n";
+
+/// OnOff silhouettes of a tessellated unit sphere and the analytic one: the polyhedron lies
+/// between the spheres of radius r_in (its smallest face distance) and 1, so every pixel
+/// whose camera ray passes the centre closer than r_in sees both, every one passing farther
+/// than 1 sees neither, and only the ring between may differ.
+#[test]
+fn a_tessellated_sphere_has_the_analytic_silhouette() {
+    let dir = tempfile::tempdir().unwrap();
+    let (v, f) = write_icosphere(dir.path(), "ball.obj", 3, false);
+    let r_in = inscribed_radius(&v, &f);
+    assert!(r_in > 0.99 && r_in < 1.0, "{r_in}");
+    let place = ".transformation TRANSLATE(3, 0, 0)";
+    let mesh = load(dir.path(), &format!("SPAWN Shape.Mesh(.file \"ball.obj\", {place})\n{ONOFF}"));
+    let sphere = load(dir.path(), &format!("SPAWN Shape.Sphere({place})\n{ONOFF}"));
+    let (a, b) = (
+        render(&mesh, &RenderOptions::default(), Progress::Hidden).image,
+        render(&sphere, &RenderOptions::default(), Progress::Hidden).image,
+    );
+    let centre = DVec3::new(3.0, 0.0, 0.0);
+    let (mut checked, mut skipped) = (0, 0);
+    for row in 0..48 {
+        for col in 0..48 {
+            let ray = sphere.camera.ray((col as f64 + 0.5) / 48.0, 1.0 - (row as f64 + 0.5) / 48.0);
+            let d = ray.dir.normalize();
+            let to_c = centre - ray.origin;
+            let miss = (to_c - to_c.dot(d) * d).length();
+            if miss < r_in - 1e-9 || miss > 1.0 + 1e-9 {
+                assert_eq!(a.get(col, row), b.get(col, row), "pixel ({col}, {row}) at distance {miss}");
+                assert_eq!(a.get(col, row).g, if miss < r_in { 1.0 } else { 0.0 });
+                checked += 1;
+            } else {
+                skipped += 1;
+            }
+        }
+    }
+    assert!(checked > 2000 && skipped < 100, "{checked} checked, {skipped} in the ring");
+}
+
+/// A convex diffuse polyhedron under a uniform sky, one bounce, no NEE: each path scatters
+/// once and escapes (it cannot meet a convex surface again), so every pixel that sees it is
+/// exactly ρL, as for the analytic sphere, flat or smooth.
+#[test]
+fn a_diffuse_mesh_under_a_uniform_sky_shows_albedo_times_sky() {
+    let dir = tempfile::tempdir().unwrap();
+    write_icosphere(dir.path(), "ball.obj", 2, true);
+    for smooth in [0, 1] {
+        let scene = load(
+            dir.path(),
+            &format!(
+                "SPAWN Shape.Mesh(.file \"ball.obj\", .material Material(Brdf.Diffuse(<0.6, 0.6, 0.6>)),
+                                  .transformation TRANSLATE(3, 0, 0), .smooth {smooth})
+                 USING Camera.Perspective() Image(24, 24) Tracer(.samples_per_side 1)
+                       Renderer.PathTracer(.n 4, .max_depth 3, .nee 0) Environment.Uniform(.color <2, 2, 2>)"
+            ),
+        );
+        let img = render(&scene, &RenderOptions::default(), Progress::Hidden).image;
+        let mut on = 0;
+        for p in img.pixels() {
+            let seen = (f64::from(p.g) - 1.2).abs() < 1e-6;
+            // Smooth shading may drop a path whose sample leaves below the facet (shading
+            // normals never send light through a surface): then less, never more.
+            assert!(seen || (f64::from(p.g) - 2.0).abs() < 1e-6 || (smooth == 1 && p.g < 1.2), "{p:?}");
+            on += usize::from(seen);
+        }
+        assert!(on > 20, "smooth {smooth}: {on} pixels see the ball");
+    }
+}
+
+/// Closed furnace: the camera inside an emissive diffuse mesh sphere (Le 1, ρ 0.5, seen from
+/// inside), flat-shaded: without roulette every path is Le Σ_{k≤20} ρᵏ exactly. (Smooth
+/// shading would lose the samples that its normals aim through the facets: by design.)
+#[test]
+fn closed_furnace_of_an_emissive_mesh_sphere() {
+    let dir = tempfile::tempdir().unwrap();
+    write_icosphere(dir.path(), "room.obj", 2, true);
+    let scene = load(
+        dir.path(),
+        "SPAWN Shape.Mesh(.file \"room.obj\", .transformation SCALE 10, .smooth 0,
+                          .material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>), <1, 1, 1>))
+         USING Camera.Perspective() Image(8, 8) Tracer(.samples_per_side 1)
+               Renderer.PathTracer(.n 2, .max_depth 20, .roulette_depth 1000, .nee 0)",
+    );
+    let expected = 2.0 * (1.0 - 0.5f64.powi(21));
+    let img = render(&scene, &RenderOptions::default(), Progress::Hidden).image;
+    let bad: Vec<_> = img
+        .pixels()
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| (f64::from(p.g) / expected - 1.0).abs() >= 1e-6)
+        .map(|(i, p)| (i, p.g))
+        .collect();
+    assert!(bad.is_empty(), "{bad:?}");
+    // With NEE (the mesh is an area light) + MIS: unbiased, noisy.
+    let nee = load(
+        dir.path(),
+        "SPAWN Shape.Mesh(.file \"room.obj\", .transformation SCALE 10, .smooth 0,
+                          .material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>), <1, 1, 1>))
+         USING Camera.Perspective() Image(16, 16) Tracer(.samples_per_side 2)
+               Renderer.PathTracer(.n 16, .max_depth 20, .roulette_depth 1000, .nee 1)",
+    );
+    let img = render(&nee, &RenderOptions::default(), Progress::Hidden).image;
+    let (mean, se) = mean_and_stderr(&img, |_, _| true);
+    println!("mesh furnace with NEE: {mean} ± {se} (expected {expected})");
+    assert!(5.0 * se < 0.01 * expected, "test too weak: se {se}");
+    assert!((mean / expected - 1.0).abs() < 0.01, "{mean} vs {expected}");
+}
+
+/// Two `Shape.Mesh` of one file share one triangle set (stored once) and render as two
+/// copies of the file under different names do.
+#[test]
+fn instances_share_one_mesh_and_render_as_copies() {
+    let dir = tempfile::tempdir().unwrap();
+    write_icosphere(dir.path(), "a.obj", 2, true);
+    write_icosphere(dir.path(), "b.obj", 2, true);
+    let scene = |second: &str| {
+        load(
+            dir.path(),
+            &format!(
+                "SET m Material(Brdf.Diffuse(<0.7, 0.4, 0.2>))
+                 SPAWN Shape.Mesh(.file \"a.obj\", .material m, .transformation TRANSLATE(4, 1.2, 0))
+                       Shape.Mesh(.file \"{second}\", .material m, .transformation TRANSLATE(4, -1.2, 0) * SCALE 0.8)
+                       Shape.Plane(.transformation TRANSLATE(.Z -1))
+                 USING Camera.Perspective() Image(24, 16) Tracer(.samples_per_side 1)
+                       Renderer.PathTracer(.n 2, .max_depth 3) Environment.Uniform(.color <1, 1, 1>)"
+            ),
+        )
+    };
+    let (shared, copies) = (scene("a.obj"), scene("b.obj"));
+    let mesh = |s: &Scene, i: usize| match &s.shapes[i] {
+        Shape::Mesh(m) => m.mesh.clone(),
+        other => panic!("{other:?}"),
+    };
+    assert!(std::sync::Arc::ptr_eq(&mesh(&shared, 0), &mesh(&shared, 1)), "one file, one mesh");
+    assert!(!std::sync::Arc::ptr_eq(&mesh(&copies, 0), &mesh(&copies, 1)));
+    let a = render(&shared, &RenderOptions::default(), Progress::Hidden).image;
+    let b = render(&copies, &RenderOptions::default(), Progress::Hidden).image;
+    assert_eq!(a.pixels(), b.pixels());
+}
+
+#[test]
+fn meshes_in_csg_and_bad_mesh_files_are_located_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    write_icosphere(dir.path(), "ball.obj", 1, false);
+    std::fs::write(dir.path().join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    let err = |src: &str| {
+        load_str(&format!("{src}\n{ONOFF}"), "t.sl", dir.path(), &LoadOptions::default()).expect_err("an error")
+    };
+    let e = err("SPAWN UNITE(Shape.Sphere(), Shape.Mesh(.file \"ball.obj\"))");
+    assert_eq!(e.kind, ErrorKind::WrongType);
+    assert!(e.to_string().contains("cannot be a CSG operand") && e.to_string().contains("t.sl:1:"), "{e}");
+    let e = err("SPAWN Shape.Mesh(.file \"missing.obj\")");
+    assert_eq!(e.kind, ErrorKind::MeshFile);
+    assert!(e.to_string().contains("missing.obj") && e.to_string().contains("t.sl:1:24"), "{e}");
+    let e = err("SPAWN Shape.Mesh(.file \"bad.obj\")");
+    assert!(e.to_string().contains("bad.obj") && e.to_string().contains("line 3"), "{e}");
+    let e = err("SPAWN Shape.Mesh(.material Material())");
+    assert!(e.to_string().contains("needs a `.file`"), "{e}");
+}
+
+/// The bottom-level BVH finds what testing every triangle finds.
+#[test]
+fn mesh_bvh_queries_match_brute_force() {
+    let (v, f) = icosphere(3);
+    let parts = MeshParts { positions: v, normals: None, uvs: None, triangles: f, dropped_faces: 0 };
+    let mesh = std::sync::Arc::new(TriangleMesh::from_parts("ball", parts).unwrap());
+    let to_world_shape =
+        Transform::translation(DVec3::new(0.3, -0.2, 0.1)) * Transform::scaling(DVec3::new(1.0, 2.0, 0.5));
+    let world =
+        lumen::cpu::World::from_shapes(&[Shape::mesh(mesh.clone(), "ball", to_world_shape, MaterialId(0), false)]);
+    let to_world = Transform::translation(DVec3::new(0.3, -0.2, 0.1)) * Transform::scaling(DVec3::new(1.0, 2.0, 0.5));
+    let inv = to_world.inverse_matrix();
+    let mut rng = lumen::sampling::Pcg32::new(1, 2);
+    let mut hits = 0;
+    for _ in 0..2000 {
+        let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 6.0 - 3.0;
+        let d = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - 1.0;
+        let ray = lumen::cpu::Ray::new(o, d, 0.0, f64::INFINITY);
+        let (lo, ld) = (inv.transform_point3(o), inv.transform_vector3(d));
+        let brute = (0..mesh.triangle_count())
+            .filter_map(|i| {
+                let [a, b, c] = mesh.triangle(i);
+                lumen::accel::intersect_triangle(lo, ld, a, b, c, f64::INFINITY).map(|h| h.t)
+            })
+            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
+        assert_eq!(world.intersect(&ray).map(|h| h.t), brute, "{o} {d}");
+        hits += usize::from(brute.is_some());
+    }
+    assert!(hits > 50, "{hits}");
+}
