@@ -44,3 +44,11 @@
 // #if AREA_LIGHTS
 @group(1) @binding(12) var<storage, read> area_lights: array<AreaLight>;
 // #endif
+// #if MESH
+// Triangles of the meshes in bottom-level leaf order: vertices (MESH_POSITION_VEC4S vec4
+// each), and for shading their vertex normals and uvs (MESH_SHADING_VEC4S).
+@group(1) @binding(13) var<storage, read> tri_positions: array<vec4<f32>>;
+// #if SHADING
+@group(1) @binding(14) var<storage, read> tri_shading: array<vec4<f32>>;
+// #endif
+// #endif

@@ -19,7 +19,8 @@ struct Shape {
     material: u32,
     // Index into area_lights, or NONE.
     light: u32,
-    _pad: u32,
+    // Mesh instances: the root of the bottom-level BVH in bvh_nodes and flags (MESH_*).
+    mesh: u32,
 }
 
 // An object reference (a u32 in `indices`: BVH leaves, the plane list, CSG children) is

@@ -16,12 +16,13 @@ fn point_light_sample(i: u32, hit: Hit) -> PointLightSample {
     let to_light = light.position.xyz - hit.point;
     let dist = length(to_light);
     let l = to_light / dist;
-    let origin = offset_origin(hit.point, hit.scale, hit.normal, l);
+    let origin = offset_origin(hit.point, hit.scale, hit.geometric, l);
     var falloff = 1.0;
     if (light.position.w > 0.0) {
         let q = light.position.w / dist;
         falloff = q * q;
     }
     let ray = Ray(origin, light.position.xyz - origin, 0.0, 1.0);
-    return PointLightSample(l, light.color.xyz * falloff, ray, dist > 0.0 && dot(hit.normal, l) > 0.0);
+    let lit = dist > 0.0 && dot(hit.normal, l) > 0.0 && dot(hit.geometric, l) > 0.0;
+    return PointLightSample(l, light.color.xyz * falloff, ray, lit);
 }

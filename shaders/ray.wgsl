@@ -49,8 +49,11 @@ struct Hit {
     point: vec3<f32>,
     // Error scale of `point` (offset::error_scale): what spawned rays offset by.
     scale: f32,
-    // Unit normal facing the incoming ray.
+    // Unit shading normal facing the incoming ray.
     normal: vec3<f32>,
+    // Unit geometric normal facing the incoming ray: sidedness and offsets (differs from
+    // `normal` only on smooth meshes).
+    geometric: vec3<f32>,
     front_face: bool,
     uv: vec2<f32>,
     material: u32,

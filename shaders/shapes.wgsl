@@ -11,6 +11,9 @@
 // #if CYLINDER
 // #requires cylinder
 // #endif
+// #if MESH
+// #requires mesh
+// #endif
 // Placed primitives: mirrors src/cpu/shapes/{mod,instance}.rs. The ray moves into object
 // space without normalising its direction, so t means the same point in both spaces.
 
@@ -56,6 +59,11 @@ fn shape_span(i: u32, ray: Ray) -> Span {
 // The first finite crossing of shape `i` with t in the open range (tmin, tmax); t = OPEN
 // when there is none.
 fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
+// #if MESH
+    if (shapes[i].kind == SHAPE_MESH) {
+        return mesh_first_crossing(i, ray);
+    }
+// #endif
     let sp = shape_span(i, ray);
     if (sp.valid) {
         if (sp.enter.t > ray.tmin && sp.enter.t < ray.tmax && abs(sp.enter.t) < OPEN) {
@@ -102,6 +110,11 @@ fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
 // carved by a subtracted CSG child).
 fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> Hit {
     let s = shapes[i];
+// #if MESH
+    if (s.kind == SHAPE_MESH) {
+        return mesh_surface_hit(i, ray, c, object);
+    }
+// #endif
     let o = affine_point(s.to_object, ray.origin);
     let d = affine_vector(s.to_object, ray.dir);
     let sp = primitive_surface(s.kind, o + c.t * d, c.face);
@@ -111,7 +124,7 @@ fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> 
     let front_face = dot(outward, ray.dir) < 0.0;
     let normal = select(-outward, outward, front_face);
     let scale = affine_error_scale(s.to_world, sp.point);
-    return Hit(c.t, point, scale, normal, front_face, sp.uv, s.material, object);
+    return Hit(c.t, point, scale, normal, normal, front_face, sp.uv, s.material, object);
 }
 // #endif
 // #endif

@@ -105,7 +105,11 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, d: vec3<f32>, xi0: f
     if (all(f == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) {
         return none;
     }
-    let o = offset_origin(hit.point, hit.scale, hit.normal, dir);
+    if ((dot(dir, hit.normal) > 0.0) != (dot(dir, hit.geometric) > 0.0)) {
+        // Shading normals never take light from behind the facet (cpu Hit::consistent).
+        return none;
+    }
+    let o = offset_origin(hit.point, hit.scale, hit.geometric, dir);
     var ray = Ray(o, dir, 0.0, OPEN);
     if (is_area) {
         let e = offset_origin(y, sy, ny, hit.point - y);
@@ -178,7 +182,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
 // #endif
     let s = sample_bsdf(m, color, d, hit.normal, hit.front_face, xi[3], xi[4], xi[5]);
-    if (!s.valid) {
+    if (!s.valid || (dot(s.dir, hit.normal) > 0.0) != (dot(s.dir, hit.geometric) > 0.0)) {
         return;
     }
     beta *= s.weight;
@@ -195,6 +199,6 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     paths[field(F_BETA, slot)] = vec4<f32>(beta, s.pdf);
     paths[field(F_PREV, slot)] = vec4<f32>(hit.point, 0.0);
     words[field(W_PREV, slot)] = vec4<u32>(hit.object, select(0u, 1u, s.delta), 0u, 0u);
-    store_ray(slot, Ray(offset_origin(hit.point, hit.scale, hit.normal, s.dir), s.dir, 0.0, OPEN));
+    store_ray(slot, Ray(offset_origin(hit.point, hit.scale, hit.geometric, s.dir), s.dir, 0.0, OPEN));
     wf_push(Q_RAY + ((bounce + 1u) & 1u), slot);
 }

@@ -214,12 +214,12 @@ fn world_first(ray: Ray, any_hit: bool) -> Candidate {
 fn closest_hit(ray: Ray) -> Hit {
     let cand = world_first(ray, false);
     if (cand.c.t >= OPEN) {
-        return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
+        return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
     }
 // #if GEOMETRY
     return shape_surface_hit(cand.shape, ray, cand.c, cand.flip, cand.object);
 // #else
-    return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
+    return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
 // #endif
 }
 // #endif

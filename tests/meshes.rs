@@ -213,3 +213,110 @@ fn mesh_bvh_queries_match_brute_force() {
     }
     assert!(hits > 50, "{hits}");
 }
+
+// ---- The GPU ----
+
+use lumen::gpu::gpu_for_tests;
+use lumen::gpu::render::{render as gpu_render, GpuRenderOptions};
+
+/// GPU vs CPU on `scene`: at least `min_share` of the pixels agree, the rest add little.
+fn gpu_matches_cpu(gpu: &lumen::gpu::Gpu, scene: &Scene, min_share: f64) -> lumen::image::HdrImage {
+    let g = gpu_render(gpu, scene, &GpuRenderOptions::default()).unwrap();
+    let c = render(scene, &RenderOptions::default(), Progress::Hidden);
+    let a = common::agreement(&g.image, &c.image);
+    println!("{a}");
+    a.check(common::Tolerance::share(min_share)).unwrap_or_else(|e| panic!("GPU vs CPU: {e}"));
+    assert_eq!(g.non_finite_samples, 0);
+    g.image
+}
+
+/// A mesh scene on both devices: a smooth icosphere with uvs (a checkered pigment reads
+/// them), a flat one, a rough conductor mesh, on a plane, under a point light and a sky;
+/// path traced with NEE and without, and by the three simple renderers.
+#[test]
+fn mesh_scenes_render_on_the_gpu_as_on_the_cpu() {
+    let Some(gpu) = gpu_for_tests("mesh_scenes_render_on_the_gpu_as_on_the_cpu") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (v, f) = icosphere(2);
+    // uvs from the longitude and latitude of each vertex.
+    let mut text = String::new();
+    for p in &v {
+        text += &format!("v {} {} {}\nvn {} {} {}\n", p.x, p.y, p.z, p.x, p.y, p.z);
+        text += &format!(
+            "vt {} {}\n",
+            0.5 + p.y.atan2(p.x) / std::f64::consts::TAU,
+            0.5 + p.z.asin() / std::f64::consts::PI
+        );
+    }
+    for [a, b, c] in &f {
+        text += &format!("f {0}/{0}/{0} {1}/{1}/{1} {2}/{2}/{2}\n", a + 1, b + 1, c + 1);
+    }
+    std::fs::write(dir.path().join("ball.obj"), text).unwrap();
+    let renderers = [
+        "Renderer.PathTracer(.n 4, .max_depth 4, .roulette_depth 2, .nee 1)",
+        "Renderer.PathTracer(.n 4, .max_depth 4, .roulette_depth 2, .nee 0)",
+        "Renderer.OnOff()",
+        "Renderer.Flat()",
+        "Renderer.PointLight(.ambient_color <0.02, 0.02, 0.02>)",
+    ];
+    for renderer in renderers {
+        let scene = load(
+            dir.path(),
+            &format!(
+                "SET check Material(Brdf.Diffuse(Pigment.Checkered(6, <0.8, 0.7, 0.2>, <0.1, 0.2, 0.6>)))
+                 SPAWN Shape.Mesh(.file \"ball.obj\", .material check, .transformation TRANSLATE(4, 1.3, 0) * ROTATE(.Z 30))
+                       Shape.Mesh(.file \"ball.obj\", .smooth 0, .material Material(Brdf.Diffuse(<0.6, 0.3, 0.3>)),
+                                  .transformation TRANSLATE(4, -1.3, 0) * SCALE(1, 0.7, 1.2))
+                       Shape.Mesh(.file \"ball.obj\", .material Material(Brdf.Conductor(.metal \"Au\", .roughness 0.3)),
+                                  .transformation TRANSLATE(6, 0, 0.5) * SCALE 0.8)
+                       Shape.Plane(.material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>)), .transformation TRANSLATE(.Z -1))
+                       Light(.position {{1, 2, 4}}, .color <3, 3, 3>)
+                 USING Camera.Perspective(.aspect_ratio 1.5) Image(30, 20) Tracer(.samples_per_side 2) {renderer}
+                       Environment.Gradient(<0.3, 0.4, 0.8>, <0.6, 0.6, 0.6>, <0.1, 0.1, 0.1>)"
+            ),
+        );
+        println!("{renderer}");
+        gpu_matches_cpu(&gpu, &scene, 0.99);
+    }
+}
+
+/// The closed furnace of a flat emissive mesh sphere, and the tessellated sphere's
+/// silhouette, on the GPU: the same closed forms as the CPU tests above.
+#[test]
+fn mesh_furnace_and_silhouette_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("mesh_furnace_and_silhouette_on_the_gpu") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (v, f) = write_icosphere(dir.path(), "ball.obj", 3, false);
+    let scene = load(
+        dir.path(),
+        "SPAWN Shape.Mesh(.file \"ball.obj\", .transformation SCALE 10,
+                          .material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>), <1, 1, 1>))
+         USING Camera.Perspective() Image(8, 8) Tracer(.samples_per_side 1)
+               Renderer.PathTracer(.n 2, .max_depth 20, .roulette_depth 1000, .nee 0)",
+    );
+    let expected = 2.0 * (1.0 - 0.5f64.powi(21));
+    let img = gpu_render(&gpu, &scene, &GpuRenderOptions::default()).unwrap().image;
+    for p in img.pixels() {
+        assert!((f64::from(p.g) / expected - 1.0).abs() < 2e-6, "{p:?}");
+    }
+    let r_in = inscribed_radius(&v, &f);
+    let mesh =
+        load(dir.path(), &format!("SPAWN Shape.Mesh(.file \"ball.obj\", .transformation TRANSLATE(3, 0, 0))\n{ONOFF}"));
+    let img = gpu_render(&gpu, &mesh, &GpuRenderOptions::default()).unwrap().image;
+    let centre = DVec3::new(3.0, 0.0, 0.0);
+    let mut checked = 0;
+    for row in 0..48 {
+        for col in 0..48 {
+            let ray = mesh.camera.ray((col as f64 + 0.5) / 48.0, 1.0 - (row as f64 + 0.5) / 48.0);
+            let d = ray.dir.normalize();
+            let to_c = centre - ray.origin;
+            let miss = (to_c - to_c.dot(d) * d).length();
+            // f32 on the GPU: a margin of 1e-5 around the ring.
+            if miss < r_in - 1e-5 || miss > 1.0 + 1e-5 {
+                assert_eq!(img.get(col, row).g, if miss < r_in { 1.0 } else { 0.0 }, "({col}, {row}) at {miss}");
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 2000, "{checked}");
+}

@@ -14,6 +14,12 @@ vertical field of view 2 atan(1/1) = 90 degrees, square image), a sphere of radi
 with lumen max_depth 64 (Mitsuba max_depth 65: Mitsuba counts segments, lumen scattering
 vertices; see cornell.py), box-filtered pixel samples. Roughness is GGX alpha on both sides.
 
+Masking-shadowing differs at high roughness: Mitsuba 3's `MicrofacetDistribution::G` is the
+separable product G1(wi) G1(wo), lumen's the height-correlated 1/(1 + L(wi) + L(wo)) (Heitz
+2014, what issue 14 asks for), which is never smaller (at alpha = 1, wi = (0.6, 0, 0.8),
+wo = (-0.28, 0, 0.96): 0.87075 against 0.87273). The gap grows with alpha, so the means are
+asserted within 1 % up to alpha = 0.5 and reported at alpha = 1.
+
 The plastics are different models: lumen's base is seen through the coat with the coat's
 directional albedo (1 - E_R(mu_o))(1 - E_R(mu_i)), Mitsuba's `roughplastic` weighs it by the
 Fresnel transmittance of a precomputed table and its own internal-reflection term; their
@@ -147,6 +153,7 @@ def main(argv=None) -> int:
                 theirs = mitsuba_mean(bsdf, a.size, a.spp)
                 compensated = lumen_mean(a.lumen, a.device, brdf.replace(", .multiple_scattering 0", ""), a.size, a.spp, tmp)
                 diff = ours / theirs - 1.0
+                strict = strict and alpha <= 0.5
                 mark = "" if not strict or abs(diff) < 0.01 else " **over 1 %**"
                 if strict and abs(diff) >= 0.01:
                     failed.append(f"{name} alpha {alpha}")

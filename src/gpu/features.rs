@@ -80,6 +80,8 @@ pub struct FeatureSet {
     pub area_lights: bool,
     pub environment: EnvKind,
     pub renderer: RendererKind,
+    /// Triangle mesh instances (bottom-level BVHs under the top-level one).
+    pub mesh: bool,
     /// Finite objects exist, traversed through the BVH (planes are tested separately).
     pub bvh: bool,
     /// Next-event estimation with MIS (path tracer with some non-delta material only: light
@@ -96,6 +98,7 @@ impl FeatureSet {
             match shape {
                 Shape::Mesh(m) => {
                     f.bvh = true;
+                    f.mesh = true;
                     if let Some(u) = used.get_mut(m.material.0 as usize) {
                         *u = true;
                     }
@@ -229,6 +232,7 @@ impl FeatureSet {
             plane: true,
             cube: true,
             cylinder: true,
+            mesh: true,
             csg: true,
             csg_max_intervals: self.csg_max_intervals.max(FULL_CSG_MAX_INTERVALS),
             csg_max_depth: self.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
@@ -299,7 +303,7 @@ impl FeatureSet {
     }
 
     /// Every feature name a shader may test (see [`Self::names`]).
-    pub const ALL_NAMES: [&'static str; 30] = [
+    pub const ALL_NAMES: [&'static str; 31] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -307,6 +311,7 @@ impl FeatureSet {
         "PLANE",
         "CUBE",
         "CYLINDER",
+        "MESH",
         "CSG",
         "BVH",
         "SHADING",
@@ -342,6 +347,7 @@ impl FeatureSet {
             (self.plane, "PLANE"),
             (self.cube, "CUBE"),
             (self.cylinder, "CYLINDER"),
+            (self.mesh, "MESH"),
             (self.csg, "CSG"),
             (self.bvh, "BVH"),
             (self.shading(), "SHADING"),

@@ -25,7 +25,23 @@ pub mod shape_kind {
     pub const PLANE: u32 = 1;
     pub const CUBE: u32 = 2;
     pub const CYLINDER: u32 = 3;
+    /// A triangle mesh instance: `Shape::mesh` says where its bottom-level BVH starts.
+    pub const MESH: u32 = 4;
 }
+/// `Shape::mesh` of a mesh instance: the index of its bottom-level BVH's root in
+/// `bvh_nodes` (low bits) and two flags.
+pub mod mesh_bits {
+    /// Shading interpolates the file's vertex normals.
+    pub const SMOOTH: u32 = 0x8000_0000;
+    /// The file has uvs (else uv = the barycentric (b1, b2)).
+    pub const UVS: u32 = 0x4000_0000;
+    /// The root node index.
+    pub const NODE_MASK: u32 = 0x3FFF_FFFF;
+}
+/// Per triangle, in `tri_positions`: three vec4 (the vertices, object space); in
+/// `tri_shading`: five vec4 (three vertex normals, then uv0 uv1 and uv2).
+pub const TRI_POSITION_VEC4S: u32 = 3;
+pub const TRI_SHADING_VEC4S: u32 = 5;
 /// `CsgNode::op` values.
 pub mod csg_op {
     pub const UNITE: u32 = 0;
@@ -105,7 +121,8 @@ pub struct Shape {
     pub kind: u32,
     pub material: u32,
     pub light: u32,
-    pub _pad: u32,
+    /// Mesh instances: `mesh_bits` (root node and flags); 0 for primitives.
+    pub mesh: u32,
 }
 
 #[repr(C)]
@@ -222,7 +239,7 @@ pub mod image_filter_kind {
 /// name tags only through these, so the two sides cannot disagree (a test scans the shaders
 /// for bare tag literals).
 pub fn tags_wgsl() -> String {
-    let groups: [(&str, &[(&str, u32)]); 8] = [
+    let groups: [(&str, &[(&str, u32)]); 9] = [
         (
             "SHAPE",
             &[
@@ -230,6 +247,17 @@ pub fn tags_wgsl() -> String {
                 ("PLANE", shape_kind::PLANE),
                 ("CUBE", shape_kind::CUBE),
                 ("CYLINDER", shape_kind::CYLINDER),
+                ("MESH", shape_kind::MESH),
+            ],
+        ),
+        (
+            "MESH",
+            &[
+                ("SMOOTH", mesh_bits::SMOOTH),
+                ("UVS", mesh_bits::UVS),
+                ("NODE_MASK", mesh_bits::NODE_MASK),
+                ("POSITION_VEC4S", TRI_POSITION_VEC4S),
+                ("SHADING_VEC4S", TRI_SHADING_VEC4S),
             ],
         ),
         (
@@ -337,7 +365,7 @@ mod tests {
     fn expected() -> Vec<Expected> {
         vec![
             expect!(Affine, "Affine", [r0, r1, r2]),
-            expect!(Shape, "Shape", [to_object, to_world, kind, material, light, _pad]),
+            expect!(Shape, "Shape", [to_object, to_world, kind, material, light, mesh]),
             expect!(CsgNode, "CsgNode", [op, first_child, child_count, _pad]),
             expect!(
                 Material,

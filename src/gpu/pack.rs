@@ -46,6 +46,11 @@ pub struct PackedScene {
     pub floats: Vec<f32>,
     pub point_lights: Vec<layout::PointLight>,
     pub area_lights: Vec<layout::AreaLight>,
+    /// Triangles of every distinct mesh, in bottom-level BVH leaf order
+    /// (`layout::TRI_POSITION_VEC4S` vec4 each, object space).
+    pub tri_positions: Vec<[f32; 4]>,
+    /// Their vertex normals and uvs (`layout::TRI_SHADING_VEC4S` vec4 each).
+    pub tri_shading: Vec<[f32; 4]>,
     /// The world point that the packed coordinates are relative to.
     pub origin: DVec3,
 }
@@ -54,11 +59,29 @@ impl PackedScene {
     /// Replaces the BVH by one leaf holding every finite object, so the kernel tests them all
     /// in turn: a plain object list behind one box test (for `lumen bench`'s BVH-or-list
     /// measurement; the leaf loop takes any count).
+    /// The meshes' bottom-level BVHs (after the top-level nodes) stay, moved down.
     pub fn flatten_bvh(&mut self) {
         if let Some(root) = self.bvh_nodes.first().copied() {
+            let top = self.settings.bvh_node_count as usize;
+            let bottom = self.bvh_nodes.split_off(top);
             self.bvh_nodes = vec![BvhNode { left_or_first: 0, count: self.settings.plane_offset, ..root }];
+            self.bvh_nodes.extend(bottom.into_iter().map(|n| rebased(n, 1, top as u32, 0)));
+            for s in self.shapes.iter_mut().filter(|s| s.kind == layout::shape_kind::MESH) {
+                let root = (s.mesh & layout::mesh_bits::NODE_MASK) + 1 - top as u32;
+                s.mesh = (s.mesh & !layout::mesh_bits::NODE_MASK) | root;
+            }
             self.settings.bvh_node_count = 1;
         }
+    }
+}
+
+/// A bottom-level node moved from index base `from` to `to` (its right child moves with
+/// it), leaves' triangle ranges moved by `tri_base`.
+fn rebased(n: BvhNode, to: u32, from: u32, tri_base: u32) -> BvhNode {
+    if n.count > 0 {
+        BvhNode { left_or_first: n.left_or_first + tri_base, ..n }
+    } else {
+        BvhNode { left_or_first: n.left_or_first + to - from, ..n }
     }
 }
 
@@ -184,8 +207,11 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         floats: Vec::new(),
         point_lights: Vec::new(),
         area_lights: Vec::new(),
+        tri_positions: Vec::new(),
+        tri_shading: Vec::new(),
         origin,
     };
+    let mesh_roots = pack_meshes(&shifted, &mut p)?;
 
     // Objects in scene order: a top-level primitive is one shape, a CSG tree its nodes and
     // leaves (depth first).
@@ -193,7 +219,16 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     let mut csg_children: Vec<(usize, Vec<u32>)> = Vec::new();
     for (i, s) in shifted.iter().enumerate() {
         object_ref[i] = match s {
-            Shape::Mesh(_) => return Err(PackError::TooMany { what: "meshes", count: 1, limit: 0 }),
+            Shape::Mesh(m) => {
+                check_range(i, ShapeKind::Cube, &m.transform)?;
+                let mut shape = packed_shape(ShapeKind::Cube, &m.transform, m.material.0, area_of_shape[i]);
+                shape.kind = layout::shape_kind::MESH;
+                let flags = if m.shades_smooth() { layout::mesh_bits::SMOOTH } else { 0 }
+                    | if m.mesh.uvs().is_some() { layout::mesh_bits::UVS } else { 0 };
+                shape.mesh = mesh_roots[&(std::sync::Arc::as_ptr(&m.mesh) as usize)] | flags;
+                p.shapes.push(shape);
+                count_u32("shapes", p.shapes.len())? - 1
+            }
             Shape::Primitive(prim) => {
                 check_range(i, prim.kind, &prim.transform)?;
                 p.shapes.push(packed_shape(prim.kind, &prim.transform, prim.material.0, area_of_shape[i]));
@@ -284,7 +319,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         _pad0: 0,
         area_light_count: count_u32("area lights", area_lights.len())?,
         point_light_count: count_u32("point lights", scene.point_lights.len())?,
-        bvh_node_count: count_u32("BVH nodes", p.bvh_nodes.len())?,
+        bvh_node_count: count_u32("BVH nodes", world.bvh.nodes().len())?,
     };
     Ok(p)
 }
@@ -293,6 +328,44 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
 /// single scattering with probability 1 and return nothing through the (zero-scaled)
 /// compensating lobes, which is exactly the uncompensated BSDF.
 const UNCOMPENSATED: [f64; CONDUCTOR_NODES] = [1.0; CONDUCTOR_NODES];
+
+/// Appends each distinct mesh's bottom-level BVH to `bvh_nodes` (after the top-level ones)
+/// and its triangles, in leaf order, to `tri_positions` and `tri_shading`, so that a leaf's
+/// range indexes the triangles directly. Returns the root node of each mesh (by the
+/// address of its `Arc`).
+fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, u32>, PackError> {
+    let bvhs = crate::prepare::MeshBvhs::of(shapes);
+    let mut roots = HashMap::new();
+    for mesh in &bvhs.meshes {
+        let Some(bvh) = bvhs.get(mesh) else { continue };
+        let node_base = count_u32("BVH nodes", p.bvh_nodes.len())?;
+        let tri_base = count_u32("triangles", p.tri_positions.len() / layout::TRI_POSITION_VEC4S as usize)?;
+        if (node_base as usize + bvh.nodes().len()) > layout::mesh_bits::NODE_MASK as usize {
+            return Err(PackError::TooMany {
+                what: "BVH nodes (top level and meshes)",
+                count: node_base as usize + bvh.nodes().len(),
+                limit: layout::mesh_bits::NODE_MASK as usize,
+            });
+        }
+        p.bvh_nodes.extend(bvh.nodes().iter().map(|&n| rebased(n, node_base, 0, tri_base)));
+        let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
+        for &t in bvh.prim_indices() {
+            let t = t as usize;
+            let [i0, i1, i2] = mesh.triangles()[t].map(|i| i as usize);
+            p.tri_positions.extend(mesh.triangle(t).map(v4));
+            match mesh.normals() {
+                Some(n) => p.tri_shading.extend([v4(n[i0]), v4(n[i1]), v4(n[i2])]),
+                None => p.tri_shading.extend([[0.0; 4]; 3]),
+            }
+            let uv = |i: usize| mesh.uvs().map_or([0.0, 0.0], |uv| [uv[i].x as f32, uv[i].y as f32]);
+            let (a, b, c) = (uv(i0), uv(i1), uv(i2));
+            p.tri_shading.extend([[a[0], a[1], b[0], b[1]], [c[0], c[1], 0.0, 0.0]]);
+        }
+        count_u32("triangles", p.tri_positions.len() / layout::TRI_POSITION_VEC4S as usize)?;
+        roots.insert(std::sync::Arc::as_ptr(mesh) as usize, node_base);
+    }
+    Ok(roots)
+}
 
 /// A material's kind and constants. The microfacet kinds get what depends on their α and η
 /// only, computed here in f64 once (the CPU reference computes the same per query through
@@ -415,7 +488,7 @@ fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32
         kind,
         material,
         light,
-        _pad: 0,
+        mesh: 0,
     }
 }
 

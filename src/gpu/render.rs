@@ -18,7 +18,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 46] = [
+const MODULES: [(&str, &str); 48] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -29,6 +29,8 @@ const MODULES: [(&str, &str); 46] = [
     ("shaders/plane.wgsl", include_str!("../../shaders/plane.wgsl")),
     ("shaders/cube.wgsl", include_str!("../../shaders/cube.wgsl")),
     ("shaders/cylinder.wgsl", include_str!("../../shaders/cylinder.wgsl")),
+    ("shaders/triangle.wgsl", include_str!("../../shaders/triangle.wgsl")),
+    ("shaders/mesh.wgsl", include_str!("../../shaders/mesh.wgsl")),
     ("shaders/shapes.wgsl", include_str!("../../shaders/shapes.wgsl")),
     ("shaders/csg.wgsl", include_str!("../../shaders/csg.wgsl")),
     ("shaders/world.wgsl", include_str!("../../shaders/world.wgsl")),
@@ -402,6 +404,8 @@ impl SceneBuffers {
                     10 => gpu.storage_buffer("floats (texels and environment tables)", &at_least_one(&p.floats))?,
                     11 => gpu.storage_buffer("point_lights", &at_least_one(&p.point_lights))?,
                     12 => gpu.storage_buffer("area_lights", &at_least_one(&p.area_lights))?,
+                    13 => gpu.storage_buffer("tri_positions", &at_least_one(&p.tri_positions))?,
+                    14 => gpu.storage_buffer("tri_shading", &at_least_one(&p.tri_shading))?,
                     b => {
                         return Err(GpuError::Validation(format!(
                             "a stage kernel declares unknown @group(1) @binding({b})"
@@ -498,6 +502,7 @@ mod tests {
             plane: b(),
             cube: b(),
             cylinder: b(),
+            mesh: b(),
             csg: b(),
             pigment_uniform: b(),
             pigment_checkered: b(),
@@ -515,7 +520,7 @@ mod tests {
             environment,
             ..FeatureSet::default()
         };
-        f.bvh = f.csg || f.sphere || f.cube || f.cylinder;
+        f.bvh = f.csg || f.sphere || f.cube || f.cylinder || f.mesh;
         if !f.bvh && !f.plane {
             // Only materials of some shape count.
             (f.diffuse, f.specular, f.dielectric) = (false, false, false);
@@ -600,11 +605,15 @@ mod tests {
                 "conductor",
                 "plastic",
                 "albedo_row",
+                "triangle",
+                "mesh",
             ] {
                 assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in the {} stage: {names:?}", stage.label());
             }
             let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
-            for bad in ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool"] {
+            for bad in
+                ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool", "tri_positions", "tri_shading"]
+            {
                 assert!(!globals.iter().any(|g| g == bad), "{bad} bound in the {} stage: {globals:?}", stage.label());
             }
             all.extend(names);

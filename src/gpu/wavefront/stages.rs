@@ -121,7 +121,7 @@ impl Stage {
         let keep = |allowed: &[&'static str]| -> Vec<&'static str> {
             scene.iter().copied().filter(|n| allowed.contains(n)).collect()
         };
-        const SHAPES: [&str; 5] = ["GEOMETRY", "SPHERE", "PLANE", "CUBE", "CYLINDER"];
+        const SHAPES: [&str; 6] = ["GEOMETRY", "SPHERE", "PLANE", "CUBE", "CYLINDER", "MESH"];
         let mut names: Vec<&'static str> = match self {
             Stage::Camera => vec!["CAMERA", "WF_RAY_STORE", "WF_PATH_ID"],
             Stage::FirstHit => {
@@ -144,7 +144,8 @@ impl Stage {
                 n
             }
             Stage::Csg => {
-                let mut n = keep(&[&SHAPES[..], &["CSG", "MATERIALS"]].concat());
+                // Meshes are never CSG operands: no mesh code here.
+                let mut n = keep(&[&SHAPES[..5], &["CSG", "MATERIALS"]].concat());
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "SPANS"]);
                 n
             }
