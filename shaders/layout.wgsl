@@ -74,8 +74,10 @@ struct AreaLight {
     det: f32,
     face_cdf: vec2<f32>,
     area: f32,
-    _pad0: u32,
-    _pad1: u32,
+    // Meshes: the offset in `floats` of the triangle CDF (then each triangle's index in
+    // tri_positions, as bits), and the triangle count (0: not a mesh).
+    mesh_cdf: u32,
+    mesh_triangles: u32,
     _pad2: u32,
 }
 

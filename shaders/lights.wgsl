@@ -15,7 +15,67 @@ struct LightPoint {
     normal: vec3<f32>,
     object_point: vec3<f32>,
     pdf: f32,
+    // Meshes: the uv at the point (the object point alone does not give it).
+    uv: vec2<f32>,
 }
+
+// #if AREA_LIGHTS
+// #if MESH
+// 1 / (world area) as a solid-angle density at x, for a light point y of normal n.
+fn mesh_light_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n: vec3<f32>) -> f32 {
+    let to_light = y - x;
+    let dist2 = dot(to_light, to_light);
+    let cos_light = abs(dot(normalize_or(n, vec3<f32>(0.0)), to_light)) / sqrt(dist2);
+    if (!(cos_light > 0.0) || !(dist2 > 0.0)) {
+        return 0.0;
+    }
+    return dist2 / (cos_light * light.area);
+}
+
+// #if SHADOWS
+// prepare::MeshLight::choose and AreaLight::sample_mesh: the triangle ξ0 falls in by the
+// CDF of world areas (file order), a uniform point on it by the rest of ξ0 and ξ1.
+fn light_sample_mesh(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
+    let n = light.mesh_triangles;
+    var lo = 0u;
+    var hi = n;
+    while (lo < hi) {
+        let mid = (lo + hi) / 2u;
+        if (floats[light.mesh_cdf + mid] <= xi0) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    let t = min(lo, n - 1u);
+    let below = select(floats[light.mesh_cdf + t - 1u], 0.0, t == 0u);
+    let width = floats[light.mesh_cdf + t] - below;
+    let u = select(0.5, clamp((xi0 - below) / width, 0.0, 1.0), width > 0.0);
+    let tri = bitcast<u32>(floats[light.mesh_cdf + n + t]);
+    let s = shapes[light.shape];
+    let base = MESH_POSITION_VEC4S * tri;
+    let p0 = tri_positions[base].xyz;
+    let p1 = tri_positions[base + 1u].xyz;
+    let p2 = tri_positions[base + 2u].xyz;
+    let su = sqrt(u);
+    let b0 = 1.0 - su;
+    let b1 = xi1 * su;
+    let b2 = 1.0 - b0 - b1;
+    let p_obj = b0 * p0 + b1 * p1 + b2 * p2;
+    let y = affine_point(s.to_world, p_obj);
+    let normal = normalize_or(affine_normal(s.to_object, cross(p1 - p0, p2 - p0)), vec3<f32>(0.0, 0.0, 1.0));
+    var uv = vec2<f32>(b1, b2);
+    if ((s.mesh & MESH_UVS) != 0u) {
+        let sh = MESH_SHADING_VEC4S * tri;
+        let uv01 = tri_shading[sh + 3u];
+        uv = b0 * uv01.xy + b1 * uv01.zw + b2 * tri_shading[sh + 4u].xy;
+    }
+    let scale = affine_error_scale(s.to_world, max(max(abs(p0), abs(p1)), abs(p2)));
+    return LightPoint(y, scale, normal, p_obj, mesh_light_pdf(light, x, y, normal), uv);
+}
+// #endif
+// #endif
+// #endif
 
 const UNIFORM_SPHERE_PDF: f32 = 0.0795774715459477;
 
@@ -142,7 +202,7 @@ fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
     let t = abs(c) + abs(r * normal);
     let scale = max(t.x, max(t.y, t.z));
     let s = shapes[light.shape];
-    return LightPoint(point, scale, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max));
+    return LightPoint(point, scale, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max), vec2<f32>(0.0));
 }
 // #endif
 
@@ -152,6 +212,11 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     if (light_uses_cone(light, x, x_object)) {
         return light_sample_cone(light, x, xi0, xi1);
     }
+// #if MESH
+    if (light.mesh_triangles > 0u) {
+        return light_sample_mesh(light, x, xi0, xi1);
+    }
+// #endif
     let s = shapes[light.shape];
     var p_obj: vec3<f32>;
     var n_obj: vec3<f32>;
@@ -166,15 +231,21 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     let y = affine_point(s.to_world, p_obj);
     let pdf = light_area_pdf(light, x, y, n_obj);
     let scale = affine_error_scale(s.to_world, p_obj);
-    return LightPoint(y, scale, normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0)), p_obj, pdf);
+    let n_world = normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0));
+    return LightPoint(y, scale, n_world, p_obj, pdf, vec2<f32>(0.0));
 }
 // #endif
 
-// AreaLight::pdf: density of light_sample producing y from x.
-fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>) -> f32 {
+// AreaLight::pdf: density of light_sample producing y (geometric normal n_y) from x.
+fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: vec3<f32>) -> f32 {
     if (light_uses_cone(light, x, x_object)) {
         return uniform_cone_pdf(cone_one_minus_cos(light.sphere.w, length(light.sphere.xyz - x)));
     }
+// #if MESH
+    if (light.mesh_triangles > 0u) {
+        return mesh_light_pdf(light, x, y, n_y);
+    }
+// #endif
     let s = shapes[light.shape];
     let p_obj = affine_point(s.to_object, y);
     return light_area_pdf(light, x, y, light_object_normal(s.kind, p_obj));
@@ -185,6 +256,11 @@ fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>) -> f32
 fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
     let s = shapes[light.shape];
     let m = materials[s.material];
+// #if MESH
+    if (light.mesh_triangles > 0u) {
+        return pigment_color(m.emitted, lp.uv);
+    }
+// #endif
     let n = light_object_normal(s.kind, lp.object_point);
     var face = 0u;
     if (s.kind == SHAPE_CUBE) {

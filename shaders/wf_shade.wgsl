@@ -31,7 +31,7 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
     if (i == 0xFFFFFFFFu) {
         return le;
     }
-    let nee_pdf = light_selection_pdf() * light_pdf(area_lights[i], prev.point, prev.object, hit.point);
+    let nee_pdf = light_selection_pdf() * light_pdf(area_lights[i], prev.point, prev.object, hit.point, hit.geometric);
     return le * power_heuristic(prev.pdf, nee_pdf);
 // #else
     return le;

@@ -231,8 +231,9 @@ fn gpu_matches_cpu(gpu: &lumen::gpu::Gpu, scene: &Scene, min_share: f64) -> lume
 }
 
 /// A mesh scene on both devices: a smooth icosphere with uvs (a checkered pigment reads
-/// them), a flat one, a rough conductor mesh, on a plane, under a point light and a sky;
-/// path traced with NEE and without, and by the three simple renderers.
+/// them), a flat one, a rough conductor mesh, on a plane, under a point light, a sky and an
+/// emissive mesh (an area light with a checkered emission, sampled by NEE); path traced with
+/// NEE and without, and by the three simple renderers.
 #[test]
 fn mesh_scenes_render_on_the_gpu_as_on_the_cpu() {
     let Some(gpu) = gpu_for_tests("mesh_scenes_render_on_the_gpu_as_on_the_cpu") else { return };
@@ -270,6 +271,8 @@ fn mesh_scenes_render_on_the_gpu_as_on_the_cpu() {
                        Shape.Mesh(.file \"ball.obj\", .material Material(Brdf.Conductor(.metal \"Au\", .roughness 0.3)),
                                   .transformation TRANSLATE(6, 0, 0.5) * SCALE 0.8)
                        Shape.Plane(.material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>)), .transformation TRANSLATE(.Z -1))
+                       Shape.Mesh(.file \"ball.obj\", .transformation TRANSLATE(4, 0, 2.6) * SCALE(0.6, 0.8, 0.05),
+                                  .material Material(Brdf.Diffuse(<0, 0, 0>), Pigment.Checkered(4, <6, 5, 4>, <1, 1, 2>)))
                        Light(.position {{1, 2, 4}}, .color <3, 3, 3>)
                  USING Camera.Perspective(.aspect_ratio 1.5) Image(30, 20) Tracer(.samples_per_side 2) {renderer}
                        Environment.Gradient(<0.3, 0.4, 0.8>, <0.6, 0.6, 0.6>, <0.1, 0.1, 0.1>)"
@@ -299,6 +302,19 @@ fn mesh_furnace_and_silhouette_on_the_gpu() {
     for p in img.pixels() {
         assert!((f64::from(p.g) / expected - 1.0).abs() < 2e-6, "{p:?}");
     }
+    // With NEE: the mesh is an area light (triangles sampled by area), MIS-weighted.
+    let nee = load(
+        dir.path(),
+        "SPAWN Shape.Mesh(.file \"ball.obj\", .transformation SCALE 10,
+                          .material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>), <1, 1, 1>))
+         USING Camera.Perspective() Image(12, 12) Tracer(.samples_per_side 2)
+               Renderer.PathTracer(.n 8, .max_depth 20, .roulette_depth 1000, .nee 1)",
+    );
+    let img = gpu_render(&gpu, &nee, &GpuRenderOptions::default()).unwrap().image;
+    let (mean, se) = mean_and_stderr(&img, |_, _| true);
+    println!("GPU mesh furnace with NEE: {mean} ± {se} (expected {expected})");
+    assert!(5.0 * se < 0.01 * expected, "test too weak: se {se}");
+    assert!((mean / expected - 1.0).abs() < 0.01, "{mean} vs {expected}");
     let r_in = inscribed_radius(&v, &f);
     let mesh =
         load(dir.path(), &format!("SPAWN Shape.Mesh(.file \"ball.obj\", .transformation TRANSLATE(3, 0, 0))\n{ONOFF}"));

@@ -15,7 +15,7 @@
 
 use std::f64::consts::PI;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use crate::color::Color;
 use crate::scene::{Pigment, Scene, ShapeKind};
@@ -37,6 +37,9 @@ pub struct LightPoint {
     pub normal: DVec3,
     /// Object-space point (for the emitted pigment's uv).
     pub object_point: DVec3,
+    /// Meshes: the uv there (the file's, else barycentric), which the object point alone
+    /// does not give.
+    pub uv: Option<DVec2>,
     /// Solid-angle density at the shading point (0: unusable sample).
     pub pdf: f64,
 }
@@ -58,17 +61,22 @@ impl AreaLight {
                 let (point, normal, pdf) = sample_cone(c, r, d, x, xi0, xi1);
                 // point = c + r·normal, so its terms are |c| and r·|normal|.
                 let scale = (c.abs() + (r * normal).abs()).max_element();
-                LightPoint { point, scale, normal, object_point: self.transform.inverse().point(point), pdf }
+                LightPoint { point, scale, normal, object_point: self.transform.inverse().point(point), pdf, uv: None }
             }
+            None if self.mesh.is_some() => self.sample_mesh(x, xi0, xi1),
             None => self.sample_area(x, xi0, xi1),
         }
     }
 
     /// Solid-angle density of [`Self::sample`] producing the point `y` on the light (a
-    /// point that a ray from `x` reached).
-    pub fn pdf(&self, x: DVec3, x_shape: u32, y: DVec3) -> f64 {
+    /// point that a ray from `x` reached, where the light's geometric normal is `n_y`:
+    /// meshes need it, the analytic shapes compute theirs).
+    pub fn pdf(&self, x: DVec3, x_shape: u32, y: DVec3, n_y: DVec3) -> f64 {
         if let Some((_, r, d)) = self.uses_cone(x, x_shape) {
             return uniform_cone_pdf(cone_one_minus_cos(r, d));
+        }
+        if self.mesh.is_some() {
+            return self.mesh_pdf_solid_angle(x, y, n_y);
         }
         let p_obj = self.transform.inverse().point(y);
         let n_obj = object_normal(self.kind, p_obj);
@@ -82,6 +90,9 @@ impl AreaLight {
         if let Pigment::Uniform(c) = emitted {
             return *c;
         }
+        if let Some(uv) = lp.uv {
+            return emitted.color_at(uv.x, uv.y);
+        }
         let n = object_normal(self.kind, lp.object_point);
         // Cube faces are numbered 2·axis + (1 on the + side), as the shapes number them.
         let face = if self.kind == ShapeKind::Cube {
@@ -92,6 +103,43 @@ impl AreaLight {
         };
         let uv = super::shapes::surface(self.kind, lp.object_point, face).uv;
         emitted.color_at(uv.x, uv.y)
+    }
+
+    /// A triangle by its world-area share (ξ0), a uniform point on it (the rest of ξ0, ξ1).
+    fn sample_mesh(&self, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
+        let Some(m) = &self.mesh else { unreachable!("sample_mesh is called for meshes") };
+        let (t, u) = m.choose(xi0);
+        let [p0, p1, p2] = m.mesh.triangle(t);
+        let su = u.sqrt();
+        let (b0, b1) = (1.0 - su, xi1 * su);
+        let b2 = 1.0 - b0 - b1;
+        let p_obj = b0 * p0 + b1 * p1 + b2 * p2;
+        let y = self.transform.point(p_obj);
+        let normal = normalize_scaled(self.transform.normal((p1 - p0).cross(p2 - p0)));
+        let [i0, i1, i2] = m.mesh.triangles()[t].map(|i| i as usize);
+        let uv = match m.mesh.uvs() {
+            Some(uv) => b0 * uv[i0] + b1 * uv[i1] + b2 * uv[i2],
+            None => DVec2::new(b1, b2),
+        };
+        LightPoint {
+            point: y,
+            scale: error_scale(&self.transform.matrix(), p0.abs().max(p1.abs()).max(p2.abs())),
+            normal,
+            object_point: p_obj,
+            pdf: self.mesh_pdf_solid_angle(x, y, normal),
+            uv: Some(uv),
+        }
+    }
+
+    /// 1 / (world area) converted to solid angle at x.
+    fn mesh_pdf_solid_angle(&self, x: DVec3, y: DVec3, n: DVec3) -> f64 {
+        let to_light = y - x;
+        let dist2 = to_light.length_squared();
+        let cos_light = normalize_scaled(n).dot(to_light).abs() / dist2.sqrt();
+        if !(cos_light > 0.0 && dist2 > 0.0) {
+            return 0.0;
+        }
+        dist2 / (cos_light * self.area)
     }
 
     fn sample_area(&self, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
@@ -110,6 +158,7 @@ impl AreaLight {
             normal: normalize_scaled(self.transform.normal(n_obj)),
             object_point: p_obj,
             pdf,
+            uv: None,
         }
     }
 
@@ -221,7 +270,7 @@ mod tests {
                 continue;
             }
             if !force_area {
-                let back = light.pdf(x, u32::MAX, s.point);
+                let back = light.pdf(x, u32::MAX, s.point, s.normal);
                 assert!((back / s.pdf - 1.0).abs() < 1e-9, "{back} vs {}", s.pdf);
             }
             if (s.point - x).dot(s.normal) < 0.0 {
@@ -229,6 +278,39 @@ mod tests {
             }
         }
         sum / n as f64
+    }
+
+    /// An emissive mesh (a unit square of two triangles, stretched 3 × 1): area sampling
+    /// measures its solid angle (Σ 1/pdf of front-facing samples, which only a density
+    /// uniform over the world area makes exact), and the pdf reads back.
+    #[test]
+    fn mesh_lights_are_sampled_uniformly_over_their_world_area() {
+        let parts = crate::scene::MeshParts {
+            positions: vec![
+                DVec3::new(0.0, -0.5, -0.5),
+                DVec3::new(0.0, 0.5, -0.5),
+                DVec3::new(0.0, 0.5, 0.5),
+                DVec3::new(0.0, -0.5, 0.5),
+            ],
+            normals: None,
+            uvs: None,
+            triangles: vec![[0, 2, 1], [0, 3, 2]],
+            dropped_faces: 0,
+        };
+        let mesh = std::sync::Arc::new(crate::scene::TriangleMesh::from_parts("panel", parts).unwrap());
+        let mut b = SceneBuilder::new(4, 4);
+        let lamp = b.material(Material::new(crate::scene::Brdf::default(), Pigment::Uniform(Color::WHITE)));
+        let t = Transform::translation(DVec3::new(2.0, 0.0, 0.0)) * Transform::scaling(DVec3::new(1.0, 3.0, 1.0));
+        b.shape(Shape::mesh(mesh, "panel", t, lamp, false));
+        let scene = b.build().unwrap();
+        let light = AreaLight::new(&scene, 0).unwrap();
+        assert!((light.area - 3.0).abs() < 1e-12);
+        let x = DVec3::ZERO;
+        let estimate = solid_angle_estimate(&light, x, false, 200_000);
+        // A centred rectangle of half-sides a, b at distance d subtends 4 atan(ab / (d√(a²+b²+d²))).
+        let (a, bb, d) = (1.5f64, 0.5f64, 2.0f64);
+        let exact = 4.0 * (a * bb / (d * (a * a + bb * bb + d * d).sqrt())).atan();
+        assert!((estimate / exact - 1.0).abs() < 0.01, "{estimate} vs {exact}");
     }
 
     #[test]

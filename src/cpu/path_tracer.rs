@@ -110,7 +110,8 @@ fn emitted(ctx: &Context, settings: &PathTracerSettings, prev: &Previous, hit: &
     let Some(i) = ctx.lights.area_of_shape[hit.shape as usize] else {
         return le;
     };
-    let light_pdf = ctx.lights.selection_pdf() * ctx.lights.area[i as usize].pdf(prev.point, prev.shape, hit.point);
+    let light_pdf =
+        ctx.lights.selection_pdf() * ctx.lights.area[i as usize].pdf(prev.point, prev.shape, hit.point, hit.geometric);
     le * power_heuristic(prev.pdf, light_pdf)
 }
 

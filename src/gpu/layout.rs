@@ -183,10 +183,13 @@ pub struct AreaLight {
     pub det: f32,
     /// Cubes: `prepare::AreaLight::face_cdf` (the face pairs' world-area shares, summed).
     pub face_cdf: [f32; 2],
-    /// Cubes: the world surface area.
+    /// Cubes and meshes: the world surface area.
     pub area: f32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    /// Meshes: offset in `floats` of the triangle CDF (file order; then each triangle's
+    /// index in `tri_positions`, as bits).
+    pub mesh_cdf: u32,
+    /// Meshes: the triangle count; 0 for spheres and cubes.
+    pub mesh_triangles: u32,
     pub _pad2: u32,
 }
 
@@ -374,7 +377,7 @@ mod tests {
             ),
             expect!(Pigment, "Pigment", [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]),
             expect!(PointLight, "PointLight", [position, color]),
-            expect!(AreaLight, "AreaLight", [sphere, shape, det, face_cdf, area, _pad0, _pad1, _pad2]),
+            expect!(AreaLight, "AreaLight", [sphere, shape, det, face_cdf, area, mesh_cdf, mesh_triangles, _pad2]),
             expect!(
                 Environment,
                 "Environment",

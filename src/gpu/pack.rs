@@ -225,7 +225,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
                 shape.kind = layout::shape_kind::MESH;
                 let flags = if m.shades_smooth() { layout::mesh_bits::SMOOTH } else { 0 }
                     | if m.mesh.uvs().is_some() { layout::mesh_bits::UVS } else { 0 };
-                shape.mesh = mesh_roots[&(std::sync::Arc::as_ptr(&m.mesh) as usize)] | flags;
+                shape.mesh = mesh_roots[&(std::sync::Arc::as_ptr(&m.mesh) as usize)].root | flags;
                 p.shapes.push(shape);
                 count_u32("shapes", p.shapes.len())? - 1
             }
@@ -249,7 +249,8 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         p.indices.extend(children);
     }
     for l in &area_lights {
-        p.area_lights.push(packed_area_light(scene, l.shape, object_ref[l.shape], origin));
+        let light = packed_area_light(scene, l.shape, object_ref[l.shape], origin, &mesh_roots, &mut p.floats)?;
+        p.area_lights.push(light);
     }
 
     // Appearance.
@@ -333,7 +334,7 @@ const UNCOMPENSATED: [f64; CONDUCTOR_NODES] = [1.0; CONDUCTOR_NODES];
 /// and its triangles, in leaf order, to `tri_positions` and `tri_shading`, so that a leaf's
 /// range indexes the triangles directly. Returns the root node of each mesh (by the
 /// address of its `Arc`).
-fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, u32>, PackError> {
+fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, PackedMesh>, PackError> {
     let bvhs = crate::prepare::MeshBvhs::of(shapes);
     let mut roots = HashMap::new();
     for mesh in &bvhs.meshes {
@@ -348,6 +349,10 @@ fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, u
             });
         }
         p.bvh_nodes.extend(bvh.nodes().iter().map(|&n| rebased(n, node_base, 0, tri_base)));
+        let mut leaf_of = vec![0u32; mesh.triangle_count()];
+        for (k, &t) in bvh.prim_indices().iter().enumerate() {
+            leaf_of[t as usize] = tri_base + k as u32;
+        }
         let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
         for &t in bvh.prim_indices() {
             let t = t as usize;
@@ -362,9 +367,16 @@ fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, u
             p.tri_shading.extend([[a[0], a[1], b[0], b[1]], [c[0], c[1], 0.0, 0.0]]);
         }
         count_u32("triangles", p.tri_positions.len() / layout::TRI_POSITION_VEC4S as usize)?;
-        roots.insert(std::sync::Arc::as_ptr(mesh) as usize, node_base);
+        roots.insert(std::sync::Arc::as_ptr(mesh) as usize, PackedMesh { root: node_base, leaf_of });
     }
     Ok(roots)
+}
+
+/// Where a mesh went: its bottom-level root in `bvh_nodes`, and for each of its triangles
+/// (file order) its index in `tri_positions`.
+struct PackedMesh {
+    root: u32,
+    leaf_of: Vec<u32>,
 }
 
 /// A material's kind and constants. The microfacet kinds get what depends on their α and η
@@ -433,8 +445,27 @@ fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, floats: &mut Vec<f32>)
 }
 
 /// Area light data as `cpu::area_light::AreaLight` computes it, in the camera frame.
-fn packed_area_light(scene: &Scene, shape: usize, shape_ref: u32, origin: DVec3) -> layout::AreaLight {
-    let light = AreaLight::new(scene, shape).expect("Scene::area_lights lists only top-level spheres and cubes");
+///
+/// A mesh light's triangle CDF (file order, as the CPU samples it) goes into `floats`,
+/// followed by each triangle's index in `tri_positions` (as bits).
+fn packed_area_light(
+    scene: &Scene,
+    shape: usize,
+    shape_ref: u32,
+    origin: DVec3,
+    meshes: &HashMap<usize, PackedMesh>,
+    floats: &mut Vec<f32>,
+) -> Result<layout::AreaLight, PackError> {
+    let light = AreaLight::new(scene, shape)
+        .ok_or_else(|| crate::scene::SceneError::Invalid(format!("shape {shape}: an emissive surface of zero area")))?;
+    let (mut mesh_cdf, mut mesh_triangles) = (0, 0);
+    if let (Some(m), Shape::Mesh(instance)) = (&light.mesh, &scene.shapes[shape]) {
+        let packed = &meshes[&(std::sync::Arc::as_ptr(&instance.mesh) as usize)];
+        mesh_cdf = count_u32("floats", floats.len())?;
+        mesh_triangles = count_u32("emissive triangles", m.cdf.len())?;
+        floats.extend(m.cdf.iter().map(|&c| c as f32));
+        floats.extend(packed.leaf_of.iter().map(|&i| f32::from_bits(i)));
+    }
     let sphere = match light.sphere {
         Some((c, r)) => {
             let c = c - origin;
@@ -442,16 +473,16 @@ fn packed_area_light(scene: &Scene, shape: usize, shape_ref: u32, origin: DVec3)
         }
         None => [0.0; 4],
     };
-    layout::AreaLight {
+    Ok(layout::AreaLight {
         sphere,
         shape: shape_ref,
         det: light.det as f32,
         face_cdf: light.face_cdf.map(|c| c as f32),
         area: light.area as f32,
-        _pad0: 0,
-        _pad1: 0,
+        mesh_cdf,
+        mesh_triangles,
         _pad2: 0,
-    }
+    })
 }
 
 /// `s` with `shift` applied after its own transformation.

@@ -74,13 +74,63 @@ pub struct AreaLight {
     /// the rest), proportional to their world areas, so that area sampling is uniform over
     /// the world surface (a flat panel's broad faces get nearly all the samples).
     pub face_cdf: [f64; 2],
-    /// Cubes: the world surface area (sampling density 1 / area).
+    /// Cubes and meshes: the world surface area (sampling density 1 / area).
     pub area: f64,
+    /// Meshes: the triangles and what sampling them needs.
+    pub mesh: Option<MeshLight>,
+}
+
+/// An emissive mesh instance, sampled uniformly over its world surface: a triangle by its
+/// share of the world area, then a uniform point on it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshLight {
+    pub mesh: std::sync::Arc<crate::scene::TriangleMesh>,
+    /// Cumulative world areas of the triangles (in the file's order) over the total: the
+    /// last entry is 1.
+    pub cdf: Vec<f64>,
+}
+
+impl MeshLight {
+    /// The triangle ξ falls in, and ξ rescaled to [0, 1) within it.
+    pub fn choose(&self, xi: f64) -> (usize, f64) {
+        let n = self.cdf.len();
+        let i = self.cdf.partition_point(|&c| c <= xi).min(n - 1);
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let width = self.cdf[i] - lo;
+        let u = if width > 0.0 { ((xi - lo) / width).clamp(0.0, 1.0) } else { 0.5 };
+        (i, u)
+    }
 }
 
 impl AreaLight {
     /// The light for `Scene::shapes[shape]`, which must be a sphere or cube primitive.
     pub fn new(scene: &Scene, shape: usize) -> Option<Self> {
+        if let Shape::Mesh(m) = &scene.shapes[shape] {
+            let lin = DMat3::from_mat4(m.transform.matrix());
+            let mut sum = 0.0;
+            let mut cdf: Vec<f64> = (0..m.mesh.triangle_count())
+                .map(|i| {
+                    let [a, b, c] = m.mesh.triangle(i).map(|p| m.transform.point(p));
+                    sum += 0.5 * (b - a).cross(c - a).length();
+                    sum
+                })
+                .collect();
+            if !(sum > 0.0 && sum.is_finite()) {
+                return None;
+            }
+            cdf.iter_mut().for_each(|c| *c /= sum);
+            return Some(Self {
+                shape: shape as u32,
+                kind: ShapeKind::Cube,
+                transform: m.transform,
+                material: m.material,
+                det: lin.determinant().abs(),
+                sphere: None,
+                face_cdf: [1.0 / 3.0, 2.0 / 3.0],
+                area: sum,
+                mesh: Some(MeshLight { mesh: m.mesh.clone(), cdf }),
+            });
+        }
         let Shape::Primitive(p) = &scene.shapes[shape] else { return None };
         if !matches!(p.kind, ShapeKind::Sphere | ShapeKind::Cube) {
             return None;
@@ -102,6 +152,7 @@ impl AreaLight {
             sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
             face_cdf,
             area: 2.0 * faces.iter().sum::<f64>(),
+            mesh: None,
         })
     }
 }

@@ -67,8 +67,8 @@ pub struct Scene {
     pub environment: Option<Environment>,
 }
 
-/// A top-level primitive whose material emits, with a shape that can be sampled
-/// (sphere or cube): the path tracer's area lights.
+/// A top-level shape whose material emits, with a surface that can be sampled (a sphere,
+/// a cube or a mesh): the path tracer's area lights.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EmissiveShape {
     /// Index into [`Scene::shapes`].
@@ -103,6 +103,7 @@ impl Scene {
                 {
                     Some(EmissiveShape { shape: i })
                 }
+                Shape::Mesh(m) if self.material(m.material).is_emissive() => Some(EmissiveShape { shape: i }),
                 _ => None,
             })
             .collect()

@@ -183,7 +183,9 @@ impl Stage {
                     // Only emitters hit after a non-delta vertex need NEE's densities here.
                     n.retain(|x| *x != "NEE");
                 }
-                if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") || microfacet_kind(kind) {
+                // Sampling mesh lights reads their triangle tables in `floats`.
+                let mesh_lights = ["AREA_LIGHTS", "MESH", "SHADOWS"].iter().all(|x| n.contains(x));
+                if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") || microfacet_kind(kind) || mesh_lights {
                     n.push("TEXTURES");
                 }
                 n.extend(["PIGMENTS", "WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "WF_RAY_STORE", "WF_PATH_ID"]);
