@@ -27,13 +27,20 @@ fn load_previous(slot: u32) -> Previous {
 }
 
 // #if NEE
+// path_tracer::power_heuristic a² / (a² + b²), written with the ratio of the smaller density
+// to the larger so that f32 does not overflow: a light seen edge-on has a solid-angle
+// density beyond 1e19, whose square is ∞ (and ∞/∞ NaN).
 fn power_heuristic(a: f32, b: f32) -> f32 {
-    let a2 = a * a;
-    let b2 = b * b;
-    if (a2 + b2 > 0.0) {
-        return a2 / (a2 + b2);
+    if (!(a > 0.0)) {
+        return 0.0;
     }
-    return 0.0;
+    if (a >= b) {
+        let r = b / a;
+        return 1.0 / (1.0 + r * r);
+    }
+    let r = a / b;
+    let r2 = r * r;
+    return r2 / (1.0 + r2);
 }
 // #endif
 

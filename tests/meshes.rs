@@ -157,6 +157,10 @@ fn instances_share_one_mesh_and_render_as_copies() {
         other => panic!("{other:?}"),
     };
     assert!(std::sync::Arc::ptr_eq(&mesh(&shared, 0), &mesh(&shared, 1)), "one file, one mesh");
+    let summary = lumen::scenelang::SceneSummary::of(&shared);
+    assert_eq!((summary.mesh_instances, summary.meshes.len(), summary.meshes[0].instances), (2, 1, 2));
+    assert_eq!((summary.meshes[0].triangles, summary.meshes[0].vertices), (320, 162));
+    assert!(summary.to_string().contains("a.obj: 320 triangles, 162 vertices, normals, ×2"), "{summary}");
     assert!(!std::sync::Arc::ptr_eq(&mesh(&copies, 0), &mesh(&copies, 1)));
     let a = render(&shared, &RenderOptions::default(), Progress::Hidden).image;
     let b = render(&copies, &RenderOptions::default(), Progress::Hidden).image;

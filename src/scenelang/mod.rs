@@ -61,7 +61,7 @@ use std::io::Write;
 use std::path::Path;
 
 pub use error::{ErrorKind, SceneLangError, Span};
-pub use summary::SceneSummary;
+pub use summary::{MeshSummary, SceneSummary};
 
 use crate::scene::Scene;
 use interpreter::{Interp, Vars};

@@ -23,6 +23,10 @@ pub struct SceneSummary {
     pub csg_nodes: usize,
     /// Deepest CSG tree (0 when there is none).
     pub csg_max_depth: usize,
+    /// Mesh instances, and per distinct mesh (file): its name, triangles, vertices,
+    /// degenerate triangles dropped, and its object-space bounds.
+    pub mesh_instances: usize,
+    pub meshes: Vec<MeshSummary>,
     pub point_lights: usize,
     /// Emissive top-level spheres and cubes ([`Scene::area_lights`]).
     pub area_lights: usize,
@@ -50,6 +54,19 @@ pub struct SceneSummary {
     pub infinite_shapes: usize,
 }
 
+/// One distinct mesh of a scene, for `lumen check`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshSummary {
+    pub name: String,
+    pub instances: usize,
+    pub triangles: usize,
+    pub vertices: usize,
+    pub dropped_degenerate: usize,
+    pub smooth_normals: bool,
+    pub uvs: bool,
+    pub bounds: Aabb,
+}
+
 fn rgb(c: crate::color::Color) -> String {
     format!("<{}, {}, {}>", c.r, c.g, c.b)
 }
@@ -61,6 +78,27 @@ impl SceneSummary {
             s.for_each_primitive(&mut |p, _| {
                 primitives[ShapeKind::ALL.iter().position(|k| *k == p.kind).unwrap_or(0)] += 1;
             });
+        }
+        let mut meshes: Vec<(std::sync::Arc<crate::scene::TriangleMesh>, MeshSummary)> = Vec::new();
+        for s in &scene.shapes {
+            if let Shape::Mesh(m) = s {
+                match meshes.iter_mut().find(|(x, _)| std::sync::Arc::ptr_eq(x, &m.mesh)) {
+                    Some((_, summary)) => summary.instances += 1,
+                    None => meshes.push((
+                        m.mesh.clone(),
+                        MeshSummary {
+                            name: m.name.to_string(),
+                            instances: 1,
+                            triangles: m.mesh.triangle_count(),
+                            vertices: m.mesh.vertex_count(),
+                            dropped_degenerate: m.mesh.dropped_degenerate(),
+                            smooth_normals: m.mesh.normals().is_some(),
+                            uvs: m.mesh.uvs().is_some(),
+                            bounds: m.mesh.bounds(),
+                        },
+                    )),
+                }
+            }
         }
         let count_brdf = |f: fn(&Brdf) -> bool| scene.materials.iter().filter(|m| f(&m.brdf)).count();
         let (camera_kind, aperture_deg) = match scene.camera.projection {
@@ -99,6 +137,8 @@ impl SceneSummary {
             primitives,
             csg_nodes: scene.shapes.iter().map(Shape::csg_node_count).sum(),
             csg_max_depth: scene.shapes.iter().map(Shape::csg_depth).max().unwrap_or(0),
+            mesh_instances: scene.shapes.iter().filter(|s| matches!(s, Shape::Mesh(_))).count(),
+            meshes: meshes.into_iter().map(|(_, s)| s).collect(),
             point_lights: scene.point_lights.len(),
             area_lights: scene.area_lights().len(),
             materials: scene.materials.len(),
@@ -132,7 +172,44 @@ impl fmt::Display for SceneSummary {
             ShapeKind::ALL.iter().zip(self.primitives).map(|(k, n)| format!("{n} {}", k.name())).collect();
         writeln!(f, "shapes:       {} top-level; primitives: {}", self.top_level_shapes, kinds.join(", "))?;
         writeln!(f, "csg:          {} nodes, max depth {}", self.csg_nodes, self.csg_max_depth)?;
-        writeln!(f, "lights:       {} point, {} area (emissive spheres/cubes)", self.point_lights, self.area_lights)?;
+        if self.mesh_instances > 0 {
+            let triangles: usize = self.meshes.iter().map(|m| m.triangles).sum();
+            writeln!(
+                f,
+                "meshes:       {} instance(s) of {} mesh(es), {triangles} distinct triangles",
+                self.mesh_instances,
+                self.meshes.len()
+            )?;
+            for m in &self.meshes {
+                let b = &m.bounds;
+                writeln!(
+                    f,
+                    "  {}: {} triangles, {} vertices{}{}{}, ×{}, bounds [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",
+                    m.name,
+                    m.triangles,
+                    m.vertices,
+                    if m.smooth_normals { ", normals" } else { "" },
+                    if m.uvs { ", uvs" } else { "" },
+                    if m.dropped_degenerate > 0 {
+                        format!(", {} degenerate dropped", m.dropped_degenerate)
+                    } else {
+                        String::new()
+                    },
+                    m.instances,
+                    b.min.x,
+                    b.min.y,
+                    b.min.z,
+                    b.max.x,
+                    b.max.y,
+                    b.max.z
+                )?;
+            }
+        }
+        writeln!(
+            f,
+            "lights:       {} point, {} area (emissive spheres, cubes, meshes)",
+            self.point_lights, self.area_lights
+        )?;
         writeln!(
             f,
             "materials:    {} ({} diffuse, {} specular, {} dielectric; {} emissive)",
