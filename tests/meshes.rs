@@ -62,6 +62,75 @@ fn a_tessellated_sphere_has_the_analytic_silhouette() {
     assert!(checked > 2000 && skipped < 100, "{checked} checked, {skipped} in the ring");
 }
 
+/// Shaded: a smooth tessellated sphere and the analytic one under a point light (PointLight
+/// renderer: each pixel is ρ/π·I·max(0, n·l)). Derived bound, for pixels whose camera ray
+/// meets the sphere less than 60° from its normal: the interpolated normal lies in the
+/// spherical triangle of its vertex normals, as does the true normal there, so they differ
+/// by at most δ, the largest angle between two vertex normals of a triangle; the hit point
+/// moves by at most (1 − r_in)/cos 60° along the ray, which turns the direction to a light
+/// at distance ≥ D − 1 by at most that over D − 1. max(0, ·) is 1-Lipschitz, so
+/// |Δ value| ≤ ρ/π·I·(δ + 2(1 − r_in)/(D − 1)).
+#[test]
+fn a_smooth_tessellated_sphere_shades_like_the_analytic_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let (v, f) = write_icosphere(dir.path(), "ball.obj", 4, true);
+    let r_in = inscribed_radius(&v, &f);
+    let delta = f
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+        .map(|(a, b)| v[a as usize].dot(v[b as usize]).clamp(-1.0, 1.0).acos())
+        .fold(0.0, f64::max);
+    let (rho, intensity, light) = (0.8, 2.0, DVec3::new(0.0, 4.0, 5.0));
+    let distance = (light - DVec3::new(3.0, 0.0, 0.0)).length();
+    let bound = rho / std::f64::consts::PI * intensity * (delta + 2.0 * (1.0 - r_in) / (distance - 1.0));
+    let settings = format!(
+        "Light(.position {{{}, {}, {}}}, .color <{intensity}, {intensity}, {intensity}>)
+         USING Camera.Perspective() Image(48, 48) Renderer.PointLight() Tracer(.samples_per_side 0)",
+        light.x, light.y, light.z
+    );
+    let material = format!(".material Material(Brdf.Diffuse(<{rho}, {rho}, {rho}>))");
+    let mesh = load(
+        dir.path(),
+        &format!("SPAWN Shape.Mesh(.file \"ball.obj\", {material}, .transformation TRANSLATE(3, 0, 0)) {settings}"),
+    );
+    let sphere =
+        load(dir.path(), &format!("SPAWN Shape.Sphere({material}, .transformation TRANSLATE(3, 0, 0)) {settings}"));
+    let a = render(&mesh, &RenderOptions::default(), Progress::Hidden).image;
+    let b = render(&sphere, &RenderOptions::default(), Progress::Hidden).image;
+    let centre = DVec3::new(3.0, 0.0, 0.0);
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for row in 0..48 {
+        for col in 0..48 {
+            let ray = sphere.camera.ray((col as f64 + 0.5) / 48.0, 1.0 - (row as f64 + 0.5) / 48.0);
+            let d = ray.dir.normalize();
+            let to_c = centre - ray.origin;
+            // sin of the angle between the ray and the sphere's normal at the hit.
+            if (to_c - to_c.dot(d) * d).length() < r_in * (60f64).to_radians().sin() {
+                let diff = (f64::from(a.get(col, row).g) - f64::from(b.get(col, row).g)).abs();
+                worst = worst.max(diff);
+                assert!(diff <= bound, "({col}, {row}): {diff} > {bound}");
+                checked += 1;
+            }
+        }
+    }
+    println!("smooth icosphere vs sphere: worst {worst:.5}, bound {bound:.5} (δ {delta:.4}, r_in {r_in:.5})");
+    assert!(checked > 80, "{checked}");
+    // The same facets shaded flat are off by up to ~δ/2 in the normal: interpolation, not
+    // the bound, is what makes the smooth image close.
+    let flat = load(
+        dir.path(),
+        &format!("SPAWN Shape.Mesh(.file \"ball.obj\", {material}, .smooth 0, .transformation TRANSLATE(3, 0, 0)) {settings}"),
+    );
+    let c = render(&flat, &RenderOptions::default(), Progress::Hidden).image;
+    let flat_worst = a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .zip(c.pixels())
+        .fold(0.0f64, |m, ((_, s), f)| m.max((f64::from(f.g) - f64::from(s.g)).abs()));
+    assert!(flat_worst > 10.0 * worst, "flat {flat_worst} vs smooth {worst}");
+}
+
 /// A convex diffuse polyhedron under a uniform sky, one bounce, no NEE: each path scatters
 /// once and escapes (it cannot meet a convex surface again), so every pixel that sees it is
 /// exactly ρL, as for the analytic sphere, flat or smooth.
