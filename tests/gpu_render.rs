@@ -655,7 +655,10 @@ fn example_scenes_match_the_cpu() {
         // units away carry f32 errors of 10⁻⁴–10⁻³, a sizeable part of a 0.02-wide square,
         // so near the horizon the checker colour differs between f32 and f64 (Flat: 1.2 % of
         // pixels; the path tracer's later bounces add ~5 %).
-        let min = if path.ends_with("glass.sl") {
+        // meshes.sl's checkered floor also reaches the horizon, and its smooth-shaded knot
+        // drops samples whose shading and facet normals disagree, a test that f32 and f64
+        // directions answer differently near grazing (4 of its 384 thumbnail pixels).
+        let min = if path.ends_with("glass.sl") || path.ends_with("meshes.sl") {
             0.98
         } else if path.ends_with("spheres_10k.sl") {
             0.92

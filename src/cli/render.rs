@@ -341,6 +341,7 @@ fn load(args: &RenderArgs, time: f64) -> anyhow::Result<Scene> {
 }
 
 /// Renders one image and writes it to every output; returns whether it stopped early.
+/// `loaded` is the scene at `time` when it has been loaded already (big meshes are read once).
 fn render_one(
     device: &OpenDevice,
     args: &RenderArgs,
@@ -348,8 +349,12 @@ fn render_one(
     outputs: &[PathBuf],
     tm: &ToneMap,
     part: Part,
+    loaded: Option<Scene>,
 ) -> anyhow::Result<bool> {
-    let scene = load(args, time)?;
+    let scene = match loaded {
+        Some(s) => s,
+        None => load(args, time)?,
+    };
     let total = layout_spp(args, &scene);
     let range = part.samples(total)?;
     let out = render_on(device, args, &scene, range)?;
@@ -375,11 +380,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         args.outputs.clone()
     };
     let (tm, frames, part) = validate(&args, &outputs)?;
-    // Load once before opening a device: a broken script fails fast, without GPU start-up.
-    load(&args, frames.map_or(args.script.time, |f| f.time(0)))?;
+    // Load before opening a device: a broken script fails fast, without GPU start-up.
+    let mut first = Some(load(&args, frames.map_or(args.script.time, |f| f.time(0)))?);
     let device = open(&args)?;
     let Some(frames) = frames else {
-        return render_one(&device, &args, args.script.time, &outputs, &tm, part).map(|_| ());
+        return render_one(&device, &args, args.script.time, &outputs, &tm, part, first).map(|_| ());
     };
     // `--shard I/N` with frames: contiguous runs of frames, as for samples.
     let mine = match part {
@@ -390,7 +395,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
         eprintln!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
         // The shard applies to the frames: each frame takes all its samples.
-        if render_one(&device, &args, frames.time(k), &paths, &tm, Part::All)? {
+        let loaded = if k == 0 { first.take() } else { None };
+        if render_one(&device, &args, frames.time(k), &paths, &tm, Part::All, loaded)? {
             eprintln!("note: stopping the animation after frame {}", k + 1);
             return Ok(());
         }

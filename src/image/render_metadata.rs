@@ -51,12 +51,17 @@ const VERSION: &str = "lumen.version";
 
 /// A 64-bit FNV-1a hash, fed through `fmt::Write` so that `Debug` text (which writes every
 /// f64 exactly, texels included) is hashed without being held in memory.
-struct Fnv(u64);
+struct Fnv {
+    hash: u64,
+    /// Meshes already hashed (by the address of their `Arc`), each with its order of first
+    /// use: an instance of one of them hashes that number, not its triangles again.
+    meshes: Vec<usize>,
+}
 
 impl Fnv {
     fn bytes(&mut self, bytes: &[u8]) {
         for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+            self.hash = (self.hash ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
         }
     }
 
@@ -85,6 +90,13 @@ impl Fnv {
                 self.bytes(&[2, u8::from(m.smooth)]);
                 self.f64s(&m.transform.matrix().to_cols_array());
                 self.bytes(&m.material.0.to_le_bytes());
+                let key = std::sync::Arc::as_ptr(&m.mesh) as usize;
+                if let Some(k) = self.meshes.iter().position(|&x| x == key) {
+                    self.bytes(&[3]);
+                    self.bytes(&(k as u64).to_le_bytes());
+                    return;
+                }
+                self.meshes.push(key);
                 let mesh = &m.mesh;
                 self.bytes(&(mesh.triangle_count() as u64).to_le_bytes());
                 for p in mesh.positions() {
@@ -116,7 +128,7 @@ impl std::fmt::Write for Fnv {
 /// different when anything that changes the image differs. The device is left out on
 /// purpose (CPU and GPU shards of one render may be merged).
 pub fn fingerprint(scene: &Scene, layout_spp: u32) -> String {
-    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    let mut h = Fnv { hash: 0xcbf2_9ce4_8422_2325, meshes: Vec::new() };
     let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment } = scene;
     let _ = write!(
         h,
@@ -126,7 +138,7 @@ pub fn fingerprint(scene: &Scene, layout_spp: u32) -> String {
     );
     h.bytes(&(shapes.len() as u64).to_le_bytes());
     shapes.iter().for_each(|s| h.shape(s));
-    format!("{:016x}", h.0)
+    format!("{:016x}", h.hash)
 }
 
 fn text(s: &str) -> Text {
