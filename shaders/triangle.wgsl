@@ -66,9 +66,11 @@ fn triangle_crossing(r: Sheared, tri: u32, tmin: f32, tmax: f32) -> vec4<f32> {
     if (!(nonneg || nonpos) || det == 0.0) {
         return none;
     }
-    let t = (u * r.s.z * a[k.z] + v * r.s.z * b[k.z] + w * r.s.z * c[k.z]) / det;
+    // As accel::triangle: one reciprocal of the determinant scales t and the weights.
+    let inv_det = 1.0 / det;
+    let t = (u * r.s.z * a[k.z] + v * r.s.z * b[k.z] + w * r.s.z * c[k.z]) * inv_det;
     if (!(t > tmin && t < tmax)) {
         return none;
     }
-    return vec4<f32>(t, u / det, v / det, w / det);
+    return vec4<f32>(t, u * inv_det, v * inv_det, w * inv_det);
 }
