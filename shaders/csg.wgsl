@@ -289,7 +289,11 @@ fn csg_run() {
 // Evaluates the tree rooted at node `root` along the ray's whole line; the result is in
 // slot 0, sorted by entry.
 fn csg_intervals(root: u32, ray: Ray) {
-    var frames: array<vec2<u32>, CSG_MAX_DEPTH>;
+    // One frame more than the tree's depth: with a one-element array (trees one level
+    // deep) llvmpipe (Mesa, LLVM 15) mis-executes this loop, running it to its loop limiter
+    // with carved surfaces taking the wrong leaf (tests/gpu_render.rs,
+    // csg_one_level_deep_matches_the_cpu); the spare frame is never written.
+    var frames: array<vec2<u32>, CSG_MAX_DEPTH + 1u>;
     frames[0] = vec2<u32>(root, 0u);
     var depth = 1u;
     csg_len[0] = 0u;
