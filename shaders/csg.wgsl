@@ -14,19 +14,36 @@
 
 const CSG_SLOTS: u32 = 2u * CSG_MAX_DEPTH + 2u;
 const CSG_SCRATCH: u32 = CSG_SLOTS - 1u;
-const NO_SURFACE: u32 = 0xFFFFFFFFu;
 // Pieces no longer than CSG_SLIVER relative to their ends are dropped (csg::SLIVER, which
 // is 256 f64 ulps; this is 256 f32 ulps, 2⁻¹⁵).
 const CSG_SLIVER: f32 = 3.0517578125e-5;
 
-// One end of an interval: the ray parameter and the surface bounding the solid there
-// (a shape index, or NO_SURFACE at an open end); `flip` (0 or 1: storage holds no bools)
-// marks carved surfaces.
+// One end of an interval: the ray parameter and the surface bounding the solid there,
+// packed into one word (`tag`): the leaf's shape index above CSG_END_FACE_BITS + 1 bits,
+// then the flip bit (a carved surface), then the face (layout::CSG_END_FACE_BITS; the
+// packer keeps shape indices below layout::CSG_LEAF_LIMIT). An open end (no surface) has
+// the all-ones leaf field, whatever its flip bit. Two words per end instead of four nearly
+// halved streetlamp.sl's time on llvmpipe, where every private-array access is a per-lane
+// gather or scatter.
 struct End {
     t: f32,
-    leaf: u32,
-    face: u32,
-    flip: u32,
+    tag: u32,
+}
+
+const CSG_END_FLIP: u32 = 1u << CSG_END_FACE_BITS;
+const CSG_END_LEAF_SHIFT: u32 = CSG_END_FACE_BITS + 1u;
+const CSG_END_OPEN: u32 = 0xFFFFFFFFu >> CSG_END_LEAF_SHIFT;
+
+fn end_leaf(e: End) -> u32 {
+    return e.tag >> CSG_END_LEAF_SHIFT;
+}
+
+fn end_face(e: End) -> u32 {
+    return e.tag & (CSG_END_FLIP - 1u);
+}
+
+fn end_flipped(e: End) -> bool {
+    return (e.tag & CSG_END_FLIP) != 0u;
 }
 
 struct Interval {
@@ -44,6 +61,10 @@ var<private> csg_pool: array<Interval, CSG_POOL_SIZE>;
 // the private pool.
 var<private> csg_base: u32;
 var<private> csg_len: array<u32, CSG_SLOTS>;
+// Where each slot's list lives, in units of intervals from csg_base: the slots own the
+// CSG_SLOTS buffers of CSG_MAX_INTERVALS entries in some order, and moving a whole list to
+// another slot swaps two buffers (OP_SWAP) instead of copying it.
+var<private> csg_off: array<u32, CSG_SLOTS>;
 
 // The stages that evaluate trees call this first, for the path slot they work on.
 fn csg_use_slot(slot: u32) {
@@ -54,7 +75,7 @@ fn csg_use_slot(slot: u32) {
 
 // The pool index of entry i of a list slot.
 fn csg_at(slot: u32, i: u32) -> u32 {
-    return csg_base + slot * CSG_MAX_INTERVALS + i;
+    return csg_base + csg_off[slot] + i;
 }
 
 fn csg_get(slot: u32, i: u32) -> Interval {
@@ -138,7 +159,7 @@ fn csg_intersect(a: u32, b: u32) {
 }
 
 fn flipped(e: End) -> End {
-    return End(e.t, e.leaf, e.face, 1u - e.flip);
+    return End(e.t, e.tag ^ CSG_END_FLIP);
 }
 
 // scratch := a minus the disjoint sorted `cut`, unsorted; cut ends become carved surfaces
@@ -173,12 +194,12 @@ fn csg_subtract(a: u32, cut: u32) {
 }
 
 fn end_from_crossing(c: Crossing, leaf: u32) -> End {
-    return End(c.t, select(NO_SURFACE, leaf, abs(c.t) < OPEN), c.face, 0u);
+    let l = select(CSG_END_OPEN, leaf, abs(c.t) < OPEN);
+    return End(c.t, (l << CSG_END_LEAF_SHIFT) | c.face);
 }
 
-// The leaf's interval (if any) into `slot`.
+// Appends the leaf's interval (if any) to `slot`.
 fn csg_leaf(slot: u32, shape: u32, ray: Ray) {
-    csg_len[slot] = 0u;
     let sp = shape_span(shape, ray);
     if (sp.valid) {
         csg_push(slot, Interval(end_from_crossing(sp.enter, shape), end_from_crossing(sp.exit, shape)));
@@ -195,9 +216,10 @@ const OP_SORT: u32 = 2u;
 const OP_COALESCE: u32 = 3u;
 const OP_INTERSECT: u32 = 4u;
 const OP_SUBTRACT: u32 = 5u;
-// A step plans at most a node's finish (DIFF: 6 operations) and its fold into the parent
-// (INTERSECT: 4).
-const CSG_MAX_OPS: u32 = 10u;
+const OP_SWAP: u32 = 6u;
+// A step plans at most a node's finish (DIFF: 5 operations) and its fold into the parent
+// (INTERSECT: 3).
+const CSG_MAX_OPS: u32 = 8u;
 
 var<private> csg_ops: array<vec3<u32>, CSG_MAX_OPS>;
 var<private> csg_op_count: u32;
@@ -210,16 +232,28 @@ fn csg_plan(op: u32, a: u32, b: u32) {
 // Replaces list `dst` by the scratch list sorted (the end of INTERSECT and DIFF).
 fn plan_sorted_scratch_into(dst: u32) {
     csg_plan(OP_SORT, CSG_SCRATCH, 0u);
-    csg_plan(OP_CLEAR, dst, 0u);
-    csg_plan(OP_APPEND, dst, CSG_SCRATCH);
+    csg_plan(OP_SWAP, dst, CSG_SCRATCH);
+}
+
+// Where a leaf that is child number `i` of a node of frame f puts its interval: straight
+// into the list the node folds it into, but for INTERSECT's later children, which are
+// intersected from their own slot `own`. The caller clears the node's lists at i = 0.
+fn leaf_target(op: u32, f: u32, i: u32, own: u32) -> u32 {
+    let acc = 2u * f;
+    if (i == 0u || op == CSG_UNITE || op == CSG_FUSE) {
+        return acc;
+    }
+    if (op == CSG_DIFF) {
+        return acc + 1u;
+    }
+    return own;
 }
 
 // Folds child number `i` (its list in `src`) into the node of frame f.
 fn plan_combine(op: u32, f: u32, i: u32, src: u32) {
     let acc = 2u * f;
     if (i == 0u) {
-        csg_plan(OP_CLEAR, acc, 0u);
-        csg_plan(OP_APPEND, acc, src);
+        csg_plan(OP_SWAP, acc, src);
         csg_plan(OP_CLEAR, acc + 1u, 0u);
         return;
     }
@@ -278,6 +312,14 @@ fn csg_run() {
             case OP_INTERSECT: {
                 csg_intersect(o.y, o.z);
             }
+            case OP_SWAP: {
+                let off = csg_off[o.y];
+                csg_off[o.y] = csg_off[o.z];
+                csg_off[o.z] = off;
+                let len = csg_len[o.y];
+                csg_len[o.y] = csg_len[o.z];
+                csg_len[o.z] = len;
+            }
             default: {
                 csg_subtract(o.y, o.z);
             }
@@ -296,8 +338,10 @@ fn csg_intervals(root: u32, ray: Ray) {
     var frames: array<vec2<u32>, CSG_MAX_DEPTH + 1u>;
     frames[0] = vec2<u32>(root, 0u);
     var depth = 1u;
-    csg_len[0] = 0u;
-    csg_len[1] = 0u;
+    for (var k = 0u; k < CSG_SLOTS; k++) {
+        csg_off[k] = k * CSG_MAX_INTERVALS;
+        csg_len[k] = 0u;
+    }
     csg_op_count = 0u;
     var done = false;
     while (!done) {
@@ -322,8 +366,17 @@ fn csg_intervals(root: u32, ray: Ray) {
                 depth++;
                 continue;
             }
-            csg_leaf(2u * depth, r & ~CSG_NODE_BIT, ray);
-            plan_combine(node.op, f, i, 2u * depth);
+            let own = 2u * depth;
+            let dst = leaf_target(node.op, f, i, own);
+            if (i == 0u) {
+                csg_len[2u * f] = 0u;
+                csg_len[2u * f + 1u] = 0u;
+            }
+            csg_len[own] = 0u;
+            csg_leaf(dst, r & ~CSG_NODE_BIT, ray);
+            if (dst == own) {
+                plan_combine(node.op, f, i, own);
+            }
         }
         csg_run();
     }
@@ -340,8 +393,8 @@ fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
             if (k == 0u) {
                 e = iv.enter;
             }
-            if (e.leaf != NO_SURFACE && e.t > ray.tmin && e.t < ray.tmax && e.t < best.c.t) {
-                best = Candidate(Crossing(e.t, e.face), e.leaf, e.flip != 0u, object);
+            if (end_leaf(e) != CSG_END_OPEN && e.t > ray.tmin && e.t < ray.tmax && e.t < best.c.t) {
+                best = Candidate(Crossing(e.t, end_face(e)), end_leaf(e), end_flipped(e), object);
             }
         }
     }

@@ -241,6 +241,13 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         };
     }
     p.indices.extend(world.bvh.prim_indices().iter().map(|&i| object_ref[i as usize]));
+    if features.csg && p.shapes.len() >= layout::CSG_LEAF_LIMIT as usize {
+        return Err(PackError::TooMany {
+            what: "shapes in a scene with CSG trees",
+            count: p.shapes.len(),
+            limit: layout::CSG_LEAF_LIMIT as usize - 1,
+        });
+    }
     let plane_offset = count_u32("indices", p.indices.len())?;
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
@@ -385,7 +392,8 @@ struct PackedMesh {
 /// material's α and η, appended to `floats`, so the kernel interpolates in μ alone.
 fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, floats: &mut Vec<f32>) -> layout::Material {
     let mut m = layout::Material { pigment, emitted, ior: 1.0, rows: floats.len() as u32, ..Zeroable::zeroed() };
-    let tables = energy_tables();
+    // Generated on first use (a few tenths of a second), so only for the microfacet kinds.
+    let tables = energy_tables;
     let mut push_row = |row: &[f64]| floats.extend(row.iter().map(|&v| v as f32));
     let three = |c: Color, w: f64| [c.r as f32, c.g as f32, c.b as f32, w as f32];
     match *brdf {
@@ -400,12 +408,12 @@ fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, floats: &mut Vec<f32>)
                 let alpha = alpha_of(roughness);
                 m.alpha = alpha as f32;
                 for eta in [ior, 1.0 / ior] {
-                    let [r, t] = tables.dielectric_rows(alpha, eta);
+                    let [r, t] = tables().dielectric_rows(alpha, eta);
                     let total: Vec<f64> = r.iter().zip(&t).map(|(r, t)| r + t).collect();
                     push_row(if multiple_scattering { &total } else { &UNCOMPENSATED[..DIELECTRIC_NODES] });
                 }
                 let side = |eta: f64| {
-                    let l = dielectric_lobes(tables, alpha, eta);
+                    let l = dielectric_lobes(tables(), alpha, eta);
                     [l.k_t as f32, l.reflect as f32, l.transmit as f32, 0.0]
                 };
                 if multiple_scattering {
@@ -422,8 +430,8 @@ fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, floats: &mut Vec<f32>)
                 let alpha = alpha_of(roughness);
                 m.alpha = alpha as f32;
                 if multiple_scattering {
-                    push_row(&tables.conductor_row(alpha));
-                    m.lobe = three(conductor_ms(tables, alpha, fresnel), 0.0);
+                    push_row(&tables().conductor_row(alpha));
+                    m.lobe = three(conductor_ms(tables(), alpha, fresnel), 0.0);
                 } else {
                     push_row(&UNCOMPENSATED);
                 }
@@ -435,9 +443,9 @@ fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, floats: &mut Vec<f32>)
             let alpha = (roughness > 0.0).then(|| alpha_of(roughness));
             if let Some(a) = alpha {
                 m.alpha = a as f32;
-                push_row(&tables.dielectric_rows(a, ior)[0]);
+                push_row(&tables().dielectric_rows(a, ior)[0]);
             }
-            let coat = plastic_coat(tables, alpha, ior);
+            let coat = plastic_coat(tables(), alpha, ior);
             m.lobe = [coat.internal as f32, coat.base as f32, 0.0, 0.0];
         }
     }
