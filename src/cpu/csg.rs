@@ -278,6 +278,79 @@ mod tests {
         list.iter().map(|i| (i.enter.t, i.exit.t)).collect()
     }
 
+    /// The BVH renders a top-level UNITE as its parts (`Shape::top_level_parts`): the
+    /// interval evaluation of the whole tree must give the same closest hit (t, leaf
+    /// surface, flip) and occlusion as the parts queried one by one, including nested
+    /// UNITEs, transformed nodes, a plane's half-space and a DIFF part.
+    #[test]
+    fn a_unite_hits_like_its_top_level_parts() {
+        use crate::scene::{ShapeKind, Transform};
+        use glam::DVec3;
+        let m = MaterialId(0);
+        let p = |k: ShapeKind, t: Transform| Shape::primitive(k, t, m);
+        let carved = Shape::csg(
+            CsgOp::Diff,
+            vec![
+                p(ShapeKind::Cube, Transform::IDENTITY),
+                p(
+                    ShapeKind::Sphere,
+                    Transform::translation(DVec3::new(0.4, 0.0, 0.3)) * Transform::scaling(DVec3::splat(0.5)),
+                ),
+            ],
+            Transform::translation(DVec3::new(0.0, 1.0, 0.0)),
+        );
+        let inner = Shape::csg(
+            CsgOp::Unite,
+            vec![p(ShapeKind::Cylinder, Transform::scaling(DVec3::new(0.3, 0.3, 2.0))), carved],
+            Transform::rotation_z(30.0) * Transform::translation(DVec3::new(0.5, 0.0, 0.0)),
+        );
+        let unite = Shape::csg(
+            CsgOp::Unite,
+            vec![
+                p(ShapeKind::Sphere, Transform::scaling(DVec3::splat(0.8))),
+                inner,
+                p(ShapeKind::Plane, Transform::translation(DVec3::new(0.0, 0.0, -1.5))),
+            ],
+            Transform::translation(DVec3::new(3.0, 0.0, 0.0)) * Transform::rotation_x(20.0),
+        );
+        let tree = CsgTree::new(&unite);
+        let parts: Vec<CsgTree> = unite.clone().top_level_parts().iter().map(CsgTree::new).collect();
+        assert_eq!(parts.len(), 4, "sphere, cylinder, carved cube, plane");
+        // Parts list their leaves in the tree's depth-first order, so leaf k of part i is
+        // leaf (offset of i) + k of the whole tree.
+        let offsets: Vec<u32> = parts
+            .iter()
+            .scan(0u32, |n, t| {
+                let o = *n;
+                *n += t.leaves().len() as u32;
+                Some(o)
+            })
+            .collect();
+        let mut rng = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut hits = 0;
+        for _ in 0..4000 {
+            let origin = DVec3::new(-1.0 + 2.0 * next(), -3.0 + 6.0 * next(), -3.0 + 6.0 * next());
+            let target = DVec3::new(2.0 + 2.0 * next(), -1.5 + 3.0 * next(), -2.0 + 4.0 * next());
+            let ray = Ray::new(origin, target - origin, 1e-9, 0.5 + 2.0 * next());
+            let whole = tree.closest(&ray).map(|h| (h.end.t, h.end.leaf, h.end.face, h.end.flip));
+            let best = parts
+                .iter()
+                .zip(&offsets)
+                .filter_map(|(t, &o)| t.closest(&ray).map(|h| (h.end.t, o + h.end.leaf, h.end.face, h.end.flip)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            assert_eq!(whole, best, "{ray:?}");
+            assert_eq!(tree.occluded(&ray), parts.iter().any(|t| t.occluded(&ray)), "{ray:?}");
+            hits += usize::from(whole.is_some());
+        }
+        assert!(hits > 1000 && hits < 3900, "{hits} of 4000 rays hit: a weak test");
+    }
+
     #[test]
     fn merge_joins_overlapping_and_touching() {
         let m = merge(vec![iv(5.0, 6.0, 2), iv(0.0, 2.0, 0), iv(2.0, 3.0, 1), iv(1.0, 1.5, 3)]);

@@ -229,6 +229,8 @@ pub fn render_limited(
         }
     }
 
+    let form = crate::prepare::render_form(scene);
+    let scene = &*form;
     let world = World::new(scene);
     let lights = Lights::new(scene);
     let ctx = Context { scene, world: &world, lights: &lights };

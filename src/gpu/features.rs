@@ -90,8 +90,12 @@ pub struct FeatureSet {
 }
 
 impl FeatureSet {
-    /// The features `scene` uses. Only materials actually referenced by a shape count.
+    /// The features `scene` uses, in its [`crate::prepare::render_form`]. Only materials
+    /// actually referenced by a shape count.
     pub fn of(scene: &Scene) -> Self {
+        // What the kernels will see: top-level UNITEs split into their parts.
+        let form = crate::prepare::render_form(scene);
+        let scene = &*form;
         let mut f = FeatureSet { renderer: RendererKind::of(&scene.renderer), ..Default::default() };
         let mut used = vec![false; scene.materials.len()];
         for shape in &scene.shapes {
@@ -427,7 +431,7 @@ mod tests {
             vec![leaf(ShapeKind::Cube, glass), leaf(ShapeKind::Cylinder, glass)],
             Transform::IDENTITY,
         );
-        b.shape(Shape::csg(CsgOp::Unite, vec![inner, leaf(ShapeKind::Sphere, diffuse)], Transform::IDENTITY))
+        b.shape(Shape::csg(CsgOp::Fuse, vec![inner, leaf(ShapeKind::Sphere, diffuse)], Transform::IDENTITY))
             .plane(Transform::IDENTITY, diffuse)
             .point_light(PointLight::default());
         let f = FeatureSet::of(&b.build().unwrap());

@@ -171,6 +171,8 @@ fn count_u32(what: &'static str, n: usize) -> Result<u32, PackError> {
 /// ```
 pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, PackError> {
     scene.validate()?;
+    let form = crate::prepare::render_form(scene);
+    let scene = &*form;
     let features = FeatureSet::of(scene);
     if features.csg {
         let pool = usize::try_from(crate::gpu::wavefront::csg_pool_intervals(&features)).unwrap_or(usize::MAX);
@@ -743,9 +745,10 @@ mod tests {
     fn a_csg_tree_too_wide_for_the_interval_pool_is_a_clear_error() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
-        // A UNITE of n spheres needs 4n intervals: 70,000 is past the limit.
+        // A FUSE of n spheres needs 4n intervals: 70,000 is past the limit. (A top-level
+        // UNITE would be stored as its 70,000 spheres.)
         let many = (0..70_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
-        b.shape(Shape::csg(CsgOp::Unite, many, Transform::IDENTITY));
+        b.shape(Shape::csg(CsgOp::Fuse, many, Transform::IDENTITY));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
         assert!(err.to_string().contains("CSG interval slots"), "{err}");

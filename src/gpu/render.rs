@@ -631,17 +631,15 @@ mod tests {
         assert!(shade.contains("sample_diffuse") && !shade.contains("traverse") && !shade.contains("sphere_span"));
     }
 
-    /// `shaders/angles.wgsl` against f64 atan2 on the device: every octant, both signed
-    /// zeros, tiny and huge magnitudes, and the polar angle near the poles.
     /// Issue 12, goal 3: kernel code and private memory must not grow with a scene's size.
-    /// A UNITE of 1,000 spheres gets the same kernels as a UNITE of 100 but for the values of
+    /// A FUSE of 1,000 spheres gets the same kernels as a FUSE of 100 but for the values of
     /// the two interval-bound constants, and neither sizes an array (the lists live in the
     /// storage pool, whose size the host picks); only lists of at most
     /// `CSG_PRIVATE_POOL_MAX` intervals stay in a private array.
     #[test]
     fn csg_kernels_do_not_grow_with_the_interval_bound() {
         use crate::scene::{CsgOp, Shape, ShapeKind, Transform};
-        let unite = |n: usize| {
+        let fuse = |n: usize| {
             let mut b = crate::scene::SceneBuilder::new(4, 4);
             let m = b.diffuse(crate::color::Color::gray(0.5));
             let spheres = (0..n)
@@ -650,7 +648,8 @@ mod tests {
                     Shape::primitive(ShapeKind::Sphere, Transform::translation(at), m)
                 })
                 .collect();
-            b.shape(Shape::csg(CsgOp::Unite, spheres, Transform::IDENTITY));
+            // FUSE: a top-level UNITE would be stored as its spheres.
+            b.shape(Shape::csg(CsgOp::Fuse, spheres, Transform::IDENTITY));
             b.point_light(crate::scene::PointLight {
                 position: glam::DVec3::new(0.0, 0.0, 5.0),
                 color: crate::color::Color::WHITE,
@@ -659,15 +658,15 @@ mod tests {
             FeatureSet::of(&b.build().unwrap())
         };
         // A small tree's lists stay in a bounded private array (no pool binding).
-        let tiny = assemble_stages(&unite(2)).unwrap();
+        let tiny = assemble_stages(&fuse(2)).unwrap();
         let (csg_stage, private) = tiny.iter().find(|(s, _)| *s == Stage::Csg).unwrap();
         assert!(
             private.source.contains("var<private> csg_pool")
                 && !private.source.contains("var<storage, read_write> csg_pool"),
             "{csg_stage:?}"
         );
-        assert!(wavefront::csg_pool_intervals(&unite(2)) <= wavefront::CSG_PRIVATE_POOL_MAX);
-        let (small, large) = (unite(100), unite(1000));
+        assert!(wavefront::csg_pool_intervals(&fuse(2)) <= wavefront::CSG_PRIVATE_POOL_MAX);
+        let (small, large) = (fuse(100), fuse(1000));
         assert_eq!((small.csg_max_intervals, large.csg_max_intervals), (100, 1000));
         let bound_free = |src: &str| -> String {
             src.lines()
@@ -695,6 +694,8 @@ mod tests {
         assert_eq!(csg_stages, 2, "the CSG and shadow stages evaluate trees");
     }
 
+    /// `shaders/angles.wgsl` against f64 atan2 on the device: every octant, both signed
+    /// zeros, tiny and huge magnitudes, and the polar angle near the poles.
     #[test]
     fn precise_atan2_on_the_device_is_within_2e_7_rad_plus_an_ulp() {
         let Some(gpu) = crate::gpu::gpu_for_tests("precise_atan2") else { return };

@@ -7,6 +7,7 @@
 pub mod csg_bounds;
 pub mod mesh_bvh;
 pub mod pixel_samples;
+pub mod render_form;
 pub mod sample_range;
 
 use glam::{DMat3, DVec3};
@@ -19,6 +20,7 @@ use crate::scene::{Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
 pub use csg_bounds::{max_intervals, IntervalBound};
 pub use mesh_bvh::{mesh_bvh, MeshBvhs};
 pub use pixel_samples::PixelSamples;
+pub use render_form::render_form;
 pub use sample_range::{SampleRange, SampleRangeError};
 
 /// Most top-level CSG trees whose evaluation a closest-hit query defers until the

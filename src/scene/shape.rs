@@ -180,6 +180,61 @@ impl Shape {
         Shape::Mesh(Box::new(MeshInstance { mesh, name: name.into(), transform, material, smooth }))
     }
 
+    /// The same shape placed by `t` after its own transformation.
+    pub fn transformed(self, t: &Transform) -> Shape {
+        match self {
+            Shape::Primitive(p) => Shape::Primitive(Primitive { transform: *t * p.transform, ..p }),
+            Shape::Csg(mut c) => {
+                c.transform = *t * c.transform;
+                Shape::Csg(c)
+            }
+            Shape::Mesh(mut m) => {
+                m.transform = *t * m.transform;
+                Shape::Mesh(m)
+            }
+        }
+    }
+
+    /// The top-level shapes that render as this one: a UNITE's children (under its
+    /// transformation, recursively), anything else itself. A UNITE keeps every child's
+    /// surface, so its closest hit along any ray is the closest of its children's and its
+    /// occlusion theirs: as separate shapes they go into the BVH one by one instead of being
+    /// evaluated as one CSG tree by interval lists ([`crate::prepare::render_form`], DESIGN.md
+    /// "Top-level UNITEs"). A UNITE holding a mesh stays whole, so that
+    /// [`crate::scene::Scene::validate`] still refuses it.
+    pub fn top_level_parts(self) -> Vec<Shape> {
+        fn walk(s: Shape, out: &mut Vec<Shape>) {
+            match s {
+                Shape::Csg(c) if c.op == CsgOp::Unite && !c.children.iter().any(Shape::holds_mesh) => {
+                    let t = c.transform;
+                    for child in c.children {
+                        walk(child.transformed(&t), out);
+                    }
+                }
+                other => out.push(other),
+            }
+        }
+        if !self.splits_at_top_level() {
+            return vec![self];
+        }
+        let mut out = Vec::new();
+        walk(self, &mut out);
+        out
+    }
+
+    /// Whether [`Self::top_level_parts`] splits this shape (a UNITE without meshes).
+    pub fn splits_at_top_level(&self) -> bool {
+        matches!(self, Shape::Csg(c) if c.op == CsgOp::Unite && !c.children.iter().any(Shape::holds_mesh))
+    }
+
+    fn holds_mesh(&self) -> bool {
+        match self {
+            Shape::Mesh(_) => true,
+            Shape::Primitive(_) => false,
+            Shape::Csg(c) => c.children.iter().any(Shape::holds_mesh),
+        }
+    }
+
     /// World-space bounds of the visible surface. A lone plane is infinite. CSG: union of
     /// the children for UNITE/FUSE, their intersection for INTERSECT (planes' half-spaces
     /// make this finite where a bounded child cuts them), the first child's for DIFF.
@@ -275,6 +330,43 @@ mod tests {
         assert!(b.is_finite());
         assert_eq!(b.max.z, 0.0);
         assert_eq!(b.min.z, -0.5);
+    }
+
+    #[test]
+    fn top_level_unites_split_into_their_parts() {
+        let s = |x: f64| Shape::primitive(ShapeKind::Sphere, Transform::translation(DVec3::new(x, 0.0, 0.0)), m());
+        let fuse = Shape::csg(CsgOp::Fuse, vec![s(1.0), s(2.0)], Transform::IDENTITY);
+        let up = Transform::translation(DVec3::Z);
+        let inner = Shape::csg(CsgOp::Unite, vec![s(3.0), fuse.clone()], Transform::scaling(DVec3::splat(2.0)));
+        let parts = Shape::csg(CsgOp::Unite, vec![s(0.0), inner], up).top_level_parts();
+        // Nested UNITEs flatten, their transformations applied outside-in; other nodes stay.
+        let want = [
+            s(0.0).transformed(&up),
+            s(3.0).transformed(&(up * Transform::scaling(DVec3::splat(2.0)))),
+            fuse.clone().transformed(&(up * Transform::scaling(DVec3::splat(2.0)))),
+        ];
+        assert_eq!(parts, want);
+        let Shape::Primitive(p) = &parts[1] else { panic!() };
+        assert!((p.transform.point(DVec3::ZERO) - DVec3::new(6.0, 0.0, 1.0)).length() < 1e-12);
+        assert_eq!(fuse.clone().top_level_parts(), [fuse]);
+        // A UNITE holding a mesh stays whole (Scene::validate refuses it).
+        let mesh = TriangleMesh::from_parts(
+            "t",
+            super::super::mesh::MeshParts {
+                positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y],
+                normals: None,
+                uvs: None,
+                triangles: vec![[0, 1, 2]],
+                dropped_faces: 0,
+            },
+        )
+        .unwrap();
+        let with_mesh = Shape::csg(
+            CsgOp::Unite,
+            vec![s(0.0), Shape::mesh(Arc::new(mesh), "t", Transform::IDENTITY, m(), false)],
+            Transform::IDENTITY,
+        );
+        assert_eq!(with_mesh.clone().top_level_parts(), [with_mesh]);
     }
 
     #[test]

@@ -1,0 +1,42 @@
+//! The form of a scene the renderers consume: the script's scene with every top-level
+//! UNITE split into its parts ([`Shape::top_level_parts`]). A UNITE keeps every surface, so
+//! its parts render the same image; as separate top-level shapes they go into the BVH one
+//! by one instead of through the CSG interval code (DESIGN.md "Top-level UNITEs"). Both
+//! renderers, and the GPU's feature set, start from this form, so shape indices (area
+//! lights, BVH leaves) mean the same everywhere; `lumen check` and DUMP show the script's
+//! own structure.
+
+use std::borrow::Cow;
+
+use crate::scene::{Scene, Shape};
+
+/// `scene` itself when no top-level shape splits, else a copy with the parts in place of
+/// each splitting UNITE, in order (textures and meshes are shared, not copied).
+///
+/// ```
+/// use lumen::scene::*;
+/// let mut b = SceneBuilder::new(4, 4);
+/// let m = b.diffuse(lumen::color::Color::gray(0.5));
+/// let ball = |x: f64| Shape::primitive(ShapeKind::Sphere, Transform::translation(glam::DVec3::new(x, 0.0, 0.0)), m);
+/// b.shape(Shape::csg(CsgOp::Unite, vec![ball(0.0), ball(3.0)], Transform::IDENTITY));
+/// let scene = b.build().unwrap();
+/// assert_eq!(scene.shapes.len(), 1);
+/// assert_eq!(lumen::prepare::render_form(&scene).shapes.len(), 2);
+/// ```
+pub fn render_form(scene: &Scene) -> Cow<'_, Scene> {
+    if !scene.shapes.iter().any(Shape::splits_at_top_level) {
+        return Cow::Borrowed(scene);
+    }
+    let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment } = scene;
+    Cow::Owned(Scene {
+        shapes: shapes.iter().flat_map(|s| s.clone().top_level_parts()).collect(),
+        materials: materials.clone(),
+        point_lights: point_lights.clone(),
+        camera: *camera,
+        width: *width,
+        height: *height,
+        renderer: renderer.clone(),
+        tracer: *tracer,
+        environment: environment.clone(),
+    })
+}
