@@ -332,9 +332,10 @@ fn csg_run() {
 // slot 0, sorted by entry.
 fn csg_intervals(root: u32, ray: Ray) {
     // One frame more than the tree's depth: with a one-element array (trees one level
-    // deep) llvmpipe (Mesa, LLVM 15) mis-executes this loop, running it to its loop limiter
-    // with carved surfaces taking the wrong leaf (tests/gpu_render.rs,
-    // csg_one_level_deep_matches_the_cpu); the spare frame is never written.
+    // deep) wgpu's OpenGL backend on Mesa's llvmpipe (22.3, LLVM 15) mis-executes this loop,
+    // running it to its loop limiter with carved surfaces taking the wrong leaf
+    // (tests/gpu_render.rs, csg_one_level_deep_matches_the_cpu, with WGPU_BACKEND=gl;
+    // Vulkan's lavapipe was right). The spare frame is never written.
     var frames: array<vec2<u32>, CSG_MAX_DEPTH + 1u>;
     frames[0] = vec2<u32>(root, 0u);
     var depth = 1u;

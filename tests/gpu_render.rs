@@ -453,8 +453,9 @@ fn csg_matches_the_cpu() {
 }
 
 /// Trees one level deep (every child a primitive): the GPU's CSG frame stack then has one
-/// frame, and a one-element private array once made llvmpipe run the CSG walk to its loop
-/// limiter (24× slower on glass.sl, and a quarter of its pixels wrong). Every operation
+/// frame, and a one-element private array once made llvmpipe behind wgpu's OpenGL backend
+/// (run this with WGPU_BACKEND=gl) run the CSG walk to its loop limiter (24× slower on
+/// glass.sl, and a quarter of its pixels wrong; Vulkan's lavapipe was right). Every operation
 /// but UNITE, alone, for two renderers.
 #[test]
 fn csg_one_level_deep_matches_the_cpu() {
