@@ -219,3 +219,39 @@ fn a_fuse_of_1000_spheres_renders_like_the_cpu() {
     let cpu = lumen::cpu::render(&scene, &RenderOptions { spp: Some(2), ..RenderOptions::default() }, Progress::Hidden);
     agreement(&unite.image, &cpu.image).check(Tolerance::share(0.97)).unwrap_or_else(|e| panic!("{e}"));
 }
+
+/// `GpuRenderOptions::profile`: the timestamps change nothing in the image, every stage the
+/// scene has is timed, each as often as the schedule launches it (camera and film once per
+/// batch; closest hit once per bounce and once more for the last one), and the device
+/// time fits in the wall time of the rounds.
+#[test]
+fn a_profiled_render_times_every_stage_and_keeps_the_image() {
+    let Some(gpu) = gpu_for_tests("a_profiled_render") else { return };
+    let depth = 4;
+    let scene = mixed_scene(pt(2, depth, true));
+    let mut opts = GpuRenderOptions::fixed_passes(Some(4), 2);
+    opts.passes.batch_paths = 100;
+    let plain = render(&gpu, &scene, &opts).unwrap();
+    opts.profile = true;
+    let timed = render(&gpu, &scene, &opts).unwrap();
+    assert!(bits(&timed.image) == bits(&plain.image), "timestamps changed the image");
+    assert!(plain.profile.is_none());
+    let Some(p) = timed.profile else {
+        assert!(!gpu.device.features().contains(lumen::gpu::wavefront::profile::FEATURES));
+        println!("skipped: {} has no timestamp queries inside passes", gpu.adapter_info.name);
+        return;
+    };
+    println!("{}", p.table());
+    let launched: std::collections::BTreeSet<String> = p.stages.keys().cloned().collect();
+    let expected: std::collections::BTreeSet<String> =
+        lumen::gpu::wavefront::Stage::for_scene(&timed.features).into_iter().map(|s| s.label()).collect();
+    assert_eq!(launched, expected);
+    let launches = |s: &str| p.stages[s].launches;
+    assert!(timed.batches > 1);
+    assert_eq!((launches("camera"), launches("film")), (timed.batches, timed.batches));
+    assert_eq!(launches("intersect"), timed.batches * u64::from(depth + 1));
+    assert_eq!(p.untimed_launches, 0);
+    assert!(p.stages.values().all(|t| t.seconds.is_finite() && t.seconds >= 0.0));
+    let busy = p.busy_fraction();
+    assert!(p.device_seconds() > 0.0 && busy > 0.0 && busy <= 1.0 + 1e-6, "busy {busy}");
+}

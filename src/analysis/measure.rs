@@ -89,6 +89,7 @@ pub fn measure_with(
                 passes: PassOptions { progress, ..PassOptions::default() },
                 features: kernel,
                 samples: None,
+                profile: false,
             };
             let out = renderer.borrow_mut().render(gpu, scene, &opts)?;
             let pixels = u64::from(scene.width) * u64::from(scene.height);

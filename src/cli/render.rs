@@ -71,6 +71,10 @@ pub struct RenderArgs {
     /// JOB_COMPLETION_INDEX.
     #[arg(long, value_name = "I/N")]
     pub shard: Option<String>,
+    /// On the GPU, time every stage launch with timestamp queries and print, on stderr, each
+    /// stage's device time and the device's busy fraction (the image is the same)
+    #[arg(long)]
+    pub profile: bool,
 }
 
 /// Which part of the work this render does (`--samples`, `--shard`).
@@ -263,9 +267,17 @@ fn render_on_gpu(
         spp: args.spp.spp,
         samples: Some(range),
         passes: args.gpu.pass_options(),
+        profile: args.profile,
         ..GpuRenderOptions::default()
     };
     let out = renderer.render(gpu, scene, &opts)?;
+    match &out.profile {
+        Some(p) => eprintln!("GPU stages ({}):\n{}", gpu.adapter_info.name, p.table()),
+        None if args.profile => {
+            eprintln!("note: {} has no timestamp queries inside passes; --profile timed nothing", gpu.adapter_info.name)
+        }
+        None => {}
+    }
     let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
     eprintln!(
         "{}×{} {} on the GPU ({}): {} of {} samples per pixel, {} samples in {:.2} s ({:.2} Msamples/s)",

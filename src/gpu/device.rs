@@ -269,8 +269,10 @@ impl Gpu {
         let limits = adapter.limits();
         let desc = wgpu::DeviceDescriptor {
             label: Some("lumen"),
-            // Only to keep compiled pipelines across runs, where the adapter offers it.
-            required_features: adapter.features() & wgpu::Features::PIPELINE_CACHE,
+            // Only to keep compiled pipelines across runs, and timestamps for profiled
+            // renders (`GpuRenderOptions::profile`), where the adapter offers them.
+            required_features: adapter.features()
+                & (wgpu::Features::PIPELINE_CACHE | super::wavefront::profile::FEATURES),
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,

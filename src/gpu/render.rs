@@ -84,6 +84,10 @@ pub struct GpuRenderOptions {
     /// scene's features ([`FeatureSet::covers`]), e.g. [`FeatureSet::full_for`], else the
     /// render is refused. For benchmarks and tests of specialisation; the image is the same.
     pub features: Option<FeatureSet>,
+    /// Time every stage launch on the device (`lumen render --profile`): the output's
+    /// [`GpuRenderOutput::profile`]. Needs the adapter's timestamp queries; the image is
+    /// the same.
+    pub profile: bool,
 }
 
 impl GpuRenderOptions {
@@ -122,6 +126,9 @@ pub struct GpuRenderOutput {
     /// Closest-hit and shadow rays traced (the same count as the CPU reference's
     /// `RenderStats::rays` for the same samples).
     pub rays: u64,
+    /// Device time per stage and the busy fraction, when [`GpuRenderOptions::profile`]
+    /// was asked for and the device has timestamp queries.
+    pub profile: Option<super::wavefront::profile::StageProfile>,
 }
 
 /// All modules, in a library that knows every feature name.
@@ -331,6 +338,7 @@ impl GpuRenderer {
             features: f,
             shadow_rays,
             max_depth: s.max_depth,
+            profile: opts.profile,
         };
         let mut runner = wavefront::Runner::new(&setup, capacity)?;
         let range = opts.samples.unwrap_or(crate::prepare::SampleRange::all(s.spp));
@@ -344,7 +352,9 @@ impl GpuRenderer {
             capacity: runner.capacity(),
             shadow_rays,
         };
+        let rounds = Instant::now();
         let acc = run_rounds(&mut runner, &plan, &opts.passes)?;
+        let profile = runner.profile(rounds.elapsed().as_secs_f64());
         let counters = runner.counters()?;
         Ok(GpuRenderOutput {
             image: acc.image,
@@ -357,6 +367,7 @@ impl GpuRenderer {
             batches: acc.batches,
             batch_paths: runner.capacity(),
             rays: counters.rays,
+            profile,
         })
     }
 }

@@ -17,6 +17,7 @@
 //! for fixed samples per round, whatever the batch size or the order queues fill in.
 
 mod contract;
+pub mod profile;
 mod schedule;
 mod stages;
 
@@ -146,6 +147,8 @@ pub(crate) struct Runner<'a> {
     shade: Vec<Stage>,
     shadow: bool,
     max_depth: u32,
+    /// Timestamps around every launch (`GpuRenderOptions::profile`, where the device can).
+    profiler: Option<profile::Profiler>,
 }
 
 /// A batch in flight: its film's staging buffer and submission.
@@ -165,6 +168,8 @@ pub(crate) struct RunnerSetup<'a> {
     /// Shadow rays a vertex may queue ([`BatchUniform::shadow_rays`]).
     pub shadow_rays: u32,
     pub max_depth: u32,
+    /// Time every launch ([`profile`]), if the device has the timestamp features.
+    pub profile: bool,
 }
 
 impl<'a> Runner<'a> {
@@ -174,7 +179,12 @@ impl<'a> Runner<'a> {
         let mut capacity = capacity.max(1);
         loop {
             match Self::allocate(setup, capacity) {
-                Ok(r) => return Ok(r),
+                Ok(mut r) => {
+                    if setup.profile {
+                        r.profiler = profile::Profiler::new(setup.gpu)?;
+                    }
+                    return Ok(r);
+                }
                 Err(GpuError::TooLarge { .. } | GpuError::OutOfMemory(_)) if capacity > 1024 => capacity /= 2,
                 Err(e) => return Err(e),
             }
@@ -273,11 +283,30 @@ impl<'a> Runner<'a> {
             shade,
             shadow: kernels.kernels.contains_key(&Stage::Shadow),
             max_depth,
+            profiler: None,
         })
     }
 
     pub fn capacity(&self) -> u32 {
         self.capacity
+    }
+
+    /// The stage times so far, with the wall time of the rounds (`None` unless profiling).
+    pub fn profile(&self, wall_seconds: f64) -> Option<profile::StageProfile> {
+        self.profiler.as_ref().map(|p| p.finish(wall_seconds))
+    }
+
+    /// Records `launch` of `stage`, timed when profiling.
+    fn launch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        stage: Stage,
+        launch: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<(), GpuError>,
+    ) -> Result<(), GpuError> {
+        match &self.profiler {
+            Some(p) => p.timed(pass, stage.label(), launch),
+            None => launch(pass),
+        }
     }
 
     /// Binds `stage`'s pipeline and groups in `pass`.
@@ -294,24 +323,30 @@ impl<'a> Runner<'a> {
 
     /// A launch of `stage` over `count` invocations, sized on the host (camera, film).
     fn direct(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize, count: u32) -> Result<(), GpuError> {
-        self.bind(pass, stage, film)?;
-        let groups = count.div_ceil(WORKGROUP);
-        let x = groups.min(MAX_GRID);
-        pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
-        Ok(())
+        self.launch(pass, stage, |pass| {
+            self.bind(pass, stage, film)?;
+            let groups = count.div_ceil(WORKGROUP);
+            let x = groups.min(MAX_GRID);
+            pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
+            Ok(())
+        })
     }
 
     /// A launch of `stage` over queue `q`, sized on the device.
     fn indirect(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, q: u32) -> Result<(), GpuError> {
-        self.bind(pass, stage, 0)?;
-        pass.dispatch_workgroups_indirect(&self.args, 12 * u64::from(q));
-        Ok(())
+        self.launch(pass, stage, |pass| {
+            self.bind(pass, stage, 0)?;
+            pass.dispatch_workgroups_indirect(&self.args, 12 * u64::from(q));
+            Ok(())
+        })
     }
 
     fn control_kernel(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage) -> Result<(), GpuError> {
-        self.bind(pass, stage, 0)?;
-        pass.dispatch_workgroups(1, 1, 1);
-        Ok(())
+        self.launch(pass, stage, |pass| {
+            self.bind(pass, stage, 0)?;
+            pass.dispatch_workgroups(1, 1, 1);
+            Ok(())
+        })
     }
 
     /// Records one bounce of every path in flight.
@@ -411,6 +446,9 @@ impl BatchRunner for Runner<'_> {
 
     fn submit(&mut self, batch: &BatchUniform, slot: usize) -> Result<Pending, GpuError> {
         let gpu = self.gpu;
+        if let Some(p) = &self.profiler {
+            p.begin_batch(slot);
+        }
         gpu.queue.write_buffer(&self.batch, 0, bytemuck::bytes_of(batch));
         let last = if self.path_tracer {
             // Bounce 0, every slot queued for the closest-hit stage (the camera stage writes
@@ -455,6 +493,9 @@ impl BatchRunner for Runner<'_> {
                 self.direct(&mut pass, Stage::Film, slot, pixels)?;
             }
             e.copy_buffer_to_buffer(&self.films[slot], 0, &self.staging[slot], 0, u64::from(pixels) * 32);
+            if let Some(p) = &self.profiler {
+                p.resolve(e);
+            }
             Ok(())
         })?;
         Ok(Pending { slot, pixels, submission })
@@ -462,7 +503,11 @@ impl BatchRunner for Runner<'_> {
 
     fn collect(&mut self, pending: Pending) -> Result<Vec<[f64; 3]>, GpuError> {
         let bytes = u64::from(pending.pixels) * 32;
-        let film: Vec<[f32; 4]> = map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission))?;
+        let film: Vec<[f32; 4]> =
+            map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission.clone()))?;
+        if let Some(p) = &self.profiler {
+            p.collect(self.gpu, pending.slot, pending.submission)?;
+        }
         // Each pixel's value and rounding error, summed exactly in f64.
         Ok(film.chunks_exact(2).map(|v| std::array::from_fn(|c| f64::from(v[0][c]) + f64::from(v[1][c]))).collect())
     }
