@@ -99,14 +99,10 @@ fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
 // #endif
 
 // #if STAGE_ESCAPE
-// EnvLight::pdf for a unit direction.
-fn env_pdf(dir: vec3<f32>) -> f32 {
 // #if ENV_IMAGE
-    if (environment.kind == ENV_IMAGE) {
-        let uv = equirect_uv(dir, environment.rotation_rad);
-        return env_image_pdf(env_dist_pdf(uv.x, uv.y), uv.y);
-    }
-// #endif
-    return UNIFORM_SPHERE_PDF;
+// EnvLight::pdf of the image light for the direction at (u, v) of the map.
+fn env_image_pdf_at(uv: vec2<f32>) -> f32 {
+    return env_image_pdf(env_dist_pdf(uv.x, uv.y), uv.y);
 }
+// #endif
 // #endif

@@ -15,27 +15,44 @@ fn equirect_uv(d: vec3<f32>, rotation_rad: f32) -> vec2<f32> {
     }
     return vec2<f32>(u, atan2_precise(length(d.xy), d.z) / PI);
 }
+
+// The image's radiance at (u, v).
+fn env_image_radiance(uv: vec2<f32>) -> vec3<f32> {
+    let w = environment.tex_width;
+    let h = environment.tex_height;
+    let col = min(u32(uv.x * f32(w)), w - 1u);
+    let row = min(u32(uv.y * f32(h)), h - 1u);
+    return texel(environment.tex_offset, w, col, row) * environment.intensity;
+}
 // #endif
 
+// #if ENV_GRADIENT
+fn env_gradient_radiance(d: vec3<f32>) -> vec3<f32> {
+    if (d.z >= 0.0) {
+        return environment.b.xyz * (1.0 - d.z) + environment.a.xyz * d.z;
+    }
+    return environment.b.xyz * (1.0 + d.z) + environment.c.xyz * (-d.z);
+}
+// #endif
+
+fn escape_direction(dir: vec3<f32>) -> vec3<f32> {
+    return normalize_or(dir, vec3<f32>(0.0, 0.0, 1.0));
+}
+
+// #if !STAGE_ESCAPE
+// (The escape stage looks the environment up in pt_escaped, with its MIS density.)
 fn escape_radiance(dir: vec3<f32>) -> vec3<f32> {
-    let d = normalize_or(dir, vec3<f32>(0.0, 0.0, 1.0));
+    let d = escape_direction(dir);
 // #if ENV_GRADIENT
     if (environment.kind == ENV_GRADIENT) {
-        if (d.z >= 0.0) {
-            return environment.b.xyz * (1.0 - d.z) + environment.a.xyz * d.z;
-        }
-        return environment.b.xyz * (1.0 + d.z) + environment.c.xyz * (-d.z);
+        return env_gradient_radiance(d);
     }
 // #endif
 // #if ENV_IMAGE
     if (environment.kind == ENV_IMAGE) {
-        let uv = equirect_uv(d, environment.rotation_rad);
-        let w = environment.tex_width;
-        let h = environment.tex_height;
-        let col = min(u32(uv.x * f32(w)), w - 1u);
-        let row = min(u32(uv.y * f32(h)), h - 1u);
-        return texel(environment.tex_offset, w, col, row) * environment.intensity;
+        return env_image_radiance(equirect_uv(d, environment.rotation_rad));
     }
 // #endif
     return environment.a.xyz;
 }
+// #endif

@@ -48,16 +48,36 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 // Radiance of an escaping ray, MIS-weighted when NEE samples the environment. NEE code
 // compiled in still obeys settings.nee (as cpu::path_tracer does), so a full-featured
 // kernel renders a scene without NEE correctly.
+// An image environment's (u, v) (two precise atan2) is computed once for the radiance
+// and the light's density.
 fn pt_escaped(prev: Previous, dir: vec3<f32>) -> vec3<f32> {
     if (environment.is_light == 0u) {
         return vec3<f32>(0.0);
     }
-    let le = escape_radiance(dir);
+    let d = escape_direction(dir);
+    var le = environment.a.xyz;
+// #if NEE
+    var pdf = UNIFORM_SPHERE_PDF;
+// #endif
+// #if ENV_GRADIENT
+    if (environment.kind == ENV_GRADIENT) {
+        le = env_gradient_radiance(d);
+    }
+// #endif
+// #if ENV_IMAGE
+    if (environment.kind == ENV_IMAGE) {
+        let uv = equirect_uv(d, environment.rotation_rad);
+        le = env_image_radiance(uv);
+// #if NEE
+        pdf = env_image_pdf_at(uv);
+// #endif
+    }
+// #endif
 // #if NEE
     if (settings.nee == 0u || prev.delta) {
         return le;
     }
-    return le * power_heuristic(prev.pdf, light_selection_pdf() * env_pdf(dir));
+    return le * power_heuristic(prev.pdf, light_selection_pdf() * pdf);
 // #else
     return le;
 // #endif
