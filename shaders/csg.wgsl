@@ -23,8 +23,8 @@ const CSG_SLIVER: f32 = 3.0517578125e-5;
 // then the flip bit (a carved surface), then the face (layout::CSG_END_FACE_BITS; the
 // packer keeps shape indices below layout::CSG_LEAF_LIMIT). An open end (no surface) has
 // the all-ones leaf field, whatever its flip bit. Two words per end instead of four nearly
-// halved streetlamp.sl's time on llvmpipe, where every private-array access is a per-lane
-// gather or scatter.
+// halved streetlamp.sl's time on llvmpipe (GL backend), where every private-array access
+// is a per-lane gather or scatter.
 struct End {
     t: f32,
     tag: u32,

@@ -5,9 +5,10 @@ mod common;
 
 use std::path::Path;
 
-use common::{icosphere, inscribed_radius, mean_and_stderr, obj_text};
+use common::{inscribed_radius, mean_and_stderr, obj_text};
 use glam::DVec3;
 use lumen::cpu::{render, Progress, RenderOptions};
+use lumen::scene::mesh::icosphere;
 use lumen::scene::*;
 use lumen::scenelang::{load_str, ErrorKind, LoadOptions};
 

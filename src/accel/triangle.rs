@@ -193,8 +193,8 @@ fn difference_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::sampling::Pcg32;
+    use crate::scene::mesh::icosphere;
     use rayon::prelude::*;
-    use std::collections::HashMap;
 
     const P0: DVec3 = DVec3::new(0.0, 0.0, 0.0);
     const P1: DVec3 = DVec3::new(1.0, 0.0, 0.0);
@@ -351,69 +351,6 @@ mod tests {
         }
         // The bound is conservative but not absurd.
         assert!(max_ratio > 1e-6, "bound looser than expected: {max_ratio}");
-    }
-
-    /// A subdivided icosahedron on the unit sphere: `levels` 4-to-1 splits, shared vertices
-    /// (each edge midpoint made once), outward winding.
-    fn icosphere(levels: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let phi = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut verts: Vec<DVec3> = [
-            (-1.0, phi, 0.0),
-            (1.0, phi, 0.0),
-            (-1.0, -phi, 0.0),
-            (1.0, -phi, 0.0),
-            (0.0, -1.0, phi),
-            (0.0, 1.0, phi),
-            (0.0, -1.0, -phi),
-            (0.0, 1.0, -phi),
-            (phi, 0.0, -1.0),
-            (phi, 0.0, 1.0),
-            (-phi, 0.0, -1.0),
-            (-phi, 0.0, 1.0),
-        ]
-        .iter()
-        .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
-        .collect();
-        let mut tris: Vec<[u32; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        for _ in 0..levels {
-            let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
-            let mut midpoint = |a: u32, b: u32, verts: &mut Vec<DVec3>| {
-                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    verts.push(((verts[a as usize] + verts[b as usize]) * 0.5).normalize());
-                    (verts.len() - 1) as u32
-                })
-            };
-            let mut next = Vec::with_capacity(tris.len() * 4);
-            for [a, b, c] in tris {
-                let ab = midpoint(a, b, &mut verts);
-                let bc = midpoint(b, c, &mut verts);
-                let ca = midpoint(c, a, &mut verts);
-                next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-            }
-            tris = next;
-        }
-        (verts, tris)
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //! errors that name the file. No input makes it panic (property-tested below).
 
 mod error;
+mod icosphere;
 mod obj;
 mod ply;
 
@@ -15,6 +16,7 @@ use std::path::Path;
 use glam::{DVec2, DVec3};
 
 pub use error::{MeshError, MeshErrorKind, MeshLocation};
+pub use icosphere::icosphere;
 
 use super::Aabb;
 

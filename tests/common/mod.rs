@@ -244,67 +244,6 @@ pub fn add_lit_props(b: &mut SceneBuilder) {
 
 // ------------------------------------------------------------------ meshes
 
-/// A unit icosphere: the icosahedron with each triangle split in four `subdivisions` times,
-/// every vertex pushed onto the unit sphere; outward (counter-clockwise) winding.
-pub fn icosphere(subdivisions: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut v: Vec<DVec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..subdivisions {
-        let mut mid = std::collections::HashMap::new();
-        let mut midpoint = |a: u32, b: u32, v: &mut Vec<DVec3>| -> u32 {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                v.push(((v[a as usize] + v[b as usize]) / 2.0).normalize());
-                (v.len() - 1) as u32
-            })
-        };
-        let mut next = Vec::with_capacity(4 * f.len());
-        for [a, b, c] in f {
-            let (ab, bc, ca) = (midpoint(a, b, &mut v), midpoint(b, c, &mut v), midpoint(c, a, &mut v));
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = next;
-    }
-    (v, f)
-}
-
 /// OBJ text of a mesh; with `normals`, the vertex positions (unit sphere) as normals too.
 pub fn obj_text(v: &[DVec3], f: &[[u32; 3]], normals: bool) -> String {
     let mut s = String::new();
