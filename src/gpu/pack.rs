@@ -113,10 +113,10 @@ pub enum PackError {
     /// f32 cannot hold the shape's placement: rounding its transform would give ±∞ and a
     /// meaningless render, so the GPU refuses the scene (the CPU renders it in f64).
     #[error(
-        "shape {shape} ({kind:?}): its transform reaches {magnitude:e} in the camera frame, beyond f32's range \
+        "shape {shape} ({what}): its transform reaches {magnitude:e} in the camera frame, beyond f32's range \
          (±3.4e38) that the GPU computes in"
     )]
-    OutOfRange { shape: usize, kind: ShapeKind, magnitude: f64 },
+    OutOfRange { shape: usize, what: &'static str, magnitude: f64 },
 }
 
 /// The camera's position in the world: where the packed frame's origin goes. For a
@@ -222,7 +222,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     for (i, s) in shifted.iter().enumerate() {
         object_ref[i] = match s {
             Shape::Mesh(m) => {
-                check_range(i, ShapeKind::Cube, &m.transform)?;
+                check_range(i, "mesh instance", &m.transform)?;
                 let mut shape = packed_shape(ShapeKind::Cube, &m.transform, m.material.0, area_of_shape[i]);
                 shape.kind = layout::shape_kind::MESH;
                 let flags = if m.shades_smooth() { layout::mesh_bits::SMOOTH } else { 0 }
@@ -232,7 +232,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
                 count_u32("shapes", p.shapes.len())? - 1
             }
             Shape::Primitive(prim) => {
-                check_range(i, prim.kind, &prim.transform)?;
+                check_range(i, prim.kind.name(), &prim.transform)?;
                 p.shapes.push(packed_shape(prim.kind, &prim.transform, prim.material.0, area_of_shape[i]));
                 count_u32("shapes", p.shapes.len())? - 1
             }
@@ -508,10 +508,12 @@ fn shifted_shape(s: &Shape, shift: &Transform) -> Shape {
 /// has an entry beyond f32's range. A shape too *small* for f32 (its inverse overflows) is
 /// kept: its rays become non-finite in object space and miss, as they would at the
 /// resolution f32 has for any coordinate it could be seen from.
-fn check_range(shape: usize, kind: ShapeKind, to_world: &Transform) -> Result<(), PackError> {
+/// Refuses top-level shape `shape` when `to_world` (of it, or of a part called `what`) is
+/// beyond f32.
+fn check_range(shape: usize, what: &'static str, to_world: &Transform) -> Result<(), PackError> {
     let magnitude = to_world.matrix().to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if magnitude > f64::from(f32::MAX) {
-        return Err(PackError::OutOfRange { shape, kind, magnitude });
+        return Err(PackError::OutOfRange { shape, what, magnitude });
     }
     Ok(())
 }
@@ -567,7 +569,7 @@ fn pack_csg(
             }
             Shape::Primitive(prim) => {
                 let to_world = t * prim.transform;
-                check_range(top, prim.kind, &to_world)?;
+                check_range(top, prim.kind.name(), &to_world)?;
                 p.shapes.push(packed_shape(prim.kind, &to_world, prim.material.0, NONE));
                 count_u32("shapes", p.shapes.len())? - 1
             }
@@ -808,9 +810,9 @@ mod tests {
         b.sphere(Transform::scaling(DVec3::splat(1e30)), m).sphere(Transform::scaling(DVec3::splat(1e-300)), m);
         assert!(pack(&b.build().unwrap(), None).is_ok(), "1e30 fits f32; 1e-300 is kept (and never hit)");
         let huge = Transform::scaling(DVec3::splat(1e300));
-        b.shape(Shape::csg(CsgOp::Unite, vec![sphere_at(0.0, m), Shape::primitive(ShapeKind::Cube, huge, m)], huge));
+        b.shape(Shape::csg(CsgOp::Fuse, vec![sphere_at(0.0, m), Shape::primitive(ShapeKind::Cube, huge, m)], huge));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
-        assert!(matches!(err, PackError::OutOfRange { shape: 2, kind: ShapeKind::Sphere, .. }), "{err}");
+        assert!(matches!(err, PackError::OutOfRange { shape: 2, what: "sphere", .. }), "{err}");
         assert!(err.to_string().contains("beyond f32's range"), "{err}");
     }
 
