@@ -210,9 +210,9 @@ fn world_first(ray: Ray, any_hit: bool) -> Candidate {
 // #endif
 
 // #if FIRST_HIT
-// The closest hit; `hit.t = OPEN` when the ray escapes.
-fn closest_hit(ray: Ray) -> Hit {
-    let cand = world_first(ray, false);
+// #if !ONOFF
+// The surface a closest-hit query found along `ray`; `hit.t = OPEN` when it escaped.
+fn hit_of(cand: Candidate, ray: Ray) -> Hit {
     if (cand.c.t >= OPEN) {
         return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
     }
@@ -224,9 +224,20 @@ fn closest_hit(ray: Ray) -> Hit {
 }
 // #endif
 
+// #if FLAT
+// The closest hit; `hit.t = OPEN` when the ray escapes.
+fn closest_hit(ray: Ray) -> Hit {
+    return hit_of(world_first(ray, false), ray);
+}
+// #endif
+// #endif
+
 // #if SHADOWS
-// True when something lies on the ray strictly inside (tmin, tmax).
+// #if !POINTLIGHT
+// True when something lies on the ray strictly inside (tmin, tmax). (The PointLight
+// integrator queries world_first directly, from one call site.)
 fn occluded(ray: Ray) -> bool {
     return world_first(ray, true).c.t < OPEN;
 }
+// #endif
 // #endif
