@@ -228,6 +228,9 @@ fn render_on_cpu(scene: &Scene, args: &RenderArgs, range: SampleRange) -> anyhow
         s.rays as f64 / s.seconds.max(1e-9) / 1e6
     );
     let stopped_early = report_stop(s.stop, s.spp);
+    if args.profile {
+        eprintln!("note: --profile times GPU stages; this render ran on the CPU");
+    }
     if s.spp == 0 {
         bail!("stopped before any sample was complete; nothing to write");
     }
