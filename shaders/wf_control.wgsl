@@ -4,9 +4,13 @@
 // arguments; `advance` ends a bounce (counts its rays, empties the queues it consumed,
 // swaps the ray queues) and sizes the next bounce's closest-hit launch.
 
-// Grid of a launch over `n` entries: (x, y, 1) workgroups, x ≤ WF_MAX_GRID.
+// Grid of a launch over `n` entries: (x, y, 1) workgroups, x ≤ WF_MAX_GRID. The CSG
+// stage's launch covers both its queues (at most one is non-empty: wf_csg.wgsl).
 fn write_args(q: u32) {
-    let n = atomicLoad(&control[CTRL_COUNT + q]);
+    var n = atomicLoad(&control[CTRL_COUNT + q]);
+    if (q == Q_CSG) {
+        n += atomicLoad(&control[CTRL_COUNT + Q_SHADOW_CSG]);
+    }
     let groups = (n + WF_WORKGROUP - 1u) / WF_WORKGROUP;
     let x = min(groups, WF_MAX_GRID);
     var y = 0u;
@@ -26,6 +30,14 @@ fn write_all_args() {
 
 @compute @workgroup_size(1)
 fn dispatch_args() {
+    write_all_args();
+}
+
+// After the shadow stage: the bounce's closest-hit CSG queue has been evaluated, so it is
+// emptied and the CSG stage's second launch covers the shadow rays' trees alone.
+@compute @workgroup_size(1)
+fn shadow_csg_args() {
+    atomicStore(&control[CTRL_COUNT + Q_CSG], 0u);
     write_all_args();
 }
 

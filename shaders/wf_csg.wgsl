@@ -1,27 +1,91 @@
 // #requires wf_classify csg
-// CSG stage: the trees a closest-hit query deferred (in the order it met them, as
-// cpu::World evaluates them), against the best candidate the traversal found; only the
-// rays that met a tree run this code.
+// CSG stage: the trees a query deferred (in the order it met them, as cpu::World evaluates
+// them). Launched twice per bounce over two queues, one of them empty each time
+// (wf_control.wgsl): after the closest-hit stage over Q_CSG, the rays whose closest-hit
+// query met trees, against the best candidate the traversal found; after the shadow stage
+// over Q_SHADOW_CSG, the paths whose shadow rays met trees and nothing else, whose
+// contributions it then adds. Only this kernel holds CSG code, and it calls csg_first from
+// one place (Mesa inlines every call site).
 
 @compute @workgroup_size(64)
 fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = wf_slot(Q_CSG, wf_index(gid, nwg));
+    let index = wf_index(gid, nwg);
+    let closest_count = atomicLoad(&control[CTRL_COUNT + Q_CSG]);
+    let shadows = index >= closest_count;
+// #if WF_SHADOW_CSG
+    var slot = WF_NONE;
+    if (shadows) {
+        slot = wf_slot(Q_SHADOW_CSG, index - closest_count);
+    } else {
+        slot = wf_slot(Q_CSG, index);
+    }
+    let queries = select(1u, batch.shadow_rays, shadows);
+// #else
+    let slot = wf_slot(Q_CSG, index);
+    let queries = 1u;
+// #endif
     if (slot == WF_NONE) {
         return;
     }
     csg_use_slot(slot);
-    var ray = load_ray(slot);
-    var best = load_hit(slot);
-    ray.tmax = min(ray.tmax, best.c.t);
-    let base = slot * (CSG_DEFER_SLOTS + 1u);
-    let count = deferred_refs[base];
-    for (var k = 0u; k < count; k++) {
-        let r = deferred_refs[base + 1u + k];
-        let cand = csg_first(r & ~CSG_NODE_BIT, ray, r);
-        if (cand.c.t < ray.tmax) {
-            best = cand;
-            ray.tmax = cand.c.t;
+    var best = no_candidate();
+// #if WF_SHADOW_CSG
+    let ri = field(F_RADIANCE, slot);
+    var radiance = paths[ri].xyz;
+// #endif
+    for (var q = 0u; q < queries; q++) {
+        var ray: Ray;
+        var record = deferred_record(slot, 0u);
+// #if WF_SHADOW_CSG
+        var value = vec3<f32>(0.0);
+        if (shadows) {
+            // Shadow ray q, when the shadow stage left its trees to evaluate.
+            let i = 3u * (slot * batch.shadow_rays + q);
+            let v = shadow[i + 2u];
+            if (v.w == 0.0) {
+                break;
+            }
+            record = deferred_record(slot, 1u + q);
+            if (deferred_refs[record] == 0u) {
+                continue;
+            }
+            let o = shadow[i];
+            let d = shadow[i + 1u];
+            ray = Ray(o.xyz, d.xyz, o.w, d.w);
+            value = v.xyz;
+            best = no_candidate();
+        } else {
+            ray = load_ray(slot);
+            best = load_hit(slot);
         }
+// #else
+        ray = load_ray(slot);
+        best = load_hit(slot);
+// #endif
+        ray.tmax = min(ray.tmax, best.c.t);
+        let count = deferred_refs[record];
+        for (var k = 0u; k < count; k++) {
+            let r = deferred_refs[record + 1u + k];
+            let cand = csg_first(r & ~CSG_NODE_BIT, ray, r);
+            if (cand.c.t < ray.tmax) {
+                best = cand;
+                ray.tmax = cand.c.t;
+                if (shadows) {
+                    break;
+                }
+            }
+        }
+// #if WF_SHADOW_CSG
+        if (shadows && best.c.t >= OPEN) {
+            radiance += value;
+        }
+// #endif
     }
+// #if WF_SHADOW_CSG
+    if (shadows) {
+        paths[ri] = vec4<f32>(radiance, 0.0);
+        return;
+    }
+// #endif
     classify(slot, best);
 }

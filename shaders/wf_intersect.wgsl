@@ -20,7 +20,7 @@ fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
 // #if CSG_QUEUE
     let best = traverse(ray, false);
     if (deferred.count > 0u) {
-        let base = slot * (CSG_DEFER_SLOTS + 1u);
+        let base = deferred_record(slot, 0u);
         deferred_refs[base] = deferred.count;
         for (var k = 0u; k < deferred.count; k++) {
             deferred_refs[base + 1u + k] = deferred.refs[k];

@@ -30,6 +30,15 @@ fn wf_slot(q: u32, k: u32) -> u32 {
 }
 // #endif
 
+// #if WF_DEFERRED
+// #requires constants
+// Where record r of path `slot` starts in `deferred_refs` (a count, then up to
+// CSG_DEFER_SLOTS tree references): r = 0 for the closest-hit query, 1 + k for shadow ray k.
+fn deferred_record(slot: u32, r: u32) -> u32 {
+    return (slot * (1u + batch.shadow_rays) + r) * (CSG_DEFER_SLOTS + 1u);
+}
+// #endif
+
 // #if WF_PUSH
 // Appends path `slot` to queue q (each path is in at most one queue of a kind per bounce,
 // so a queue never holds more than batch.capacity entries).

@@ -1,7 +1,10 @@
 // #requires wf_path world wf_counting
 // Shadow stage: for every path that queued shadow rays this bounce, trace them in order
 // (any-hit) and add the contribution of each one nothing blocks. One invocation per path,
-// so a path's radiance is only ever written by one invocation, in a fixed order.
+// so a path's radiance is only ever written by one invocation, in a fixed order. With
+// CSG_QUEUE, a ray that meets CSG trees and nothing else leaves them in its deferred
+// record and the path goes to Q_SHADOW_CSG: the CSG stage evaluates them after this stage
+// and adds those rays' contributions (in ray order, after the ones added here).
 
 @compute @workgroup_size(64)
 fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -10,10 +13,15 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
 // #if CSG
+// #if !CSG_QUEUE
     csg_use_slot(slot);
+// #endif
 // #endif
     let ri = field(F_RADIANCE, slot);
     var radiance = paths[ri].xyz;
+// #if CSG_QUEUE
+    var pending = false;
+// #endif
     for (var k = 0u; k < batch.shadow_rays; k++) {
         let i = 3u * (slot * batch.shadow_rays + k);
         let value = shadow[i + 2u];
@@ -22,10 +30,33 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         }
         let o = shadow[i];
         let d = shadow[i + 1u];
-        if (!occluded(Ray(o.xyz, d.xyz, o.w, d.w))) {
+        let ray = Ray(o.xyz, d.xyz, o.w, d.w);
+// #if CSG_QUEUE
+        rays_traced += 1u;
+        let record = deferred_record(slot, 1u + k);
+        var trees = 0u;
+        if (traverse(ray, true).c.t >= OPEN) {
+            trees = deferred.count;
+            if (trees == 0u) {
+                radiance += value.xyz;
+            }
+            for (var j = 0u; j < trees; j++) {
+                deferred_refs[record + 1u + j] = deferred.refs[j];
+            }
+        }
+        deferred_refs[record] = trees;
+        pending = pending || trees > 0u;
+// #else
+        if (!occluded(ray)) {
             radiance += value.xyz;
         }
+// #endif
     }
     paths[ri] = vec4<f32>(radiance, 0.0);
+// #if CSG_QUEUE
+    if (pending) {
+        wf_push(Q_SHADOW_CSG, slot);
+    }
+// #endif
     flush_rays_traced();
 }

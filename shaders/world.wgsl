@@ -234,10 +234,13 @@ fn closest_hit(ray: Ray) -> Hit {
 
 // #if SHADOWS
 // #if !POINTLIGHT
+// #if !CSG_QUEUE
 // True when something lies on the ray strictly inside (tmin, tmax). (The PointLight
-// integrator queries world_first directly, from one call site.)
+// integrator queries world_first directly, from one call site; with CSG_QUEUE the shadow
+// stage traverses and hands CSG trees to the CSG stage.)
 fn occluded(ray: Ray) -> bool {
     return world_first(ray, true).c.t < OPEN;
 }
+// #endif
 // #endif
 // #endif

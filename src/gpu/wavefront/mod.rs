@@ -8,7 +8,8 @@
 //!
 //! ```text
 //! intersect ─┬─ (CSG trees met) ─ csg ─┬─ escape
-//!            └──────────────────────────┴─ shade[diffuse | specular | dielectric] ─ shadow ─ advance
+//!            └──────────────────────────┴─ shade[diffuse | specular | dielectric] ─ shadow ─┬─ advance
+//!                                      (shadow rays that met CSG trees) shadow_csg_args ─ csg ─┘
 //! ```
 //!
 //! Determinism: a path's state is written only by the stage that holds its slot, so no
@@ -111,7 +112,9 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> 
         StateBuffer::Paths => 16 * u64::from(path_field::COUNT),
         StateBuffer::Words => 16 * u64::from(word_field::COUNT),
         StateBuffer::Shadow => 48 * u64::from(shadow_rays.max(1)),
-        StateBuffer::DeferredRefs => 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1),
+        // A record of the trees one query deferred (a count, then the references): the
+        // closest-hit query's, then each shadow ray's.
+        StateBuffer::DeferredRefs => 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1) * (1 + u64::from(shadow_rays)),
         // The compensated sum: value and error (wf_film.wgsl).
         StateBuffer::Film => 32,
         StateBuffer::Args => 0,
@@ -146,6 +149,8 @@ pub(crate) struct Runner<'a> {
     csg: bool,
     shade: Vec<Stage>,
     shadow: bool,
+    /// Shadow rays that meet CSG trees go to the CSG stage (a second launch per bounce).
+    shadow_csg: bool,
     max_depth: u32,
     /// Timestamps around every launch (`GpuRenderOptions::profile`, where the device can).
     profiler: Option<profile::Profiler>,
@@ -282,6 +287,7 @@ impl<'a> Runner<'a> {
             csg: kernels.kernels.contains_key(&Stage::Csg),
             shade,
             shadow: kernels.kernels.contains_key(&Stage::Shadow),
+            shadow_csg: kernels.kernels.contains_key(&Stage::ShadowCsgArgs),
             max_depth,
             profiler: None,
         })
@@ -366,6 +372,11 @@ impl<'a> Runner<'a> {
         if self.shadow {
             self.control_kernel(pass, Stage::DispatchArgs)?;
             self.indirect(pass, Stage::Shadow, queue::SHADOW)?;
+            if self.shadow_csg {
+                // The shadow rays' CSG trees, through the one kernel that holds CSG code.
+                self.control_kernel(pass, Stage::ShadowCsgArgs)?;
+                self.indirect(pass, Stage::Csg, queue::CSG)?;
+            }
         }
         self.control_kernel(pass, Stage::Advance)
     }

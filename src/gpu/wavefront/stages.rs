@@ -34,6 +34,9 @@ pub enum Stage {
     Film,
     /// Indirect dispatch arguments from queue lengths.
     DispatchArgs,
+    /// After the shadow stage: the closest-hit CSG work of the bounce is done; the
+    /// arguments of the CSG stage's second launch, over the shadow rays' trees.
+    ShadowCsgArgs,
     /// End of a bounce: count rays, empty consumed queues, size the next closest-hit launch.
     Advance,
 }
@@ -51,6 +54,9 @@ impl Stage {
         stages.extend(shade_kinds(f).into_iter().map(Stage::Shade));
         if has_shadow_rays(f) {
             stages.push(Stage::Shadow);
+            if csg_queue(f) {
+                stages.push(Stage::ShadowCsgArgs);
+            }
         }
         stages.extend([Stage::Film, Stage::DispatchArgs, Stage::Advance]);
         stages
@@ -76,6 +82,7 @@ impl Stage {
             Stage::Shadow => ("wf_shadow", "shadow_stage"),
             Stage::Film => ("wf_film", "film_stage"),
             Stage::DispatchArgs => ("wf_control", "dispatch_args"),
+            Stage::ShadowCsgArgs => ("wf_control", "shadow_csg_args"),
             Stage::Advance => ("wf_control", "advance"),
         }
     }
@@ -102,16 +109,21 @@ impl Stage {
             Stage::Intersect if f.bvh || f.plane => vec![Batch, Control, Queues, Paths, Words],
             // Nothing to hit: every ray escapes and no hit is recorded.
             Stage::Intersect => vec![Batch, Control, Queues, Paths],
+            Stage::Csg if has_shadow_rays(f) => {
+                vec![Batch, Control, Queues, Paths, Words, Shadow, DeferredRefs, CsgPool]
+            }
             Stage::Csg => vec![Batch, Control, Queues, Paths, Words, DeferredRefs, CsgPool],
             Stage::Escape => vec![Batch, Control, Queues, Paths, Words],
             Stage::Shade(kind) if casts_shadow_rays(kind) && has_shadow_rays(f) => {
                 vec![Batch, Control, Queues, Paths, Words, Shadow]
             }
             Stage::Shade(_) => vec![Batch, Control, Queues, Paths, Words],
+            // Trees met are handed to the CSG stage.
+            Stage::Shadow if csg_queue(f) => vec![Batch, Control, Queues, Paths, Shadow, DeferredRefs],
             Stage::Shadow if f.csg => vec![Batch, Control, Queues, Paths, Shadow, CsgPool],
             Stage::Shadow => vec![Batch, Control, Queues, Paths, Shadow],
             Stage::Film => vec![Batch, Control, Paths, Film],
-            Stage::DispatchArgs | Stage::Advance => vec![Control, Args],
+            Stage::DispatchArgs | Stage::ShadowCsgArgs | Stage::Advance => vec![Control, Args],
         }
     }
 
@@ -139,14 +151,17 @@ impl Stage {
                 let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "MATERIALS"]].concat());
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
                 if csg_queue(f) {
-                    n.push("CSG_QUEUE");
+                    n.extend(["CSG_QUEUE", "WF_DEFERRED"]);
                 }
                 n
             }
             Stage::Csg => {
                 // Meshes are never CSG operands: no mesh code here.
                 let mut n = keep(&[&SHAPES[..5], &["CSG", "MATERIALS"]].concat());
-                n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "SPANS"]);
+                n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "SPANS", "WF_DEFERRED"]);
+                if has_shadow_rays(f) {
+                    n.push("WF_SHADOW_CSG");
+                }
                 n
             }
             Stage::Escape => {
@@ -194,9 +209,12 @@ impl Stage {
             Stage::Shadow => {
                 let mut n = keep(&[&SHAPES[..], &["CSG", "BVH"]].concat());
                 n.extend(["SHADOWS", "WF_QUEUED", "WF_COUNT", "TRAVERSE", "SPANS"]);
+                if csg_queue(f) {
+                    n.extend(["CSG_QUEUE", "WF_DEFERRED", "WF_PUSH"]);
+                }
                 n
             }
-            Stage::Film | Stage::DispatchArgs | Stage::Advance => vec![],
+            Stage::Film | Stage::DispatchArgs | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
         if !scene.contains(&"GEOMETRY") {
             // Nothing to intersect: no spans or traversal helpers to call.
@@ -262,12 +280,12 @@ impl Stage {
             Stage::Shade(_) => "STAGE_SHADE",
             Stage::Shadow => "STAGE_SHADOW",
             Stage::Film => "STAGE_FILM",
-            Stage::DispatchArgs | Stage::Advance => "STAGE_CONTROL",
+            Stage::DispatchArgs | Stage::ShadowCsgArgs | Stage::Advance => "STAGE_CONTROL",
         }
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 27] = [
+    pub const NAMES: [&'static str; 29] = [
         "CSG_POOL_PRIVATE",
         "WF_HIT_STORE",
         "WF_HIT_LOAD",
@@ -287,6 +305,8 @@ impl Stage {
         "WF_RAY_STORE",
         "WF_PATH_ID",
         "WF_COUNT",
+        "WF_DEFERRED",
+        "WF_SHADOW_CSG",
         "STAGE_CAMERA",
         "STAGE_FIRST_HIT",
         "STAGE_INTERSECT",
