@@ -1,4 +1,7 @@
 // #requires wf_classify csg
+// #if WF_SHADOW_CSG
+// #requires wf_shadow_ray
+// #endif
 // CSG stage: the trees a query deferred (in the order it met them, as cpu::World evaluates
 // them). Launched twice per bounce over two queues, one of them empty each time
 // (wf_control.wgsl): after the closest-hit stage over Q_CSG, the rays whose closest-hit
@@ -40,19 +43,16 @@ fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         var value = vec3<f32>(0.0);
         if (shadows) {
             // Shadow ray q, when the shadow stage left its trees to evaluate.
-            let i = 3u * (slot * batch.shadow_rays + q);
-            let v = shadow[i + 2u];
-            if (v.w == 0.0) {
+            let s = load_shadow_ray(slot, q);
+            if (!s.present) {
                 break;
             }
             record = deferred_record(slot, 1u + q);
             if (deferred_refs[record] == 0u) {
                 continue;
             }
-            let o = shadow[i];
-            let d = shadow[i + 1u];
-            ray = Ray(o.xyz, d.xyz, o.w, d.w);
-            value = v.xyz;
+            ray = s.ray;
+            value = s.value;
             best = no_candidate();
         } else {
             ray = load_ray(slot);

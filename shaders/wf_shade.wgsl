@@ -3,6 +3,7 @@
 // #requires point_lights
 // #endif
 // #if SHADOWS
+// #requires wf_shadow_ray
 // #if NEE
 // #requires env_light
 // #endif
@@ -37,16 +38,6 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
     return le;
 // #endif
 }
-
-// #if SHADOWS
-// Shadow ray k of path `slot` (k < batch.shadow_rays) and what it adds if nothing blocks it.
-fn queue_shadow(slot: u32, k: u32, ray: Ray, value: vec3<f32>) {
-    let i = 3u * (slot * batch.shadow_rays + k);
-    shadow[i] = vec4<f32>(ray.origin, ray.tmin);
-    shadow[i + 1u] = vec4<f32>(ray.dir, ray.tmax);
-    shadow[i + 2u] = vec4<f32>(value, 1.0);
-}
-// #endif
 
 // #if NEE
 // #if SHADOWS
@@ -175,9 +166,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 // #endif
     }
     if (shadows > 0u) {
-        if (shadows < batch.shadow_rays) {
-            shadow[3u * (slot * batch.shadow_rays + shadows) + 2u] = vec4<f32>(0.0);
-        }
+        end_shadows(slot, shadows);
         wf_push(Q_SHADOW, slot);
     }
 // #endif

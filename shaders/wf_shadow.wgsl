@@ -1,4 +1,4 @@
-// #requires wf_path world wf_counting
+// #requires wf_path world wf_counting wf_shadow_ray
 // Shadow stage: for every path that queued shadow rays this bounce, trace them in order
 // (any-hit) and add the contribution of each one nothing blocks. One invocation per path,
 // so a path's radiance is only ever written by one invocation, in a fixed order. With
@@ -23,14 +23,11 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     var pending = false;
 // #endif
     for (var k = 0u; k < batch.shadow_rays; k++) {
-        let i = 3u * (slot * batch.shadow_rays + k);
-        let value = shadow[i + 2u];
-        if (value.w == 0.0) {
+        let s = load_shadow_ray(slot, k);
+        if (!s.present) {
             break;
         }
-        let o = shadow[i];
-        let d = shadow[i + 1u];
-        let ray = Ray(o.xyz, d.xyz, o.w, d.w);
+        let ray = s.ray;
 // #if CSG_QUEUE
         rays_traced += 1u;
         let record = deferred_record(slot, 1u + k);
@@ -38,7 +35,7 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if (traverse(ray, true).c.t >= OPEN) {
             trees = deferred.count;
             if (trees == 0u) {
-                radiance += value.xyz;
+                radiance += s.value;
             }
             for (var j = 0u; j < trees; j++) {
                 deferred_refs[record + 1u + j] = deferred.refs[j];
@@ -48,7 +45,7 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         pending = pending || trees > 0u;
 // #else
         if (!occluded(ray)) {
-            radiance += value.xyz;
+            radiance += s.value;
         }
 // #endif
     }

@@ -263,6 +263,18 @@ impl Gpu {
         Ok(buffer)
     }
 
+    /// A buffer the host maps to read what the device copied into it (at least 16 bytes).
+    pub fn readback_buffer(&self, label: &str, bytes: u64) -> Result<wgpu::Buffer, GpuError> {
+        self.scoped(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(16),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })
+    }
+
     /// A zero-filled storage buffer of `bytes` bytes (padded like [`Self::storage_buffer`]).
     pub fn storage_buffer_zeroed(&self, label: &str, bytes: u64) -> Result<wgpu::Buffer, GpuError> {
         let size = padded_len(bytes);
@@ -350,18 +362,12 @@ impl Gpu {
             return Ok(Vec::new());
         }
         let copy = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
-        let staging = self.scoped(|| {
-            let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("readback"),
-                size: copy,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+        let staging = self.readback_buffer("readback", copy)?;
+        self.scoped(|| {
             let mut encoder =
                 self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
             encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, copy);
             self.queue.submit([encoder.finish()]);
-            staging
         })?;
         let (tx, rx) = std::sync::mpsc::channel();
         staging.map_async(wgpu::MapMode::Read, .., move |r| {

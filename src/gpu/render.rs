@@ -18,7 +18,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 48] = [
+const MODULES: [(&str, &str); 49] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -65,6 +65,7 @@ const MODULES: [(&str, &str); 48] = [
     ("shaders/wf_csg.wgsl", include_str!("../../shaders/wf_csg.wgsl")),
     ("shaders/wf_escape.wgsl", include_str!("../../shaders/wf_escape.wgsl")),
     ("shaders/wf_shade.wgsl", include_str!("../../shaders/wf_shade.wgsl")),
+    ("shaders/wf_shadow_ray.wgsl", include_str!("../../shaders/wf_shadow_ray.wgsl")),
     ("shaders/wf_shadow.wgsl", include_str!("../../shaders/wf_shadow.wgsl")),
     ("shaders/wf_film.wgsl", include_str!("../../shaders/wf_film.wgsl")),
 ];

@@ -167,6 +167,11 @@ pub enum Shape {
     Mesh(Box<MeshInstance>),
 }
 
+/// A UNITE without meshes: [`Shape::top_level_parts`] splits it.
+fn unite_splits(c: &Csg) -> bool {
+    c.op == CsgOp::Unite && !c.children.iter().any(Shape::holds_mesh)
+}
+
 impl Shape {
     pub fn primitive(kind: ShapeKind, transform: Transform, material: MaterialId) -> Self {
         Shape::Primitive(Primitive { kind, transform, material })
@@ -205,7 +210,7 @@ impl Shape {
     pub fn top_level_parts(self) -> Vec<Shape> {
         fn walk(s: Shape, out: &mut Vec<Shape>) {
             match s {
-                Shape::Csg(c) if c.op == CsgOp::Unite && !c.children.iter().any(Shape::holds_mesh) => {
+                Shape::Csg(c) if unite_splits(&c) => {
                     let t = c.transform;
                     for child in c.children {
                         walk(child.transformed(&t), out);
@@ -214,9 +219,6 @@ impl Shape {
                 other => out.push(other),
             }
         }
-        if !self.splits_at_top_level() {
-            return vec![self];
-        }
         let mut out = Vec::new();
         walk(self, &mut out);
         out
@@ -224,7 +226,7 @@ impl Shape {
 
     /// Whether [`Self::top_level_parts`] splits this shape (a UNITE without meshes).
     pub fn splits_at_top_level(&self) -> bool {
-        matches!(self, Shape::Csg(c) if c.op == CsgOp::Unite && !c.children.iter().any(Shape::holds_mesh))
+        matches!(self, Shape::Csg(c) if unite_splits(c))
     }
 
     fn holds_mesh(&self) -> bool {

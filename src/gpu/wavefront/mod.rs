@@ -220,16 +220,7 @@ impl<'a> Runner<'a> {
         let deferred = tiny("deferred CSG trees", StateBuffer::DeferredRefs)?;
         let csg_pool = tiny("CSG interval pool", StateBuffer::CsgPool)?;
         let films = [storage("film 0", StateBuffer::Film)?, storage("film 1", StateBuffer::Film)?];
-        let staging_buffer = |label: &str, bytes: u64| {
-            gpu.scoped(|| {
-                gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: bytes.max(16),
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            })
-        };
+        let staging_buffer = |label: &str, bytes: u64| gpu.readback_buffer(label, bytes);
         let film_bytes = cap * state_bytes(StateBuffer::Film, shadow_rays, features);
         let staging = [staging_buffer("film readback 0", film_bytes)?, staging_buffer("film readback 1", film_bytes)?];
         let probe = staging_buffer("control readback", u64::from(control::WORDS) * 4)?;

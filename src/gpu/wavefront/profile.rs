@@ -109,22 +109,23 @@ impl Profiler {
                 })
             })
         };
-        let buffer = |label: &str, usage: wgpu::BufferUsages| {
+        let resolve = |label: &str| {
             gpu.scoped(|| {
                 gpu.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
                     size: bytes,
-                    usage,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 })
             })
         };
-        let resolve = wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC;
-        let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
         Ok(Some(Self {
             sets: [set("timestamps 0")?, set("timestamps 1")?],
-            resolve: [buffer("timestamp resolve 0", resolve)?, buffer("timestamp resolve 1", resolve)?],
-            staging: [buffer("timestamp readback 0", read)?, buffer("timestamp readback 1", read)?],
+            resolve: [resolve("timestamp resolve 0")?, resolve("timestamp resolve 1")?],
+            staging: [
+                gpu.readback_buffer("timestamp readback 0", bytes)?,
+                gpu.readback_buffer("timestamp readback 1", bytes)?,
+            ],
             labels: RefCell::new([Vec::new(), Vec::new()]),
             slot: Cell::new(0),
             period_ns: f64::from(gpu.queue.get_timestamp_period()),
