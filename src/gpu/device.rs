@@ -370,18 +370,32 @@ pub fn probe_loop_limiter(gpu: &Gpu) -> Result<u32, GpuError> {
 mod tests {
     use super::*;
 
-    /// The probe sees llvmpipe's limiter (65,535 iterations, all loops of an invocation
-    /// together) and no limiter anywhere else it has run.
+    /// The probe sees llvmpipe's limiter where it exists (Mesa 22 and older: 65,535
+    /// iterations, all loops of an invocation together; Mesa 25 has none) and reports either
+    /// the limit or the whole loop, never anything between.
     #[test]
     fn the_probe_detects_llvmpipes_loop_limiter() {
         let Some(gpu) = crate::gpu::gpu_for_tests("loop_limiter_probe") else { return };
         let count = probe_loop_limiter(&gpu).unwrap();
+        println!("{}: the probe counted {count} of {LOOP_LIMITER_PROBE_TRIPS}", gpu.description());
+        assert!(count == 65_535 || count == LOOP_LIMITER_PROBE_TRIPS, "{count}");
         let llvmpipe = gpu.adapter_info.name.to_lowercase().contains("llvmpipe");
-        if llvmpipe {
+        if llvmpipe && mesa_major(&gpu.adapter_info.driver_info).is_some_and(|m| m <= 22) {
             assert_eq!(count, 65_535, "{}", gpu.description());
-        } else {
-            println!("{}: the probe counted {count} of {LOOP_LIMITER_PROBE_TRIPS}", gpu.description());
         }
+    }
+
+    /// The major version in a driver string such as "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)".
+    fn mesa_major(driver_info: &str) -> Option<u32> {
+        let rest = &driver_info[driver_info.find("Mesa ")? + 5..];
+        rest.split('.').next()?.parse().ok()
+    }
+
+    #[test]
+    fn mesa_versions_are_read_from_the_driver_string() {
+        assert_eq!(mesa_major("llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"), Some(22));
+        assert_eq!(mesa_major("llvmpipe Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"), Some(25));
+        assert_eq!(mesa_major("NVIDIA 550.54"), None);
     }
 
     #[test]
