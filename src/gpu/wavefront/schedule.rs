@@ -27,8 +27,8 @@ use crate::image::HdrImage;
 pub const MAX_SPP_PER_ROUND: u32 = 64;
 
 /// Most paths one film invocation sums (a round's samples × paths per sample): a bound on
-/// any invocation's loop count, far below the 65,535 iterations after which llvmpipe's
-/// loop limiter silently ends loops (docs/DESIGN.md "Wavefront renderer").
+/// any invocation's loop count, far below the 65,535 iterations after which Mesa 22's
+/// llvmpipe silently ends loops (docs/DESIGN.md "Wavefront renderer").
 pub const MAX_PATHS_PER_PIXEL_PER_ROUND: u32 = 16_384;
 
 /// How rounds are sized and when rendering stops.
