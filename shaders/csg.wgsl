@@ -361,7 +361,7 @@ fn csg_intervals(root: u32, ray: Ray) {
             }
         } else {
             frames[f].y = i + 1u;
-            let r = indices[node.first_child + i];
+            let r = object_ref(node.first_child + i);
             if ((r & CSG_NODE_BIT) != 0u && depth < CSG_MAX_DEPTH) {
                 frames[depth] = vec2<u32>(r & ~CSG_NODE_BIT, 0u);
                 depth++;

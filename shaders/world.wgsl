@@ -78,7 +78,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
 // #endif
 // #if PLANE
     for (var i = 0u; i < settings.plane_count; i++) {
-        let r = indices[settings.plane_offset + i];
+        let r = object_ref(settings.plane_offset + i);
 // #if CSG
         if (defer_csg(r)) {
             continue;
@@ -107,7 +107,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
         let node = bvh_nodes[node_index];
         if (node.count > 0u) {
             for (var k = 0u; k < node.count; k++) {
-                let r = indices[node.left_or_first + k];
+                let r = object_ref(node.left_or_first + k);
 // #if CSG
                 if (defer_csg(r)) {
                     continue;

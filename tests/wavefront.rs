@@ -255,3 +255,61 @@ fn a_profiled_render_times_every_stage_and_keeps_the_image() {
     let busy = p.busy_fraction();
     assert!(p.device_seconds() > 0.0 && busy > 0.0 && busy <= 1.0 + 1e-6, "busy {busy}");
 }
+
+/// Where the scene's tables live (`GpuRenderOptions::tables`, DESIGN.md "Uniform scene
+/// tables") changes how the kernels load them, never what they load: uniform and storage
+/// placement give the same bits for every renderer, with CSG trees (their nodes and
+/// children), and when a table is too large for a uniform buffer (600 shapes: shapes in
+/// storage, the BVH and materials in uniform buffers).
+#[test]
+fn uniform_and_storage_tables_give_the_same_bits() {
+    use lumen::gpu::tables::{Table, TablePlacement, UniformTables};
+    let Some(gpu) = gpu_for_tests("uniform_and_storage_tables_give_the_same_bits") else { return };
+    let render_with = |scene: &Scene, tables: TablePlacement| {
+        let opts = GpuRenderOptions { tables, ..GpuRenderOptions::fixed_passes(Some(4), 4) };
+        let out = render(&gpu, scene, &opts).unwrap();
+        assert_eq!((out.spp_done, out.non_finite_samples), (4, 0));
+        out
+    };
+    let csg = {
+        let mut b = SceneBuilder::new(12, 9);
+        let m = b.diffuse(Color::new(0.7, 0.5, 0.3));
+        let at = |x: f64, r: f64| Transform::translation(DVec3::new(x, 0.0, 0.0)) * Transform::scaling(DVec3::splat(r));
+        let ball = |x, r| Shape::primitive(ShapeKind::Sphere, at(x, r), m);
+        let carved = Shape::csg(CsgOp::Diff, vec![ball(4.0, 1.0), ball(3.4, 0.6)], Transform::IDENTITY);
+        b.shape(Shape::csg(CsgOp::Intersect, vec![carved, ball(4.0, 0.95)], Transform::IDENTITY));
+        common::add_lit_props(&mut b);
+        b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() }).renderer(pt(2, 4, true));
+        b.build().unwrap()
+    };
+    let many = {
+        let mut b = SceneBuilder::new(12, 9);
+        let m = b.diffuse(Color::gray(0.6));
+        for i in 0..600 {
+            let at = DVec3::new(3.0 + (i / 30) as f64 * 0.1, -1.5 + (i % 30) as f64 * 0.1, 0.0);
+            b.sphere(Transform::translation(at) * Transform::scaling(DVec3::splat(0.06)), m);
+        }
+        b.point_light(PointLight { position: DVec3::new(0.0, 0.0, 3.0), color: Color::gray(9.0), linear_radius: 0.0 });
+        b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() }).renderer(pt(2, 3, true));
+        b.build().unwrap()
+    };
+    let mut scenes: Vec<Scene> = [
+        pt(2, 4, true),
+        Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
+        Renderer::Flat { background: Color::gray(0.2) },
+        Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) },
+    ]
+    .into_iter()
+    .map(mixed_scene)
+    .collect();
+    scenes.extend([csg, many]);
+    for (k, scene) in scenes.iter().enumerate() {
+        let uniform = render_with(scene, TablePlacement::Uniform);
+        let storage = render_with(scene, TablePlacement::Storage);
+        assert_eq!(storage.tables, UniformTables::NONE);
+        let placed = uniform.tables;
+        assert!(placed.contains(Table::BvhNodes) && placed.contains(Table::Indices), "scene {k}: {placed:?}");
+        assert_eq!(placed.contains(Table::Shapes), k != 5, "scene {k}: {placed:?}");
+        assert!(bits(&uniform.image) == bits(&storage.image), "scene {k}: the table placement changes the image");
+    }
+}

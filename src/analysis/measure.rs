@@ -88,8 +88,7 @@ pub fn measure_with(
                 spp: Some(spp),
                 passes: PassOptions { progress, ..PassOptions::default() },
                 features: kernel,
-                samples: None,
-                profile: false,
+                ..GpuRenderOptions::default()
             };
             let out = renderer.borrow_mut().render(gpu, scene, &opts)?;
             let pixels = u64::from(scene.width) * u64::from(scene.height);

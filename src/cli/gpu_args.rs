@@ -6,6 +6,7 @@ use std::time::Duration;
 use clap::Args;
 
 use crate::device::Device;
+use crate::gpu::tables::TablePlacement;
 use crate::gpu::{ctrlc_flag, AdapterChoice, PassOptions};
 
 /// `--adapter NAME` (default: `$LUMEN_ADAPTER`, else the best adapter).
@@ -54,6 +55,31 @@ pub struct GpuArgs {
     /// on a software adapter, 2,097,152 on a hardware GPU). Images do not depend on it.
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..=1 << 30))]
     pub batch_paths: Option<u32>,
+    /// Where GPU kernels read the scene's small tables (shapes, BVH nodes, materials, ...)
+    /// from: `auto` puts each table that fits 64 KiB in a uniform buffer on a software
+    /// adapter (much faster on lavapipe) and in a storage buffer on hardware GPUs; `uniform`
+    /// and `storage` force one placement (for measurements). Images do not depend on it.
+    #[arg(long, value_enum, default_value_t = TablesArg::Auto)]
+    pub tables: TablesArg,
+}
+
+/// `--tables` ([`TablePlacement`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TablesArg {
+    #[default]
+    Auto,
+    Uniform,
+    Storage,
+}
+
+impl From<TablesArg> for TablePlacement {
+    fn from(t: TablesArg) -> Self {
+        match t {
+            TablesArg::Auto => TablePlacement::Auto,
+            TablesArg::Uniform => TablePlacement::Uniform,
+            TablesArg::Storage => TablePlacement::Storage,
+        }
+    }
 }
 
 impl GpuArgs {

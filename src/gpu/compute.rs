@@ -292,7 +292,11 @@ impl Gpu {
     /// A uniform buffer holding `value` (rewritable with `queue.write_buffer`). The WGSL
     /// struct must match `T`'s layout, including uniform alignment rules (16-byte vectors).
     pub fn uniform_buffer<T: Pod>(&self, label: &str, value: &T) -> Result<wgpu::Buffer, GpuError> {
-        let bytes = bytemuck::bytes_of(value);
+        self.uniform_buffer_bytes(label, bytemuck::bytes_of(value))
+    }
+
+    /// A uniform buffer holding `bytes` (zero-padded to a multiple of 16).
+    pub fn uniform_buffer_bytes(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, GpuError> {
         let size = bytes.len().next_multiple_of(16).max(16);
         let mut contents = bytes.to_vec();
         contents.resize(size, 0);

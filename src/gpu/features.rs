@@ -4,6 +4,7 @@
 //! spheres-only scene never compiles CSG interval lists or texture lookups) and lets
 //! fixed-size arrays (CSG interval lists) be sized from the scene instead of a worst case.
 
+use super::tables::UniformTables;
 use crate::scene::{Brdf, Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
 
 /// CSG bounds compiled into a full-featured kernel ([`FeatureSet::full_for`]): a general
@@ -87,6 +88,9 @@ pub struct FeatureSet {
     /// Next-event estimation with MIS (path tracer with some non-delta material only: light
     /// sampling happens at diffuse and microfacet vertices).
     pub nee: bool,
+    /// The tables read from uniform buffers instead of storage buffers: chosen per render
+    /// for the adapter ([`UniformTables::choose`]); [`FeatureSet::of`] leaves it empty.
+    pub uniform_tables: UniformTables,
 }
 
 impl FeatureSet {
@@ -256,6 +260,7 @@ impl FeatureSet {
             renderer: self.renderer,
             bvh: true,
             nee: path,
+            uniform_tables: self.uniform_tables,
         }
     }
 
@@ -306,7 +311,8 @@ impl FeatureSet {
         }
     }
 
-    /// Every feature name a shader may test (see [`Self::names`]).
+    /// Every feature name a shader may test that the scene decides (see [`Self::names`]; the
+    /// table placements' names are [`super::tables::Table::feature`]).
     pub const ALL_NAMES: [&'static str; 31] = [
         "MATERIALS",
         "GEOMETRY",
@@ -379,7 +385,9 @@ impl FeatureSet {
             (self.renderer == RendererKind::PointLight, "POINTLIGHT"),
             (self.renderer == RendererKind::PathTracer, "PATHTRACER"),
         ];
-        flags.iter().filter(|(on, _)| *on).map(|(_, n)| *n).collect()
+        let mut names: Vec<&'static str> = flags.iter().filter(|(on, _)| *on).map(|(_, n)| *n).collect();
+        names.extend(self.uniform_tables.names());
+        names
     }
 
     /// The set in the form the shader assembler takes.

@@ -15,6 +15,7 @@ pub mod layout;
 pub mod pack;
 pub mod pipeline_cache;
 pub mod render;
+pub mod tables;
 mod test_support;
 pub mod wavefront;
 

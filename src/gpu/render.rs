@@ -11,8 +11,9 @@ use std::time::Instant;
 
 use super::features::{FeatureSet, RendererKind};
 use super::pack::{at_least_one, pack, PackedScene};
+use super::tables::{Table, TablePlacement, UniformTables};
 use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
-use super::{Assembled, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary};
+use super::{Assembled, BindingKind, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary};
 use crate::image::HdrImage;
 use crate::scene::Scene;
 
@@ -89,6 +90,9 @@ pub struct GpuRenderOptions {
     /// [`GpuRenderOutput::profile`]. Needs the adapter's timestamp queries; the image is
     /// the same.
     pub profile: bool,
+    /// Which scene tables the kernels read from uniform buffers (`lumen render --tables`;
+    /// [`super::tables::UniformTables::choose`]). The image is the same.
+    pub tables: TablePlacement,
 }
 
 impl GpuRenderOptions {
@@ -118,8 +122,11 @@ pub struct GpuRenderOutput {
     /// Path (or camera-sample) estimates that were NaN or infinite, written as 0.
     pub non_finite_samples: u64,
     pub stop: StopReason,
-    /// Features the kernels were compiled for (the scene's, or the override).
+    /// Features the kernels were compiled for (the scene's, or the override), leaving out
+    /// the table placement, which is [`Self::tables`].
     pub features: FeatureSet,
+    /// The tables the kernels read from uniform buffers (chosen for the adapter).
+    pub tables: UniformTables,
     /// Batches run (each a launch of every stage for a run of whole pixels).
     pub batches: u64,
     /// Path slots per batch.
@@ -134,7 +141,8 @@ pub struct GpuRenderOutput {
 
 /// All modules, in a library that knows every feature name.
 pub fn shader_library() -> ShaderLibrary {
-    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().chain(Stage::NAMES.iter()).copied().collect();
+    let tables = super::tables::Table::ALL.map(super::tables::Table::feature);
+    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().chain(&Stage::NAMES).chain(&tables).copied().collect();
     let mut lib = ShaderLibrary::new(&names);
     for (file, src) in &MODULES {
         lib.add(file, src).unwrap_or_else(|e| panic!("built-in shader {file} is malformed: {e}"));
@@ -323,7 +331,13 @@ impl GpuRenderer {
         opts: &GpuRenderOptions,
         start: Instant,
     ) -> Result<GpuRenderOutput, GpuError> {
-        let f = kernel_features(&packed.features, opts.features)?;
+        let mut f = kernel_features(&packed.features, opts.features)?;
+        f.uniform_tables = UniformTables::choose(
+            packed,
+            opts.tables,
+            gpu.adapter_info.device_type,
+            gpu.limits.max_uniform_buffer_binding_size,
+        );
         let kernels = self.stage_kernels(gpu, &f)?;
         let buffers = SceneBuffers::upload(gpu, &kernels, packed)?;
         let s = &packed.settings;
@@ -364,7 +378,8 @@ impl GpuRenderer {
             seconds: start.elapsed().as_secs_f64(),
             non_finite_samples: counters.non_finite + acc.nonfinite,
             stop: acc.stop,
-            features: f,
+            features: FeatureSet { uniform_tables: UniformTables::NONE, ..f },
+            tables: f.uniform_tables,
             batches: acc.batches,
             batch_paths: runner.capacity(),
             rays: counters.rays,
@@ -399,8 +414,15 @@ impl SceneBuffers {
     fn upload(gpu: &Gpu, kernels: &StageKernels, p: &PackedScene) -> Result<Self, GpuError> {
         let mut buffers = BTreeMap::new();
         for kernel in kernels.kernels.values() {
-            for &(binding, _) in kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]) {
+            for &(binding, kind) in kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]) {
                 if buffers.contains_key(&binding) {
+                    continue;
+                }
+                if let (BindingKind::Uniform, Some(table)) = (kind, Table::from_binding(binding)) {
+                    let contents = super::tables::uniform_contents(table, p).ok_or_else(|| {
+                        GpuError::Internal(format!("the {table:?} table does not fit the uniform buffer it was given"))
+                    })?;
+                    buffers.insert(binding, gpu.uniform_buffer_bytes(table.feature(), &contents)?);
                     continue;
                 }
                 let buffer = match binding {
@@ -532,6 +554,11 @@ mod tests {
             environment,
             ..FeatureSet::default()
         };
+        for t in Table::ALL {
+            if b() {
+                f.uniform_tables = f.uniform_tables.with(t);
+            }
+        }
         f.bvh = f.csg || f.sphere || f.cube || f.cylinder || f.mesh;
         if !f.bvh && !f.plane {
             // Only materials of some shape count.
@@ -574,6 +601,7 @@ mod tests {
                     (true, true, true, true, true, true);
                 all.csg_max_intervals = 4;
                 all.csg_max_depth = 3;
+                all.uniform_tables = UniformTables::all();
                 let none = random_features(&mut Pcg32::new(0, 0), renderer, environment);
                 let none = FeatureSet { renderer, environment: none.environment, ..FeatureSet::default() };
                 assert_minimal(&none);

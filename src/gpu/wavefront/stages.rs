@@ -216,6 +216,8 @@ impl Stage {
             }
             Stage::Film | Stage::DispatchArgs | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
+        // Where the tables are read from (their bindings are declared only where used).
+        names.extend(f.uniform_tables.names());
         if !scene.contains(&"GEOMETRY") {
             // Nothing to intersect: no spans or traversal helpers to call.
             names.retain(|n| !["SPANS", "TRAVERSE"].contains(n));

@@ -1,0 +1,277 @@
+//! Where the kernels read the scene's small tables from: a storage buffer, or a uniform
+//! buffer of fixed length (DESIGN.md "Uniform scene tables").
+//!
+//! On llvmpipe (lavapipe) a storage-buffer load at an index that differs between lanes is
+//! compiled into one branch and one scalar load per lane and word, while a uniform-buffer
+//! load at any index is a straight-line gather. Reading shapes, BVH nodes, materials and
+//! the other read-only tables from uniform buffers halved the cold compile time of
+//! cornell.sl and made it render 39 % faster there (BENCHMARKS.md). Hardware GPUs serve
+//! divergent uniform reads from a constant cache that serialises them, so there the tables
+//! stay in storage buffers. A table goes in a uniform buffer only when it fits one
+//! ([`UNIFORM_TABLE_BYTES`], WebGPU's default limit, which every adapter offers); larger
+//! tables of the same scene stay in storage buffers.
+
+use super::layout;
+use super::pack::PackedScene;
+use crate::accel::BvhNode;
+
+/// Bytes of every uniform table buffer: WebGPU's default `max_uniform_buffer_binding_size`.
+/// The WGSL arrays have a fixed length, so the buffer always holds the whole array.
+pub const UNIFORM_TABLE_BYTES: usize = 65536;
+
+/// A read-only group-1 table that may live in a uniform buffer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Table {
+    Shapes,
+    /// Object references (u32), packed four to a `vec4<u32>` in the uniform form.
+    Indices,
+    BvhNodes,
+    CsgNodes,
+    Materials,
+    Pigments,
+    PointLights,
+    AreaLights,
+}
+
+impl Table {
+    pub const ALL: [Table; 8] = [
+        Table::Shapes,
+        Table::Indices,
+        Table::BvhNodes,
+        Table::CsgNodes,
+        Table::Materials,
+        Table::Pigments,
+        Table::PointLights,
+        Table::AreaLights,
+    ];
+
+    /// The `@group(1) @binding` of the table (shaders/bindings.wgsl).
+    pub fn binding(self) -> u32 {
+        match self {
+            Table::Shapes => 3,
+            Table::Indices => 4,
+            Table::BvhNodes => 5,
+            Table::CsgNodes => 6,
+            Table::Materials => 7,
+            Table::Pigments => 8,
+            Table::PointLights => 11,
+            Table::AreaLights => 12,
+        }
+    }
+
+    /// The table whose binding is `binding`, if it is one.
+    pub fn from_binding(binding: u32) -> Option<Table> {
+        Table::ALL.into_iter().find(|t| t.binding() == binding)
+    }
+
+    /// The assembly feature that declares the table as a uniform array.
+    pub fn feature(self) -> &'static str {
+        match self {
+            Table::Shapes => "UNIFORM_SHAPES",
+            Table::Indices => "UNIFORM_INDICES",
+            Table::BvhNodes => "UNIFORM_BVH_NODES",
+            Table::CsgNodes => "UNIFORM_CSG_NODES",
+            Table::Materials => "UNIFORM_MATERIALS",
+            Table::Pigments => "UNIFORM_PIGMENTS",
+            Table::PointLights => "UNIFORM_POINT_LIGHTS",
+            Table::AreaLights => "UNIFORM_AREA_LIGHTS",
+        }
+    }
+
+    /// The WGSL constant holding the uniform array's length (generated into the tags module).
+    pub fn length_constant(self) -> String {
+        format!("{}_LEN", self.feature())
+    }
+
+    /// Bytes of one element of the WGSL array (uniform arrays need a 16-byte stride, so
+    /// the indices are held as `vec4<u32>`).
+    pub fn stride(self) -> usize {
+        use std::mem::size_of;
+        match self {
+            Table::Shapes => size_of::<layout::Shape>(),
+            Table::Indices => 16,
+            Table::BvhNodes => size_of::<BvhNode>(),
+            Table::CsgNodes => size_of::<layout::CsgNode>(),
+            Table::Materials => size_of::<layout::Material>(),
+            Table::Pigments => size_of::<layout::Pigment>(),
+            Table::PointLights => size_of::<layout::PointLight>(),
+            Table::AreaLights => size_of::<layout::AreaLight>(),
+        }
+    }
+
+    /// Length of the uniform WGSL array.
+    pub fn uniform_length(self) -> usize {
+        UNIFORM_TABLE_BYTES / self.stride()
+    }
+
+    /// The packed table as bytes.
+    pub fn bytes(self, p: &PackedScene) -> &[u8] {
+        match self {
+            Table::Shapes => bytemuck::cast_slice(&p.shapes),
+            Table::Indices => bytemuck::cast_slice(&p.indices),
+            Table::BvhNodes => bytemuck::cast_slice(&p.bvh_nodes),
+            Table::CsgNodes => bytemuck::cast_slice(&p.csg_nodes),
+            Table::Materials => bytemuck::cast_slice(&p.materials),
+            Table::Pigments => bytemuck::cast_slice(&p.pigments),
+            Table::PointLights => bytemuck::cast_slice(&p.point_lights),
+            Table::AreaLights => bytemuck::cast_slice(&p.area_lights),
+        }
+    }
+
+    fn bit(self) -> u8 {
+        1 << Table::ALL.iter().position(|t| *t == self).unwrap_or(0)
+    }
+}
+
+/// Which tables a render's kernels read from uniform buffers (the others: storage buffers).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct UniformTables(u8);
+
+/// How a render places its tables ([`super::render::GpuRenderOptions::tables`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TablePlacement {
+    /// Uniform buffers on software adapters (where each table fits), storage elsewhere.
+    #[default]
+    Auto,
+    /// Uniform buffers wherever a table fits, on any adapter (for measurements and tests).
+    Uniform,
+    /// Storage buffers only.
+    Storage,
+}
+
+impl UniformTables {
+    /// No table in a uniform buffer.
+    pub const NONE: UniformTables = UniformTables(0);
+
+    /// Every table in a uniform buffer (what a scene gets when all its tables fit).
+    pub fn all() -> Self {
+        Table::ALL.into_iter().fold(Self::NONE, |s, t| s.with(t))
+    }
+
+    pub fn with(self, t: Table) -> Self {
+        UniformTables(self.0 | t.bit())
+    }
+
+    pub fn contains(self, t: Table) -> bool {
+        self.0 & t.bit() != 0
+    }
+
+    /// The tables of `packed` to read from uniform buffers under `placement`, on an adapter
+    /// of type `device` whose uniform bindings may hold `max_uniform_bytes`.
+    ///
+    /// ```
+    /// use lumen::gpu::tables::{Table, TablePlacement, UniformTables};
+    /// let mut b = lumen::scene::SceneBuilder::new(4, 4);
+    /// let m = b.diffuse(lumen::color::Color::gray(0.5));
+    /// b.sphere(lumen::scene::Transform::IDENTITY, m);
+    /// let packed = lumen::gpu::pack::pack(&b.build().unwrap(), None).unwrap();
+    /// let lavapipe = UniformTables::choose(&packed, TablePlacement::Auto, wgpu::DeviceType::Cpu, 65536);
+    /// assert!(lavapipe.contains(Table::Shapes) && lavapipe.contains(Table::BvhNodes));
+    /// let hardware = UniformTables::choose(&packed, TablePlacement::Auto, wgpu::DeviceType::DiscreteGpu, 65536);
+    /// assert_eq!(hardware, UniformTables::NONE);
+    /// ```
+    pub fn choose(
+        packed: &PackedScene,
+        placement: TablePlacement,
+        device: wgpu::DeviceType,
+        max_uniform_bytes: u64,
+    ) -> Self {
+        let wanted = match placement {
+            TablePlacement::Storage => false,
+            TablePlacement::Uniform => true,
+            TablePlacement::Auto => device == wgpu::DeviceType::Cpu,
+        };
+        if !wanted || max_uniform_bytes < UNIFORM_TABLE_BYTES as u64 {
+            return Self::NONE;
+        }
+        Table::ALL
+            .into_iter()
+            .filter(|t| t.bytes(packed).len() <= UNIFORM_TABLE_BYTES)
+            .fold(Self::NONE, |s, t| s.with(t))
+    }
+
+    /// The assembly features of the tables held in uniform buffers.
+    pub fn names(self) -> Vec<&'static str> {
+        Table::ALL.into_iter().filter(|t| self.contains(*t)).map(Table::feature).collect()
+    }
+}
+
+/// Every uniform array's length as WGSL constants (`UNIFORM_SHAPES_LEN`, ...), for the
+/// generated tags module.
+pub fn lengths_wgsl() -> String {
+    Table::ALL.into_iter().map(|t| format!("const {}: u32 = {}u;\n", t.length_constant(), t.uniform_length())).collect()
+}
+
+/// The contents of table `t`'s uniform buffer: the packed table zero-padded to the WGSL
+/// array's full length (a uniform binding must hold the whole declared array).
+pub fn uniform_contents(t: Table, packed: &PackedScene) -> Option<Vec<u8>> {
+    let bytes = t.bytes(packed);
+    if bytes.len() > UNIFORM_TABLE_BYTES {
+        return None;
+    }
+    let mut out = vec![0u8; t.uniform_length() * t.stride()];
+    out[..bytes.len()].copy_from_slice(bytes);
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::color::Color;
+    use crate::scene::{SceneBuilder, Transform};
+
+    #[test]
+    fn uniform_arrays_have_16_byte_strides_and_fit_the_default_limit() {
+        for t in Table::ALL {
+            assert_eq!(t.stride() % 16, 0, "{t:?}: uniform arrays need a 16-byte stride");
+            assert!(t.uniform_length() * t.stride() <= UNIFORM_TABLE_BYTES, "{t:?}");
+            assert!(t.uniform_length() >= 1, "{t:?}");
+            assert_eq!(Table::from_binding(t.binding()), Some(t));
+        }
+        let bindings: std::collections::BTreeSet<u32> = Table::ALL.iter().map(|t| t.binding()).collect();
+        assert_eq!(bindings.len(), Table::ALL.len());
+        assert_eq!(Table::Shapes.uniform_length(), 65536 / 112);
+        assert_eq!(Table::Indices.uniform_length(), 4096);
+    }
+
+    fn spheres(n: usize) -> PackedScene {
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        for i in 0..n {
+            b.sphere(Transform::translation(glam::DVec3::new(3.0 * i as f64, 0.0, 0.0)), m);
+        }
+        crate::gpu::pack::pack(&b.build().unwrap(), None).unwrap()
+    }
+
+    #[test]
+    fn tables_that_do_not_fit_stay_in_storage() {
+        let small = spheres(3);
+        let cpu = wgpu::DeviceType::Cpu;
+        let all = UniformTables::choose(&small, TablePlacement::Auto, cpu, 1 << 16);
+        assert_eq!(all, UniformTables::all());
+        // 600 shapes of 112 bytes exceed 64 KiB; their BVH (< 2048 nodes) and material do not.
+        let large = spheres(600);
+        let some = UniformTables::choose(&large, TablePlacement::Auto, cpu, 1 << 16);
+        assert!(!some.contains(Table::Shapes));
+        assert!(some.contains(Table::BvhNodes) && some.contains(Table::Materials));
+        assert!(uniform_contents(Table::Shapes, &large).is_none());
+        let bytes = uniform_contents(Table::Materials, &large).unwrap();
+        assert_eq!(bytes.len(), Table::Materials.uniform_length() * Table::Materials.stride());
+        assert_eq!(&bytes[..large.materials.len() * 96], bytemuck::cast_slice::<_, u8>(&large.materials));
+        assert!(bytes[large.materials.len() * 96..].iter().all(|b| *b == 0));
+    }
+
+    #[test]
+    fn placement_follows_the_adapter_and_the_limit() {
+        let p = spheres(2);
+        let gpu = wgpu::DeviceType::DiscreteGpu;
+        assert_eq!(UniformTables::choose(&p, TablePlacement::Auto, gpu, 1 << 16), UniformTables::NONE);
+        assert_eq!(UniformTables::choose(&p, TablePlacement::Uniform, gpu, 1 << 16), UniformTables::all());
+        let cpu = wgpu::DeviceType::Cpu;
+        assert_eq!(UniformTables::choose(&p, TablePlacement::Storage, cpu, 1 << 16), UniformTables::NONE);
+        // An adapter below WebGPU's default limit cannot hold the fixed-length arrays.
+        assert_eq!(UniformTables::choose(&p, TablePlacement::Uniform, cpu, 16384), UniformTables::NONE);
+        let names = UniformTables::NONE.with(Table::Shapes).with(Table::AreaLights).names();
+        assert_eq!(names, ["UNIFORM_SHAPES", "UNIFORM_AREA_LIGHTS"]);
+    }
+}
