@@ -27,9 +27,11 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
     var stack: array<u32, BVH_STACK_SIZE>;
     var top = 0u;
     var node_index = root;
-    var more = box_entry(bvh_nodes[root], o, inv_dir, ray.tmin, tmax) < OPEN;
+    // The current node, carried from the box test that chose it: each step loads only
+    // the two children (a node fetch is a per-lane loop or gather on llvmpipe).
+    var node = bvh_nodes[root];
+    var more = box_entry(node, o, inv_dir, ray.tmin, tmax) < OPEN;
     while (more) {
-        let node = bvh_nodes[node_index];
         if (node.count > 0u) {
             for (var k = 0u; k < node.count; k++) {
                 let tri = node.left_or_first + k;
@@ -42,14 +44,18 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
         } else {
             let left = node_index + 1u;
             let right = node.left_or_first;
-            let tl = box_entry(bvh_nodes[left], o, inv_dir, ray.tmin, tmax);
-            let tr = box_entry(bvh_nodes[right], o, inv_dir, ray.tmin, tmax);
+            let left_node = bvh_nodes[left];
+            let right_node = bvh_nodes[right];
+            let tl = box_entry(left_node, o, inv_dir, ray.tmin, tmax);
+            let tr = box_entry(right_node, o, inv_dir, ray.tmin, tmax);
             if (tl < OPEN || tr < OPEN) {
                 var near = left;
+                var near_node = left_node;
                 var far = right;
                 var t_far = tr;
                 if (tr < tl) {
                     near = right;
+                    near_node = right_node;
                     far = left;
                     t_far = tl;
                 }
@@ -58,6 +64,7 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
                     top++;
                 }
                 node_index = near;
+                node = near_node;
                 continue;
             }
         }
@@ -65,8 +72,10 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
         while (top > 0u) {
             top--;
             let candidate = stack[top];
-            if (box_entry(bvh_nodes[candidate], o, inv_dir, ray.tmin, tmax) < OPEN) {
+            let candidate_node = bvh_nodes[candidate];
+            if (box_entry(candidate_node, o, inv_dir, ray.tmin, tmax) < OPEN) {
                 node_index = candidate;
+                node = candidate_node;
                 more = true;
                 break;
             }

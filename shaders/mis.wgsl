@@ -21,9 +21,11 @@ struct Previous {
     pdf: f32,
 }
 
-fn load_previous(slot: u32) -> Previous {
+// `beta` is the path's F_BETA field, which the caller has loaded anyway (its w is the
+// previous vertex's BSDF density): storage loads are costly on llvmpipe and are not merged.
+fn load_previous(slot: u32, beta: vec4<f32>) -> Previous {
     let w = words[field(W_PREV, slot)];
-    return Previous(paths[field(F_PREV, slot)].xyz, w.x, w.y != 0u, paths[field(F_BETA, slot)].w);
+    return Previous(paths[field(F_PREV, slot)].xyz, w.x, w.y != 0u, beta.w);
 }
 
 // #if NEE

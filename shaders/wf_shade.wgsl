@@ -132,10 +132,17 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
     let m = materials[hit.material];
     let color = pigment_color(m.pigment, hit.uv);
-    let prev = load_previous(slot);
-    var beta = paths[field(F_BETA, slot)].xyz;
-    let ri = field(F_RADIANCE, slot);
-    paths[ri] = vec4<f32>(paths[ri].xyz + beta * pt_emitted(prev, hit, m), 0.0);
+    let beta_pdf = paths[field(F_BETA, slot)];
+    let prev = load_previous(slot, beta_pdf);
+    var beta = beta_pdf.xyz;
+    // Most surfaces emit nothing: skipping the read-modify-write then saves eight per-lane
+    // storage accesses (llvmpipe) without changing any sum (e is added only when nonzero or
+    // NaN, and x + 0 = x).
+    let e = beta * pt_emitted(prev, hit, m);
+    if (any(e != vec3<f32>(0.0))) {
+        let ri = field(F_RADIANCE, slot);
+        paths[ri] = vec4<f32>(paths[ri].xyz + e, 0.0);
+    }
     if (bounce == settings.max_depth) {
         return;
     }
@@ -186,7 +193,10 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         return;
     }
     paths[field(F_BETA, slot)] = vec4<f32>(beta, s.pdf);
+// #if AREA_LIGHTS
+    // Only emission MIS at the next hit reads the previous point (pt_emitted).
     paths[field(F_PREV, slot)] = vec4<f32>(hit.point, 0.0);
+// #endif
     words[field(W_PREV, slot)] = vec4<u32>(hit.object, select(0u, 1u, s.delta), 0u, 0u);
     store_ray(slot, Ray(offset_origin(hit.point, hit.scale, hit.geometric, s.dir), s.dir, 0.0, OPEN));
     wf_push(Q_RAY + ((bounce + 1u) & 1u), slot);

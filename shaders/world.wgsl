@@ -101,10 +101,11 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     var node_index = 0u;
     // An empty tree or a missed root box skips the loop (not a return: deferred CSG
     // trees are still to be evaluated).
-    var more = settings.bvh_node_count != 0u
-        && box_entry(bvh_nodes[0], ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN;
+    // The current node, carried from the box test that chose it: each step loads only
+    // the two children (a node fetch is a per-lane loop or gather on llvmpipe).
+    var node = bvh_nodes[0];
+    var more = settings.bvh_node_count != 0u && box_entry(node, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN;
     while (more) {
-        let node = bvh_nodes[node_index];
         if (node.count > 0u) {
             for (var k = 0u; k < node.count; k++) {
                 let r = object_ref(node.left_or_first + k);
@@ -126,14 +127,18 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
             // Visit the nearer child first, push the other.
             let left = node_index + 1u;
             let right = node.left_or_first;
-            let tl = box_entry(bvh_nodes[left], ray.origin, inv_dir, ray.tmin, ray.tmax);
-            let tr = box_entry(bvh_nodes[right], ray.origin, inv_dir, ray.tmin, ray.tmax);
+            let left_node = bvh_nodes[left];
+            let right_node = bvh_nodes[right];
+            let tl = box_entry(left_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
+            let tr = box_entry(right_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
             if (tl < OPEN || tr < OPEN) {
                 var near = left;
+                var near_node = left_node;
                 var far = right;
                 var t_far = tr;
                 if (tr < tl) {
                     near = right;
+                    near_node = right_node;
                     far = left;
                     t_far = tl;
                 }
@@ -142,6 +147,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
                     top++;
                 }
                 node_index = near;
+                node = near_node;
                 continue;
             }
         }
@@ -150,8 +156,10 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
         while (top > 0u) {
             top--;
             let candidate = stack[top];
-            if (box_entry(bvh_nodes[candidate], ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
+            let candidate_node = bvh_nodes[candidate];
+            if (box_entry(candidate_node, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
                 node_index = candidate;
+                node = candidate_node;
                 more = true;
                 break;
             }
