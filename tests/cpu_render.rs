@@ -525,6 +525,13 @@ mod cli {
         assert!(has("sphere_span") && has("radiance_flat"), "the kernel lacks what the scene needs");
         assert!(!has("cylinder_span") && !has("sample_bsdf"), "the kernel holds what the scene does not use");
         assert!(stages[1].starts_with("film"), "{}", &stages[1][..40]);
+        // The storage placement by default (hardware GPUs); the software adapters' on request.
+        assert!(wgsl.contains("var<storage, read> shapes: array<Shape>;") && !wgsl.contains("var<uniform> shapes"));
+        let out = run(&["shader", "tiny.sl", "--tables", "uniform", "-o", "uniform.wgsl"]).unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let wgsl = std::fs::read_to_string(dir.path().join("uniform.wgsl")).unwrap();
+        assert!(wgsl.contains("var<uniform> shapes: array<Shape, UNIFORM_SHAPES_LEN>;"), "{wgsl}");
+        assert!(!wgsl.contains("var<storage, read> shapes"));
         let out = run(&["check", "tiny.sl"]).unwrap();
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(stdout.contains("GPU kernel features:") && stdout.contains(" SPHERE ") && stdout.contains("FLAT"));
