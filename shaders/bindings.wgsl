@@ -71,7 +71,20 @@ fn object_ref(k: u32) -> u32 {
 // #if TEXTURES
 // Texels (rgb triples) of image pigments and the environment, then the environment's
 // importance-sampling arrays.
+// Read through float_at (a uniform array of f32 would need a 16-byte stride).
+// #if UNIFORM_FLOATS
+@group(1) @binding(10) var<uniform> floats: array<vec4<f32>, UNIFORM_FLOATS_LEN>;
+
+fn float_at(k: u32) -> f32 {
+    return floats[k >> 2u][k & 3u];
+}
+// #else
 @group(1) @binding(10) var<storage, read> floats: array<f32>;
+
+fn float_at(k: u32) -> f32 {
+    return floats[k];
+}
+// #endif
 // #endif
 // #if POINT_LIGHTS
 // #if UNIFORM_POINT_LIGHTS

@@ -5,9 +5,9 @@
 // #if ENV_IMAGE
 // A Distribution1D of n cells at floats[base]: integral, n values, n + 1 CDF entries.
 fn dist1d_pdf_cell(base: u32, n: u32, i: u32) -> f32 {
-    let integral = floats[base];
+    let integral = float_at(base);
     if (integral > 0.0) {
-        return floats[base + 1u + i] / integral;
+        return float_at(base + 1u + i) / integral;
     }
     return 1.0;
 }
@@ -19,7 +19,7 @@ fn dist1d_find_cell(base: u32, n: u32, u: f32) -> u32 {
     var hi = n;
     while (hi - lo > 1u) {
         let mid = (lo + hi) / 2u;
-        if (floats[cdf + mid] <= u) {
+        if (float_at(cdf + mid) <= u) {
             lo = mid;
         } else {
             hi = mid;
@@ -34,8 +34,8 @@ fn dist1d_find_cell(base: u32, n: u32, u: f32) -> u32 {
 fn dist1d_sample(base: u32, n: u32, u: f32) -> vec3<f32> {
     let cell = dist1d_find_cell(base, n, u);
     let cdf = base + 1u + n;
-    let c0 = floats[cdf + cell];
-    let width = floats[cdf + cell + 1u] - c0;
+    let c0 = float_at(cdf + cell);
+    let width = float_at(cdf + cell + 1u) - c0;
     var du = 0.0;
     if (width > 0.0) {
         du = clamp((u - c0) / width, 0.0, 1.0);

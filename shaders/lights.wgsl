@@ -41,17 +41,17 @@ fn light_sample_mesh(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
     var hi = n;
     while (lo < hi) {
         let mid = (lo + hi) / 2u;
-        if (floats[light.mesh_cdf + mid] <= xi0) {
+        if (float_at(light.mesh_cdf + mid) <= xi0) {
             lo = mid + 1u;
         } else {
             hi = mid;
         }
     }
     let t = min(lo, n - 1u);
-    let below = select(floats[light.mesh_cdf + t - 1u], 0.0, t == 0u);
-    let width = floats[light.mesh_cdf + t] - below;
+    let below = select(float_at(light.mesh_cdf + t - 1u), 0.0, t == 0u);
+    let width = float_at(light.mesh_cdf + t) - below;
     let u = select(0.5, clamp((xi0 - below) / width, 0.0, 1.0), width > 0.0);
-    let tri = bitcast<u32>(floats[light.mesh_cdf + n + t]);
+    let tri = bitcast<u32>(float_at(light.mesh_cdf + n + t));
     let s = shapes[light.shape];
     let base = MESH_POSITION_VEC4S * tri;
     let p0 = tri_positions[base].xyz;

@@ -4,5 +4,5 @@
 // Texel (col, row) of the image whose rgb triples start at floats[offset].
 fn texel(offset: u32, width: u32, col: u32, row: u32) -> vec3<f32> {
     let i = offset + 3u * (row * width + col);
-    return vec3<f32>(floats[i], floats[i + 1u], floats[i + 2u]);
+    return vec3<f32>(float_at(i), float_at(i + 1u), float_at(i + 2u));
 }

@@ -293,6 +293,34 @@ fn uniform_and_storage_tables_give_the_same_bits() {
         b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() }).renderer(pt(2, 3, true));
         b.build().unwrap()
     };
+    // Texels, an image environment's sampling tables and a rough metal's energy rows, all
+    // in `floats`.
+    let textured = {
+        let mut img = lumen::image::HdrImage::new(8, 6);
+        for (k, p) in img.pixels_mut().iter_mut().enumerate() {
+            *p = lumen::color::Rgb32::new(0.1 + (k % 8) as f32 * 0.1, 0.2 + (k / 8) as f32 * 0.15, 0.5);
+        }
+        img.set(2, 1, lumen::color::Rgb32::new(40.0, 30.0, 20.0));
+        let img = std::sync::Arc::new(img);
+        let mut b = SceneBuilder::new(12, 9);
+        let pigment = Pigment::Image { image: img.clone(), filter: ImageFilter::Bilinear };
+        let wall = b.material(Material::new(Brdf::Diffuse { pigment }, Pigment::Uniform(Color::BLACK)));
+        let metal = b.material(Material::new(
+            Brdf::Conductor {
+                pigment: Pigment::Uniform(Color::gray(0.9)),
+                roughness: 0.3,
+                fresnel: None,
+                multiple_scattering: true,
+            },
+            Pigment::Uniform(Color::BLACK),
+        ));
+        b.sphere(Transform::translation(DVec3::new(4.0, 0.8, 0.0)), wall)
+            .sphere(Transform::translation(DVec3::new(4.0, -1.2, 0.0)) * Transform::scaling(DVec3::splat(0.8)), metal)
+            .camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() })
+            .environment(Environment::Image { image: img, intensity: 0.7, rotation_deg: 30.0 })
+            .renderer(pt(2, 4, true));
+        b.build().unwrap()
+    };
     let mut scenes: Vec<Scene> = [
         pt(2, 4, true),
         Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
@@ -302,13 +330,13 @@ fn uniform_and_storage_tables_give_the_same_bits() {
     .into_iter()
     .map(mixed_scene)
     .collect();
-    scenes.extend([csg, many]);
+    scenes.extend([csg, many, textured]);
     for (k, scene) in scenes.iter().enumerate() {
         let uniform = render_with(scene, TablePlacement::Uniform);
         let storage = render_with(scene, TablePlacement::Storage);
         assert_eq!(storage.tables, UniformTables::NONE);
         let placed = uniform.tables;
-        assert!(placed.contains(Table::BvhNodes) && placed.contains(Table::Indices), "scene {k}: {placed:?}");
+        assert!(placed.contains(Table::BvhNodes) && placed.contains(Table::Floats), "scene {k}: {placed:?}");
         assert_eq!(placed.contains(Table::Shapes), k != 5, "scene {k}: {placed:?}");
         assert!(bits(&uniform.image) == bits(&storage.image), "scene {k}: the table placement changes the image");
     }

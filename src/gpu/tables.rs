@@ -4,7 +4,7 @@
 //! On llvmpipe (lavapipe) a storage-buffer load at an index that differs between lanes is
 //! compiled into one branch and one scalar load per lane and word, while a uniform-buffer
 //! load at any index is a straight-line gather. Reading shapes, BVH nodes, materials and
-//! the other read-only tables from uniform buffers halved the cold compile time of
+//! the other read-only tables (texels and sampling tables too, when small) from uniform buffers halved the cold compile time of
 //! cornell.sl and made it render 39 % faster there (BENCHMARKS.md). Hardware GPUs serve
 //! divergent uniform reads from a constant cache that serialises them, so there the tables
 //! stay in storage buffers. A table goes in a uniform buffer only when it fits one
@@ -31,10 +31,12 @@ pub enum Table {
     Pigments,
     PointLights,
     AreaLights,
+    /// Texels and sampling tables (f32), packed four to a `vec4<f32>` in the uniform form.
+    Floats,
 }
 
 impl Table {
-    pub const ALL: [Table; 8] = [
+    pub const ALL: [Table; 9] = [
         Table::Shapes,
         Table::Indices,
         Table::BvhNodes,
@@ -43,6 +45,7 @@ impl Table {
         Table::Pigments,
         Table::PointLights,
         Table::AreaLights,
+        Table::Floats,
     ];
 
     /// The `@group(1) @binding` of the table (shaders/bindings.wgsl).
@@ -56,6 +59,7 @@ impl Table {
             Table::Pigments => 8,
             Table::PointLights => 11,
             Table::AreaLights => 12,
+            Table::Floats => 10,
         }
     }
 
@@ -75,6 +79,7 @@ impl Table {
             Table::Pigments => "UNIFORM_PIGMENTS",
             Table::PointLights => "UNIFORM_POINT_LIGHTS",
             Table::AreaLights => "UNIFORM_AREA_LIGHTS",
+            Table::Floats => "UNIFORM_FLOATS",
         }
     }
 
@@ -84,12 +89,12 @@ impl Table {
     }
 
     /// Bytes of one element of the WGSL array (uniform arrays need a 16-byte stride, so
-    /// the indices are held as `vec4<u32>`).
+    /// the indices and floats are held as vec4s).
     pub fn stride(self) -> usize {
         use std::mem::size_of;
         match self {
             Table::Shapes => size_of::<layout::Shape>(),
-            Table::Indices => 16,
+            Table::Indices | Table::Floats => 16,
             Table::BvhNodes => size_of::<BvhNode>(),
             Table::CsgNodes => size_of::<layout::CsgNode>(),
             Table::Materials => size_of::<layout::Material>(),
@@ -115,17 +120,18 @@ impl Table {
             Table::Pigments => bytemuck::cast_slice(&p.pigments),
             Table::PointLights => bytemuck::cast_slice(&p.point_lights),
             Table::AreaLights => bytemuck::cast_slice(&p.area_lights),
+            Table::Floats => bytemuck::cast_slice(&p.floats),
         }
     }
 
-    fn bit(self) -> u8 {
+    fn bit(self) -> u16 {
         1 << Table::ALL.iter().position(|t| *t == self).unwrap_or(0)
     }
 }
 
 /// Which tables a render's kernels read from uniform buffers (the others: storage buffers).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct UniformTables(u8);
+pub struct UniformTables(u16);
 
 /// How a render places its tables ([`super::render::GpuRenderOptions::tables`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
