@@ -21,11 +21,12 @@ struct Previous {
     pdf: f32,
 }
 
-// `beta` is the path's F_BETA field, which the caller has loaded anyway (its w is the
-// previous vertex's BSDF density): storage loads are costly on llvmpipe and are not merged.
+// `beta` is the path's F_BETA field, which the caller has loaded anyway: its w is the
+// previous BSDF density, negative for a delta vertex (storage loads are costly on llvmpipe
+// and are not merged). The point and object (W_PREV) are read only by emission MIS.
 fn load_previous(slot: u32, beta: vec4<f32>) -> Previous {
     let w = words[field(W_PREV, slot)];
-    return Previous(paths[field(F_PREV, slot)].xyz, w.x, w.y != 0u, beta.w);
+    return Previous(bitcast<vec3<f32>>(w.xyz), w.w, beta.w < 0.0, beta.w);
 }
 
 // #if NEE

@@ -1,8 +1,7 @@
 // #requires wf_path camera
 // Camera stage of the path tracer: one invocation per path slot of the batch writes its
 // camera ray and the start of its path state (throughput 1, no radiance, the camera as a
-// delta "previous vertex", whose point nothing reads), and queues it for the closest-hit
-// stage of bounce 0.
+// delta "previous vertex"), and queues it for the closest-hit stage of bounce 0.
 
 @compute @workgroup_size(64)
 fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -14,8 +13,8 @@ fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let col = id.pixel % settings.width;
     let row = id.pixel / settings.width;
     store_ray(slot, pixel_ray(col, row, id.j));
-    paths[field(F_BETA, slot)] = vec4<f32>(1.0, 1.0, 1.0, 0.0);
+    // The camera is a delta vertex (a negative density), whose point and object nothing reads.
+    paths[field(F_BETA, slot)] = vec4<f32>(1.0, 1.0, 1.0, -1.0);
     paths[field(F_RADIANCE, slot)] = vec4<f32>(0.0);
-    words[field(W_PREV, slot)] = vec4<u32>(0xFFFFFFFFu, 1u, 0u, 0u);
     queues[Q_RAY * batch.capacity + slot] = slot;
 }

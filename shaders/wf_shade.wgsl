@@ -192,12 +192,12 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     if (all(beta == vec3<f32>(0.0))) {
         return;
     }
-    paths[field(F_BETA, slot)] = vec4<f32>(beta, s.pdf);
+    // A delta vertex is marked by a negative density (load_previous).
+    paths[field(F_BETA, slot)] = vec4<f32>(beta, select(s.pdf, -1.0, s.delta));
 // #if AREA_LIGHTS
-    // Only emission MIS at the next hit reads the previous point (pt_emitted).
-    paths[field(F_PREV, slot)] = vec4<f32>(hit.point, 0.0);
+    // Only emission MIS at the next hit reads the previous point and object (pt_emitted).
+    words[field(W_PREV, slot)] = vec4<u32>(bitcast<vec3<u32>>(hit.point), hit.object);
 // #endif
-    words[field(W_PREV, slot)] = vec4<u32>(hit.object, select(0u, 1u, s.delta), 0u, 0u);
     store_ray(slot, Ray(offset_origin(hit.point, hit.scale, hit.geometric, s.dir), s.dir, 0.0, OPEN));
     wf_push(Q_RAY + ((bounce + 1u) & 1u), slot);
 }

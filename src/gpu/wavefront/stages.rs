@@ -100,7 +100,7 @@ impl Stage {
     fn buffers_with_pool(self, f: &FeatureSet) -> Vec<StateBuffer> {
         use StateBuffer::*;
         match self {
-            Stage::Camera => vec![Batch, Queues, Paths, Words],
+            Stage::Camera => vec![Batch, Queues, Paths],
             Stage::FirstHit if f.csg => vec![Batch, Control, Paths, CsgPool],
             Stage::FirstHit => vec![Batch, Control, Paths],
             Stage::Intersect if csg_queue(f) => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
