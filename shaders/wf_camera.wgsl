@@ -1,7 +1,8 @@
 // #requires wf_path camera
 // Camera stage of the path tracer: one invocation per path slot of the batch writes its
-// camera ray and the start of its path state (throughput 1, no radiance, the camera as a
-// delta "previous vertex"), and queues it for the closest-hit stage of bounce 0.
+// camera ray and the start of its path state (throughput 1, the camera as a delta
+// "previous vertex"; the host has cleared the radiance), and queues it for the closest-hit
+// stage of bounce 0.
 
 @compute @workgroup_size(64)
 fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -15,6 +16,5 @@ fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     store_ray(slot, pixel_ray(col, row, id.j));
     // The camera is a delta vertex (a negative density), whose point and object nothing reads.
     paths[field(F_BETA, slot)] = vec4<f32>(1.0, 1.0, 1.0, -1.0);
-    paths[field(F_RADIANCE, slot)] = vec4<f32>(0.0);
     queues[Q_RAY * batch.capacity + slot] = slot;
 }

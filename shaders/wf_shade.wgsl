@@ -173,7 +173,10 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 // #endif
     }
     if (shadows > 0u) {
+// #if POINT_LIGHTS
+        // Without point lights a vertex queues at most the one NEE ray, a full list.
         end_shadows(slot, shadows);
+// #endif
         wf_push(Q_SHADOW, slot);
     }
 // #endif

@@ -17,12 +17,14 @@ fn queue_shadow(slot: u32, k: u32, ray: Ray, value: vec3<f32>) {
     shadow[i + 2u] = vec4<f32>(value, 1.0);
 }
 
+// #if POINT_LIGHTS
 // Ends the path's list after `count` rays (a full list needs no end mark).
 fn end_shadows(slot: u32, count: u32) {
     if (count < batch.shadow_rays) {
         shadow[shadow_index(slot, count) + 2u] = vec4<f32>(0.0);
     }
 }
+// #endif
 // #else
 struct ShadowRay {
     ray: Ray,

@@ -156,6 +156,8 @@ pub(crate) struct Runner<'a> {
     max_depth: u32,
     /// Timestamps around every launch (`GpuRenderOptions::profile`, where the device can).
     profiler: Option<profile::Profiler>,
+    /// The path fields, whose radiance region each batch clears before its camera stage.
+    paths: wgpu::Buffer,
 }
 
 /// A batch in flight: its film's staging buffer and submission.
@@ -283,6 +285,7 @@ impl<'a> Runner<'a> {
             shadow_csg: kernels.kernels.contains_key(&Stage::ShadowCsgArgs),
             max_depth,
             profiler: None,
+            paths: paths.clone(),
         })
     }
 
@@ -461,6 +464,10 @@ impl BatchRunner for Runner<'_> {
             words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
             self.submit_commands(|e| {
+                // Every path starts with no radiance: a copy-engine clear (a memset on
+                // lavapipe) rather than a store per invocation in the camera stage.
+                let radiance = u64::from(path_field::RADIANCE) * u64::from(self.capacity) * 16;
+                e.clear_buffer(&self.paths, radiance, Some(u64::from(batch.path_count) * 16));
                 let mut pass = e
                     .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("camera"), timestamp_writes: None });
                 self.direct(&mut pass, Stage::Camera, 0, batch.path_count)?;
