@@ -324,7 +324,6 @@ pub fn tags_wgsl() -> String {
             out.push_str(&format!("const {prefix}_{name}: u32 = {value}u;\n"));
         }
     }
-    out.push_str(&super::tables::lengths_wgsl());
     out
 }
 

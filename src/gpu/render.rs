@@ -184,6 +184,7 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
     let generated = [
         ("<generated tags>", super::layout::tags_wgsl()),
         ("<generated constants>", constants_module(features)),
+        ("<generated scene tables>", super::tables::tables_wgsl()),
         ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features), stage.shade_queue())),
     ];
     for (name, text) in &generated {
@@ -418,26 +419,24 @@ impl SceneBuffers {
                 if buffers.contains_key(&binding) {
                     continue;
                 }
-                if let (BindingKind::Uniform, Some(table)) = (kind, Table::from_binding(binding)) {
-                    let contents = super::tables::uniform_contents(table, p).ok_or_else(|| {
-                        GpuError::Internal(format!("the {table:?} table does not fit the uniform buffer it was given"))
-                    })?;
-                    buffers.insert(binding, gpu.uniform_buffer_bytes(table.feature(), &contents)?);
+                if let Some(table) = Table::from_binding(binding) {
+                    let buffer = if kind == BindingKind::Uniform {
+                        let contents = super::tables::uniform_contents(table, p).ok_or_else(|| {
+                            GpuError::Internal(format!(
+                                "the {table:?} table does not fit the uniform buffer it was given"
+                            ))
+                        })?;
+                        gpu.uniform_buffer_bytes(table.feature(), &contents)?
+                    } else {
+                        gpu.storage_buffer(table.wgsl_name(), &super::tables::storage_contents(table, p))?
+                    };
+                    buffers.insert(binding, buffer);
                     continue;
                 }
                 let buffer = match binding {
                     0 => gpu.uniform_buffer("settings", &p.settings)?,
                     1 => gpu.uniform_buffer("camera", &p.camera)?,
-                    3 => gpu.storage_buffer("shapes", &at_least_one(&p.shapes))?,
-                    4 => gpu.storage_buffer("indices", &at_least_one(&p.indices))?,
-                    5 => gpu.storage_buffer("bvh_nodes", &at_least_one(&p.bvh_nodes))?,
-                    6 => gpu.storage_buffer("csg_nodes", &at_least_one(&p.csg_nodes))?,
-                    7 => gpu.storage_buffer("materials", &at_least_one(&p.materials))?,
-                    8 => gpu.storage_buffer("pigments", &at_least_one(&p.pigments))?,
                     9 => gpu.uniform_buffer("environment", &p.environment)?,
-                    10 => gpu.storage_buffer("floats (texels and environment tables)", &at_least_one(&p.floats))?,
-                    11 => gpu.storage_buffer("point_lights", &at_least_one(&p.point_lights))?,
-                    12 => gpu.storage_buffer("area_lights", &at_least_one(&p.area_lights))?,
                     13 => gpu.storage_buffer("tri_positions", &at_least_one(&p.tri_positions))?,
                     14 => gpu.storage_buffer("tri_shading", &at_least_one(&p.tri_shading))?,
                     b => {

@@ -4,12 +4,18 @@
 //! On llvmpipe (lavapipe) a storage-buffer load at an index that differs between lanes is
 //! compiled into one branch and one scalar load per lane and word, while a uniform-buffer
 //! load at any index is a straight-line gather. Reading shapes, BVH nodes, materials and
-//! the other read-only tables (texels and sampling tables too, when small) from uniform buffers halved the cold compile time of
-//! cornell.sl and made it render 39 % faster there (BENCHMARKS.md). Hardware GPUs serve
+//! the other read-only tables (texels and sampling tables too, when small) from uniform
+//! buffers halved the cold compile time of cornell.sl and made it render 39 % faster there
+//! (BENCHMARKS.md). Hardware GPUs serve
 //! divergent uniform reads from a constant cache that serialises them, so there the tables
 //! stay in storage buffers. A table goes in a uniform buffer only when it fits one
 //! ([`UNIFORM_TABLE_BYTES`], WebGPU's default limit, which every adapter offers); larger
 //! tables of the same scene stay in storage buffers.
+//!
+//! Each table is described here once: its binding, WGSL name and element type, the
+//! features that declare it, and its bytes. [`tables_wgsl`] generates the declarations in
+//! either form (and the accessors of the packed ones), and the renderer uploads through
+//! [`Table::bytes`], so no binding number is written twice.
 
 use super::layout;
 use super::pack::PackedScene;
@@ -48,7 +54,7 @@ impl Table {
         Table::Floats,
     ];
 
-    /// The `@group(1) @binding` of the table (shaders/bindings.wgsl).
+    /// The `@group(1) @binding` of the table.
     pub fn binding(self) -> u32 {
         match self {
             Table::Shapes => 3,
@@ -83,9 +89,80 @@ impl Table {
         }
     }
 
-    /// The WGSL constant holding the uniform array's length (generated into the tags module).
+    /// The WGSL constant holding the uniform array's length.
     pub fn length_constant(self) -> String {
         format!("{}_LEN", self.feature())
+    }
+
+    /// The name of the WGSL global.
+    pub fn wgsl_name(self) -> &'static str {
+        match self {
+            Table::Shapes => "shapes",
+            Table::Indices => "indices",
+            Table::BvhNodes => "bvh_nodes",
+            Table::CsgNodes => "csg_nodes",
+            Table::Materials => "materials",
+            Table::Pigments => "pigments",
+            Table::PointLights => "point_lights",
+            Table::AreaLights => "area_lights",
+            Table::Floats => "floats",
+        }
+    }
+
+    /// The WGSL element type of the storage form (the uniform form packs u32 and f32 four
+    /// to a vec4).
+    fn wgsl_element(self) -> &'static str {
+        match self {
+            Table::Shapes => "Shape",
+            Table::Indices => "u32",
+            Table::BvhNodes => "BvhNode",
+            Table::CsgNodes => "CsgNode",
+            Table::Materials => "Material",
+            Table::Pigments => "Pigment",
+            Table::PointLights => "PointLight",
+            Table::AreaLights => "AreaLight",
+            Table::Floats => "f32",
+        }
+    }
+
+    /// The assembly features under which a kernel declares the table (all must hold).
+    fn declared_when(self) -> &'static [&'static str] {
+        match self {
+            Table::Shapes => &["GEOMETRY"],
+            Table::Indices => &["SPANS"],
+            Table::BvhNodes => &["BVH"],
+            // With the CSG queue the CSG stage reads the nodes through its deferred records.
+            Table::CsgNodes => &["CSG", "!CSG_QUEUE"],
+            Table::Materials => &["MATERIALS"],
+            Table::Pigments => &["PIGMENTS"],
+            Table::PointLights => &["POINT_LIGHTS"],
+            Table::AreaLights => &["AREA_LIGHTS"],
+            Table::Floats => &["TEXTURES"],
+        }
+    }
+
+    /// For the u32 and f32 tables, the accessor every read goes through (the uniform form
+    /// holds them packed) and what the table holds.
+    fn accessor(self) -> Option<(&'static str, &'static str)> {
+        match self {
+            Table::Indices => {
+                Some(("object_ref", "BVH leaf object references from 0, then the plane list and CSG children"))
+            }
+            Table::Floats => Some((
+                "float_at",
+                "texels (rgb triples) of image pigments and the environment, the environment's \
+                 importance-sampling arrays, energy rows and mesh-light CDFs",
+            )),
+            _ => None,
+        }
+    }
+
+    /// Bytes of one element of the storage form (a binding holds at least one).
+    pub fn storage_element_bytes(self) -> usize {
+        match self {
+            Table::Indices | Table::Floats => 4,
+            _ => self.stride(),
+        }
     }
 
     /// Bytes of one element of the WGSL array (uniform arrays need a 16-byte stride, so
@@ -125,7 +202,7 @@ impl Table {
     }
 
     fn bit(self) -> u16 {
-        1 << Table::ALL.iter().position(|t| *t == self).unwrap_or(0)
+        1 << self as u16
     }
 }
 
@@ -202,10 +279,56 @@ impl UniformTables {
     }
 }
 
-/// Every uniform array's length as WGSL constants (`UNIFORM_SHAPES_LEN`, ...), for the
-/// generated tags module.
-pub fn lengths_wgsl() -> String {
-    Table::ALL.into_iter().map(|t| format!("const {}: u32 = {}u;\n", t.length_constant(), t.uniform_length())).collect()
+/// The `scene_tables` WGSL module: for each table, guarded by the features that use it,
+/// its uniform declaration (`UNIFORM_<TABLE>`, a fixed-length array of
+/// `UNIFORM_<TABLE>_LEN` elements) or else its storage declaration, and for the u32 and f32
+/// tables the accessor that reads either form.
+pub fn tables_wgsl() -> String {
+    let mut out = String::from(
+        "// #provides scene_tables\n// #requires layout\n\
+         // The scene's read-only tables in bind group 1, generated by src/gpu/tables.rs: uniform\n\
+         // arrays where the render chose so (software adapters), else storage arrays.\n",
+    );
+    for t in Table::ALL {
+        let (b, name, elem) = (t.binding(), t.wgsl_name(), t.wgsl_element());
+        out += &format!("const {}: u32 = {}u;\n", t.length_constant(), t.uniform_length());
+        for guard in t.declared_when() {
+            out += &format!("// #if {guard}\n");
+        }
+        let packed = t.accessor().map(|(f, what)| (f, what, if elem == "u32" { "vec4<u32>" } else { "vec4<f32>" }));
+        if let Some((_, what, _)) = packed {
+            out += &format!("// {}: {what}.\n", name);
+        }
+        let uniform_elem = packed.map_or(elem, |(_, _, v)| v);
+        out += &format!(
+            "// #if {}\n@group(1) @binding({b}) var<uniform> {name}: array<{uniform_elem}, {}>;\n",
+            t.feature(),
+            t.length_constant()
+        );
+        if let Some((f, _, _)) = packed {
+            out += &format!("\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k >> 2u][k & 3u];\n}}\n");
+        }
+        out += &format!("// #else\n@group(1) @binding({b}) var<storage, read> {name}: array<{elem}>;\n");
+        if let Some((f, _, _)) = packed {
+            out += &format!("\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k];\n}}\n");
+        }
+        out += "// #endif\n";
+        for _ in t.declared_when() {
+            out += "// #endif\n";
+        }
+    }
+    out
+}
+
+/// The contents of table `t`'s storage buffer: the packed table, or one zeroed element
+/// when it is empty (a binding must hold one element of its array; kernels read by count).
+pub fn storage_contents(t: Table, packed: &PackedScene) -> std::borrow::Cow<'_, [u8]> {
+    let bytes = t.bytes(packed);
+    if bytes.is_empty() {
+        std::borrow::Cow::Owned(vec![0u8; t.storage_element_bytes()])
+    } else {
+        std::borrow::Cow::Borrowed(bytes)
+    }
 }
 
 /// The contents of table `t`'s uniform buffer: the packed table zero-padded to the WGSL
