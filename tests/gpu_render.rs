@@ -628,18 +628,6 @@ fn point_lit_plane_matches_the_closed_form_on_the_gpu() {
     }
 }
 
-/// A small HDR image with distinct texels (and one bright spot for importance sampling).
-fn test_image(w: usize, h: usize) -> std::sync::Arc<HdrImage> {
-    let mut img = HdrImage::new(w, h);
-    for row in 0..h {
-        for col in 0..w {
-            img.set(col, row, lumen::color::Rgb32::new(0.1 + col as f32 * 0.1, 0.2 + row as f32 * 0.15, 0.5));
-        }
-    }
-    img.set(w / 3, h / 4, lumen::color::Rgb32::new(40.0, 30.0, 20.0));
-    std::sync::Arc::new(img)
-}
-
 /// Image pigments (nearest and bilinear) on a sphere and a cube, a checkered plane, and an
 /// importance-sampled image environment, with the path tracer and the Flat renderer.
 #[test]
@@ -648,7 +636,7 @@ fn textures_and_image_environment_match_the_cpu() {
     for renderer in [Renderer::Flat { background: Color::BLACK }, pt(2, 3, 2, true), pt(2, 3, 2, false)] {
         println!("{}", renderer.name());
         let mut b = SceneBuilder::new(20, 15);
-        let img = test_image(8, 6);
+        let img = common::test_image(8, 6);
         let nearest = b.material(Material::new(
             Brdf::Diffuse { pigment: Pigment::Image { image: img.clone(), filter: ImageFilter::Nearest } },
             Pigment::Uniform(Color::BLACK),
@@ -670,7 +658,7 @@ fn textures_and_image_environment_match_the_cpu() {
             )
             .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), check)
             .camera(Camera { aspect_ratio: 20.0 / 15.0, ..Camera::default() })
-            .environment(Environment::Image { image: test_image(16, 8), intensity: 0.7, rotation_deg: 30.0 })
+            .environment(Environment::Image { image: common::test_image(16, 8), intensity: 0.7, rotation_deg: 30.0 })
             .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() })
             .renderer(renderer);
         let scene = b.build().unwrap();

@@ -296,12 +296,7 @@ fn uniform_and_storage_tables_give_the_same_bits() {
     // Texels, an image environment's sampling tables and a rough metal's energy rows, all
     // in `floats`.
     let textured = {
-        let mut img = lumen::image::HdrImage::new(8, 6);
-        for (k, p) in img.pixels_mut().iter_mut().enumerate() {
-            *p = lumen::color::Rgb32::new(0.1 + (k % 8) as f32 * 0.1, 0.2 + (k / 8) as f32 * 0.15, 0.5);
-        }
-        img.set(2, 1, lumen::color::Rgb32::new(40.0, 30.0, 20.0));
-        let img = std::sync::Arc::new(img);
+        let img = common::test_image(8, 6);
         let mut b = SceneBuilder::new(12, 9);
         let pigment = Pigment::Image { image: img.clone(), filter: ImageFilter::Bilinear };
         let wall = b.material(Material::new(Brdf::Diffuse { pigment }, Pigment::Uniform(Color::BLACK)));

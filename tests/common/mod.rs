@@ -275,3 +275,15 @@ pub fn inscribed_radius(v: &[DVec3], f: &[[u32; 3]]) -> f64 {
         })
         .fold(f64::INFINITY, f64::min)
 }
+
+/// A small HDR image with distinct texels (and one bright spot for importance sampling).
+pub fn test_image(w: usize, h: usize) -> std::sync::Arc<HdrImage> {
+    let mut img = HdrImage::new(w, h);
+    for row in 0..h {
+        for col in 0..w {
+            img.set(col, row, lumen::color::Rgb32::new(0.1 + col as f32 * 0.1, 0.2 + row as f32 * 0.15, 0.5));
+        }
+    }
+    img.set(w / 3, h / 4, lumen::color::Rgb32::new(40.0, 30.0, 20.0));
+    std::sync::Arc::new(img)
+}
