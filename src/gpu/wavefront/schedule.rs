@@ -166,7 +166,15 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     let mut acc = Accumulator::new(width, height).map_err(|e| GpuError::OutOfMemory(format!("host memory: {e}")))?;
     let progress = progress_bar(opts.progress, u64::from(total_spp) * u64::from(width) * u64::from(height));
     let cancelled = || opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst));
-    let mut spp_per_round = opts.initial_spp_per_pass.clamp(1, max_spp);
+    // A round never leaves slots idle that more samples could fill: a batch's launches cost
+    // about the same however many slots are in use (on lavapipe a 160×107 skybox.sl round
+    // of 1 spp spent ~20 ms in its ~70 launches against ~3 ms of path work), so rounds start
+    // at, and never drop below, the samples that fill one batch. Only a time limit, which
+    // must be overshot by at most a one-sample round, keeps the first round at
+    // `initial_spp_per_pass` and lets later ones shrink below that.
+    let fill = full_batch_samples(plan).min(max_spp);
+    let first = if opts.time_limit.is_none() { opts.initial_spp_per_pass.max(fill) } else { opts.initial_spp_per_pass };
+    let mut spp_per_round = first.clamp(1, max_spp);
     let (mut done, mut rounds, mut batch_count) = (0u32, 0u32, 0u64);
     let mut stop = StopReason::Completed;
 
@@ -217,8 +225,14 @@ pub(crate) fn run_rounds<R: BatchRunner>(
             }
             None => None,
         };
-        spp_per_round =
-            next_spp_per_pass(samples, per_sample, per_sample, remaining, opts.target_pass_seconds, max_spp);
+        spp_per_round = next_spp_per_pass(
+            samples,
+            per_sample,
+            per_sample,
+            remaining,
+            opts.target_pass_seconds,
+            RoundBounds { floor: fill, max: max_spp },
+        );
     }
     progress.finish_and_clear();
     Ok(Accumulated {
@@ -231,27 +245,44 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     })
 }
 
+/// Camera samples per pixel that fill one batch's path slots when the whole image shares
+/// them (at least 1; images with more pixels than slots need several batches per sample).
+fn full_batch_samples(plan: &Plan) -> u32 {
+    let paths_per_spp = u64::from(plan.width) * u64::from(plan.height) * u64::from(plan.paths_per_sample.max(1));
+    let fill = u64::from(plan.capacity) / paths_per_spp.max(1);
+    round_samples(plan, u32::try_from(fill).unwrap_or(u32::MAX))
+}
+
+/// Limits on a round's samples per pixel: `floor` (one full batch) unless a time limit
+/// leaves time for fewer, and `max`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RoundBounds {
+    pub floor: u32,
+    pub max: u32,
+}
+
 /// Samples for the next round, from the last round's timings (seconds per sample per pixel
 /// of the slowest part and of the whole round; one and the same for whole-image rounds):
 /// a round should take about `target` seconds, growth is at most ×2 per round (timings of
-/// tiny rounds are noisy), and with a time limit the whole round should fit in the time
-/// left (so the limit is overshot by at most a one-sample round).
+/// tiny rounds are noisy) and it fills at least `bounds.floor`, and with a time limit the
+/// whole round should fit in the time left (so the limit is overshot by at most a
+/// one-sample round).
 pub(crate) fn next_spp_per_pass(
     current: u32,
     worst_seconds_per_sample: f64,
     round_seconds_per_sample: f64,
     remaining_seconds: Option<f64>,
     target: f64,
-    max_spp: u32,
+    bounds: RoundBounds,
 ) -> u32 {
     let by_target = if worst_seconds_per_sample > 0.0 { target / worst_seconds_per_sample } else { f64::INFINITY };
-    let mut spp = by_target.min(f64::from(current.saturating_mul(2)));
+    let mut spp = by_target.min(f64::from(current.saturating_mul(2))).max(f64::from(bounds.floor));
     if let Some(rem) = remaining_seconds {
         if round_seconds_per_sample > 0.0 {
             spp = spp.min(rem / round_seconds_per_sample);
         }
     }
-    (spp.floor() as u32).clamp(1, max_spp.max(1))
+    (spp.floor() as u32).clamp(1, bounds.max.max(1))
 }
 
 fn progress_bar(enabled: bool, len: u64) -> ProgressBar {
@@ -271,16 +302,48 @@ mod tests {
 
     #[test]
     fn spp_grows_at_most_twice_and_meets_the_target() {
+        let b = RoundBounds { floor: 1, max: 64 };
         // A round of 1 spp took 1 ms: 25 would meet 25 ms but growth is capped at ×2.
-        assert_eq!(next_spp_per_pass(1, 0.001, 0.004, None, 0.025, 64), 2);
-        assert_eq!(next_spp_per_pass(16, 0.001, 0.004, None, 0.025, 64), 25);
+        assert_eq!(next_spp_per_pass(1, 0.001, 0.004, None, 0.025, b), 2);
+        assert_eq!(next_spp_per_pass(16, 0.001, 0.004, None, 0.025, b), 25);
         // Too slow: shrink, but never below 1.
-        assert_eq!(next_spp_per_pass(8, 0.010, 0.04, None, 0.025, 64), 2);
-        assert_eq!(next_spp_per_pass(8, 1.0, 4.0, None, 0.025, 64), 1);
+        assert_eq!(next_spp_per_pass(8, 0.010, 0.04, None, 0.025, b), 2);
+        assert_eq!(next_spp_per_pass(8, 1.0, 4.0, None, 0.025, b), 1);
         // The f32 bound.
-        assert_eq!(next_spp_per_pass(64, 1e-9, 1e-8, None, 0.025, 64), 64);
+        assert_eq!(next_spp_per_pass(64, 1e-9, 1e-8, None, 0.025, b), 64);
         // Time left for 3 samples per pixel over the whole image.
-        assert_eq!(next_spp_per_pass(32, 1e-4, 0.1, Some(0.35), 0.025, 64), 3);
+        assert_eq!(next_spp_per_pass(32, 1e-4, 0.1, Some(0.35), 0.025, b), 3);
+    }
+
+    #[test]
+    fn rounds_fill_a_batch_unless_the_time_limit_says_fewer() {
+        let b = RoundBounds { floor: 7, max: 64 };
+        // Too slow for the target, or growth capped below the floor: still a full batch.
+        assert_eq!(next_spp_per_pass(8, 1.0, 4.0, None, 0.025, b), 7);
+        assert_eq!(next_spp_per_pass(2, 0.001, 0.004, None, 0.025, b), 7);
+        // The time left wins over the floor.
+        assert_eq!(next_spp_per_pass(8, 1e-4, 0.1, Some(0.35), 0.025, b), 3);
+        // The floor of a plan: slots over paths per sample of the whole image, at least 1,
+        // within the film's and one pixel's bounds.
+        assert_eq!(full_batch_samples(&plan(5, 3, 2, 64)), 2);
+        assert_eq!(full_batch_samples(&plan(5, 3, 1, 1 << 17)), 8738);
+        assert_eq!(full_batch_samples(&plan(1000, 1000, 1, 1 << 17)), 1);
+        assert_eq!(full_batch_samples(&plan(4, 4, 10, 25)), 1);
+    }
+
+    #[test]
+    fn the_first_round_fills_the_slots_without_a_time_limit() {
+        // 15 pixels, 2 paths per sample, 64 slots: 2 samples fill a batch (60 paths).
+        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let p = Plan { total_spp: 9, ..plan(5, 3, 2, 64) };
+        run_rounds(&mut fake, &p, &PassOptions::default()).unwrap();
+        assert_eq!((fake.submitted[0].samples, fake.submitted[0].path_count), (2, 60));
+        assert!(fake.submitted.iter().all(|b| b.samples >= 1 && b.path_count <= 64));
+        // With a time limit the first round is `initial_spp_per_pass`.
+        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let opts = PassOptions { time_limit: Some(Duration::from_secs(3600)), ..PassOptions::default() };
+        run_rounds(&mut fake, &p, &opts).unwrap();
+        assert_eq!(fake.submitted[0].samples, 1);
     }
 
     fn plan(width: u32, height: u32, n: u32, capacity: u32) -> Plan {
