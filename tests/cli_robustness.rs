@@ -106,6 +106,30 @@ fn no_runtime_dir_noise_on_a_headless_machine() {
     assert!(!stderr(&o).contains("XDG_RUNTIME_DIR"), "{}", stderr(&o));
 }
 
+#[test]
+fn llvmpipe_gets_128_bit_vectors_unless_the_user_chose_a_width() {
+    let dir = scene_dir();
+    let devices = |width: Option<&str>| {
+        let mut cmd = lumen(dir.path());
+        cmd.arg("devices").env_remove("LP_NATIVE_VECTOR_WIDTH");
+        if let Some(w) = width {
+            cmd.env("LP_NATIVE_VECTOR_WIDTH", w);
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let default = devices(None);
+    if !default.contains("llvmpipe") {
+        eprintln!("skipped: no llvmpipe adapter ({default})");
+        return;
+    }
+    // llvmpipe names its vector width in the adapter name.
+    assert!(default.contains("llvmpipe (LLVM") && default.contains(", 128 bits)"), "{default}");
+    let chosen = devices(Some("256"));
+    assert!(chosen.contains(", 256 bits)"), "{chosen}");
+}
+
 /// `lumen render` under a 4 GiB address-space limit (`ulimit -v`, as the reproducer).
 fn render_limited_to_4_gib(dir: &Path, args: &str) -> Output {
     let bin = env!("CARGO_BIN_EXE_lumen");

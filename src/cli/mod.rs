@@ -19,6 +19,7 @@ pub mod output;
 pub mod render;
 pub mod script_args;
 mod shader;
+pub mod software_driver;
 mod tonemap;
 
 /// lumen: a physically based path tracer on wgpu compute shaders, checked against an
@@ -69,6 +70,7 @@ pub fn main() -> ExitCode {
     // First, while the process has one thread: it may set an environment variable.
     #[cfg(unix)]
     let _runtime_dir = headless::ensure_runtime_dir();
+    software_driver::prefer_narrow_vectors();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return clap_exit(&e),
