@@ -8,6 +8,13 @@
 // the exact sum of its sample means to about 2⁻⁴⁸ whatever the round sizes: renders of
 // sample ranges (shards) then merge into the one-render image to the last f32 bit.
 
+// `x` as the compiler cannot know it: TwoSum's error term is (s + x) − s − x in exact terms,
+// which reassociation (allowed for WGSL floats, done by lavapipe) folds to 0; XOR with the
+// run-time zero `batch.zero` keeps each step as written.
+fn unfolded(x: vec3<f32>) -> vec3<f32> {
+    return bitcast<vec3<f32>>(bitcast<vec3<u32>>(x) ^ vec3<u32>(batch.zero));
+}
+
 @compute @workgroup_size(64)
 fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let p = wf_index(gid, nwg);
@@ -34,9 +41,9 @@ fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
             bad++;
             mean = vec3<f32>(0.0);
         }
-        let t = sum + mean;
-        let back = t - sum;
-        err += (sum - (t - back)) + (mean - back);
+        let t = unfolded(sum + mean);
+        let back = unfolded(t - sum);
+        err += (sum - unfolded(t - back)) + (mean - back);
         sum = t;
     }
     if (bad > 0u) {

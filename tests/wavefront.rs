@@ -124,6 +124,35 @@ fn images_do_not_depend_on_the_batch_size() {
     }
 }
 
+/// The film's compensated sum makes a pixel's value independent of how its samples are
+/// split into rounds (what lets shards merge into the one-render image): 16 samples in one
+/// round, in rounds of 5, 5, 5, 1 and one by one give the same f32 image but for the rare
+/// final rounding of an exact tie. A plain f32 sum (or a TwoSum the shader compiler folds
+/// away) differs in the last bits on most pixels.
+#[test]
+fn round_sizes_do_not_change_the_image() {
+    let Some(gpu) = gpu_for_tests("round_sizes_do_not_change_the_image") else { return };
+    let scene = mixed_scene(pt(3, 5, true));
+    let image = |per_round: u32| {
+        let out = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(Some(16), per_round)).unwrap();
+        assert_eq!(out.spp_done, 16);
+        bits(&out.image)
+    };
+    let whole = image(16);
+    for per_round in [5, 1] {
+        let split = image(per_round);
+        let mut differing = 0;
+        for (p, (a, b)) in whole.iter().zip(&split).enumerate() {
+            for c in 0..3 {
+                let ulps = a[c].abs_diff(b[c]);
+                assert!(ulps <= 1, "pixel {p} channel {c}: {ulps} ulp apart with {per_round} spp per round");
+                differing += usize::from(ulps > 0);
+            }
+        }
+        assert!(differing * 100 <= whole.len() * 3, "{differing} channels differ with {per_round} spp per round");
+    }
+}
+
 /// Ctrl-C (the cancel flag) before the first round ends drops it: nothing is kept.
 #[test]
 fn cancel_drops_the_unfinished_round() {

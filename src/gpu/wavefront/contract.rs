@@ -116,6 +116,12 @@ pub struct BatchUniform {
     pub capacity: u32,
     /// Shadow rays a path vertex may queue (point lights + 1 for NEE): the stride of `shadow`.
     pub shadow_rays: u32,
+    /// Always 0. Kernels XOR values with it where arithmetic must run as written (the film
+    /// stage's TwoSum): a compiler cannot fold across a value it cannot know, while it may
+    /// simplify `(s + x) − s` to `x` under the reassociation WGSL allows (Mesa's lavapipe
+    /// does, and the compensated sum's error term came out 0).
+    pub zero: u32,
+    pub _pad: [u32; 3],
 }
 
 const BATCH_WGSL: &str = "struct Batch {
@@ -127,6 +133,10 @@ const BATCH_WGSL: &str = "struct Batch {
     path_count: u32,
     capacity: u32,
     shadow_rays: u32,
+    zero: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 ";
 
@@ -265,6 +275,7 @@ mod tests {
             ("path_count", std::mem::offset_of!(BatchUniform, path_count)),
             ("capacity", std::mem::offset_of!(BatchUniform, capacity)),
             ("shadow_rays", std::mem::offset_of!(BatchUniform, shadow_rays)),
+            ("zero", std::mem::offset_of!(BatchUniform, zero)),
         ];
         for (m, (name, offset)) in members.iter().zip(rust) {
             assert_eq!((m.name.as_deref(), m.offset as usize), (Some(name), offset));

@@ -138,6 +138,8 @@ pub(crate) fn batches(plan: &Plan, j0: u32, samples: u32) -> Vec<BatchUniform> {
                 path_count: count * per_pixel,
                 capacity: plan.capacity,
                 shadow_rays: plan.shadow_rays,
+                zero: 0,
+                _pad: [0; 3],
             }
         })
         .collect()
