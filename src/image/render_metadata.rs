@@ -50,7 +50,8 @@ const SECONDS: &str = "lumen.renderSeconds";
 const VERSION: &str = "lumen.version";
 
 /// A 64-bit FNV-1a hash, fed through `fmt::Write` so that `Debug` text (which writes every
-/// f64 exactly, texels included) is hashed without being held in memory.
+/// f64 exactly, and images as a digest of their texels' bits) is hashed without being held
+/// in memory.
 struct Fnv {
     hash: u64,
     /// Meshes already hashed (by the address of their `Arc`), each with its order of first
