@@ -59,27 +59,8 @@ pub struct GpuArgs {
     /// from: `auto` puts each table that fits 64 KiB in a uniform buffer on a software
     /// adapter (much faster on lavapipe) and in a storage buffer on hardware GPUs; `uniform`
     /// and `storage` force one placement (for measurements). Images do not depend on it.
-    #[arg(long, value_enum, default_value_t = TablesArg::Auto)]
-    pub tables: TablesArg,
-}
-
-/// `--tables` ([`TablePlacement`]).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum TablesArg {
-    #[default]
-    Auto,
-    Uniform,
-    Storage,
-}
-
-impl From<TablesArg> for TablePlacement {
-    fn from(t: TablesArg) -> Self {
-        match t {
-            TablesArg::Auto => TablePlacement::Auto,
-            TablesArg::Uniform => TablePlacement::Uniform,
-            TablesArg::Storage => TablePlacement::Storage,
-        }
-    }
+    #[arg(long, value_enum, default_value_t = TablePlacement::Auto)]
+    pub tables: TablePlacement,
 }
 
 impl GpuArgs {

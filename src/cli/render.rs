@@ -271,7 +271,7 @@ fn render_on_gpu(
         samples: Some(range),
         passes: args.gpu.pass_options(),
         profile: args.profile,
-        tables: args.gpu.tables.into(),
+        tables: args.gpu.tables,
         ..GpuRenderOptions::default()
     };
     let out = renderer.render(gpu, scene, &opts)?;

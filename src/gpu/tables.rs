@@ -210,8 +210,9 @@ impl Table {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct UniformTables(u16);
 
-/// How a render places its tables ([`super::render::GpuRenderOptions::tables`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How a render places its tables ([`super::render::GpuRenderOptions::tables`]; also
+/// `lumen render --tables`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum TablePlacement {
     /// Uniform buffers on software adapters (where each table fits), storage elsewhere.
     #[default]
