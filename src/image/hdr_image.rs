@@ -46,15 +46,16 @@ pub struct HdrImage {
 /// ```
 impl std::fmt::Debug for HdrImage {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        // FNV-1a over 32-bit words: a change detector, not a cryptographic hash.
-        let digest =
-            self.pixels.iter().flat_map(|p| [p.r, p.g, p.b]).fold(0xcbf2_9ce4_8422_2325_u64, |h, c| {
-                (h ^ u64::from(c.to_bits())).wrapping_mul(0x0000_0100_0000_01b3)
-            });
+        let mut digest = super::fnv::Fnv1a::new();
+        for p in &self.pixels {
+            for c in [p.r, p.g, p.b] {
+                digest.bytes(&c.to_bits().to_le_bytes());
+            }
+        }
         f.debug_struct("HdrImage")
             .field("width", &self.width)
             .field("height", &self.height)
-            .field("pixel_bits", &format_args!("{digest:016x}"))
+            .field("pixel_bits", &format_args!("{:016x}", digest.finish()))
             .finish()
     }
 }

@@ -9,6 +9,7 @@
 mod atomic_file;
 mod error;
 mod exr_file;
+mod fnv;
 mod hdr_image;
 mod image_file;
 mod ldr_file;

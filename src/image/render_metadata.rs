@@ -15,6 +15,7 @@ use std::fmt::Write as _;
 
 use exr::meta::attribute::{AttributeValue, Text};
 
+use super::fnv::Fnv1a;
 use crate::prepare::SampleRange;
 use crate::scene::{Scene, Shape};
 
@@ -53,7 +54,7 @@ const VERSION: &str = "lumen.version";
 /// f64 exactly, and images as a digest of their texels' bits) is hashed without being held
 /// in memory.
 struct Fnv {
-    hash: u64,
+    hash: Fnv1a,
     /// Meshes already hashed (by the address of their `Arc`), each with its order of first
     /// use: an instance of one of them hashes that number, not its triangles again.
     meshes: Vec<usize>,
@@ -61,9 +62,7 @@ struct Fnv {
 
 impl Fnv {
     fn bytes(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.hash = (self.hash ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-        }
+        self.hash.bytes(bytes);
     }
 
     fn f64s(&mut self, values: &[f64]) {
@@ -129,7 +128,7 @@ impl std::fmt::Write for Fnv {
 /// different when anything that changes the image differs. The device is left out on
 /// purpose (CPU and GPU shards of one render may be merged).
 pub fn fingerprint(scene: &Scene, layout_spp: u32) -> String {
-    let mut h = Fnv { hash: 0xcbf2_9ce4_8422_2325, meshes: Vec::new() };
+    let mut h = Fnv { hash: Fnv1a::new(), meshes: Vec::new() };
     let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment } = scene;
     let _ = write!(
         h,
@@ -139,7 +138,7 @@ pub fn fingerprint(scene: &Scene, layout_spp: u32) -> String {
     );
     h.bytes(&(shapes.len() as u64).to_le_bytes());
     shapes.iter().for_each(|s| h.shape(s));
-    format!("{:016x}", h.hash)
+    format!("{:016x}", h.hash.finish())
 }
 
 fn text(s: &str) -> Text {
