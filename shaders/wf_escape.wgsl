@@ -10,10 +10,5 @@ fn escape_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     let ray = load_ray(slot);
     let beta = paths[field(F_BETA, slot)];
-    let e = beta.xyz * pt_escaped(load_previous(slot, beta), normalize(ray.dir));
-    // A black sky adds nothing: skip the read-modify-write (as in wf_shade.wgsl).
-    if (any(e != vec3<f32>(0.0))) {
-        let i = field(F_RADIANCE, slot);
-        paths[i] = vec4<f32>(paths[i].xyz + e, 0.0);
-    }
+    add_radiance(slot, beta.xyz * pt_escaped(load_previous(slot, beta), normalize(ray.dir)));
 }

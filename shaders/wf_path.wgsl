@@ -48,6 +48,18 @@ fn wf_push(q: u32, slot: u32) {
 }
 // #endif
 
+// #if WF_RADIANCE_ADD
+// Adds `e` to the path's radiance. Most contributions are zero (a surface that emits
+// nothing, a black sky): those skip the read-modify-write, eight per-lane storage accesses
+// on llvmpipe, without changing any sum (x + 0 = x; a NaN is added, for the film to count).
+fn add_radiance(slot: u32, e: vec3<f32>) {
+    if (any(e != vec3<f32>(0.0))) {
+        let i = field(F_RADIANCE, slot);
+        paths[i] = vec4<f32>(paths[i].xyz + e, 0.0);
+    }
+}
+// #endif
+
 // #if WF_RAY_LOAD
 fn load_ray(slot: u32) -> Ray {
     let o = paths[field(F_RAY_ORIGIN, slot)];

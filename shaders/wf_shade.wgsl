@@ -135,14 +135,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     let beta_pdf = paths[field(F_BETA, slot)];
     let prev = load_previous(slot, beta_pdf);
     var beta = beta_pdf.xyz;
-    // Most surfaces emit nothing: skipping the read-modify-write then saves eight per-lane
-    // storage accesses (llvmpipe) without changing any sum (e is added only when nonzero or
-    // NaN, and x + 0 = x).
-    let e = beta * pt_emitted(prev, hit, m);
-    if (any(e != vec3<f32>(0.0))) {
-        let ri = field(F_RADIANCE, slot);
-        paths[ri] = vec4<f32>(paths[ri].xyz + e, 0.0);
-    }
+    add_radiance(slot, beta * pt_emitted(prev, hit, m));
     if (bounce == settings.max_depth) {
         return;
     }

@@ -169,7 +169,7 @@ impl Stage {
                 if n.contains(&"ENV_IMAGE") {
                     n.push("TEXTURES");
                 }
-                n.extend(["WF_QUEUED", "WF_RAY_LOAD"]);
+                n.extend(["WF_QUEUED", "WF_RAY_LOAD", "WF_RADIANCE_ADD"]);
                 n
             }
             Stage::Shade(kind) => {
@@ -203,7 +203,15 @@ impl Stage {
                 if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") || microfacet_kind(kind) || mesh_lights {
                     n.push("TEXTURES");
                 }
-                n.extend(["PIGMENTS", "WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "WF_RAY_STORE", "WF_PATH_ID"]);
+                n.extend([
+                    "PIGMENTS",
+                    "WF_QUEUED",
+                    "WF_PUSH",
+                    "WF_RAY_LOAD",
+                    "WF_RAY_STORE",
+                    "WF_PATH_ID",
+                    "WF_RADIANCE_ADD",
+                ]);
                 n
             }
             Stage::Shadow => {
@@ -287,7 +295,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 29] = [
+    pub const NAMES: [&'static str; 30] = [
         "CSG_POOL_PRIVATE",
         "WF_HIT_STORE",
         "WF_HIT_LOAD",
@@ -306,6 +314,7 @@ impl Stage {
         "WF_RAY_LOAD",
         "WF_RAY_STORE",
         "WF_PATH_ID",
+        "WF_RADIANCE_ADD",
         "WF_COUNT",
         "WF_DEFERRED",
         "WF_SHADOW_CSG",
