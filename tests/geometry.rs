@@ -1,9 +1,7 @@
 //! Geometry against hand-computed answers: primitives, CSG, offsets, BVH vs brute force.
 
 use glam::{DVec2, DVec3};
-use lumen::cpu::csg::CsgTree;
 use lumen::cpu::{offset_origin, Hit, Ray, World};
-use lumen::prepare::max_intervals;
 use lumen::scene::{CsgOp, MaterialId, Shape, ShapeKind, Transform};
 use proptest::prelude::*;
 
@@ -416,41 +414,6 @@ fn csg_with_a_plane_half_space() {
         Transform::IDENTITY,
     )]);
     check_hit(&hit(&w, ray(DVec3::new(0.0, 0.3, -5.0), DVec3::Z)), 5.0, -DVec3::Z, 5, true);
-}
-
-#[test]
-fn max_intervals_bounds_random_trees() {
-    let mut rng = lumen::sampling::Pcg32::new(9, 1);
-    fn subtrees<'a>(s: &'a Shape, out: &mut Vec<&'a Shape>) {
-        out.push(s);
-        if let Shape::Csg(c) = s {
-            c.children.iter().for_each(|ch| subtrees(ch, out));
-        }
-    }
-    for _ in 0..200 {
-        let root = random_shape(&mut rng, 3);
-        let root_bound = max_intervals(&root);
-        let mut all = Vec::new();
-        subtrees(&root, &mut all);
-        // Every node's own lists fit its bound, and the root's bound covers them all.
-        for shape in all {
-            let bound = max_intervals(shape);
-            assert!(bound <= root_bound);
-            let tree = CsgTree::new(shape);
-            for _ in 0..30 {
-                let r = random_ray(&mut rng, 3.0);
-                let n = tree.intervals(&r).len();
-                assert!(n as u64 <= bound, "{n} intervals > bound {bound} for {shape:?}");
-            }
-        }
-    }
-    // Known values.
-    let s = || sphere(Transform::IDENTITY, 0);
-    let diff = Shape::csg(CsgOp::Diff, vec![s(), s(), s()], Transform::IDENTITY);
-    assert_eq!(max_intervals(&diff), 3);
-    let unite = Shape::csg(CsgOp::Unite, vec![s(), s()], Transform::IDENTITY);
-    let inter = Shape::csg(CsgOp::Intersect, vec![unite.clone(), unite], Transform::IDENTITY);
-    assert_eq!(max_intervals(&inter), 4);
 }
 
 // ---------------------------------------------------------------- offsets

@@ -447,9 +447,22 @@ fn csg_matches_the_cpu() {
         println!("{}", renderer.name());
         let scene = csg_scene(renderer);
         let f = lumen::gpu::features::FeatureSet::of(&scene);
-        assert!(f.csg && f.csg_max_depth == 2 && f.csg_max_intervals >= 2, "{f:?}");
+        assert!(f.csg && f.csg_max_depth == 2 && f.csg_max_leaves >= 2, "{f:?}");
         assert_matches_cpu(&gpu, &scene, None, 0.99);
     }
+}
+
+/// Two CSG trees above a floor plane at height z, in a grey sky, 24×18 pixels at 4 spp.
+fn csg_pair_scene(mut b: SceneBuilder, trees: [Shape; 2], floor: (f64, MaterialId), renderer: Renderer) -> Scene {
+    let [first, second] = trees;
+    b.shape(first)
+        .shape(second)
+        .plane(Transform::translation(DVec3::new(0.0, 0.0, floor.0)), floor.1)
+        .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
+        .renderer(renderer)
+        .environment(Environment::Uniform(Color::gray(0.7)))
+        .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
+    b.build().unwrap()
 }
 
 /// Trees one level deep (every child a primitive): the GPU's CSG frame stack then has one
@@ -490,19 +503,66 @@ fn csg_one_level_deep_matches_the_cpu() {
                 ],
                 Transform::translation(DVec3::new(3.5, -1.2, 0.0)) * Transform::scaling(DVec3::splat(0.8)),
             );
-            b.shape(tree)
-                .shape(shell)
-                .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), blue)
-                .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
-                .renderer(renderer)
-                .environment(Environment::Uniform(Color::gray(0.7)))
-                .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
-            let scene = b.build().unwrap();
+            let scene = csg_pair_scene(b, [tree, shell], (-1.0, blue), renderer);
             let f = lumen::gpu::features::FeatureSet::of(&scene);
             assert!(f.csg && f.csg_max_depth == 1, "{f:?}");
             println!("{op:?}, {}", scene.renderer.name());
             assert_matches_cpu(&gpu, &scene, None, 0.99);
         }
+    }
+}
+
+/// Trees whose interval lists would be huge: an INTERSECT of 32 two-sphere UNITEs (2³²
+/// pieces along a ray; the GPU once refused it) and a DIFF of a slab by a FUSE of 100
+/// spheres, whose leaves' spans live in the storage pool rather than in private memory
+/// (more than `wavefront::CSG_PRIVATE_POOL_MAX` leaves). Both render as on the CPU, with
+/// a flat renderer (every pixel a surface colour) and the path tracer.
+#[test]
+fn csg_trees_with_many_leaves_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("csg_trees_with_many_leaves_match_the_cpu") else { return };
+    for renderer in [
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
+    ] {
+        let mut b = SceneBuilder::new(24, 18);
+        let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
+        let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
+        let sphere = |at: DVec3, r: f64, m| {
+            Shape::primitive(ShapeKind::Sphere, Transform::translation(at) * Transform::scaling(DVec3::splat(r)), m)
+        };
+        // Radii shrink with k: the solid is the last UNITE's two spheres, and only its
+        // surfaces show.
+        let unites = (0..32)
+            .map(|k| {
+                let r = 1.0 - 0.01 * f64::from(k);
+                Shape::csg(
+                    CsgOp::Unite,
+                    vec![sphere(DVec3::new(0.0, -0.6, 0.0), r, red), sphere(DVec3::new(0.0, 0.6, 0.0), r, blue)],
+                    Transform::IDENTITY,
+                )
+            })
+            .collect();
+        let holes = (0..100)
+            .map(|k| {
+                let (i, j) = (f64::from(k % 10), f64::from(k / 10));
+                sphere(DVec3::new(-0.5, -1.35 + 0.3 * i, -1.35 + 0.3 * j), 0.12, blue)
+            })
+            .collect();
+        let slab = Shape::csg(
+            CsgOp::Diff,
+            vec![
+                Shape::primitive(ShapeKind::Cube, Transform::scaling(DVec3::new(0.4, 3.0, 3.0)), red),
+                Shape::csg(CsgOp::Fuse, holes, Transform::IDENTITY),
+            ],
+            Transform::translation(DVec3::new(1.0, -1.5, 0.0)),
+        );
+        let intersect = Shape::csg(CsgOp::Intersect, unites, Transform::translation(DVec3::new(4.0, 1.5, 0.0)));
+        let scene = csg_pair_scene(b, [intersect, slab], (-1.5, blue), renderer);
+        let f = lumen::gpu::features::FeatureSet::of(&scene);
+        assert!(f.csg && f.csg_max_leaves == 101 && f.csg_max_depth == 2, "{f:?}");
+        assert!(lumen::gpu::wavefront::csg_pool_spans(&f) > lumen::gpu::wavefront::CSG_PRIVATE_POOL_MAX);
+        println!("{}", scene.renderer.name());
+        assert_matches_cpu(&gpu, &scene, None, 0.99);
     }
 }
 

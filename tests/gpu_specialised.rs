@@ -127,7 +127,7 @@ fn a_kernel_override_that_does_not_cover_the_scene_is_refused() {
     flat.renderer = lumen::gpu::features::RendererKind::Flat;
     refused(&spheres, flat, "renderer PathTracer");
     let mut small_csg = FeatureSet::of(&with_csg);
-    small_csg.csg_max_intervals = 1;
+    small_csg.csg_max_leaves = 1;
     refused(&with_csg, small_csg, "CSG bounds");
 
     for (scene, kernel) in [(&spheres, spheres_only), (&with_csg, spheres_only.full_for())] {

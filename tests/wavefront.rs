@@ -230,7 +230,7 @@ fn a_fuse_of_1000_spheres_renders_like_the_cpu() {
     };
     let scene = block(CsgOp::Fuse);
     let f = lumen::gpu::features::FeatureSet::of(&scene);
-    assert!(f.csg && f.csg_max_intervals == 1000, "{f:?}");
+    assert!(f.csg && f.csg_max_leaves == 1000, "{f:?}");
     let whole = gpu_render(&gpu, &scene, 2, 0);
     let few = gpu_render(&gpu, &scene, 2, 7);
     assert!(few.batches > whole.batches);

@@ -19,7 +19,7 @@ use crate::analysis::{
 };
 use crate::color::Color;
 use crate::cpu::World;
-use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_INTERVALS};
+use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_LEAVES};
 use crate::gpu::pack::pack;
 use crate::gpu::render::{assemble_stages, GpuRenderOptions};
 use crate::gpu::Gpu;
@@ -412,7 +412,7 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
     }
     Ok(format!(
         "### Specialised vs full-featured GPU kernel\n\nfeatures = number of `// #if` feature flags on; full-featured = \
-         every shape, CSG ({FULL_CSG_MAX_INTERVALS} intervals, depth {FULL_CSG_MAX_DEPTH}), pigment, BRDF and light \
+         every shape, CSG ({FULL_CSG_MAX_LEAVES} leaves, depth {FULL_CSG_MAX_DEPTH}), pigment, BRDF and light \
          kind and every environment, with the scene's renderer (`FeatureSet::full_for`). samples/s as in the scene \
          table (after a throw-away render that compiles the kernel), each kernel rendering the same scene. Pipeline creation = naga validation + \
          `create_compute_pipeline` until the device is idle.\n\n{}",

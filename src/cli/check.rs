@@ -28,8 +28,8 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
     out.line(format_args!("GPU kernel features: {}", features.names().join(" ")));
     if features.csg {
         out.line(format_args!(
-            "CSG interval lists: at most {} intervals, trees {} deep",
-            features.csg_max_intervals, features.csg_max_depth
+            "CSG trees: at most {} leaves, {} deep",
+            features.csg_max_leaves, features.csg_max_depth
         ));
     }
     Ok(out.print()?)

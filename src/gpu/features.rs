@@ -1,8 +1,9 @@
 //! What a scene needs from the GPU kernel, so the assembled WGSL holds nothing else.
 //!
 //! Specialising the kernel per scene keeps register pressure and compile time down (a
-//! spheres-only scene never compiles CSG interval lists or texture lookups) and lets
-//! fixed-size arrays (CSG interval lists) be sized from the scene instead of a worst case.
+//! spheres-only scene never compiles CSG evaluation or texture lookups) and lets
+//! fixed-size arrays (a CSG query's leaf spans, its walk's stack) be sized from the scene
+//! instead of a worst case.
 
 use super::tables::UniformTables;
 use crate::scene::{Brdf, Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
@@ -10,7 +11,7 @@ use crate::scene::{Brdf, Environment, Pigment, Renderer, Scene, Shape, ShapeKind
 /// CSG bounds compiled into a full-featured kernel ([`FeatureSet::full_for`]): a general
 /// kernel is sized for the worst scene it accepts; these cover every example scene, and a
 /// scene with larger bounds raises them.
-pub const FULL_CSG_MAX_INTERVALS: u32 = 16;
+pub const FULL_CSG_MAX_LEAVES: u32 = 16;
 pub const FULL_CSG_MAX_DEPTH: u32 = 8;
 
 /// Environment kinds, for specialisation.
@@ -58,8 +59,9 @@ pub struct FeatureSet {
     pub cylinder: bool,
     /// Some top-level shape is a CSG tree.
     pub csg: bool,
-    /// Bound on the length of any CSG interval list (`csg::max_intervals`); ≥ 1 when `csg`.
-    pub csg_max_intervals: u32,
+    /// Most leaves (primitives) of any CSG tree: the spans one CSG query stores; ≥ 1 when
+    /// `csg`.
+    pub csg_max_leaves: u32,
     /// Bound on the depth of any CSG tree (sizes the evaluation stack).
     pub csg_max_depth: u32,
     /// Top-level CSG trees: up to `prepare::CSG_DEFER_MAX` of them are evaluated after the BVH
@@ -121,8 +123,8 @@ impl FeatureSet {
                     f.bvh = true;
                     f.csg_trees += 1;
                     // Saturated, never truncated: pack refuses what the GPU cannot hold.
-                    let bound = crate::prepare::max_intervals(shape).min(u64::from(u32::MAX)) as u32;
-                    f.csg_max_intervals = f.csg_max_intervals.max(bound);
+                    let leaves = u32::try_from(shape.leaf_count()).unwrap_or(u32::MAX);
+                    f.csg_max_leaves = f.csg_max_leaves.max(leaves);
                     f.csg_max_depth = f.csg_max_depth.max(shape.csg_depth() as u32);
                 }
             }
@@ -220,7 +222,7 @@ impl FeatureSet {
     }
 
     /// The full-featured kernel for scenes like this one: every shape, CSG (with bounds of
-    /// at least [`FULL_CSG_MAX_INTERVALS`] and [`FULL_CSG_MAX_DEPTH`]), pigment, BRDF and
+    /// at least [`FULL_CSG_MAX_LEAVES`] and [`FULL_CSG_MAX_DEPTH`]), pigment, BRDF and
     /// light kind and every environment ([`EnvKind::All`]), for this set's renderer.
     ///
     /// Two things stay the scene's, because they select an algorithm rather than add code:
@@ -242,7 +244,7 @@ impl FeatureSet {
             cylinder: true,
             mesh: true,
             csg: true,
-            csg_max_intervals: self.csg_max_intervals.max(FULL_CSG_MAX_INTERVALS),
+            csg_max_leaves: self.csg_max_leaves.max(FULL_CSG_MAX_LEAVES),
             csg_max_depth: self.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
             csg_trees: if self.csg_trees > defer_max { self.csg_trees } else { defer_max },
             pigment_uniform: pigments,
@@ -282,10 +284,10 @@ impl FeatureSet {
             missing.push(format!("environment {:?} (kernel: {:?})", scene.environment, self.environment));
         }
         if scene.csg {
-            if self.csg_max_intervals < scene.csg_max_intervals || self.csg_max_depth < scene.csg_max_depth {
+            if self.csg_max_leaves < scene.csg_max_leaves || self.csg_max_depth < scene.csg_max_depth {
                 missing.push(format!(
-                    "CSG bounds {} intervals, depth {} (kernel: {}, {})",
-                    scene.csg_max_intervals, scene.csg_max_depth, self.csg_max_intervals, self.csg_max_depth
+                    "CSG bounds {} leaves, depth {} (kernel: {}, {})",
+                    scene.csg_max_leaves, scene.csg_max_depth, self.csg_max_leaves, self.csg_max_depth
                 ));
             }
             let defer_max = crate::prepare::CSG_DEFER_MAX as u32;
@@ -444,7 +446,7 @@ mod tests {
             .point_light(PointLight::default());
         let f = FeatureSet::of(&b.build().unwrap());
         assert!(f.sphere && f.cube && f.cylinder && f.plane && f.csg && f.bvh);
-        assert_eq!((f.csg_max_depth, f.csg_max_intervals), (2, 3));
+        assert_eq!((f.csg_max_depth, f.csg_max_leaves), (2, 3));
         assert!(f.diffuse && f.dielectric && !f.specular);
         assert!(f.pigment_uniform && f.pigment_checkered && !f.pigment_image && !f.textures());
         assert!(f.point_lights && f.nee && !f.area_lights);
@@ -513,35 +515,34 @@ mod tests {
         // as the CPU reference chooses it) is kept: a deferring kernel cannot take a scene
         // with more trees than its slots, nor a non-deferring one a scene the CPU defers.
         let max = crate::prepare::CSG_DEFER_MAX as u32;
-        let csg = |trees, intervals| FeatureSet {
+        let csg = |trees, leaves| FeatureSet {
             csg: true,
             csg_trees: trees,
-            csg_max_intervals: intervals,
+            csg_max_leaves: leaves,
             csg_max_depth: 1,
             ..spheres
         };
         let full = csg(2, 40).full_for();
-        assert_eq!((full.csg_trees, full.csg_max_intervals, full.csg_max_depth), (max, 40, FULL_CSG_MAX_DEPTH));
+        assert_eq!((full.csg_trees, full.csg_max_leaves, full.csg_max_depth), (max, 40, FULL_CSG_MAX_DEPTH));
         assert!(full.covers(&csg(max, 40)) && !full.covers(&csg(max + 1, 2)) && !full.covers(&csg(1, 41)));
         let many = csg(max + 5, 2).full_for();
         assert_eq!(many.csg_trees, max + 5);
         assert!(many.covers(&csg(max + 100, 2)) && !many.covers(&csg(1, 2)));
     }
 
-    /// Issue 16's reproducer: an INTERSECT of 32 two-sphere UNITEs has an interval bound of
-    /// 2³², which once truncated to 0 and compiled a kernel with room for one interval. It
-    /// saturates, and the packer refuses the scene with the limit (SceneLang refuses it
-    /// earlier, at its line; a scene built in Rust reaches the GPU side).
+    /// Issue 16's reproducer: an INTERSECT of 32 two-sphere UNITEs, whose interval lists
+    /// could hold 2³² intervals along a ray, once compiled a kernel with room for one
+    /// interval and was later refused. The GPU now stores one span per leaf: 64, and the
+    /// scene packs (tests/gpu_render.rs renders one against the CPU).
     #[test]
-    fn csg_bounds_beyond_u32_saturate_and_the_packer_refuses_them() {
+    fn an_intersect_of_many_unites_needs_one_span_per_leaf() {
         let mut b = SceneBuilder::new(2, 2);
         let m = b.diffuse(Color::gray(0.5));
         let sphere = |x: f64| Shape::primitive(ShapeKind::Sphere, Transform::translation(DVec3::new(x, 0.0, 0.0)), m);
         let unite = || Shape::csg(CsgOp::Unite, vec![sphere(0.0), sphere(0.5)], Transform::IDENTITY);
         b.shape(Shape::csg(CsgOp::Intersect, (0..32).map(|_| unite()).collect(), Transform::IDENTITY));
         let scene = b.build().unwrap();
-        assert_eq!(FeatureSet::of(&scene).csg_max_intervals, u32::MAX);
-        let err = crate::gpu::pack::pack(&scene, None).unwrap_err();
-        assert!(err.to_string().contains("CSG interval slots"), "{err}");
+        assert_eq!(FeatureSet::of(&scene).csg_max_leaves, 64);
+        assert!(crate::gpu::pack::pack(&scene, None).is_ok());
     }
 }

@@ -18,12 +18,15 @@ pub const NONE: u32 = u32::MAX;
 /// Set in an object reference (BVH leaf, plane list, CSG child) when it names a CSG node
 /// rather than a shape.
 pub const CSG_NODE_BIT: u32 = 0x8000_0000;
-/// Bits of the face number in a CSG interval end, which shaders/csg.wgsl packs into one word
-/// with the leaf's shape index and the flip bit: three hold a cube's six faces.
+/// Bits of the face number in a CSG span end, which shaders/csg.wgsl packs into one word
+/// with the leaf's shape index: three hold a cube's six faces.
 pub const CSG_END_FACE_BITS: u32 = 3;
-/// Shapes a scene with CSG trees may pack: an interval end's leaf field is what the face and
-/// flip bits leave of a word, and its all-ones value marks an open end.
-pub const CSG_LEAF_LIMIT: u32 = u32::MAX >> (CSG_END_FACE_BITS + 1);
+/// Shapes a scene with CSG trees may pack: a span end's leaf field is what the face bits
+/// leave of a word, and its all-ones value marks an open end.
+pub const CSG_LEAF_LIMIT: u32 = u32::MAX >> CSG_END_FACE_BITS;
+/// CSG nodes a scene may pack: the CSG walk's frame keeps the node's operation (two bits)
+/// above its index in one word.
+pub const CSG_NODE_LIMIT: u32 = 1 << 30;
 
 /// `Shape::kind` values (the order of `ShapeKind::ALL`).
 pub mod shape_kind {

@@ -85,11 +85,10 @@ fn rebased(n: BvhNode, to: u32, from: u32, tri_base: u32) -> BvhNode {
     }
 }
 
-/// Most CSG intervals one path may need in the GPU's interval pool (32 bytes each, so
-/// 8 MiB; `wavefront::csg_pool_intervals`: 2·depth + 2 lists of `csg::max_intervals`
-/// entries). The pool bounds a batch's paths by its memory budget (256 MiB on a software
-/// adapter), so beyond this a batch would hold too few paths to be worth running; a UNITE
-/// of 65,536 spheres is within it.
+/// Most CSG leaf spans one path may need in the GPU's pool (16 bytes each, so 4 MiB;
+/// `wavefront::csg_pool_spans`: one per leaf of the largest tree). The pool bounds a
+/// batch's paths by its memory budget (256 MiB on a software adapter), so beyond this a batch would hold too few paths to be worth running; SceneLang's
+/// largest tree (`scene::MAX_CSG_LEAVES`) is well within it.
 pub const MAX_CSG_POOL: usize = 1 << 18;
 
 /// `data`, or one zeroed element when it is empty: what is bound for a buffer the kernel
@@ -175,10 +174,10 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     let scene = &*form;
     let features = FeatureSet::of(scene);
     if features.csg {
-        let pool = usize::try_from(crate::gpu::wavefront::csg_pool_intervals(&features)).unwrap_or(usize::MAX);
+        let pool = usize::try_from(crate::gpu::wavefront::csg_pool_spans(&features)).unwrap_or(usize::MAX);
         if pool > MAX_CSG_POOL {
             return Err(PackError::TooMany {
-                what: "CSG interval slots (2·tree depth + 2 lists of csg::max_intervals entries)",
+                what: "CSG leaf spans per path (the leaves of the largest tree)",
                 count: pool,
                 limit: MAX_CSG_POOL,
             });
@@ -248,6 +247,14 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
             what: "shapes in a scene with CSG trees",
             count: p.shapes.len(),
             limit: layout::CSG_LEAF_LIMIT as usize - 1,
+        });
+    }
+    // The CSG walk keeps a node's operation above its index in one word (shaders/csg.wgsl).
+    if p.csg_nodes.len() > layout::CSG_NODE_LIMIT as usize {
+        return Err(PackError::TooMany {
+            what: "CSG nodes",
+            count: p.csg_nodes.len(),
+            limit: layout::CSG_NODE_LIMIT as usize,
         });
     }
     let plane_offset = count_u32("indices", p.indices.len())?;
@@ -744,16 +751,16 @@ mod tests {
     }
 
     #[test]
-    fn a_csg_tree_too_wide_for_the_interval_pool_is_a_clear_error() {
+    fn a_csg_tree_too_wide_for_the_span_pool_is_a_clear_error() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
-        // A FUSE of n spheres needs 4n intervals: 70,000 is past the limit. (A top-level
-        // UNITE would be stored as its 70,000 spheres.)
-        let many = (0..70_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
+        // A FUSE of n spheres needs n spans: 270,000 is past the limit (SceneLang refuses
+        // such a tree earlier; a top-level UNITE would be stored as its spheres).
+        let many = (0..270_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
         b.shape(Shape::csg(CsgOp::Fuse, many, Transform::IDENTITY));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
-        assert!(err.to_string().contains("CSG interval slots"), "{err}");
+        assert!(err.to_string().contains("CSG leaf spans"), "{err}");
     }
 
     /// Microfacet materials get their kind, α and rows of the energy tables at their α and

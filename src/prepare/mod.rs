@@ -4,7 +4,6 @@
 //! the lights, the environment's sampling tables, the placement of camera samples and the
 //! CSG bounds by construction, not by two implementations kept alike.
 
-pub mod csg_bounds;
 pub mod mesh_bvh;
 pub mod pixel_samples;
 pub mod render_form;
@@ -17,7 +16,6 @@ use crate::image::HdrImage;
 use crate::sampling::Distribution2D;
 use crate::scene::{Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
 
-pub use csg_bounds::{max_intervals, IntervalBound};
 pub use mesh_bvh::{mesh_bvh, MeshBvhs};
 pub use pixel_samples::PixelSamples;
 pub use render_form::render_form;

@@ -27,9 +27,7 @@ pub use material::{Material, MaterialId};
 pub use mesh::{MeshError, MeshErrorKind, MeshFormat, MeshLocation, MeshParts, TriangleMesh, MAX_MESH_ELEMENTS};
 pub use pigment::{ImageFilter, Pigment};
 pub use settings::{PathTracerSettings, PcgSeed, Renderer, Tracer};
-pub use shape::{
-    Csg, CsgOp, MeshInstance, Primitive, Shape, ShapeKind, MAX_CSG_DEPTH, MAX_CSG_INTERVALS, MAX_PRIMITIVES,
-};
+pub use shape::{Csg, CsgOp, MeshInstance, Primitive, Shape, ShapeKind, MAX_CSG_DEPTH, MAX_PRIMITIVES};
 pub use transform::Transform;
 
 /// Largest image side lumen accepts; larger sizes are input errors, not allocations.

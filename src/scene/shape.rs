@@ -63,15 +63,9 @@ impl ShapeKind {
 pub const MAX_PRIMITIVES: u64 = 1 << 21;
 
 /// Deepest CSG tree (a CSG node over primitives is depth 1). Names let a script nest CSG
-/// without limit, while every consumer of the tree (bounds, the CPU's interval evaluation,
-/// the GPU's packing) walks it recursively and the GPU sizes its stacks by the depth.
+/// without limit, while every consumer of the tree (bounds, the CPU's evaluation, the GPU's
+/// packing) walks it recursively and the GPU sizes its stacks by the depth.
 pub const MAX_CSG_DEPTH: usize = 256;
-
-/// Largest [`crate::prepare::max_intervals`] bound a CSG tree may have: it is the length
-/// of the interval lists along one ray, which INTERSECT and DIFF of UNITEs multiply
-/// (32 two-sphere UNITEs intersected: 2³²). Large enough for a UNITE or FUSE of 65 536
-/// primitives; a union of more shapes should be spawned as separate shapes.
-pub const MAX_CSG_INTERVALS: u64 = 1 << 16;
 
 /// One placed unit primitive.
 #[derive(Debug, Clone, PartialEq)]
@@ -204,7 +198,7 @@ impl Shape {
     /// transformation, recursively), anything else itself. A UNITE keeps every child's
     /// surface, so its closest hit along any ray is the closest of its children's and its
     /// occlusion theirs: as separate shapes they go into the BVH one by one instead of being
-    /// evaluated as one CSG tree by interval lists ([`crate::prepare::render_form`], DESIGN.md
+    /// evaluated as one CSG tree ([`crate::prepare::render_form`], DESIGN.md
     /// "Top-level UNITEs"). A UNITE holding a mesh stays whole, so that
     /// [`crate::scene::Scene::validate`] still refuses it.
     pub fn top_level_parts(self) -> Vec<Shape> {
@@ -291,6 +285,15 @@ impl Shape {
             }
         }
         walk(self, &Transform::IDENTITY, f);
+    }
+
+    /// Number of primitives in this tree: a CSG tree's leaves (0 for a mesh).
+    pub fn leaf_count(&self) -> usize {
+        match self {
+            Shape::Primitive(_) => 1,
+            Shape::Mesh(_) => 0,
+            Shape::Csg(c) => c.children.iter().map(Shape::leaf_count).sum(),
+        }
     }
 
     /// Number of CSG nodes in this tree.

@@ -15,7 +15,7 @@ use crate::image::HdrImage;
 use crate::scene::{
     Brdf, Camera, CsgOp, Environment, ImageFilter, Material, PathTracerSettings, PcgSeed, Pigment, PointLight,
     Projection, Renderer, SceneError, ShapeKind, Tracer, Transform, DEFAULT_THRESHOLD_ANGLE_RAD, MAX_CSG_DEPTH,
-    MAX_CSG_INTERVALS, MAX_IMAGE_SIDE, MAX_PRIMITIVES,
+    MAX_IMAGE_SIDE, MAX_PRIMITIVES,
 };
 
 type Res<T> = Result<T, SceneLangError>;
@@ -378,9 +378,9 @@ impl Interp<'_> {
         Ok(Value::Shape(shape))
     }
 
-    /// Refuses a CSG node whose tree exceeds [`MAX_PRIMITIVES`], [`MAX_CSG_DEPTH`] or
-    /// [`MAX_CSG_INTERVALS`]; its children were checked when they were made, so the first
-    /// node to cross a limit is the one reported.
+    /// Refuses a CSG node whose tree exceeds [`MAX_PRIMITIVES`] or [`MAX_CSG_DEPTH`]; its
+    /// children were checked when they were made, so the first node to cross a limit is the
+    /// one reported.
     fn check_size(&self, shape: &ShapeValue, span: Span) -> Res<()> {
         let size = shape.size();
         let name = match shape.node() {
@@ -404,22 +404,6 @@ impl Interp<'_> {
                 .err(span, ErrorKind::TooLarge, msg)
                 .with_expected(format!("at most {MAX_PRIMITIVES} primitives in a scene"))
                 .with_note(PER_USE));
-        }
-        if size.intervals.n > MAX_CSG_INTERVALS {
-            // The bound saturates at u64::MAX rather than overflowing.
-            let n = size.intervals.n;
-            let n = if n == u64::MAX { format!("{n} or more") } else { n.to_string() };
-            let msg =
-                format!("this {name} may cross a ray in up to {n} pieces, more than the limit of {MAX_CSG_INTERVALS}");
-            let note = if size.intervals.overlap && matches!(name, "INTERSECT" | "DIFF") {
-                "INTERSECT and DIFF multiply the pieces of a UNITE (a FUSE's pieces do not overlap and only add up)"
-            } else {
-                "the pieces of UNITE and FUSE (and of INTERSECT and DIFF of FUSEs) add up: shapes spawned one by one need no CSG"
-            };
-            return Err(self
-                .err(span, ErrorKind::TooLarge, msg)
-                .with_expected(format!("CSG trees of at most {MAX_CSG_INTERVALS} intervals along a ray"))
-                .with_note(format!("{note}; {PER_USE}")));
         }
         Ok(())
     }

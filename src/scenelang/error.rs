@@ -50,8 +50,7 @@ pub enum ErrorKind {
     /// deeper than [`crate::scene::MAX_CSG_DEPTH`].
     TooDeep,
     /// A shape that would expand beyond lumen's limits: more primitives than
-    /// [`crate::scene::MAX_PRIMITIVES`] or longer interval lists than
-    /// [`crate::scene::MAX_CSG_INTERVALS`].
+    /// [`crate::scene::MAX_PRIMITIVES`].
     TooLarge,
     /// The script file could not be read, or DUMP could not write.
     Io,

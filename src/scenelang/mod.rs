@@ -36,8 +36,8 @@
 //! - `Transformation([...])` reads its 16 numbers row by row, and only affine matrices
 //!   (last row 0 0 0 1) are supported (Raytracer.jl takes any invertible one);
 //! - names share their values, and scripts whose shapes expand beyond
-//!   [`crate::scene::MAX_PRIMITIVES`], [`crate::scene::MAX_CSG_DEPTH`] or
-//!   [`crate::scene::MAX_CSG_INTERVALS`] are refused where they cross the limit;
+//!   [`crate::scene::MAX_PRIMITIVES`] or [`crate::scene::MAX_CSG_DEPTH`] are refused where
+//!   they cross the limit;
 //! - `ROTATE(.X a * .Z b)` is the product `ROTATE(.X a) * ROTATE(.Z b)`: the rightmost
 //!   rotation acts on points first, like any `*` chain;
 //! - math expressions also know `pi`, `TIME`, `sqrt` and `abs`;

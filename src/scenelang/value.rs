@@ -6,7 +6,6 @@ use glam::DVec3;
 
 use crate::color::Color;
 use crate::image::HdrImage;
-use crate::prepare::IntervalBound;
 use crate::scene::{
     Brdf, Camera, CsgOp, Environment, Material, PcgSeed, Pigment, PointLight, Renderer, ShapeKind, Tracer, Transform,
 };
@@ -65,13 +64,11 @@ pub enum ShapeNode {
 /// How limit errors explain the count of primitives.
 pub const PER_USE: &str = "a CSG leaf counts once per use: FUSE(a, a) holds the primitives of `a` twice";
 
-/// What a shape expands to: primitives (counted once per use), CSG depth and the bound on
-/// its interval lists.
+/// What a shape expands to: primitives (counted once per use) and CSG depth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TreeSize {
     pub primitives: u64,
     pub depth: usize,
-    pub intervals: IntervalBound,
 }
 
 impl ShapeValue {
@@ -92,11 +89,9 @@ impl ShapeValue {
     /// A CSG node; its size comes from its children's in O(number of children).
     pub fn csg(op: CsgOp, children: Vec<ShapeValue>, transform: Transform) -> Self {
         let sizes: Vec<TreeSize> = children.iter().map(ShapeValue::size).collect();
-        let bounds: Vec<IntervalBound> = sizes.iter().map(|s| s.intervals).collect();
         let size = TreeSize {
             primitives: sizes.iter().fold(0u64, |n, s| n.saturating_add(s.primitives)),
             depth: 1 + sizes.iter().map(|s| s.depth).max().unwrap_or(0),
-            intervals: IntervalBound::combine(op, &bounds),
         };
         Self(Arc::new(ShapeNode::Csg { op, children, transform, size }))
     }
@@ -112,10 +107,10 @@ impl ShapeValue {
 
     pub fn size(&self) -> TreeSize {
         match &*self.0 {
-            ShapeNode::Primitive { .. } => TreeSize { primitives: 1, depth: 0, intervals: IntervalBound::LEAF },
+            ShapeNode::Primitive { .. } => TreeSize { primitives: 1, depth: 0 },
             ShapeNode::Csg { size, .. } => *size,
             // Not a CSG operand: the size is never combined.
-            ShapeNode::Mesh { .. } => TreeSize { primitives: 1, depth: 0, intervals: IntervalBound::LEAF },
+            ShapeNode::Mesh { .. } => TreeSize { primitives: 1, depth: 0 },
         }
     }
 }
@@ -287,7 +282,7 @@ mod tests {
             let size = c.size();
             assert_eq!(size.depth, i as usize);
             let expect = 1u64.checked_shl(i).unwrap_or(u64::MAX);
-            assert_eq!((size.primitives, size.intervals.n), (expect, expect), "{i}");
+            assert_eq!(size.primitives, expect, "{i}");
             let ShapeNode::Csg { children, .. } = c.node() else { panic!("not a CSG node") };
             assert_eq!(children[0].key(), children[1].key());
         }
@@ -300,7 +295,7 @@ mod tests {
         assert_ne!(a, ShapeValue::csg(CsgOp::Fuse, vec![sphere(), sphere()], Transform::IDENTITY));
         // A UNITE's pieces may overlap, so an INTERSECT of two of them multiplies: 2·2.
         let x = ShapeValue::csg(CsgOp::Intersect, vec![a.clone(), a], Transform::IDENTITY);
-        assert_eq!(x.size(), TreeSize { primitives: 4, depth: 2, intervals: IntervalBound { n: 4, overlap: true } });
+        assert_eq!(x.size(), TreeSize { primitives: 4, depth: 2 });
     }
 
     #[test]

@@ -11,9 +11,9 @@
 //! - `shadow` (`array<vec4<f32>>`): per path, `batch.shadow_rays` shadow rays of three vec4 each.
 //! - `deferred_refs` (`array<u32>`): per path, the CSG trees its closest-hit query met.
 //! - `film` (`array<vec4<f32>>`): per pixel of the batch, the sum of its camera samples.
-//! - `csg_pool` (`array<Interval>`): per path, the CSG interval lists of the query it is in
-//!   ([`csg_pool_intervals`] each; the host bounds the batch so that the pool stays within
-//!   a memory budget however large a tree's bound).
+//! - `csg_pool` (`array<Interval>`): per path, the spans of the leaves of the CSG tree its
+//!   query evaluates ([`csg_pool_spans`] each; the host bounds the batch so that the pool
+//!   stays within a memory budget however large a tree).
 //! - `args` (`array<u32>`): indirect dispatch arguments, three words per queue, written by
 //!   the control kernels (a separate buffer: a dispatch may not use one buffer both as its
 //!   indirect arguments and as writable storage).
@@ -193,20 +193,20 @@ impl StateBuffer {
     }
 }
 
-/// Bytes of one CSG interval in `csg_pool` (two ends of two 32-bit words; a test checks
-/// the WGSL struct).
+/// Bytes of one leaf span in `csg_pool` (two ends of two 32-bit words; a test checks the
+/// WGSL struct).
 pub const CSG_INTERVAL_BYTES: u64 = 16;
 
-/// Most intervals per path kept in private memory instead of the storage pool (2 KiB):
-/// csg.sl's trees need 48, streetlamp.sl's 80 (1.5× faster on lavapipe in private memory
-/// than in the pool); beyond this the lists go to the pool, so that private memory, and
-/// with it compile time, stay bounded whatever a tree's bound.
-pub const CSG_PRIVATE_POOL_MAX: u64 = 128;
+/// Most leaf spans per path kept in private memory instead of the storage pool (1 KiB):
+/// every example scene's trees fit (streetlamp.sl's have 7 leaves); larger trees keep
+/// their spans in the pool, so that private memory, and with it compile time, stay bounded
+/// whatever the tree.
+pub const CSG_PRIVATE_POOL_MAX: u64 = 64;
 
-/// Intervals of `csg_pool` one lane needs for the scene's trees (features `f`): 2·depth + 2
-/// slots (two per frame, the leaf's, and the scratch slot) of the lists' bound each.
-pub fn csg_pool_intervals(f: &FeatureSet) -> u64 {
-    (2 * u64::from(f.csg_max_depth.max(1)) + 2) * u64::from(f.csg_max_intervals.max(1))
+/// Spans of `csg_pool` one lane needs for the scene's trees (features `f`): one per leaf
+/// of the largest tree.
+pub fn csg_pool_spans(f: &FeatureSet) -> u64 {
+    u64::from(f.csg_max_leaves.max(1))
 }
 
 /// The generated `wavefront` module for a stage that binds `buffers`: every constant above,

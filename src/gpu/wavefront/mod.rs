@@ -34,7 +34,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use contract::{control, path_field, word_field, MAX_GRID, WORKGROUP};
-pub use contract::{csg_pool_intervals, CSG_INTERVAL_BYTES, CSG_PRIVATE_POOL_MAX};
+pub use contract::{csg_pool_spans, CSG_INTERVAL_BYTES, CSG_PRIVATE_POOL_MAX};
 use schedule::BatchRunner;
 
 use crate::gpu::compute::ComputeKernel;
@@ -84,8 +84,8 @@ pub fn capacity(
     let used = scene_buffers(features);
     let widest = used.iter().copied().map(per_slot).max().unwrap_or(1).max(1);
     slots = slots.min(limit / widest).max(1);
-    // CSG interval lists (per slot, sized by the trees' bound) within their budget: a tree
-    // with a large bound makes batches smaller, never the kernels larger.
+    // CSG leaf spans (per slot, sized by the largest tree) within their budget: a large
+    // tree makes batches smaller, never the kernels larger.
     if used.contains(&StateBuffer::CsgPool) {
         slots = slots.min(csg_pool_budget(gpu) / per_slot(StateBuffer::CsgPool)).max(1);
     }
@@ -120,7 +120,7 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> 
         // The compensated sum: value and error (wf_film.wgsl).
         StateBuffer::Film => 32,
         StateBuffer::Args => 0,
-        StateBuffer::CsgPool => contract::csg_pool_intervals(features) * contract::CSG_INTERVAL_BYTES,
+        StateBuffer::CsgPool => contract::csg_pool_spans(features) * contract::CSG_INTERVAL_BYTES,
     }
 }
 

@@ -337,16 +337,16 @@ impl Stage {
     }
 }
 
+/// Whether a scene's CSG trees are small enough to keep their leaves' spans in private
+/// memory (at most [`super::contract::CSG_PRIVATE_POOL_MAX`] per path): faster than the
+/// storage pool on SIMD software GPUs, and bounded, so kernels still do not grow with a scene.
+pub fn csg_pool_private(f: &FeatureSet) -> bool {
+    f.csg && super::contract::csg_pool_spans(f) <= super::contract::CSG_PRIVATE_POOL_MAX
+}
+
 /// Whether CSG trees are evaluated in a stage of their own: the scene has CSG and few
 /// enough trees to defer them (`prepare::CSG_DEFER_MAX`, as `cpu::World` decides); otherwise
 /// the traversal evaluates each tree where it meets it.
-/// Whether a scene's CSG interval lists are small enough for private memory (at most
-/// [`super::contract::CSG_PRIVATE_POOL_MAX`] intervals per path): faster than the storage
-/// pool on SIMD software GPUs, and bounded, so kernels still do not grow with a scene.
-pub fn csg_pool_private(f: &FeatureSet) -> bool {
-    f.csg && super::contract::csg_pool_intervals(f) <= super::contract::CSG_PRIVATE_POOL_MAX
-}
-
 pub fn csg_queue(f: &FeatureSet) -> bool {
     f.csg && f.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX
 }
