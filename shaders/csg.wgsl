@@ -2,12 +2,14 @@
 // Constructive solid geometry by classifying the leaves' crossings: the algorithm of
 // cpu::csg, which says what the bits mean and why.
 //
-// WGSL has no recursion, so each classification is one depth-first walk of the tree with
-// an explicit frame stack; one loop does every walk. The first walk computes the leaves'
-// spans along the ray's line and stores them in `csg_pool` (one Interval per leaf, in the
-// walk's order) and finds the first crossing after tmin; every later walk classifies the
-// crossing found by the walk before and finds the next one, until the root shows a
-// crossing or none is left before tmax. The code is one walk whatever the tree, and the
+// Each classification is one run of the tree's program (layout::csg_instr: the nodes and
+// leaves depth first, built by gpu::pack), which replaces recursion: BEGIN opens a node,
+// LEAF folds the next leaf into the innermost open node, END finishes that node and folds
+// it into its parent. The first run computes the leaves' spans along the ray's line,
+// stores them in `csg_pool` (one Interval per leaf, in program order) and finds the first
+// crossings after tmin; every later run classifies up to CSG_BATCH crossings found by the
+// run before and finds the next ones, until the root shows a crossing or none is left
+// before tmax. One loop does every run, so the code is one walk whatever the tree, and the
 // memory one span per leaf: no interval lists, whose per-lane private-array traffic was
 // the slow part of CSG on SIMD software GPUs.
 //
@@ -94,12 +96,13 @@ const CSG_FLIP: u32 = 32u;
 const CSG_CUT_SHIFT: u32 = 6u;
 const CSG_SOLID: u32 = 3u * CSG_ONES;
 
-// Adds child number `i`'s classification `b` to a node's accumulator (cpu::csg::fold).
-fn csg_fold(op: u32, acc: u32, i: u32, b: u32) -> u32 {
+// Adds a child's classification `b` to a node's accumulator (cpu::csg::fold); `first`
+// for the node's first child.
+fn csg_fold(op: u32, acc: u32, first: bool, b: u32) -> u32 {
     if (op == CSG_UNITE || op == CSG_FUSE) {
         return acc | b;
     }
-    if (i == 0u) {
+    if (first) {
         return b;
     }
     if (op == CSG_INTERSECT) {
@@ -143,148 +146,143 @@ fn csg_finish(op: u32, acc: u32) -> u32 {
     return bits | (acc & ((CSG_OWN | CSG_FLIP) * CSG_ONES));
 }
 
-// A frame of the walk: the node index | op << 30, its next child, its accumulator.
-const CSG_FRAME_OP_SHIFT: u32 = 30u;
-
-fn csg_frame(node: u32) -> vec3<u32> {
-    return vec3<u32>(node | (csg_nodes[node].op << CSG_FRAME_OP_SHIFT), 0u, 0u);
-}
+// The walk's state for an open node, one word: the accumulator's fields in bits 0-29, bit
+// 9 (spare in every field) set once a child was folded in, the operation in bits 30-31.
+// The innermost open node's word stays in a register; the walk pushes the others on a
+// stack only when it opens a node.
+const CSG_OPEN_SEEN: u32 = 1u << 9u;
+const CSG_OPEN_OP_SHIFT: u32 = 30u;
+const CSG_OPEN_ACC: u32 = 0x1FFu * CSG_ONES;
 
 // Crossing (t, key) comes before (u, l): keys (2·leaf number + 1 for an exit) break ties.
 fn csg_before(t: f32, key: u32, u: f32, l: u32) -> bool {
     return t < u || (t == u && key < l);
 }
 
-// The closest surface of the tree inside (tmin, tmax): csg::CsgTree::closest.
+// Up to CSG_BATCH crossings in order; unused ones have t = tmax.
+struct CsgBatch {
+    t: vec3<f32>,
+    key: vec3<u32>,
+    tag: vec3<u32>,
+}
+
+// Offers the crossing (e, key k) to `next`, the first CSG_BATCH crossings inside
+// (tmin, tmax) after (after_t, after_key).
+fn csg_offer(next: ptr<function, CsgBatch>, e: End, k: u32, after_t: f32, after_key: u32, tmin: f32) {
+    if (end_leaf(e) == CSG_END_OPEN || e.t <= tmin || !csg_before(after_t, after_key, e.t, k)
+        || !csg_before(e.t, k, (*next).t.z, (*next).key.z)) {
+        return;
+    }
+    if (!csg_before(e.t, k, (*next).t.y, (*next).key.y)) {
+        (*next).t.z = e.t;
+        (*next).key.z = k;
+        (*next).tag.z = e.tag;
+        return;
+    }
+    (*next).t.z = (*next).t.y;
+    (*next).key.z = (*next).key.y;
+    (*next).tag.z = (*next).tag.y;
+    if (!csg_before(e.t, k, (*next).t.x, (*next).key.x)) {
+        (*next).t.y = e.t;
+        (*next).key.y = k;
+        (*next).tag.y = e.tag;
+        return;
+    }
+    (*next).t.y = (*next).t.x;
+    (*next).key.y = (*next).key.x;
+    (*next).tag.y = (*next).tag.x;
+    (*next).t.x = e.t;
+    (*next).key.x = k;
+    (*next).tag.x = e.tag;
+}
+
+// The closest surface of tree `root` inside (tmin, tmax): csg::CsgTree::closest.
 fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
-    // One frame more than the tree's depth: with a one-element array (trees one level
-    // deep) wgpu's OpenGL backend on Mesa's llvmpipe (22.3, LLVM 15) mis-executed the walk
-    // of the interval evaluator this replaced; the spare frame is never written.
-    var frames: array<vec3<u32>, CSG_MAX_DEPTH + 1u>;
-    // The crossings being classified, in order (none in the first walk); unused ones have
-    // t = tmax. Every crossing after the last one is classified later.
-    var batch_t = vec3<f32>(ray.tmax);
-    var batch_key = vec3<u32>(0u);
-    var batch_tag = vec3<u32>(0u);
-    var last_t = ray.tmin;
-    var last_key = 0xFFFFFFFFu;
-    var first = true;
+    let tree = csg_trees[root];
+    let none = CsgBatch(vec3<f32>(ray.tmax), vec3<u32>(0u), vec3<u32>(0u));
+    // The leaves' spans, and the first crossings after tmin.
+    var batch = none;
+    for (var leaf = 0u; leaf < tree.leaf_count; leaf++) {
+        let span = csg_leaf_span(tree.first_leaf + leaf, ray);
+        csg_pool[csg_base + leaf] = span;
+        csg_offer(&batch, span.enter, 2u * leaf, ray.tmin, 0xFFFFFFFFu, ray.tmin);
+        csg_offer(&batch, span.exit, 2u * leaf + 1u, ray.tmin, 0xFFFFFFFFu, ray.tmin);
+    }
+    // One entry more than the tree's depth: a one-element private array indexed by a
+    // variable once mis-executed on wgpu's OpenGL backend over Mesa's llvmpipe (22.3).
+    var stack: array<u32, CSG_MAX_DEPTH + 1u>;
     var best = no_candidate();
-    loop {
-        let s = CSG_SLIVER * abs(batch_t);
-        let before = batch_t - s;
-        let after = batch_t + s;
-        let own_leaf = batch_key >> vec3<u32>(1u);
+    // Each run of the program classifies `batch` and gathers the crossings after it.
+    while (batch.t.x < ray.tmax) {
+        let s = CSG_SLIVER * abs(batch.t);
+        let before = batch.t - s;
+        let after = batch.t + s;
+        let own_leaf = batch.key >> vec3<u32>(1u);
         let own_bits = select(
             vec3<u32>(CSG_OWN | CSG_AFTER | CSG_ENTERS),
             vec3<u32>(CSG_OWN | CSG_BEFORE | CSG_EXITS),
-            (batch_key & vec3<u32>(1u)) != vec3<u32>(0u)
+            (batch.key & vec3<u32>(1u)) != vec3<u32>(0u)
         );
-        // The next batch: the CSG_BATCH first crossings after (last_t, last_key).
-        var n0 = vec3<u32>(0u);
-        var n1 = vec3<u32>(0u);
-        var n2 = vec3<u32>(0u);
-        var n_t = vec3<f32>(ray.tmax);
-        frames[0] = csg_frame(root);
-        var depth = 1u;
+        var next = none;
+        var open = 0u;
+        var depth = 0u;
         var leaf = 0u;
         var root_bits = 0u;
-        loop {
-            let f = depth - 1u;
-            let frame = frames[f];
-            let node = csg_nodes[frame.x & ~(3u << CSG_FRAME_OP_SHIFT)];
+        var word = 0u;
+        for (var pc = 0u; pc < tree.length; pc++) {
+            let slot = pc % CSG_INSTR_PER_WORD;
+            if (slot == 0u) {
+                word = object_ref(tree.program + pc / CSG_INSTR_PER_WORD);
+            }
+            let instr = (word >> (slot * CSG_INSTR_BITS)) & ((1u << CSG_INSTR_BITS) - 1u);
+            if (instr >= CSG_INSTR_BEGIN) {
+                stack[depth] = open;
+                depth++;
+                open = (instr - CSG_INSTR_BEGIN) << CSG_OPEN_OP_SHIFT;
+                continue;
+            }
             var b = 0u;
-            if (frame.y == node.child_count) {
-                b = csg_finish(frame.x >> CSG_FRAME_OP_SHIFT, frame.z);
-                if (f == 0u) {
+            if (instr == CSG_INSTR_END) {
+                b = csg_finish(open >> CSG_OPEN_OP_SHIFT, open & CSG_OPEN_ACC);
+                depth--;
+                open = stack[depth];
+                if (depth == 0u) {
                     root_bits = b;
                     break;
                 }
-                depth = f;
             } else {
-                frames[f].y = frame.y + 1u;
-                let r = object_ref(node.first_child + frame.y);
-                if ((r & CSG_NODE_BIT) != 0u) {
-                    frames[depth] = csg_frame(r & ~CSG_NODE_BIT);
-                    depth++;
-                    continue;
-                }
-                var span: Interval;
-                if (first) {
-                    span = csg_leaf_span(r, ray);
-                    csg_pool[csg_base + leaf] = span;
-                } else {
-                    span = csg_pool[csg_base + leaf];
-                }
+                let span = csg_pool[csg_base + leaf];
                 let in_before = (vec3<f32>(span.enter.t) < before) & (before < vec3<f32>(span.exit.t));
                 let in_after = (vec3<f32>(span.enter.t) < after) & (after < vec3<f32>(span.exit.t));
                 let inside = select(vec3<u32>(0u), vec3<u32>(CSG_BEFORE), in_before)
                     | select(vec3<u32>(0u), vec3<u32>(CSG_AFTER), in_after);
                 let bits = select(inside, own_bits, own_leaf == vec3<u32>(leaf));
                 b = bits.x | (bits.y << CSG_FIELD) | (bits.z << (2u * CSG_FIELD));
-                for (var side = 0u; side < 2u; side++) {
-                    var e = span.enter;
-                    if (side == 1u) {
-                        e = span.exit;
-                    }
-                    let k = 2u * leaf + side;
-                    if (end_leaf(e) != CSG_END_OPEN && e.t > ray.tmin && csg_before(last_t, last_key, e.t, k)
-                        && csg_before(e.t, k, n_t.z, n2.x)) {
-                        // Insert into the sorted next batch.
-                        let c = vec3<u32>(k, e.tag, 0u);
-                        if (csg_before(e.t, k, n_t.y, n1.x)) {
-                            n2 = n1;
-                            n_t.z = n_t.y;
-                            if (csg_before(e.t, k, n_t.x, n0.x)) {
-                                n1 = n0;
-                                n_t.y = n_t.x;
-                                n0 = c;
-                                n_t.x = e.t;
-                            } else {
-                                n1 = c;
-                                n_t.y = e.t;
-                            }
-                        } else {
-                            n2 = c;
-                            n_t.z = e.t;
-                        }
-                    }
-                }
+                csg_offer(&next, span.enter, 2u * leaf, batch.t.z, batch.key.z, ray.tmin);
+                csg_offer(&next, span.exit, 2u * leaf + 1u, batch.t.z, batch.key.z, ray.tmin);
                 leaf++;
             }
-            // Fold b into the frame on top: the finished node's parent, or the leaf's node.
-            let top = depth - 1u;
-            let parent = frames[top];
-            frames[top].z = csg_fold(parent.x >> CSG_FRAME_OP_SHIFT, parent.z, parent.y - 1u, b);
+            // Fold b into the innermost open node.
+            let acc = csg_fold(open >> CSG_OPEN_OP_SHIFT, open & CSG_OPEN_ACC, (open & CSG_OPEN_SEEN) == 0u, b);
+            open = (open & ~CSG_OPEN_ACC) | CSG_OPEN_SEEN | acc;
         }
         // The first crossing of the batch that the root shows, if any.
         let shown = (vec3<u32>(root_bits) >> vec3<u32>(2u, CSG_FIELD + 2u, 2u * CSG_FIELD + 2u)) & vec3<u32>(3u);
         let flips = (vec3<u32>(root_bits) >> vec3<u32>(5u, CSG_FIELD + 5u, 2u * CSG_FIELD + 5u)) & vec3<u32>(1u);
-        let valid = batch_t < vec3<f32>(ray.tmax);
-        var q = CSG_BATCH;
-        if (valid.z && shown.z != 0u) {
-            q = 2u;
-        }
-        if (valid.y && shown.y != 0u) {
-            q = 1u;
-        }
-        if (valid.x && shown.x != 0u) {
-            q = 0u;
-        }
-        if (!first && q < CSG_BATCH) {
-            let e = End(batch_t[q], batch_tag[q]);
+        let hit = (batch.t < vec3<f32>(ray.tmax)) & (shown != vec3<u32>(0u));
+        if (any(hit)) {
+            var q = 2u;
+            if (hit.y) {
+                q = 1u;
+            }
+            if (hit.x) {
+                q = 0u;
+            }
+            let e = End(batch.t[q], batch.tag[q]);
             best = Candidate(Crossing(e.t, end_face(e)), end_leaf(e), flips[q] != 0u, object);
             break;
         }
-        if (n_t.x >= ray.tmax) {
-            break;
-        }
-        batch_t = n_t;
-        batch_key = vec3<u32>(n0.x, n1.x, n2.x);
-        batch_tag = vec3<u32>(n0.y, n1.y, n2.y);
-        last_t = n_t.z;
-        last_key = n2.x;
-        first = false;
+        batch = next;
     }
     return best;
 }

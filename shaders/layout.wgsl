@@ -23,14 +23,15 @@ struct Shape {
     mesh: u32,
 }
 
-// An object reference (a u32 in `indices`: BVH leaves, the plane list, CSG children) is
-// a shape index, or a CSG node index with CSG_NODE_BIT set.
-// A CSG node: its operation and its children's references at indices[first_child..].
-struct CsgNode {
-    op: u32,
-    first_child: u32,
-    child_count: u32,
-    _pad: u32,
+// An object reference (a u32 in `indices`: BVH leaves, the plane list) is a shape index,
+// or a CSG tree index with CSG_NODE_BIT set.
+// A CSG tree: its program (layout::csg_instr) at indices[program..], `length` instructions,
+// and its leaves, shapes first_leaf .. first_leaf + leaf_count.
+struct CsgTree {
+    program: u32,
+    length: u32,
+    first_leaf: u32,
+    leaf_count: u32,
 }
 
 // The microfacet kinds' α, energy rows (offset in `floats`), conductor index and

@@ -15,8 +15,8 @@ pub const LAYOUT_WGSL: &str = include_str!("../../shaders/layout.wgsl");
 
 /// "No index" marker (for example, a shape that is not an area light).
 pub const NONE: u32 = u32::MAX;
-/// Set in an object reference (BVH leaf, plane list, CSG child) when it names a CSG node
-/// rather than a shape.
+/// Set in an object reference (BVH leaf, plane list) when it names a CSG tree (its index
+/// in `csg_trees`) rather than a shape.
 pub const CSG_NODE_BIT: u32 = 0x8000_0000;
 /// Bits of the face number in a CSG span end, which shaders/csg.wgsl packs into one word
 /// with the leaf's shape index: three hold a cube's six faces.
@@ -24,9 +24,6 @@ pub const CSG_END_FACE_BITS: u32 = 3;
 /// Shapes a scene with CSG trees may pack: a span end's leaf field is what the face bits
 /// leave of a word, and its all-ones value marks an open end.
 pub const CSG_LEAF_LIMIT: u32 = u32::MAX >> CSG_END_FACE_BITS;
-/// CSG nodes a scene may pack: the CSG walk's frame keeps the node's operation (two bits)
-/// above its index in one word.
-pub const CSG_NODE_LIMIT: u32 = 1 << 30;
 
 /// `Shape::kind` values (the order of `ShapeKind::ALL`).
 pub mod shape_kind {
@@ -51,12 +48,24 @@ pub mod mesh_bits {
 /// `tri_shading`: five vec4 (three vertex normals, then uv0 uv1 and uv2).
 pub const TRI_POSITION_VEC4S: u32 = 3;
 pub const TRI_SHADING_VEC4S: u32 = 5;
-/// `CsgNode::op` values.
+/// CSG operations, as the program's BEGIN instructions carry them.
 pub mod csg_op {
     pub const UNITE: u32 = 0;
     pub const INTERSECT: u32 = 1;
     pub const DIFF: u32 = 2;
     pub const FUSE: u32 = 3;
+}
+/// A CSG tree's program (`CsgTree::program`): its nodes and leaves depth first, one
+/// instruction of `BITS` bits each, `32 / BITS` to a word from the low bits up. BEGIN + op
+/// opens a node, END closes the innermost open one, LEAF stands for the next leaf (leaves
+/// are shapes `first_leaf`, `first_leaf + 1`, ... in program order).
+pub mod csg_instr {
+    pub const LEAF: u32 = 0;
+    pub const END: u32 = 1;
+    pub const BEGIN: u32 = 2;
+    pub const BITS: u32 = 4;
+    /// Instructions per program word.
+    pub const PER_WORD: u32 = 32 / BITS;
 }
 /// `Material::brdf` values.
 pub mod brdf_kind {
@@ -136,11 +145,14 @@ pub struct Shape {
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
-pub struct CsgNode {
-    pub op: u32,
-    pub first_child: u32,
-    pub child_count: u32,
-    pub _pad: u32,
+pub struct CsgTree {
+    /// Index in `indices` of the program's first word.
+    pub program: u32,
+    /// Instructions in the program.
+    pub length: u32,
+    /// Shape index of the first leaf.
+    pub first_leaf: u32,
+    pub leaf_count: u32,
 }
 
 #[repr(C)]
@@ -251,7 +263,7 @@ pub mod image_filter_kind {
 /// name tags only through these, so the two sides cannot disagree (a test scans the shaders
 /// for bare tag literals).
 pub fn tags_wgsl() -> String {
-    let groups: [(&str, &[(&str, u32)]); 9] = [
+    let groups: [(&str, &[(&str, u32)]); 10] = [
         (
             "SHAPE",
             &[
@@ -280,6 +292,16 @@ pub fn tags_wgsl() -> String {
                 ("DIFF", csg_op::DIFF),
                 ("FUSE", csg_op::FUSE),
                 ("END_FACE_BITS", CSG_END_FACE_BITS),
+            ],
+        ),
+        (
+            "CSG_INSTR",
+            &[
+                ("LEAF", csg_instr::LEAF),
+                ("END", csg_instr::END),
+                ("BEGIN", csg_instr::BEGIN),
+                ("BITS", csg_instr::BITS),
+                ("PER_WORD", csg_instr::PER_WORD),
             ],
         ),
         (
@@ -379,7 +401,7 @@ mod tests {
         vec![
             expect!(Affine, "Affine", [r0, r1, r2]),
             expect!(Shape, "Shape", [to_object, to_world, kind, material, light, mesh]),
-            expect!(CsgNode, "CsgNode", [op, first_child, child_count, _pad]),
+            expect!(CsgTree, "CsgTree", [program, length, first_leaf, leaf_count]),
             expect!(
                 Material,
                 "Material",

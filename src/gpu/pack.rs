@@ -39,7 +39,7 @@ pub struct PackedScene {
     /// BVH leaf objects, then planes and CSG children (see `Settings`).
     pub indices: Vec<u32>,
     pub bvh_nodes: Vec<BvhNode>,
-    pub csg_nodes: Vec<layout::CsgNode>,
+    pub csg_trees: Vec<layout::CsgTree>,
     pub materials: Vec<layout::Material>,
     pub pigments: Vec<layout::Pigment>,
     /// Texels, then the environment's importance-sampling tables.
@@ -202,7 +202,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         shapes: Vec::new(),
         indices: Vec::new(),
         bvh_nodes: world.bvh.nodes().to_vec(),
-        csg_nodes: Vec::new(),
+        csg_trees: Vec::new(),
         materials: Vec::new(),
         pigments: Vec::new(),
         floats: Vec::new(),
@@ -214,10 +214,10 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     };
     let mesh_roots = pack_meshes(&shifted, &mut p)?;
 
-    // Objects in scene order: a top-level primitive is one shape, a CSG tree its nodes and
-    // leaves (depth first).
+    // Objects in scene order: a top-level primitive is one shape, a CSG tree one tree
+    // record and its leaves (depth first).
     let mut object_ref = vec![0u32; shifted.len()];
-    let mut csg_children: Vec<(usize, Vec<u32>)> = Vec::new();
+    let mut csg_programs: Vec<(usize, Vec<u32>)> = Vec::new();
     for (i, s) in shifted.iter().enumerate() {
         object_ref[i] = match s {
             Shape::Mesh(m) => {
@@ -235,10 +235,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
                 p.shapes.push(packed_shape(prim.kind, &prim.transform, prim.material.0, area_of_shape[i]));
                 count_u32("shapes", p.shapes.len())? - 1
             }
-            Shape::Csg(_) => {
-                let node = pack_csg(i, s, &Transform::IDENTITY, &mut p, &mut csg_children)?;
-                node | layout::CSG_NODE_BIT
-            }
+            Shape::Csg(_) => pack_csg(i, s, &mut p, &mut csg_programs)? | layout::CSG_NODE_BIT,
         };
     }
     p.indices.extend(world.bvh.prim_indices().iter().map(|&i| object_ref[i as usize]));
@@ -249,20 +246,12 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
             limit: layout::CSG_LEAF_LIMIT as usize - 1,
         });
     }
-    // The CSG walk keeps a node's operation above its index in one word (shaders/csg.wgsl).
-    if p.csg_nodes.len() > layout::CSG_NODE_LIMIT as usize {
-        return Err(PackError::TooMany {
-            what: "CSG nodes",
-            count: p.csg_nodes.len(),
-            limit: layout::CSG_NODE_LIMIT as usize,
-        });
-    }
     let plane_offset = count_u32("indices", p.indices.len())?;
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
-    for (node, children) in csg_children {
-        p.csg_nodes[node].first_child = count_u32("indices", p.indices.len())?;
-        p.indices.extend(children);
+    for (tree, words) in csg_programs {
+        p.csg_trees[tree].program = count_u32("indices", p.indices.len())?;
+        p.indices.extend(words);
     }
     for l in &area_lights {
         let light = packed_area_light(scene, l.shape, object_ref[l.shape], origin, &mesh_roots, &mut p.floats)?;
@@ -542,50 +531,70 @@ fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32
     }
 }
 
-/// Packs CSG tree `s` (placed by `parent`) depth-first; returns its node index. The
-/// children's references are collected in `children` and appended to `indices` later.
+/// Packs top-level CSG tree `s` as one [`layout::CsgTree`]: its leaves as shapes, depth
+/// first (so contiguous, in the order the CPU's `CsgTree::leaves` lists them), and its
+/// structure as a program (`layout::csg_instr`), which `programs` collects to append to
+/// `indices` later. Returns the tree's index.
 fn pack_csg(
     top: usize,
     s: &Shape,
-    parent: &Transform,
     p: &mut PackedScene,
-    children: &mut Vec<(usize, Vec<u32>)>,
+    programs: &mut Vec<(usize, Vec<u32>)>,
 ) -> Result<u32, PackError> {
-    let Shape::Csg(c) = s else { unreachable!("pack_csg is called on CSG nodes") };
-    let node = p.csg_nodes.len();
-    let op = match c.op {
-        CsgOp::Unite => layout::csg_op::UNITE,
-        CsgOp::Intersect => layout::csg_op::INTERSECT,
-        CsgOp::Diff => layout::csg_op::DIFF,
-        CsgOp::Fuse => layout::csg_op::FUSE,
-    };
-    p.csg_nodes.push(layout::CsgNode {
-        op,
-        first_child: 0,
-        child_count: count_u32("CSG children", c.children.len())?,
-        _pad: 0,
-    });
-    let t = *parent * c.transform;
-    let mut refs = Vec::with_capacity(c.children.len());
-    for ch in &c.children {
-        refs.push(match ch {
+    fn emit(
+        top: usize,
+        s: &Shape,
+        parent: &Transform,
+        p: &mut PackedScene,
+        code: &mut Vec<u32>,
+    ) -> Result<(), PackError> {
+        match s {
             Shape::Mesh(_) => {
                 return Err(PackError::Scene(crate::scene::SceneError::Invalid(
                     "a mesh cannot be a CSG operand".into(),
                 )))
             }
             Shape::Primitive(prim) => {
-                let to_world = t * prim.transform;
+                let to_world = *parent * prim.transform;
                 check_range(top, prim.kind.name(), &to_world)?;
                 p.shapes.push(packed_shape(prim.kind, &to_world, prim.material.0, NONE));
-                count_u32("shapes", p.shapes.len())? - 1
+                count_u32("shapes", p.shapes.len())?;
+                code.push(layout::csg_instr::LEAF);
             }
-            Shape::Csg(_) => pack_csg(top, ch, &t, p, children)? | layout::CSG_NODE_BIT,
-        });
+            Shape::Csg(c) => {
+                let op = match c.op {
+                    CsgOp::Unite => layout::csg_op::UNITE,
+                    CsgOp::Intersect => layout::csg_op::INTERSECT,
+                    CsgOp::Diff => layout::csg_op::DIFF,
+                    CsgOp::Fuse => layout::csg_op::FUSE,
+                };
+                code.push(layout::csg_instr::BEGIN + op);
+                let t = *parent * c.transform;
+                for ch in &c.children {
+                    emit(top, ch, &t, p, code)?;
+                }
+                code.push(layout::csg_instr::END);
+            }
+        }
+        Ok(())
     }
-    count_u32("CSG nodes", p.csg_nodes.len())?;
-    children.push((node, refs));
-    Ok(node as u32)
+    let first_leaf = count_u32("shapes", p.shapes.len())?;
+    let mut code = Vec::new();
+    emit(top, s, &Transform::IDENTITY, p, &mut code)?;
+    let per_word = layout::csg_instr::PER_WORD as usize;
+    let words = code
+        .chunks(per_word)
+        .map(|chunk| chunk.iter().enumerate().fold(0u32, |w, (k, &i)| w | i << (k as u32 * layout::csg_instr::BITS)))
+        .collect();
+    p.csg_trees.push(layout::CsgTree {
+        program: 0,
+        length: count_u32("CSG program instructions", code.len())?,
+        first_leaf,
+        leaf_count: count_u32("shapes", p.shapes.len())? - first_leaf,
+    });
+    let tree = count_u32("CSG trees", p.csg_trees.len())? - 1;
+    programs.push((tree as usize, words));
+    Ok(tree)
 }
 
 /// Appends an image's texels (rgb triples, row 0 first) once per image; returns the offset.
@@ -713,7 +722,7 @@ mod tests {
     }
 
     #[test]
-    fn objects_reference_shapes_and_csg_nodes_in_the_camera_frame() {
+    fn objects_reference_shapes_and_csg_trees_in_the_camera_frame() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
         let n = b.diffuse(Color::gray(0.25));
@@ -735,11 +744,12 @@ mod tests {
         // CSG leaves carry the node's transformation and their materials.
         assert_eq!((p.shapes[1].to_world.r0[3], p.shapes[1].to_world.r2[3]), (1.0, -1.0));
         assert_eq!((p.shapes[2].to_world.r0[3], p.shapes[2].material), (1.5, 1));
-        assert_eq!(p.csg_nodes.len(), 1);
-        let node = p.csg_nodes[0];
-        assert_eq!((node.op, node.child_count), (layout::csg_op::DIFF, 2));
-        let children = &p.indices[node.first_child as usize..][..2];
-        assert_eq!(children, [1, 2]);
+        assert_eq!(p.csg_trees.len(), 1);
+        let tree = p.csg_trees[0];
+        assert_eq!((tree.first_leaf, tree.leaf_count, tree.length), (1, 2, 4));
+        // BEGIN DIFF, LEAF, LEAF, END, four bits each from the low end.
+        let begin = layout::csg_instr::BEGIN + layout::csg_op::DIFF;
+        assert_eq!(p.indices[tree.program as usize], begin | layout::csg_instr::END << 12);
         // Two finite objects in the BVH, the plane in the unbounded list.
         let bvh_refs: Vec<u32> = p.indices[..p.settings.plane_offset as usize].to_vec();
         assert_eq!(bvh_refs.len(), 2);

@@ -677,7 +677,7 @@ mod tests {
             }
             let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
             for bad in
-                ["csg_nodes", "floats", "point_lights", "area_lights", "csg_pool", "tri_positions", "tri_shading"]
+                ["csg_trees", "floats", "point_lights", "area_lights", "csg_pool", "tri_positions", "tri_shading"]
             {
                 assert!(!globals.iter().any(|g| g == bad), "{bad} bound in the {} stage: {globals:?}", stage.label());
             }
