@@ -22,38 +22,25 @@
 // ulps; this is 256 f32 ulps, 2⁻¹⁵).
 const CSG_SLIVER: f32 = 3.0517578125e-5;
 
-// One end of a leaf's span: the ray parameter and the surface there, packed into one word
-// (`tag`): the leaf's shape index above the face's CSG_END_FACE_BITS bits (the packer keeps
-// shape indices below layout::CSG_LEAF_LIMIT). An open end (no surface) has the all-ones
-// leaf field.
-struct End {
-    t: f32,
-    tag: u32,
+// A tree's leaf spans, in `csg_pool` from csg_base: entry `leaf` holds the span's entry
+// and exit t (bit patterns), entry CSG_POOL_LEAVES + `leaf` their faces. Classification
+// reads only the first half, two words per leaf; the faces are read once, for the hit. A
+// line that misses a leaf gets the empty span (OPEN, -OPEN); open ends (|t| = OPEN) have
+// no surface. Small trees (CSG_POOL_PRIVATE: at most wavefront::CSG_PRIVATE_POOL_MAX
+// leaves) keep their spans in private memory, which llvmpipe accesses faster than a
+// storage buffer.
+struct CsgPoolEntry {
+    a: u32,
+    b: u32,
 }
 
-const CSG_END_LEAF_SHIFT: u32 = CSG_END_FACE_BITS;
-const CSG_END_OPEN: u32 = 0xFFFFFFFFu >> CSG_END_LEAF_SHIFT;
+const CSG_POOL_LEAVES: u32 = CSG_POOL_SIZE / 2u;
 
-fn end_leaf(e: End) -> u32 {
-    return e.tag >> CSG_END_LEAF_SHIFT;
-}
-
-fn end_face(e: End) -> u32 {
-    return e.tag & ((1u << CSG_END_FACE_BITS) - 1u);
-}
-
-struct Interval {
-    enter: End,
-    exit: End,
-}
-
-// Small trees (CSG_POOL_PRIVATE: at most wavefront::CSG_PRIVATE_POOL_MAX leaves) keep their
-// spans in private memory, which llvmpipe accesses faster than a storage buffer.
 // #if CSG_POOL_PRIVATE
-var<private> csg_pool: array<Interval, CSG_POOL_SIZE>;
+var<private> csg_pool: array<CsgPoolEntry, CSG_POOL_SIZE>;
 // #endif
 
-// This invocation's first span in `csg_pool`: set by the stage (csg_use_slot); 0 for the
+// This invocation's first entry in `csg_pool`: set by the stage (csg_use_slot); 0 for the
 // private pool.
 var<private> csg_base: u32;
 
@@ -64,19 +51,21 @@ fn csg_use_slot(slot: u32) {
 // #endif
 }
 
-fn end_from_crossing(c: Crossing, leaf: u32) -> End {
-    let l = select(CSG_END_OPEN, leaf, abs(c.t) < OPEN);
-    return End(c.t, (l << CSG_END_LEAF_SHIFT) | c.face);
+// Computes and stores leaf number `leaf`'s span (shape `shape`); returns its t's.
+fn csg_store_span(leaf: u32, shape: u32, ray: Ray) -> vec2<f32> {
+    let sp = shape_span(shape, ray);
+    var t = vec2<f32>(OPEN, -OPEN);
+    if (sp.valid) {
+        t = clamp(vec2<f32>(sp.enter.t, sp.exit.t), vec2<f32>(-OPEN), vec2<f32>(OPEN));
+    }
+    csg_pool[csg_base + leaf] = CsgPoolEntry(bitcast<u32>(t.x), bitcast<u32>(t.y));
+    csg_pool[csg_base + CSG_POOL_LEAVES + leaf] = CsgPoolEntry(sp.enter.face, sp.exit.face);
+    return t;
 }
 
-// A leaf's span; a line that misses it gets an empty span with no surfaces.
-fn csg_leaf_span(shape: u32, ray: Ray) -> Interval {
-    let sp = shape_span(shape, ray);
-    if (!sp.valid) {
-        let none = CSG_END_OPEN << CSG_END_LEAF_SHIFT;
-        return Interval(End(OPEN, none), End(-OPEN, none));
-    }
-    return Interval(end_from_crossing(sp.enter, shape), end_from_crossing(sp.exit, shape));
+fn csg_span(leaf: u32) -> vec2<f32> {
+    let e = csg_pool[csg_base + leaf];
+    return vec2<f32>(bitcast<f32>(e.a), bitcast<f32>(e.b));
 }
 
 // What a node says about a crossing being classified (cpu::csg's bits). A walk classifies
@@ -159,54 +148,48 @@ fn csg_before(t: f32, key: u32, u: f32, l: u32) -> bool {
     return t < u || (t == u && key < l);
 }
 
-// Up to CSG_BATCH crossings in order; unused ones have t = tmax.
+// Up to CSG_BATCH crossings in order, by t and key (2·leaf + 1 for an exit); unused ones
+// have t = tmax.
 struct CsgBatch {
     t: vec3<f32>,
     key: vec3<u32>,
-    tag: vec3<u32>,
 }
 
-// Offers the crossing (e, key k) to `next`, the first CSG_BATCH crossings inside
-// (tmin, tmax) after (after_t, after_key).
-fn csg_offer(next: ptr<function, CsgBatch>, e: End, k: u32, after_t: f32, after_key: u32, tmin: f32) {
-    if (end_leaf(e) == CSG_END_OPEN || e.t <= tmin || !csg_before(after_t, after_key, e.t, k)
-        || !csg_before(e.t, k, (*next).t.z, (*next).key.z)) {
+// Offers the crossing (t, key k) to `next`, the first CSG_BATCH crossings with a surface
+// inside (tmin, tmax) after (after_t, after_key).
+fn csg_offer(next: ptr<function, CsgBatch>, t: f32, k: u32, after_t: f32, after_key: u32, tmin: f32) {
+    if (abs(t) >= OPEN || t <= tmin || !csg_before(after_t, after_key, t, k)
+        || !csg_before(t, k, (*next).t.z, (*next).key.z)) {
         return;
     }
-    if (!csg_before(e.t, k, (*next).t.y, (*next).key.y)) {
-        (*next).t.z = e.t;
+    if (!csg_before(t, k, (*next).t.y, (*next).key.y)) {
+        (*next).t.z = t;
         (*next).key.z = k;
-        (*next).tag.z = e.tag;
         return;
     }
     (*next).t.z = (*next).t.y;
     (*next).key.z = (*next).key.y;
-    (*next).tag.z = (*next).tag.y;
-    if (!csg_before(e.t, k, (*next).t.x, (*next).key.x)) {
-        (*next).t.y = e.t;
+    if (!csg_before(t, k, (*next).t.x, (*next).key.x)) {
+        (*next).t.y = t;
         (*next).key.y = k;
-        (*next).tag.y = e.tag;
         return;
     }
     (*next).t.y = (*next).t.x;
     (*next).key.y = (*next).key.x;
-    (*next).tag.y = (*next).tag.x;
-    (*next).t.x = e.t;
+    (*next).t.x = t;
     (*next).key.x = k;
-    (*next).tag.x = e.tag;
 }
 
 // The closest surface of tree `root` inside (tmin, tmax): csg::CsgTree::closest.
 fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
     let tree = csg_trees[root];
-    let none = CsgBatch(vec3<f32>(ray.tmax), vec3<u32>(0u), vec3<u32>(0u));
+    let none = CsgBatch(vec3<f32>(ray.tmax), vec3<u32>(0u));
     // The leaves' spans, and the first crossings after tmin.
     var batch = none;
     for (var leaf = 0u; leaf < tree.leaf_count; leaf++) {
-        let span = csg_leaf_span(tree.first_leaf + leaf, ray);
-        csg_pool[csg_base + leaf] = span;
-        csg_offer(&batch, span.enter, 2u * leaf, ray.tmin, 0xFFFFFFFFu, ray.tmin);
-        csg_offer(&batch, span.exit, 2u * leaf + 1u, ray.tmin, 0xFFFFFFFFu, ray.tmin);
+        let span = csg_store_span(leaf, tree.first_leaf + leaf, ray);
+        csg_offer(&batch, span.x, 2u * leaf, ray.tmin, 0xFFFFFFFFu, ray.tmin);
+        csg_offer(&batch, span.y, 2u * leaf + 1u, ray.tmin, 0xFFFFFFFFu, ray.tmin);
     }
     // One entry more than the tree's depth: a one-element private array indexed by a
     // variable once mis-executed on wgpu's OpenGL backend over Mesa's llvmpipe (22.3).
@@ -251,15 +234,15 @@ fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
                     break;
                 }
             } else {
-                let span = csg_pool[csg_base + leaf];
-                let in_before = (vec3<f32>(span.enter.t) < before) & (before < vec3<f32>(span.exit.t));
-                let in_after = (vec3<f32>(span.enter.t) < after) & (after < vec3<f32>(span.exit.t));
+                let span = csg_span(leaf);
+                let in_before = (vec3<f32>(span.x) < before) & (before < vec3<f32>(span.y));
+                let in_after = (vec3<f32>(span.x) < after) & (after < vec3<f32>(span.y));
                 let inside = select(vec3<u32>(0u), vec3<u32>(CSG_BEFORE), in_before)
                     | select(vec3<u32>(0u), vec3<u32>(CSG_AFTER), in_after);
                 let bits = select(inside, own_bits, own_leaf == vec3<u32>(leaf));
                 b = bits.x | (bits.y << CSG_FIELD) | (bits.z << (2u * CSG_FIELD));
-                csg_offer(&next, span.enter, 2u * leaf, batch.t.z, batch.key.z, ray.tmin);
-                csg_offer(&next, span.exit, 2u * leaf + 1u, batch.t.z, batch.key.z, ray.tmin);
+                csg_offer(&next, span.x, 2u * leaf, batch.t.z, batch.key.z, ray.tmin);
+                csg_offer(&next, span.y, 2u * leaf + 1u, batch.t.z, batch.key.z, ray.tmin);
                 leaf++;
             }
             // Fold b into the innermost open node.
@@ -278,8 +261,10 @@ fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
             if (hit.x) {
                 q = 0u;
             }
-            let e = End(batch.t[q], batch.tag[q]);
-            best = Candidate(Crossing(e.t, end_face(e)), end_leaf(e), flips[q] != 0u, object);
+            let leaf = batch.key[q] >> 1u;
+            let faces = csg_pool[csg_base + CSG_POOL_LEAVES + leaf];
+            let face = select(faces.a, faces.b, (batch.key[q] & 1u) != 0u);
+            best = Candidate(Crossing(batch.t[q], face), tree.first_leaf + leaf, flips[q] != 0u, object);
             break;
         }
         batch = next;

@@ -560,7 +560,7 @@ fn csg_trees_with_many_leaves_match_the_cpu() {
         let scene = csg_pair_scene(b, [intersect, slab], (-1.5, blue), renderer);
         let f = lumen::gpu::features::FeatureSet::of(&scene);
         assert!(f.csg && f.csg_max_leaves == 101 && f.csg_max_depth == 2, "{f:?}");
-        assert!(lumen::gpu::wavefront::csg_pool_spans(&f) > lumen::gpu::wavefront::CSG_PRIVATE_POOL_MAX);
+        assert!(lumen::gpu::wavefront::csg_pool_entries(&f) > lumen::gpu::wavefront::CSG_PRIVATE_POOL_MAX);
         println!("{}", scene.renderer.name());
         assert_matches_cpu(&gpu, &scene, None, 0.99);
     }

@@ -18,12 +18,6 @@ pub const NONE: u32 = u32::MAX;
 /// Set in an object reference (BVH leaf, plane list) when it names a CSG tree (its index
 /// in `csg_trees`) rather than a shape.
 pub const CSG_NODE_BIT: u32 = 0x8000_0000;
-/// Bits of the face number in a CSG span end, which shaders/csg.wgsl packs into one word
-/// with the leaf's shape index: three hold a cube's six faces.
-pub const CSG_END_FACE_BITS: u32 = 3;
-/// Shapes a scene with CSG trees may pack: a span end's leaf field is what the face bits
-/// leave of a word, and its all-ones value marks an open end.
-pub const CSG_LEAF_LIMIT: u32 = u32::MAX >> CSG_END_FACE_BITS;
 
 /// `Shape::kind` values (the order of `ShapeKind::ALL`).
 pub mod shape_kind {
@@ -291,7 +285,6 @@ pub fn tags_wgsl() -> String {
                 ("INTERSECT", csg_op::INTERSECT),
                 ("DIFF", csg_op::DIFF),
                 ("FUSE", csg_op::FUSE),
-                ("END_FACE_BITS", CSG_END_FACE_BITS),
             ],
         ),
         (

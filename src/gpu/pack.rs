@@ -85,11 +85,11 @@ fn rebased(n: BvhNode, to: u32, from: u32, tri_base: u32) -> BvhNode {
     }
 }
 
-/// Most CSG leaf spans one path may need in the GPU's pool (16 bytes each, so 4 MiB;
-/// `wavefront::csg_pool_spans`: one per leaf of the largest tree). The pool bounds a
+/// Most CSG pool entries one path may need on the GPU (8 bytes each, so 4 MiB;
+/// `wavefront::csg_pool_entries`: two per leaf of the largest tree, so 2¹⁸ leaves). The pool bounds a
 /// batch's paths by its memory budget (256 MiB on a software adapter), so beyond this a batch would hold too few paths to be worth running; SceneLang's
 /// largest tree (`scene::MAX_CSG_LEAVES`) is well within it.
-pub const MAX_CSG_POOL: usize = 1 << 18;
+pub const MAX_CSG_POOL: usize = 1 << 19;
 
 /// `data`, or one zeroed element when it is empty: what is bound for a buffer the kernel
 /// declares but the scene does not fill (wgpu requires a binding to hold at least one
@@ -174,10 +174,10 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     let scene = &*form;
     let features = FeatureSet::of(scene);
     if features.csg {
-        let pool = usize::try_from(crate::gpu::wavefront::csg_pool_spans(&features)).unwrap_or(usize::MAX);
+        let pool = usize::try_from(crate::gpu::wavefront::csg_pool_entries(&features)).unwrap_or(usize::MAX);
         if pool > MAX_CSG_POOL {
             return Err(PackError::TooMany {
-                what: "CSG leaf spans per path (the leaves of the largest tree)",
+                what: "CSG pool entries per path (two per leaf of the largest tree)",
                 count: pool,
                 limit: MAX_CSG_POOL,
             });
@@ -239,13 +239,6 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         };
     }
     p.indices.extend(world.bvh.prim_indices().iter().map(|&i| object_ref[i as usize]));
-    if features.csg && p.shapes.len() >= layout::CSG_LEAF_LIMIT as usize {
-        return Err(PackError::TooMany {
-            what: "shapes in a scene with CSG trees",
-            count: p.shapes.len(),
-            limit: layout::CSG_LEAF_LIMIT as usize - 1,
-        });
-    }
     let plane_offset = count_u32("indices", p.indices.len())?;
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
@@ -764,13 +757,13 @@ mod tests {
     fn a_csg_tree_too_wide_for_the_span_pool_is_a_clear_error() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
-        // A FUSE of n spheres needs n spans: 270,000 is past the limit (SceneLang refuses
+        // A FUSE of n spheres needs 2n pool entries: 270,000 is past the limit (SceneLang refuses
         // such a tree earlier; a top-level UNITE would be stored as its spheres).
         let many = (0..270_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
         b.shape(Shape::csg(CsgOp::Fuse, many, Transform::IDENTITY));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
-        assert!(err.to_string().contains("CSG leaf spans"), "{err}");
+        assert!(err.to_string().contains("CSG pool entries"), "{err}");
     }
 
     /// Microfacet materials get their kind, α and rows of the energy tables at their α and

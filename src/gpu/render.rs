@@ -167,7 +167,7 @@ fn constants_module(features: &FeatureSet) -> String {
         crate::accel::MAX_DEPTH + 1,
         super::layout::CSG_NODE_BIT,
         depth,
-        wavefront::csg_pool_spans(features),
+        wavefront::csg_pool_entries(features),
         features.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX,
         features.csg_trees.clamp(1, crate::prepare::CSG_DEFER_MAX as u32),
         crate::optics::energy_tables::CONDUCTOR_NODES,
@@ -730,7 +730,7 @@ mod tests {
                 && !private.source.contains("var<storage, read_write> csg_pool"),
             "{csg_stage:?}"
         );
-        assert!(wavefront::csg_pool_spans(&fuse(2)) <= wavefront::CSG_PRIVATE_POOL_MAX);
+        assert!(wavefront::csg_pool_entries(&fuse(2)) <= wavefront::CSG_PRIVATE_POOL_MAX);
         let (small, large) = (fuse(100), fuse(1000));
         assert_eq!((small.csg_max_leaves, large.csg_max_leaves), (100, 1000));
         let bound_free = |src: &str| -> String {
@@ -748,9 +748,9 @@ mod tests {
                 csg_stages += 1;
                 // The pool's element is the size the host allocates by.
                 let module = y.validate().unwrap().module;
-                let ty = module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Interval")).unwrap().1;
-                let naga::TypeInner::Struct { span, .. } = ty.inner else { panic!("Interval is not a struct") };
-                assert_eq!(u64::from(span), wavefront::CSG_INTERVAL_BYTES);
+                let ty = module.types.iter().find(|(_, t)| t.name.as_deref() == Some("CsgPoolEntry")).unwrap().1;
+                let naga::TypeInner::Struct { span, .. } = ty.inner else { panic!("CsgPoolEntry is not a struct") };
+                assert_eq!(u64::from(span), wavefront::CSG_POOL_ENTRY_BYTES);
             }
         }
         assert_eq!(csg_stages, 1, "only the CSG stage evaluates trees (shadow rays' too)");

@@ -11,9 +11,9 @@
 //! - `shadow` (`array<vec4<f32>>`): per path, `batch.shadow_rays` shadow rays of three vec4 each.
 //! - `deferred_refs` (`array<u32>`): per path, the CSG trees its closest-hit query met.
 //! - `film` (`array<vec4<f32>>`): per pixel of the batch, the sum of its camera samples.
-//! - `csg_pool` (`array<Interval>`): per path, the spans of the leaves of the CSG tree its
-//!   query evaluates ([`csg_pool_spans`] each; the host bounds the batch so that the pool
-//!   stays within a memory budget however large a tree).
+//! - `csg_pool` (`array<CsgPoolEntry>`): per path, the spans of the leaves of the CSG tree
+//!   its query evaluates, then their faces ([`csg_pool_entries`] entries each; the host bounds
+//!   the batch so that the pool stays within a memory budget however large a tree).
 //! - `args` (`array<u32>`): indirect dispatch arguments, three words per queue, written by
 //!   the control kernels (a separate buffer: a dispatch may not use one buffer both as its
 //!   indirect arguments and as writable storage).
@@ -186,27 +186,27 @@ impl StateBuffer {
             StateBuffer::DeferredRefs => ("deferred_refs", "array<u32>"),
             StateBuffer::Film => ("film", "array<vec4<f32>>"),
             StateBuffer::Args => ("args", "array<u32>"),
-            // `Interval` is declared by the csg module, the only one that binds this.
-            StateBuffer::CsgPool => ("csg_pool", "array<Interval>"),
+            // `CsgPoolEntry` is declared by the csg module, the only one that binds this.
+            StateBuffer::CsgPool => ("csg_pool", "array<CsgPoolEntry>"),
         };
         format!("@group(0) @binding({}) var<storage, read_write> {name}: {ty};", self.binding())
     }
 }
 
-/// Bytes of one leaf span in `csg_pool` (two ends of two 32-bit words; a test checks the
-/// WGSL struct).
-pub const CSG_INTERVAL_BYTES: u64 = 16;
+/// Bytes of one `csg_pool` entry (two 32-bit words: a leaf span's t's, or its faces; a
+/// test checks the WGSL struct).
+pub const CSG_POOL_ENTRY_BYTES: u64 = 8;
 
-/// Most leaf spans per path kept in private memory instead of the storage pool (1 KiB):
-/// every example scene's trees fit (streetlamp.sl's have 7 leaves); larger trees keep
-/// their spans in the pool, so that private memory, and with it compile time, stay bounded
-/// whatever the tree.
-pub const CSG_PRIVATE_POOL_MAX: u64 = 64;
+/// Most pool entries per path kept in private memory instead of the storage pool (1 KiB,
+/// trees of 64 leaves): every example scene's trees fit (streetlamp.sl's have 7 leaves);
+/// larger trees keep their spans in the pool, so that private memory, and with it compile
+/// time, stay bounded whatever the tree.
+pub const CSG_PRIVATE_POOL_MAX: u64 = 128;
 
-/// Spans of `csg_pool` one lane needs for the scene's trees (features `f`): one per leaf
-/// of the largest tree.
-pub fn csg_pool_spans(f: &FeatureSet) -> u64 {
-    u64::from(f.csg_max_leaves.max(1))
+/// Entries of `csg_pool` one lane needs for the scene's trees (features `f`): two per leaf
+/// of the largest tree (its span, its faces).
+pub fn csg_pool_entries(f: &FeatureSet) -> u64 {
+    2 * u64::from(f.csg_max_leaves.max(1))
 }
 
 /// The generated `wavefront` module for a stage that binds `buffers`: every constant above,

@@ -34,7 +34,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use contract::{control, path_field, word_field, MAX_GRID, WORKGROUP};
-pub use contract::{csg_pool_spans, CSG_INTERVAL_BYTES, CSG_PRIVATE_POOL_MAX};
+pub use contract::{csg_pool_entries, CSG_POOL_ENTRY_BYTES, CSG_PRIVATE_POOL_MAX};
 use schedule::BatchRunner;
 
 use crate::gpu::compute::ComputeKernel;
@@ -120,7 +120,7 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> 
         // The compensated sum: value and error (wf_film.wgsl).
         StateBuffer::Film => 32,
         StateBuffer::Args => 0,
-        StateBuffer::CsgPool => contract::csg_pool_spans(features) * contract::CSG_INTERVAL_BYTES,
+        StateBuffer::CsgPool => contract::csg_pool_entries(features) * contract::CSG_POOL_ENTRY_BYTES,
     }
 }
 

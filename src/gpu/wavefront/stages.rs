@@ -341,7 +341,7 @@ impl Stage {
 /// memory (at most [`super::contract::CSG_PRIVATE_POOL_MAX`] per path): faster than the
 /// storage pool on SIMD software GPUs, and bounded, so kernels still do not grow with a scene.
 pub fn csg_pool_private(f: &FeatureSet) -> bool {
-    f.csg && super::contract::csg_pool_spans(f) <= super::contract::CSG_PRIVATE_POOL_MAX
+    f.csg && super::contract::csg_pool_entries(f) <= super::contract::CSG_PRIVATE_POOL_MAX
 }
 
 /// Whether CSG trees are evaluated in a stage of their own: the scene has CSG and few
