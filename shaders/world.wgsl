@@ -106,7 +106,39 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     var node = bvh_nodes[0];
     var more = settings.bvh_node_count != 0u && box_entry(node, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN;
     while (more) {
-        if (node.count > 0u) {
+        // Descend to a leaf, nearer child first, the other pushed (Aila and Laine's
+        // while-while order: lanes that reach a leaf wait for the others, so the leaf code
+        // runs once per round, not masked on every inner step).
+        var at_leaf = node.count > 0u;
+        while (!at_leaf) {
+            let left = node_index + 1u;
+            let right = node.left_or_first;
+            let left_node = bvh_nodes[left];
+            let right_node = bvh_nodes[right];
+            let tl = box_entry(left_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
+            let tr = box_entry(right_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
+            if (tl >= OPEN && tr >= OPEN) {
+                break;
+            }
+            var near = left;
+            var near_node = left_node;
+            var far = right;
+            var t_far = tr;
+            if (tr < tl) {
+                near = right;
+                near_node = right_node;
+                far = left;
+                t_far = tl;
+            }
+            if (t_far < OPEN && top < BVH_STACK_SIZE) {
+                stack[top] = far;
+                top++;
+            }
+            node_index = near;
+            node = near_node;
+            at_leaf = node.count > 0u;
+        }
+        if (at_leaf) {
             for (var k = 0u; k < node.count; k++) {
                 let r = object_ref(node.left_or_first + k);
 // #if CSG
@@ -122,33 +154,6 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
                         return best;
                     }
                 }
-            }
-        } else {
-            // Visit the nearer child first, push the other.
-            let left = node_index + 1u;
-            let right = node.left_or_first;
-            let left_node = bvh_nodes[left];
-            let right_node = bvh_nodes[right];
-            let tl = box_entry(left_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
-            let tr = box_entry(right_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
-            if (tl < OPEN || tr < OPEN) {
-                var near = left;
-                var near_node = left_node;
-                var far = right;
-                var t_far = tr;
-                if (tr < tl) {
-                    near = right;
-                    near_node = right_node;
-                    far = left;
-                    t_far = tl;
-                }
-                if (t_far < OPEN && top < BVH_STACK_SIZE) {
-                    stack[top] = far;
-                    top++;
-                }
-                node_index = near;
-                node = near_node;
-                continue;
             }
         }
         // Pop the next node still in front of the closest hit.
