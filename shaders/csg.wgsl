@@ -6,7 +6,7 @@
 // leaves depth first, built by gpu::pack), which replaces recursion: BEGIN opens a node,
 // LEAF folds the next leaf into the innermost open node, END finishes that node and folds
 // it into its parent. The first run computes the leaves' spans along the ray's line,
-// stores them in `csg_pool` (one Interval per leaf, in program order) and finds the first
+// stores them in `csg_pool` (in program order) and finds the first
 // crossings after tmin; every later run classifies up to CSG_BATCH crossings found by the
 // run before and finds the next ones, until the root shows a crossing or none is left
 // before tmax. One loop does every run, so the code is one walk whatever the tree, and the

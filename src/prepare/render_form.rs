@@ -1,7 +1,7 @@
 //! The form of a scene the renderers consume: the script's scene with every top-level
 //! UNITE split into its parts ([`Shape::top_level_parts`]). A UNITE keeps every surface, so
 //! its parts render the same image; as separate top-level shapes they go into the BVH one
-//! by one instead of through the CSG interval code (DESIGN.md "Top-level UNITEs"). Both
+//! by one instead of through the CSG evaluation (DESIGN.md "Top-level UNITEs"). Both
 //! renderers, and the GPU's feature set, start from this form, so shape indices (area
 //! lights, BVH leaves) mean the same everywhere; `lumen check` and DUMP show the script's
 //! own structure.

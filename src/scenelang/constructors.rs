@@ -360,7 +360,7 @@ impl Interp<'_> {
                 return Err(self
                     .err(s, ErrorKind::WrongType, format!("a mesh ({file}) cannot be a CSG operand"))
                     .with_expected("spheres, planes, cubes, cylinders or CSG nodes of them")
-                    .with_note("triangle meshes have no inside for CSG's interval logic; spawn the mesh on its own"));
+                    .with_note("triangle meshes have no inside for CSG's solid logic; spawn the mesh on its own"));
             }
             children.push((shape, s));
             if !self.separator(',', Some(')'), &format!(" in {name}"), "`,` or `)`")? {

@@ -124,7 +124,7 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> 
     }
 }
 
-/// Device memory the CSG interval pool may take (it bounds the slots of a batch): a
+/// Device memory the CSG span pool may take (it bounds the slots of a batch): a
 /// software adapter's caches favour a small pool, a hardware GPU has memory to spare.
 fn csg_pool_budget(gpu: &Gpu) -> u64 {
     match gpu.adapter_info.device_type {
@@ -220,7 +220,7 @@ impl<'a> Runner<'a> {
         let words = tiny("path words", StateBuffer::Words)?;
         let shadow = tiny("shadow rays", StateBuffer::Shadow)?;
         let deferred = tiny("deferred CSG trees", StateBuffer::DeferredRefs)?;
-        let csg_pool = tiny("CSG interval pool", StateBuffer::CsgPool)?;
+        let csg_pool = tiny("CSG span pool", StateBuffer::CsgPool)?;
         let films = [storage("film 0", StateBuffer::Film)?, storage("film 1", StateBuffer::Film)?];
         let staging_buffer = |label: &str, bytes: u64| gpu.readback_buffer(label, bytes);
         let film_bytes = cap * state_bytes(StateBuffer::Film, shadow_rays, features);
