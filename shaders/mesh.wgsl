@@ -24,62 +24,23 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
     let root = s.mesh & MESH_NODE_MASK;
     var best = Crossing(OPEN, 0u);
     var tmax = ray.tmax;
-    var stack: array<u32, BVH_STACK_SIZE>;
-    var top = 0u;
-    var node_index = root;
-    // The current node, carried from the box test that chose it: each step loads only
-    // the two children (a node fetch is a per-lane loop or gather on llvmpipe).
-    var node = bvh_nodes[root];
-    var more = box_entry(node, o, inv_dir, ray.tmin, tmax) < OPEN;
+    var walk: BvhWalk;
+    walk.index = root;
+    walk.node = bvh_nodes[root];
+    walk.top = 0u;
+    var more = box_entry(walk.node, o, inv_dir, ray.tmin, tmax) < OPEN;
     while (more) {
-        if (node.count > 0u) {
-            for (var k = 0u; k < node.count; k++) {
-                let tri = node.left_or_first + k;
+        if (bvh_descend(&walk, o, inv_dir, ray.tmin, tmax)) {
+            for (var k = 0u; k < walk.node.count; k++) {
+                let tri = walk.node.left_or_first + k;
                 let h = triangle_crossing(r, tri, ray.tmin, tmax);
                 if (h.x < tmax) {
                     tmax = h.x;
                     best = Crossing(h.x, tri);
                 }
             }
-        } else {
-            let left = node_index + 1u;
-            let right = node.left_or_first;
-            let left_node = bvh_nodes[left];
-            let right_node = bvh_nodes[right];
-            let tl = box_entry(left_node, o, inv_dir, ray.tmin, tmax);
-            let tr = box_entry(right_node, o, inv_dir, ray.tmin, tmax);
-            if (tl < OPEN || tr < OPEN) {
-                var near = left;
-                var near_node = left_node;
-                var far = right;
-                var t_far = tr;
-                if (tr < tl) {
-                    near = right;
-                    near_node = right_node;
-                    far = left;
-                    t_far = tl;
-                }
-                if (t_far < OPEN && top < BVH_STACK_SIZE) {
-                    stack[top] = far;
-                    top++;
-                }
-                node_index = near;
-                node = near_node;
-                continue;
-            }
         }
-        more = false;
-        while (top > 0u) {
-            top--;
-            let candidate = stack[top];
-            let candidate_node = bvh_nodes[candidate];
-            if (box_entry(candidate_node, o, inv_dir, ray.tmin, tmax) < OPEN) {
-                node_index = candidate;
-                node = candidate_node;
-                more = true;
-                break;
-            }
-        }
+        more = bvh_pop(&walk, o, inv_dir, ray.tmin, tmax);
     }
     return best;
 }

@@ -65,6 +65,67 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     let m = select(d, select(-tiny, tiny, d >= vec3<f32>(0.0)), abs(d) < tiny);
     return 1.0 / m;
 }
+
+// One BVH walk's state (the scene's tree, or a mesh's bottom-level tree in the same
+// table): the current node, carried from the box test that chose it so that each step
+// loads only the two children (a node fetch is a per-lane loop or gather on llvmpipe), and
+// the stack of nodes still to visit.
+struct BvhWalk {
+    index: u32,
+    node: BvhNode,
+    top: u32,
+    stack: array<u32, BVH_STACK_SIZE>,
+}
+
+// Descends from the current node to a leaf, nearer child first, the other pushed; false
+// when both children of an inner node are missed (the caller pops). Lanes that reach a leaf
+// wait here for the others (Aila and Laine's while-while order), so the caller's leaf code
+// runs once per round, not masked on every inner step.
+fn bvh_descend(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+    while ((*w).node.count == 0u) {
+        let left = (*w).index + 1u;
+        let right = (*w).node.left_or_first;
+        let left_node = bvh_nodes[left];
+        let right_node = bvh_nodes[right];
+        let tl = box_entry(left_node, origin, inv_dir, tmin, tmax);
+        let tr = box_entry(right_node, origin, inv_dir, tmin, tmax);
+        if (tl >= OPEN && tr >= OPEN) {
+            return false;
+        }
+        var near = left;
+        var near_node = left_node;
+        var far = right;
+        var t_far = tr;
+        if (tr < tl) {
+            near = right;
+            near_node = right_node;
+            far = left;
+            t_far = tl;
+        }
+        if (t_far < OPEN && (*w).top < BVH_STACK_SIZE) {
+            (*w).stack[(*w).top] = far;
+            (*w).top++;
+        }
+        (*w).index = near;
+        (*w).node = near_node;
+    }
+    return true;
+}
+
+// Pops the next node still in front of tmax; false when none is left.
+fn bvh_pop(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+    while ((*w).top > 0u) {
+        (*w).top--;
+        let index = (*w).stack[(*w).top];
+        let node = bvh_nodes[index];
+        if (box_entry(node, origin, inv_dir, tmin, tmax) < OPEN) {
+            (*w).index = index;
+            (*w).node = node;
+            return true;
+        }
+    }
+    return false;
+}
 // #endif
 
 // The closest candidate along the ray among planes and BVH leaves (t = OPEN when nothing
@@ -96,51 +157,17 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
 // #endif
 // #if BVH
     let inv_dir = safe_inverse(ray.dir);
-    var stack: array<u32, BVH_STACK_SIZE>;
-    var top = 0u;
-    var node_index = 0u;
+    var walk: BvhWalk;
+    walk.index = 0u;
+    walk.node = bvh_nodes[0];
+    walk.top = 0u;
     // An empty tree or a missed root box skips the loop (not a return: deferred CSG
     // trees are still to be evaluated).
-    // The current node, carried from the box test that chose it: each step loads only
-    // the two children (a node fetch is a per-lane loop or gather on llvmpipe).
-    var node = bvh_nodes[0];
-    var more = settings.bvh_node_count != 0u && box_entry(node, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN;
+    var more = settings.bvh_node_count != 0u && box_entry(walk.node, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN;
     while (more) {
-        // Descend to a leaf, nearer child first, the other pushed (Aila and Laine's
-        // while-while order: lanes that reach a leaf wait for the others, so the leaf code
-        // runs once per round, not masked on every inner step).
-        var at_leaf = node.count > 0u;
-        while (!at_leaf) {
-            let left = node_index + 1u;
-            let right = node.left_or_first;
-            let left_node = bvh_nodes[left];
-            let right_node = bvh_nodes[right];
-            let tl = box_entry(left_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
-            let tr = box_entry(right_node, ray.origin, inv_dir, ray.tmin, ray.tmax);
-            if (tl >= OPEN && tr >= OPEN) {
-                break;
-            }
-            var near = left;
-            var near_node = left_node;
-            var far = right;
-            var t_far = tr;
-            if (tr < tl) {
-                near = right;
-                near_node = right_node;
-                far = left;
-                t_far = tl;
-            }
-            if (t_far < OPEN && top < BVH_STACK_SIZE) {
-                stack[top] = far;
-                top++;
-            }
-            node_index = near;
-            node = near_node;
-            at_leaf = node.count > 0u;
-        }
-        if (at_leaf) {
-            for (var k = 0u; k < node.count; k++) {
-                let r = object_ref(node.left_or_first + k);
+        if (bvh_descend(&walk, ray.origin, inv_dir, ray.tmin, ray.tmax)) {
+            for (var k = 0u; k < walk.node.count; k++) {
+                let r = object_ref(walk.node.left_or_first + k);
 // #if CSG
                 if (defer_csg(r)) {
                     continue;
@@ -156,19 +183,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
                 }
             }
         }
-        // Pop the next node still in front of the closest hit.
-        more = false;
-        while (top > 0u) {
-            top--;
-            let candidate = stack[top];
-            let candidate_node = bvh_nodes[candidate];
-            if (box_entry(candidate_node, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
-                node_index = candidate;
-                node = candidate_node;
-                more = true;
-                break;
-            }
-        }
+        more = bvh_pop(&walk, ray.origin, inv_dir, ray.tmin, ray.tmax);
     }
 // #endif
     return best;
