@@ -2,16 +2,16 @@
 // Constructive solid geometry by classifying the leaves' crossings: the algorithm of
 // cpu::csg, which says what the bits mean and why.
 //
-// Each classification is one run of the tree's program (layout::csg_instr: the nodes and
-// leaves depth first, built by gpu::pack), which replaces recursion: BEGIN opens a node,
-// LEAF folds the next leaf into the innermost open node, END finishes that node and folds
-// it into its parent. The first run computes the leaves' spans along the ray's line,
-// stores them in `csg_pool` (in program order) and finds the first
-// crossings after tmin; every later run classifies up to CSG_BATCH crossings found by the
-// run before and finds the next ones, until the root shows a crossing or none is left
-// before tmax. One loop does every run, so the code is one walk whatever the tree, and the
-// memory one span per leaf: no interval lists, whose per-lane private-array traffic was
-// the slow part of CSG on SIMD software GPUs.
+// A query first computes the leaves' spans along the ray's line in one loop, stores them
+// in `csg_pool` (in program order) and gathers the first CSG_BATCH crossings after tmin.
+// Each classification is then one run of the tree's program (layout::csg_instr: the nodes
+// and leaves depth first, built by gpu::pack), which replaces recursion: BEGIN opens a
+// node, LEAF folds the next leaf into the innermost open node, END finishes that node and
+// folds it into its parent. A run classifies the batch and gathers the crossings after it,
+// until the root shows a crossing or none is left before tmax. One loop does every run, so
+// the code is one walk whatever the tree, and the memory one span per leaf: no interval
+// lists, whose per-lane private-array traffic was the slow part of CSG on SIMD software
+// GPUs.
 //
 // Spans of trees with many leaves live in the `csg_pool` storage buffer, CSG_POOL_SIZE per
 // path slot, not in private arrays: the kernel's code and private memory stay bounded
@@ -27,8 +27,8 @@ const CSG_SLIVER: f32 = 3.0517578125e-5;
 // reads only the first half, two words per leaf; the faces are read once, for the hit. A
 // line that misses a leaf gets the empty span (OPEN, -OPEN); open ends (|t| = OPEN) have
 // no surface. Small trees (CSG_POOL_PRIVATE: at most wavefront::CSG_PRIVATE_POOL_MAX
-// leaves) keep their spans in private memory, which llvmpipe accesses faster than a
-// storage buffer.
+// entries, 64 leaves) keep their spans in private memory, which llvmpipe accesses faster
+// than a storage buffer.
 struct CsgPoolEntry {
     a: u32,
     b: u32,
