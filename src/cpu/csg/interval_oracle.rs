@@ -4,10 +4,13 @@
 //! cut, pieces no longer than a sliver dropped. An independent construction of the same
 //! semantics, kept as the test oracle for [`super::CsgTree::closest`].
 
-use super::{CsgTree, End, Node, NO_SURFACE, SLIVER};
+use super::{CsgTree, End, Node, SLIVER};
 use crate::cpu::shapes::{Crossing, Span};
 use crate::cpu::Ray;
 use crate::scene::CsgOp;
+
+/// Marks an open end of an interval (±∞, no surface).
+pub const NO_SURFACE: u32 = u32::MAX;
 
 /// Whether the piece [a, b] is longer than a sliver. An infinite end (open interval) keeps
 /// any piece with a < b.

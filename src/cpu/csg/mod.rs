@@ -35,9 +35,6 @@ use crate::scene::{Csg, CsgOp, MaterialId, Shape, Transform};
 #[cfg(test)]
 mod interval_oracle;
 
-/// Marks an open end of an interval (±∞, no surface).
-pub const NO_SURFACE: u32 = u32::MAX;
-
 /// The probes that classify a crossing at t lie at `t ∓ SLIVER·|t|`. Faces that coincide
 /// only up to rounding (a cutter turned by 90°, where cos 90° = 6e-17) cross the ray a few
 /// ulps apart, and the piece between them is no solid but a sliver that would show as a
@@ -45,11 +42,11 @@ pub const NO_SURFACE: u32 = u32::MAX;
 /// crossings and far below any intended thickness. shaders/csg.wgsl uses 2⁻¹⁵, 256 f32 ulps.
 pub const SLIVER: f64 = 1.0 / 17_592_186_044_416.0; // 2⁻⁴⁴
 
-/// One end of a visible surface piece: the ray parameter and the surface there.
+/// A visible surface crossing: the ray parameter and the surface there.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct End {
     pub t: f64,
-    /// Index of the leaf in [`CsgTree::leaves`], or [`NO_SURFACE`].
+    /// Index of the leaf in [`CsgTree::leaves`].
     pub leaf: u32,
     pub face: u8,
     /// The leaf's outward normal points into this solid (a carved surface).
