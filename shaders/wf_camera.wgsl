@@ -5,8 +5,8 @@
 // stage of bounce 0.
 
 @compute @workgroup_size(64)
-fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = wf_index(gid, nwg);
+fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = wf_index(gid);
     if (slot >= batch.path_count) {
         return;
     }

@@ -11,8 +11,8 @@
 // one place (Mesa inlines every call site).
 
 @compute @workgroup_size(64)
-fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let index = wf_index(gid, nwg);
+fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let index = wf_index(gid);
     let closest_count = atomicLoad(&control[CTRL_COUNT + Q_CSG]);
     let shadows = index >= closest_count;
 // #if WF_SHADOW_CSG

@@ -3,8 +3,8 @@
 // MIS-weighted against NEE (cpu::path_tracer), and their paths end.
 
 @compute @workgroup_size(64)
-fn escape_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = wf_slot(Q_ESCAPE, wf_index(gid, nwg));
+fn escape_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = wf_slot(Q_ESCAPE, wf_index(gid));
     if (slot == WF_NONE) {
         return;
     }

@@ -16,8 +16,8 @@ fn unfolded(x: vec3<f32>) -> vec3<f32> {
 }
 
 @compute @workgroup_size(64)
-fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let p = wf_index(gid, nwg);
+fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = wf_index(gid);
     if (p >= batch.pixel_count) {
         return;
     }

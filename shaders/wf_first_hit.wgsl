@@ -4,8 +4,8 @@
 // One invocation per camera sample writes its estimate to the path's radiance.
 
 @compute @workgroup_size(64)
-fn first_hit_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = wf_index(gid, nwg);
+fn first_hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = wf_index(gid);
     if (slot >= batch.path_count) {
         return;
     }

@@ -5,9 +5,9 @@
 // reachable in this kernel costs every ray on SIMD software GPUs).
 
 @compute @workgroup_size(64)
-fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
-    let slot = wf_slot(Q_RAY + (bounce & 1u), wf_index(gid, nwg));
+    let slot = wf_slot(Q_RAY + (bounce & 1u), wf_index(gid));
     if (slot == WF_NONE) {
         return;
     }

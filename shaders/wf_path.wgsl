@@ -9,10 +9,13 @@
 // index of a launch, queue slots and pushes, path fields and the (pixel, sample) a path
 // slot stands for. Which of them a stage gets is decided by src/gpu/wavefront/stages.rs.
 
-// The invocation's index in a launch of WF_WORKGROUP-wide workgroups on a 2-D grid (grids
-// are at most WF_MAX_GRID workgroups wide; the control kernels size them on the device).
-fn wf_index(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
-    return gid.y * nwg.x * WF_WORKGROUP + gid.x;
+// The invocation's index in a launch of WF_WORKGROUP-wide workgroups on a 2-D grid. Every
+// grid (sized by the host or by the control kernels) is min(groups, WF_MAX_GRID) wide, so
+// a grid of more than one row is WF_MAX_GRID wide: the index needs no `num_workgroups`,
+// which D3D12 reports as 0 for indirect launches without wgpu's indirect validation
+// (src/gpu/device.rs, instance_flags).
+fn wf_index(gid: vec3<u32>) -> u32 {
+    return gid.y * WF_MAX_GRID * WF_WORKGROUP + gid.x;
 }
 
 // Index of field `f` of path `slot` in the structure-of-arrays `paths` and `words`.

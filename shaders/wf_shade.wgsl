@@ -114,8 +114,8 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, d: vec3<f32>, xi0: f
 // #endif
 
 @compute @workgroup_size(64)
-fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = wf_slot(SHADE_QUEUE, wf_index(gid, nwg));
+fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = wf_slot(SHADE_QUEUE, wf_index(gid));
     if (slot == WF_NONE) {
         return;
     }

@@ -7,8 +7,8 @@
 // and adds those rays' contributions (in ray order, after the ones added here).
 
 @compute @workgroup_size(64)
-fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let slot = wf_slot(Q_SHADOW, wf_index(gid, nwg));
+fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = wf_slot(Q_SHADOW, wf_index(gid));
     if (slot == WF_NONE) {
         return;
     }

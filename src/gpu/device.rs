@@ -149,6 +149,22 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
     (ty, backend)
 }
 
+/// wgpu's instance flags for lumen: the build's defaults without indirect-call validation
+/// (the `WGPU_*` variables still override each flag).
+///
+/// That validation runs an extra compute dispatch before every `dispatch_workgroups_indirect`
+/// to clamp its arguments; the wavefront renderer makes most of its launches indirect, so on
+/// lavapipe, where a launch costs about 0.1 ms whatever its size, it doubled their number for
+/// nothing (skybox.sl rendered 7 % faster without it, DESIGN.md "Queues and launches").
+/// lumen's indirect arguments are written only by its own control kernel
+/// (`shaders/wf_control.wgsl`), within the limits by construction: x ≤ `WF_MAX_GRID` =
+/// 65,535 (WebGPU's minimum `max_compute_workgroups_per_dimension`), y ≤ slots / (64 ·
+/// 65,535), z = 1. Without the validation D3D12 would report `num_workgroups` as 0, so no
+/// kernel reads that builtin (`wf_index` follows from the grid rule instead).
+fn instance_flags() -> wgpu::InstanceFlags {
+    wgpu::InstanceFlags::from_build_config() - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL
+}
+
 /// Adapters to choose from, best first.
 ///
 /// Vulkan/Metal/DX12 are enumerated first and OpenGL only when none of those has an
@@ -156,8 +172,10 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 /// backend. `WGPU_BACKEND` (e.g. `gl`, `vulkan`) overrides the set, for debugging.
 fn enumerate() -> Vec<wgpu::Adapter> {
     let probe = |backends: wgpu::Backends| {
-        let desc =
-            wgpu::InstanceDescriptor { backends, ..wgpu::InstanceDescriptor::new_without_display_handle_from_env() };
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        desc.flags = instance_flags();
+        let desc = desc.with_env();
         let instance = wgpu::Instance::new(desc);
         let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
         // The no-op backend (if compiled in) is not a device anyone wants to render on.

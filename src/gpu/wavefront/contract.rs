@@ -28,6 +28,15 @@ pub const WORKGROUP: u32 = 64;
 /// Widest launch grid, in workgroups (wgpu's default per-dimension limit); longer queues
 /// use a second grid dimension.
 pub const MAX_GRID: u32 = 65_535;
+/// The grid (x, y) of a launch of `groups` workgroups: at most `MAX_GRID` wide, so any grid
+/// of more than one row is exactly `MAX_GRID` wide and an invocation's index in the launch
+/// is `gid.y · MAX_GRID · WORKGROUP + gid.x` (`wf_index` in shaders/wf_path.wgsl; the
+/// control kernel's `write_args` sizes indirect launches by the same rule).
+pub fn launch_grid(groups: u32) -> (u32, u32) {
+    let x = groups.min(MAX_GRID);
+    (x, groups.div_ceil(x.max(1)))
+}
+
 /// A queue entry past the queue's end.
 pub const NONE: u32 = u32::MAX;
 /// Set in a hit record's face word when the surface's normal is flipped (CSG DIFF).
@@ -283,6 +292,25 @@ mod tests {
         let mut bindings: Vec<u32> = StateBuffer::ALL.iter().map(|b| b.binding()).collect();
         bindings.dedup();
         assert_eq!(bindings.len(), StateBuffer::ALL.len());
+    }
+
+    #[test]
+    fn launch_grids_cover_every_index_once_by_the_wf_index_rule() {
+        for groups in [0, 1, 2, 64, MAX_GRID - 1, MAX_GRID, MAX_GRID + 1, 2 * MAX_GRID + 7] {
+            let (x, y) = launch_grid(groups);
+            assert!(x <= MAX_GRID && u64::from(x) * u64::from(y) >= u64::from(groups), "{groups}");
+            // Every row but the last is full, so wf_index numbers the first `groups`
+            // workgroups' invocations 0.. in order; extra workgroups of the last row only
+            // produce indices past the end, which the stages skip.
+            assert!(groups == 0 || u64::from(x) * u64::from(y - 1) < u64::from(groups), "{groups}");
+            if y > 1 {
+                assert_eq!(x, MAX_GRID);
+            }
+            let index = |gy: u32, gx: u32| u64::from(gy) * u64::from(MAX_GRID) * u64::from(WORKGROUP) + u64::from(gx);
+            if groups > 0 {
+                assert_eq!(index(y - 1, (x - 1) * WORKGROUP + WORKGROUP - 1), u64::from(x) * u64::from(y) * 64 - 1);
+            }
+        }
     }
 
     #[test]

@@ -33,7 +33,7 @@ pub use stages::{csg_queue, has_shadow_rays, Stage};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use contract::{control, path_field, word_field, MAX_GRID, WORKGROUP};
+use contract::{control, launch_grid, path_field, word_field, WORKGROUP};
 pub use contract::{csg_pool_entries, CSG_POOL_ENTRY_BYTES, CSG_PRIVATE_POOL_MAX};
 use schedule::BatchRunner;
 
@@ -327,9 +327,8 @@ impl<'a> Runner<'a> {
     fn direct(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize, count: u32) -> Result<(), GpuError> {
         self.launch(pass, stage, |pass| {
             self.bind(pass, stage, film)?;
-            let groups = count.div_ceil(WORKGROUP);
-            let x = groups.min(MAX_GRID);
-            pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
+            let (x, y) = launch_grid(count.div_ceil(WORKGROUP));
+            pass.dispatch_workgroups(x, y, 1);
             Ok(())
         })
     }
