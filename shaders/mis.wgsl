@@ -23,10 +23,16 @@ struct Previous {
 
 // `beta` is the path's F_BETA field, which the caller has loaded anyway: its w is the
 // previous BSDF density, negative for a delta vertex (storage loads are costly on llvmpipe
-// and are not merged). The point and object (W_PREV) are read only by emission MIS.
+// and are not merged). The point and object (W_PREV) are read only by emission MIS, and
+// only after a non-delta vertex: a delta vertex (and the camera, at every path's first
+// hit) skips the load.
 fn load_previous(slot: u32, beta: vec4<f32>) -> Previous {
-    let w = words[field(W_PREV, slot)];
-    return Previous(bitcast<vec3<f32>>(w.xyz), w.w, beta.w < 0.0, beta.w);
+    let delta = beta.w < 0.0;
+    var w = vec4<u32>(0u);
+    if (!delta) {
+        w = words[field(W_PREV, slot)];
+    }
+    return Previous(bitcast<vec3<f32>>(w.xyz), w.w, delta, beta.w);
 }
 
 // #if NEE

@@ -1,8 +1,9 @@
 // #requires wf_path camera
 // Camera stage of the path tracer: one invocation per path slot of the batch writes its
-// camera ray and the start of its path state (throughput 1, the camera as a delta
-// "previous vertex"; the host has cleared the radiance), and queues it for the closest-hit
-// stage of bounce 0.
+// camera ray. The rest of a path's start is implicit, to save two per-lane stores here and
+// loads later: bounce 0's ray queue is every slot in order (wf_intersect.wgsl), its
+// throughput 1 and the camera a delta "previous vertex" (load_beta); the host has cleared
+// the radiance.
 
 @compute @workgroup_size(64)
 fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -14,7 +15,4 @@ fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let col = id.pixel % settings.width;
     let row = id.pixel / settings.width;
     store_ray(slot, pixel_ray(col, row, id.j));
-    // The camera is a delta vertex (a negative density), whose point and object nothing reads.
-    paths[field(F_BETA, slot)] = vec4<f32>(1.0, 1.0, 1.0, -1.0);
-    queues[Q_RAY * batch.capacity + slot] = slot;
 }

@@ -9,6 +9,6 @@ fn escape_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let ray = load_ray(slot);
-    let beta = paths[field(F_BETA, slot)];
+    let beta = load_beta(slot, atomicLoad(&control[CTRL_BOUNCE]));
     add_radiance(slot, beta.xyz * pt_escaped(load_previous(slot, beta), normalize(ray.dir)));
 }

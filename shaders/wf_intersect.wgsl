@@ -7,7 +7,16 @@
 @compute @workgroup_size(64)
 fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
-    let slot = wf_slot(Q_RAY + (bounce & 1u), wf_index(gid));
+    let index = wf_index(gid);
+    // Bounce 0's queue is every slot in order: the camera stage writes no entries.
+    var slot = WF_NONE;
+    if (bounce == 0u) {
+        if (index < batch.path_count) {
+            slot = index;
+        }
+    } else {
+        slot = wf_slot(Q_RAY + (bounce & 1u), index);
+    }
     if (slot == WF_NONE) {
         return;
     }

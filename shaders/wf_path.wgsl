@@ -63,6 +63,19 @@ fn add_radiance(slot: u32, e: vec3<f32>) {
 }
 // #endif
 
+// #if WF_BETA_LOAD
+// The path's throughput and the previous vertex's BSDF density (F_BETA). The camera stage
+// does not store it: at bounce 0 every path has throughput 1 and comes from the camera, a
+// delta vertex (negative density), so bounce 0's vertices skip the load.
+fn load_beta(slot: u32, bounce: u32) -> vec4<f32> {
+    var beta = vec4<f32>(1.0, 1.0, 1.0, -1.0);
+    if (bounce != 0u) {
+        beta = paths[field(F_BETA, slot)];
+    }
+    return beta;
+}
+// #endif
+
 // #if WF_RAY_LOAD
 fn load_ray(slot: u32) -> Ray {
     let o = paths[field(F_RAY_ORIGIN, slot)];

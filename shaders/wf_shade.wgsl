@@ -132,7 +132,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let m = materials[hit.material];
     let color = pigment_color(m.pigment, hit.uv);
-    let beta_pdf = paths[field(F_BETA, slot)];
+    let beta_pdf = load_beta(slot, bounce);
     let prev = load_previous(slot, beta_pdf);
     var beta = beta_pdf.xyz;
     add_radiance(slot, beta * pt_emitted(prev, hit, m));

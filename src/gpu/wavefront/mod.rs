@@ -457,8 +457,8 @@ impl BatchRunner for Runner<'_> {
         }
         gpu.queue.write_buffer(&self.batch, 0, bytemuck::bytes_of(batch));
         let last = if self.path_tracer {
-            // Bounce 0, every slot queued for the closest-hit stage (the camera stage writes
-            // the queue entries), every other queue empty; the counters stay.
+            // Bounce 0, every slot queued for the closest-hit stage (implicitly: bounce 0's
+            // queue is the slots in order), every other queue empty; the counters stay.
             let mut words = vec![0u32; (control::COUNT + queue::COUNT) as usize];
             words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));

@@ -100,7 +100,7 @@ impl Stage {
     fn buffers_with_pool(self, f: &FeatureSet) -> Vec<StateBuffer> {
         use StateBuffer::*;
         match self {
-            Stage::Camera => vec![Batch, Queues, Paths],
+            Stage::Camera => vec![Batch, Paths],
             Stage::FirstHit if f.csg => vec![Batch, Control, Paths, CsgPool],
             Stage::FirstHit => vec![Batch, Control, Paths],
             Stage::Intersect if csg_queue(f) => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
@@ -169,7 +169,7 @@ impl Stage {
                 if n.contains(&"ENV_IMAGE") {
                     n.push("TEXTURES");
                 }
-                n.extend(["WF_QUEUED", "WF_RAY_LOAD", "WF_RADIANCE_ADD"]);
+                n.extend(["WF_QUEUED", "WF_RAY_LOAD", "WF_BETA_LOAD", "WF_RADIANCE_ADD"]);
                 n
             }
             Stage::Shade(kind) => {
@@ -208,6 +208,7 @@ impl Stage {
                     "WF_QUEUED",
                     "WF_PUSH",
                     "WF_RAY_LOAD",
+                    "WF_BETA_LOAD",
                     "WF_RAY_STORE",
                     "WF_PATH_ID",
                     "WF_RADIANCE_ADD",
@@ -295,7 +296,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 30] = [
+    pub const NAMES: [&'static str; 31] = [
         "CSG_POOL_PRIVATE",
         "WF_HIT_STORE",
         "WF_HIT_LOAD",
@@ -312,6 +313,7 @@ impl Stage {
         "WF_QUEUED",
         "WF_PUSH",
         "WF_RAY_LOAD",
+        "WF_BETA_LOAD",
         "WF_RAY_STORE",
         "WF_PATH_ID",
         "WF_RADIANCE_ADD",
