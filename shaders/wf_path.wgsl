@@ -44,10 +44,16 @@ fn deferred_record(slot: u32, r: u32) -> u32 {
 
 // #if WF_PUSH
 // Appends path `slot` to queue q (each path is in at most one queue of a kind per bounce,
-// so a queue never holds more than batch.capacity entries).
+// so a queue never holds more than batch.capacity entries). The push that starts a
+// workgroup's worth of entries grows the queue's launch to cover it: the largest such k
+// makes it ⌈length / WF_WORKGROUP⌉ workgroups, one row (batch.capacity ≤ 64 · WF_MAX_GRID),
+// so no control kernel has to turn lengths into launch arguments between stages.
 fn wf_push(q: u32, slot: u32) {
     let k = atomicAdd(&control[CTRL_COUNT + q], 1u);
     queues[q * batch.capacity + k] = slot;
+    if (k % WF_WORKGROUP == 0u) {
+        wf_grow_launch(q, k / WF_WORKGROUP + 1u);
+    }
 }
 // #endif
 

@@ -52,7 +52,8 @@ pub struct GpuArgs {
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limit: Option<Duration>,
     /// GPU path slots per batch (paths in flight at once; default from the device: 131,072
-    /// on a software adapter, 2,097,152 on a hardware GPU). Images do not depend on it.
+    /// on a software adapter, 2,097,152 on a hardware GPU; at most 4,194,240, more is
+    /// clamped). Images do not depend on it.
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..=1 << 30))]
     pub batch_paths: Option<u32>,
     /// Where GPU kernels read the scene's small tables (shapes, BVH nodes, materials, ...)

@@ -14,9 +14,11 @@
 //! - `csg_pool` (`array<CsgPoolEntry>`): per path, the spans of the leaves of the CSG tree
 //!   its query evaluates, then their faces ([`csg_pool_entries`] entries each; the host bounds
 //!   the batch so that the pool stays within a memory budget however large a tree).
-//! - `args` (`array<u32>`): indirect dispatch arguments, three words per queue, written by
-//!   the control kernels (a separate buffer: a dispatch may not use one buffer both as its
-//!   indirect arguments and as writable storage).
+//! - `args_rays`, `args_hits`, `args_csg` (`array<atomic<u32>>`): indirect dispatch
+//!   arguments (x, y, z) at `3·q` for the queues q each holds ([`launch_args`]), grown by the
+//!   pushes themselves (`wf_push`). Three buffers, because a dispatch may not use one buffer
+//!   both as its indirect arguments and as writable storage: every stage pushes only to
+//!   queues whose arguments live in buffers other than the one it is launched from.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -25,9 +27,14 @@ use crate::gpu::layout::brdf_kind;
 
 /// Invocations per workgroup of every queue-driven stage.
 pub const WORKGROUP: u32 = 64;
-/// Widest launch grid, in workgroups (wgpu's default per-dimension limit); longer queues
-/// use a second grid dimension.
+/// Widest launch grid, in workgroups (wgpu's default per-dimension limit); longer direct
+/// launches would use a second grid dimension, but a batch has at most [`MAX_SLOTS`] paths.
 pub const MAX_GRID: u32 = 65_535;
+/// Most path slots per batch: a queue of them fits one row of `MAX_GRID` workgroups, so the
+/// pushes can keep a queue's launch arguments as (⌈length / 64⌉, 1, 1) (`wf_push`). Four
+/// million paths in flight is more than the largest GPU keeps resident (an H200: 132 SMs ×
+/// 2,048 threads).
+pub const MAX_SLOTS: u32 = WORKGROUP * MAX_GRID;
 /// The grid (x, y) of a launch of `groups` workgroups: at most `MAX_GRID` wide, so any grid
 /// of more than one row is exactly `MAX_GRID` wide and an invocation's index in the launch
 /// is `gid.y · MAX_GRID · WORKGROUP + gid.x` (`wf_index` in shaders/wf_path.wgsl; the
@@ -160,12 +167,14 @@ pub enum StateBuffer {
     Shadow,
     DeferredRefs,
     Film,
-    Args,
+    ArgsRays,
+    ArgsHits,
+    ArgsCsg,
     CsgPool,
 }
 
 impl StateBuffer {
-    pub const ALL: [StateBuffer; 10] = [
+    pub const ALL: [StateBuffer; 12] = [
         StateBuffer::Batch,
         StateBuffer::Control,
         StateBuffer::Queues,
@@ -174,32 +183,93 @@ impl StateBuffer {
         StateBuffer::Shadow,
         StateBuffer::DeferredRefs,
         StateBuffer::Film,
-        StateBuffer::Args,
+        StateBuffer::ArgsRays,
+        StateBuffer::ArgsHits,
+        StateBuffer::ArgsCsg,
         StateBuffer::CsgPool,
     ];
+
+    /// The three buffers of launch arguments.
+    pub const ARGS: [StateBuffer; 3] = [StateBuffer::ArgsRays, StateBuffer::ArgsHits, StateBuffer::ArgsCsg];
 
     /// Its binding number in group 0.
     pub fn binding(self) -> u32 {
         self as u32
     }
 
+    /// Its WGSL name.
+    fn declaration_name(self) -> &'static str {
+        match self {
+            StateBuffer::Batch => "batch",
+            StateBuffer::Control => "control",
+            StateBuffer::Queues => "queues",
+            StateBuffer::Paths => "paths",
+            StateBuffer::Words => "words",
+            StateBuffer::Shadow => "shadow",
+            StateBuffer::DeferredRefs => "deferred_refs",
+            StateBuffer::Film => "film",
+            StateBuffer::ArgsRays => "args_rays",
+            StateBuffer::ArgsHits => "args_hits",
+            StateBuffer::ArgsCsg => "args_csg",
+            StateBuffer::CsgPool => "csg_pool",
+        }
+    }
+
     /// Its WGSL declaration.
     fn declaration(self) -> String {
-        let (name, ty) = match self {
+        let name = self.declaration_name();
+        let ty = match self {
             StateBuffer::Batch => return format!("@group(0) @binding({}) var<uniform> batch: Batch;", self.binding()),
-            StateBuffer::Control => ("control", "array<atomic<u32>>"),
-            StateBuffer::Queues => ("queues", "array<u32>"),
-            StateBuffer::Paths => ("paths", "array<vec4<f32>>"),
-            StateBuffer::Words => ("words", "array<vec4<u32>>"),
-            StateBuffer::Shadow => ("shadow", "array<vec4<f32>>"),
-            StateBuffer::DeferredRefs => ("deferred_refs", "array<u32>"),
-            StateBuffer::Film => ("film", "array<vec4<f32>>"),
-            StateBuffer::Args => ("args", "array<u32>"),
+            StateBuffer::Control | StateBuffer::ArgsRays | StateBuffer::ArgsHits | StateBuffer::ArgsCsg => {
+                "array<atomic<u32>>"
+            }
+            StateBuffer::Queues | StateBuffer::DeferredRefs => "array<u32>",
+            StateBuffer::Paths | StateBuffer::Shadow | StateBuffer::Film => "array<vec4<f32>>",
+            StateBuffer::Words => "array<vec4<u32>>",
             // `CsgPoolEntry` is declared by the csg module, the only one that binds this.
-            StateBuffer::CsgPool => ("csg_pool", "array<CsgPoolEntry>"),
+            StateBuffer::CsgPool => "array<CsgPoolEntry>",
         };
         format!("@group(0) @binding({}) var<storage, read_write> {name}: {ty};", self.binding())
     }
+}
+
+/// The buffer that holds queue `q`'s launch arguments. Each stage pushes only to queues of
+/// buffers other than the one it is launched from: the closest-hit stage (from `ArgsRays`)
+/// to the escape, shading and CSG queues; the CSG stage (from `ArgsCsg`) to the escape and
+/// shading queues; the shading stages (from `ArgsHits`) to the shadow queue and the next
+/// ray queue; the shadow stage (from `ArgsRays`) to the shadow rays' CSG queue.
+pub fn launch_args(q: u32) -> StateBuffer {
+    if q == queue::RAY || q == queue::RAY + 1 || q == queue::SHADOW {
+        StateBuffer::ArgsRays
+    } else if q == queue::CSG || q == queue::SHADOW_CSG {
+        StateBuffer::ArgsCsg
+    } else {
+        StateBuffer::ArgsHits
+    }
+}
+
+/// The generated WGSL that keeps launch arguments, for a stage binding `buffers`:
+/// `wf_grow_launch` (pushing stages) and `wf_clear_launch` (control kernels), each touching
+/// only the argument buffers the stage binds.
+fn launch_args_wgsl(buffers: &[StateBuffer]) -> String {
+    let mut grow = String::new();
+    let mut clear = String::new();
+    for b in StateBuffer::ARGS.into_iter().filter(|b| buffers.contains(b)) {
+        let queues: Vec<String> =
+            (0..queue::COUNT).filter(|&q| launch_args(q) == b).map(|q| format!("q == {q}u")).collect();
+        let name = b.declaration_name();
+        let test = queues.join(" || ");
+        grow.push_str(&format!("    if ({test}) {{\n        atomicMax(&{name}[3u * q], groups);\n    }}\n"));
+        clear.push_str(&format!("    if ({test}) {{\n        atomicStore(&{name}[3u * q], 0u);\n    }}\n"));
+    }
+    if grow.is_empty() {
+        return String::new();
+    }
+    format!(
+        "// #if WF_PUSH\n// Grows queue q's launch to at least `groups` workgroups (contract::launch_args).\n\
+         fn wf_grow_launch(q: u32, groups: u32) {{\n{grow}}}\n// #endif\n\
+         // #if STAGE_CONTROL\n// Queue q's launch is empty again.\nfn wf_clear_launch(q: u32) {{\n{clear}}}\n// #endif\n"
+    )
 }
 
 /// Bytes of one `csg_pool` entry (two 32-bit words: a leaf span's t's, or its faces; a
@@ -259,6 +329,7 @@ pub fn wavefront_module(buffers: &[StateBuffer], shade_queue: Option<u32>) -> St
         s.push_str(&b.declaration());
         s.push('\n');
     }
+    s.push_str(&launch_args_wgsl(buffers));
     s
 }
 

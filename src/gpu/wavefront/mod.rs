@@ -89,7 +89,7 @@ pub fn capacity(
     if used.contains(&StateBuffer::CsgPool) {
         slots = slots.min(csg_pool_budget(gpu) / per_slot(StateBuffer::CsgPool)).max(1);
     }
-    slots.min(u64::from(u32::MAX / 2)) as u32
+    slots.min(u64::from(contract::MAX_SLOTS)) as u32
 }
 
 /// Device counters read at the end of a render.
@@ -119,7 +119,7 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> 
         StateBuffer::DeferredRefs => 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1) * (1 + u64::from(shadow_rays)),
         // The compensated sum: value and error (wf_film.wgsl).
         StateBuffer::Film => 32,
-        StateBuffer::Args => 0,
+        StateBuffer::ArgsRays | StateBuffer::ArgsHits | StateBuffer::ArgsCsg => 0,
         StateBuffer::CsgPool => contract::csg_pool_entries(features) * contract::CSG_POOL_ENTRY_BYTES,
     }
 }
@@ -142,7 +142,8 @@ pub(crate) struct Runner<'a> {
     groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
     batch: wgpu::Buffer,
     control: wgpu::Buffer,
-    args: wgpu::Buffer,
+    /// Launch arguments: `ArgsRays`, `ArgsHits`, `ArgsCsg` (contract::launch_args).
+    args: [wgpu::Buffer; 3],
     films: [wgpu::Buffer; 2],
     staging: [wgpu::Buffer; 2],
     probe: wgpu::Buffer,
@@ -235,14 +236,21 @@ impl<'a> Runner<'a> {
                 mapped_at_creation: false,
             })
         })?;
-        let args = gpu.scoped(|| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("indirect dispatch arguments"),
-                size: 12 * u64::from(queue::COUNT),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
-                mapped_at_creation: false,
+        let args_buffer = |label: &str| {
+            gpu.scoped(|| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: 12 * u64::from(queue::COUNT),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
             })
-        })?;
+        };
+        let args = [
+            args_buffer("launch arguments: rays and shadow rays")?,
+            args_buffer("launch arguments: hits")?,
+            args_buffer("launch arguments: CSG")?,
+        ];
         let buffer_of = |b: StateBuffer, film: usize| -> &wgpu::Buffer {
             match b {
                 StateBuffer::Batch => &batch,
@@ -253,7 +261,9 @@ impl<'a> Runner<'a> {
                 StateBuffer::Shadow => &shadow,
                 StateBuffer::DeferredRefs => &deferred,
                 StateBuffer::Film => &films[film],
-                StateBuffer::Args => &args,
+                StateBuffer::ArgsRays => &args[0],
+                StateBuffer::ArgsHits => &args[1],
+                StateBuffer::ArgsCsg => &args[2],
                 StateBuffer::CsgPool => &csg_pool,
             }
         };
@@ -333,11 +343,16 @@ impl<'a> Runner<'a> {
         })
     }
 
-    /// A launch of `stage` over queue `q`, sized on the device.
+    /// A launch of `stage` over queue `q`, sized on the device (by the pushes to `q`).
     fn indirect(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, q: u32) -> Result<(), GpuError> {
+        let args = match contract::launch_args(q) {
+            StateBuffer::ArgsRays => &self.args[0],
+            StateBuffer::ArgsHits => &self.args[1],
+            _ => &self.args[2],
+        };
         self.launch(pass, stage, |pass| {
             self.bind(pass, stage, 0)?;
-            pass.dispatch_workgroups_indirect(&self.args, 12 * u64::from(q));
+            pass.dispatch_workgroups_indirect(args, 12 * u64::from(q));
             Ok(())
         })
     }
@@ -350,13 +365,13 @@ impl<'a> Runner<'a> {
         })
     }
 
-    /// Records one bounce of every path in flight.
+    /// Records one bounce of every path in flight. Each launch is sized by the pushes to its
+    /// queue (wf_push), so only `advance` (and, for shadow rays' CSG trees, one more) runs
+    /// between stages.
     fn bounce(&self, pass: &mut wgpu::ComputePass<'_>, bounce: u32) -> Result<(), GpuError> {
         self.indirect(pass, Stage::Intersect, queue::RAY + (bounce & 1))?;
-        self.control_kernel(pass, Stage::DispatchArgs)?;
         if self.csg {
             self.indirect(pass, Stage::Csg, queue::CSG)?;
-            self.control_kernel(pass, Stage::DispatchArgs)?;
         }
         self.indirect(pass, Stage::Escape, queue::ESCAPE)?;
         for &stage in &self.shade {
@@ -365,12 +380,11 @@ impl<'a> Runner<'a> {
             }
         }
         if self.shadow {
-            self.control_kernel(pass, Stage::DispatchArgs)?;
             self.indirect(pass, Stage::Shadow, queue::SHADOW)?;
             if self.shadow_csg {
                 // The shadow rays' CSG trees, through the one kernel that holds CSG code.
                 self.control_kernel(pass, Stage::ShadowCsgArgs)?;
-                self.indirect(pass, Stage::Csg, queue::CSG)?;
+                self.indirect(pass, Stage::Csg, queue::SHADOW_CSG)?;
             }
         }
         self.control_kernel(pass, Stage::Advance)
@@ -462,6 +476,14 @@ impl BatchRunner for Runner<'_> {
             let mut words = vec![0u32; (control::COUNT + queue::COUNT) as usize];
             words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
+            // Every launch empty but bounce 0's closest-hit one, one row (launch_grid).
+            for (i, buffer) in self.args.iter().enumerate() {
+                let mut args = [[0u32, 1, 1]; queue::COUNT as usize];
+                if i == 0 {
+                    args[queue::RAY as usize][0] = launch_grid(batch.path_count.div_ceil(WORKGROUP)).0;
+                }
+                gpu.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&args));
+            }
             self.submit_commands(|e| {
                 // Every path starts with no radiance: a copy-engine clear (a memset on
                 // lavapipe) rather than a store per invocation in the camera stage.
@@ -469,8 +491,7 @@ impl BatchRunner for Runner<'_> {
                 e.clear_buffer(&self.paths, radiance, Some(u64::from(batch.path_count) * 16));
                 let mut pass = e
                     .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("camera"), timestamp_writes: None });
-                self.direct(&mut pass, Stage::Camera, 0, batch.path_count)?;
-                self.control_kernel(&mut pass, Stage::DispatchArgs)
+                self.direct(&mut pass, Stage::Camera, 0, batch.path_count)
             })?;
             // One submission per bounce keeps every submission short (OS GPU watchdogs).
             // Deep renders check every 8 bounces whether any path is left.

@@ -32,12 +32,10 @@ pub enum Stage {
     Shadow,
     /// Per-pixel sums of the batch's paths in a fixed order.
     Film,
-    /// Indirect dispatch arguments from queue lengths.
-    DispatchArgs,
-    /// After the shadow stage: the closest-hit CSG work of the bounce is done; the
-    /// arguments of the CSG stage's second launch, over the shadow rays' trees.
+    /// After the shadow stage: the closest-hit CSG work of the bounce is done; its queue is
+    /// emptied so that the CSG stage's second launch covers the shadow rays' trees.
     ShadowCsgArgs,
-    /// End of a bounce: count rays, empty consumed queues, size the next closest-hit launch.
+    /// End of a bounce: count rays, empty the consumed queues and their launches.
     Advance,
 }
 
@@ -58,7 +56,7 @@ impl Stage {
                 stages.push(Stage::ShadowCsgArgs);
             }
         }
-        stages.extend([Stage::Film, Stage::DispatchArgs, Stage::Advance]);
+        stages.extend([Stage::Film, Stage::Advance]);
         stages
     }
 
@@ -81,7 +79,6 @@ impl Stage {
             Stage::Shade(_) => ("wf_shade", "shade_stage"),
             Stage::Shadow => ("wf_shadow", "shadow_stage"),
             Stage::Film => ("wf_film", "film_stage"),
-            Stage::DispatchArgs => ("wf_control", "dispatch_args"),
             Stage::ShadowCsgArgs => ("wf_control", "shadow_csg_args"),
             Stage::Advance => ("wf_control", "advance"),
         }
@@ -99,7 +96,7 @@ impl Stage {
 
     fn buffers_with_pool(self, f: &FeatureSet) -> Vec<StateBuffer> {
         use StateBuffer::*;
-        match self {
+        let mut buffers = match self {
             Stage::Camera => vec![Batch, Paths],
             Stage::FirstHit if f.csg => vec![Batch, Control, Paths, CsgPool],
             Stage::FirstHit => vec![Batch, Control, Paths],
@@ -123,7 +120,30 @@ impl Stage {
             Stage::Shadow if f.csg => vec![Batch, Control, Queues, Paths, Shadow, CsgPool],
             Stage::Shadow => vec![Batch, Control, Queues, Paths, Shadow],
             Stage::Film => vec![Batch, Control, Paths, Film],
-            Stage::DispatchArgs | Stage::ShadowCsgArgs | Stage::Advance => vec![Control, Args],
+            Stage::ShadowCsgArgs | Stage::Advance => vec![Control],
+        };
+        // The launch arguments of the queues the stage pushes to (or, for the control
+        // kernels, empties). In binding order: bind groups pair buffers with bindings by
+        // position (ComputeKernel::bind_group).
+        buffers.extend(self.launch_args_written(f));
+        buffers.sort();
+        buffers
+    }
+
+    /// The buffers of launch arguments this stage writes: those of the queues it pushes to
+    /// (never the one it is launched from: contract::launch_args), or, for the control
+    /// kernels, of the queues they empty.
+    fn launch_args_written(self, f: &FeatureSet) -> Vec<StateBuffer> {
+        use StateBuffer::*;
+        match self {
+            Stage::Intersect if csg_queue(f) => vec![ArgsHits, ArgsCsg],
+            Stage::Intersect | Stage::Csg => vec![ArgsHits],
+            Stage::Shade(_) => vec![ArgsRays],
+            Stage::Shadow if csg_queue(f) => vec![ArgsCsg],
+            // The control kernels share one module (wf_control.wgsl), so one set of bindings.
+            Stage::ShadowCsgArgs | Stage::Advance if csg_queue(f) => vec![ArgsRays, ArgsHits, ArgsCsg],
+            Stage::ShadowCsgArgs | Stage::Advance => vec![ArgsRays, ArgsHits],
+            _ => vec![],
         }
     }
 
@@ -223,7 +243,7 @@ impl Stage {
                 }
                 n
             }
-            Stage::Film | Stage::DispatchArgs | Stage::ShadowCsgArgs | Stage::Advance => vec![],
+            Stage::Film | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
         // Where the tables are read from (their bindings are declared only where used).
         names.extend(f.uniform_tables.names());
@@ -291,7 +311,7 @@ impl Stage {
             Stage::Shade(_) => "STAGE_SHADE",
             Stage::Shadow => "STAGE_SHADOW",
             Stage::Film => "STAGE_FILM",
-            Stage::DispatchArgs | Stage::ShadowCsgArgs | Stage::Advance => "STAGE_CONTROL",
+            Stage::ShadowCsgArgs | Stage::Advance => "STAGE_CONTROL",
         }
     }
 
@@ -396,4 +416,58 @@ fn casts_shadow_rays(kind: u32) -> bool {
 
 fn microfacet_kind(kind: u32) -> bool {
     matches!(kind, brdf_kind::CONDUCTOR | brdf_kind::ROUGH_DIELECTRIC | brdf_kind::PLASTIC)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::wavefront::contract::{launch_args, queue};
+
+    /// The queues a stage's launches cover (`Runner::bounce`).
+    fn launched_from(stage: Stage) -> Vec<u32> {
+        match stage {
+            Stage::Intersect => vec![queue::RAY, queue::RAY + 1],
+            Stage::Csg => vec![queue::CSG, queue::SHADOW_CSG],
+            Stage::Escape => vec![queue::ESCAPE],
+            Stage::Shade(kind) => vec![queue::shade(kind)],
+            Stage::Shadow => vec![queue::SHADOW],
+            _ => vec![],
+        }
+    }
+
+    /// wgpu refuses a dispatch that uses one buffer both as its indirect arguments and as
+    /// writable storage, and bind groups pair buffers with bindings by position: so no
+    /// stage may bind the arguments it is launched from, and every stage lists its buffers
+    /// in binding order. Over scenes with and without CSG (deferred or not) and shadow rays.
+    #[test]
+    fn no_stage_writes_the_launch_arguments_it_is_launched_from() {
+        let mut cases = Vec::new();
+        for (csg, trees) in [(false, 0), (true, 3), (true, crate::prepare::CSG_DEFER_MAX as u32 + 1)] {
+            for (nee, point_lights) in [(false, false), (true, false), (false, true)] {
+                cases.push(FeatureSet {
+                    sphere: true,
+                    bvh: true,
+                    csg,
+                    csg_trees: trees,
+                    csg_max_leaves: if csg { 2 } else { 0 },
+                    diffuse: true,
+                    dielectric: true,
+                    nee,
+                    point_lights,
+                    area_lights: nee,
+                    renderer: RendererKind::PathTracer,
+                    ..FeatureSet::default()
+                });
+            }
+        }
+        for f in &cases {
+            for stage in Stage::for_scene(f) {
+                let buffers = stage.buffers(f);
+                assert!(buffers.windows(2).all(|w| w[0].binding() < w[1].binding()), "{stage:?}: {buffers:?}");
+                for q in launched_from(stage) {
+                    assert!(!buffers.contains(&launch_args(q)), "{stage:?} binds the arguments of queue {q}");
+                }
+            }
+        }
+    }
 }
