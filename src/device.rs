@@ -95,7 +95,7 @@ pub fn open_device(choice: DeviceChoice, adapter: &AdapterChoice) -> Result<Open
         if g.adapter_info.device_type == wgpu::DeviceType::Cpu {
             eprintln!(
                 "note: {} is a software adapter (the GPU API emulated on the CPU); lumen's own CPU renderer \
-                 (--device cpu) is usually faster on this machine",
+                 (--device cpu) is faster on some scenes",
                 g.adapter_info.name
             );
         }
