@@ -10,10 +10,10 @@
 // slot stands for. Which of them a stage gets is decided by src/gpu/wavefront/stages.rs.
 
 // The invocation's index in a launch of WF_WORKGROUP-wide workgroups on a 2-D grid. Every
-// grid (sized by the host or by the control kernels) is min(groups, WF_MAX_GRID) wide, so
-// a grid of more than one row is WF_MAX_GRID wide: the index needs no `num_workgroups`,
-// which D3D12 reports as 0 for indirect launches without wgpu's indirect validation
-// (src/gpu/device.rs, instance_flags).
+// grid is min(groups, WF_MAX_GRID) wide (the host's, contract::launch_grid; indirect ones,
+// sized by the pushes, are one row), so a grid of more than one row is WF_MAX_GRID wide:
+// the index needs no `num_workgroups`, which D3D12 reports as 0 for indirect launches
+// without wgpu's indirect validation (src/gpu/device.rs, instance_flags).
 fn wf_index(gid: vec3<u32>) -> u32 {
     return gid.y * WF_MAX_GRID * WF_WORKGROUP + gid.x;
 }

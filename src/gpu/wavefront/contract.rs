@@ -35,10 +35,10 @@ pub const MAX_GRID: u32 = 65_535;
 /// million paths in flight is more than the largest GPU keeps resident (an H200: 132 SMs ×
 /// 2,048 threads).
 pub const MAX_SLOTS: u32 = WORKGROUP * MAX_GRID;
-/// The grid (x, y) of a launch of `groups` workgroups: at most `MAX_GRID` wide, so any grid
-/// of more than one row is exactly `MAX_GRID` wide and an invocation's index in the launch
-/// is `gid.y · MAX_GRID · WORKGROUP + gid.x` (`wf_index` in shaders/wf_path.wgsl; the
-/// control kernel's `write_args` sizes indirect launches by the same rule).
+/// The grid (x, y) of a direct launch of `groups` workgroups: at most `MAX_GRID` wide, so any
+/// grid of more than one row is exactly `MAX_GRID` wide and an invocation's index in the
+/// launch is `gid.y · MAX_GRID · WORKGROUP + gid.x` (`wf_index` in shaders/wf_path.wgsl;
+/// indirect launches, sized by the pushes, are one row).
 pub fn launch_grid(groups: u32) -> (u32, u32) {
     let x = groups.min(MAX_GRID);
     (x, groups.div_ceil(x.max(1)))

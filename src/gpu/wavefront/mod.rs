@@ -92,6 +92,11 @@ pub fn capacity(
     slots.min(u64::from(contract::MAX_SLOTS)) as u32
 }
 
+/// Where launch-argument buffer `b` is in `StateBuffer::ARGS` (and `Runner::args`).
+fn args_index(b: StateBuffer) -> usize {
+    StateBuffer::ARGS.iter().position(|a| *a == b).unwrap_or(0)
+}
+
 /// Device counters read at the end of a render.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Counters {
@@ -142,7 +147,7 @@ pub(crate) struct Runner<'a> {
     groups1: &'a BTreeMap<Stage, wgpu::BindGroup>,
     batch: wgpu::Buffer,
     control: wgpu::Buffer,
-    /// Launch arguments: `ArgsRays`, `ArgsHits`, `ArgsCsg` (contract::launch_args).
+    /// Launch arguments, in `StateBuffer::ARGS` order (contract::launch_args).
     args: [wgpu::Buffer; 3],
     films: [wgpu::Buffer; 2],
     staging: [wgpu::Buffer; 2],
@@ -246,6 +251,7 @@ impl<'a> Runner<'a> {
                 })
             })
         };
+        // In `StateBuffer::ARGS` order.
         let args = [
             args_buffer("launch arguments: rays and shadow rays")?,
             args_buffer("launch arguments: hits")?,
@@ -261,9 +267,7 @@ impl<'a> Runner<'a> {
                 StateBuffer::Shadow => &shadow,
                 StateBuffer::DeferredRefs => &deferred,
                 StateBuffer::Film => &films[film],
-                StateBuffer::ArgsRays => &args[0],
-                StateBuffer::ArgsHits => &args[1],
-                StateBuffer::ArgsCsg => &args[2],
+                StateBuffer::ArgsRays | StateBuffer::ArgsHits | StateBuffer::ArgsCsg => &args[args_index(b)],
                 StateBuffer::CsgPool => &csg_pool,
             }
         };
@@ -345,11 +349,7 @@ impl<'a> Runner<'a> {
 
     /// A launch of `stage` over queue `q`, sized on the device (by the pushes to `q`).
     fn indirect(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, q: u32) -> Result<(), GpuError> {
-        let args = match contract::launch_args(q) {
-            StateBuffer::ArgsRays => &self.args[0],
-            StateBuffer::ArgsHits => &self.args[1],
-            _ => &self.args[2],
-        };
+        let args = &self.args[args_index(contract::launch_args(q))];
         self.launch(pass, stage, |pass| {
             self.bind(pass, stage, 0)?;
             pass.dispatch_workgroups_indirect(args, 12 * u64::from(q));
@@ -477,9 +477,9 @@ impl BatchRunner for Runner<'_> {
             words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
             // Every launch empty but bounce 0's closest-hit one, one row (launch_grid).
-            for (i, buffer) in self.args.iter().enumerate() {
+            for (buffer, kind) in self.args.iter().zip(StateBuffer::ARGS) {
                 let mut args = [[0u32, 1, 1]; queue::COUNT as usize];
-                if i == 0 {
+                if kind == contract::launch_args(queue::RAY) {
                     args[queue::RAY as usize][0] = launch_grid(batch.path_count.div_ceil(WORKGROUP)).0;
                 }
                 gpu.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&args));
