@@ -58,6 +58,10 @@ pub struct BenchArgs {
     /// Also write the Markdown report to this file.
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
+    /// Measure each scene this many times, the devices alternating, and report medians with
+    /// each run's GPU/CPU ratio: side-by-side figures on a shared, noisy machine.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub repeat: u32,
 }
 
 /// Settings after `--quick` and the defaults are applied.
@@ -69,6 +73,8 @@ struct Plan {
     max_spheres: u32,
     script: ScriptArgs,
     seed: Option<u64>,
+    /// Rounds of the scene table (`--repeat`).
+    repeat: u32,
 }
 
 impl Plan {
@@ -82,6 +88,7 @@ impl Plan {
             max_spheres: args.max_spheres.unwrap_or(max_spheres),
             script: args.script.clone(),
             seed: o.seed,
+            repeat: args.repeat.max(1),
         })
     }
 
@@ -196,9 +203,34 @@ fn name_of(path: &Path) -> String {
     path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| path.display().to_string())
 }
 
+/// One scene on one device over the rounds of the scene table.
+#[derive(Debug, Default)]
+struct Rounds {
+    /// Samples per second of each round (`None`: timing noise swamped the difference).
+    rates: Vec<Option<f64>>,
+    rays: Vec<f64>,
+    seconds: Vec<f64>,
+    spp: u32,
+    error: Option<String>,
+}
+
+/// The median of `v` (the mean of the middle two for an even count), `None` if empty.
+fn median(v: &[f64]) -> Option<f64> {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    (n > 0).then(|| if n % 2 == 1 { s[n / 2] } else { (s[n / 2 - 1] + s[n / 2]) / 2.0 })
+}
+
+/// Each round's GPU rate over the same round's CPU rate (rounds where both were measured).
+fn round_ratios(gpu: &Rounds, cpu: &Rounds) -> Vec<f64> {
+    gpu.rates.iter().zip(&cpu.rates).filter_map(|(g, c)| Some(g.as_ref()? / c.as_ref()?)).collect()
+}
+
 fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> String {
     let headers = ["scene", "device", "size", "spp", "seconds", "samples/s", "rays/s", "peak memory"];
     let mut rows = Vec::new();
+    let mut ratio_rows = Vec::new();
     for file in files {
         let name = name_of(file);
         let scene = match plan.load_scene(file, plan.width, plan.height) {
@@ -218,48 +250,81 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                 continue;
             }
         };
-        for d in devices {
-            eprintln!("{name} on {} ...", d.kind());
-            let size = format!("{}×{}", scene.width, scene.height);
-            match Differential::run(d, &scene, plan.spp) {
-                Ok(diff) => {
-                    let rate = diff.per_sample().map(|t| 1.0 / t);
-                    rows.push(vec![
-                        name.clone(),
-                        d.kind().to_string(),
-                        size,
-                        diff.more.spp.to_string(),
-                        format!("{:.3}", diff.more.seconds),
-                        rate.map_or("n/a (timing noise)".into(), si),
-                        diff.rays_per_second().map_or("n/a (timing noise)".into(), si),
-                        format_bytes(peak_memory_bytes()),
-                    ]);
+        let size = format!("{}×{}", scene.width, scene.height);
+        // Devices alternate within each round, so a slow spell of a shared machine falls on
+        // both alike.
+        let mut runs: Vec<Rounds> = devices.iter().map(|_| Rounds::default()).collect();
+        for round in 0..plan.repeat {
+            for (d, r) in devices.iter().zip(runs.iter_mut()) {
+                if r.error.is_some() {
+                    continue;
                 }
-                Err(e) => {
-                    eprintln!("warning: {name} on {}: {e}", d.kind());
-                    let msg = format!("error: {e}").replace('\n', " ");
-                    rows.push(vec![
-                        name.clone(),
-                        d.kind().to_string(),
-                        size,
-                        msg,
-                        "".into(),
-                        "".into(),
-                        "".into(),
-                        "".into(),
-                    ]);
+                eprintln!("{name} on {} (round {} of {}) ...", d.kind(), round + 1, plan.repeat);
+                match Differential::run(d, &scene, plan.spp) {
+                    Ok(diff) => {
+                        r.rates.push(diff.per_sample().map(|t| 1.0 / t));
+                        r.rays.extend(diff.rays_per_second());
+                        r.seconds.push(diff.more.seconds);
+                        r.spp = diff.more.spp;
+                    }
+                    Err(e) => {
+                        eprintln!("warning: {name} on {}: {e}", d.kind());
+                        r.error = Some(format!("error: {e}").replace('\n', " "));
+                    }
                 }
             }
         }
+        for (d, r) in devices.iter().zip(&runs) {
+            let noise = || "n/a (timing noise)".to_string();
+            let measured = match &r.error {
+                Some(msg) => [msg.clone(), String::new(), String::new(), String::new(), String::new()],
+                None => [
+                    r.spp.to_string(),
+                    median(&r.seconds).map_or(String::new(), |s| format!("{s:.3}")),
+                    median(&r.rates.iter().flatten().copied().collect::<Vec<_>>()).map_or_else(noise, si),
+                    median(&r.rays).map_or_else(noise, si),
+                    format_bytes(peak_memory_bytes()),
+                ],
+            };
+            let mut cells = vec![name.clone(), d.kind().to_string(), size.clone()];
+            cells.extend(measured);
+            rows.push(cells);
+        }
+        let of = |k: Device| devices.iter().position(|d| d.kind() == k).map(|i| &runs[i]);
+        if let (Some(gpu), Some(cpu)) = (of(Device::Gpu), of(Device::Cpu)) {
+            let ratios = round_ratios(gpu, cpu);
+            let range = |v: &[f64]| {
+                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                format!("{lo:.2}–{hi:.2}")
+            };
+            ratio_rows.push(match median(&ratios) {
+                Some(m) => vec![name.clone(), format!("{m:.2}"), range(&ratios), ratios.len().to_string()],
+                None => vec![name.clone(), "n/a".into(), "".into(), "0".into()],
+            });
+        }
     }
-    format!(
+    let rounds = if plan.repeat > 1 {
+        format!(" Each device measured {} times, the devices alternating; the rows give the medians.", plan.repeat)
+    } else {
+        String::new()
+    };
+    let mut out = format!(
         "### Scenes\n\nEach scene is rendered at 1 spp and at 1 + {} spp; seconds = the second render's wall time, \
              samples/s and rays/s = the extra samples (rays) over the extra time, which leaves out fixed costs (BVH \
              build, packing, kernel creation); both devices count every closest-hit and shadow ray they trace. \
-             Peak memory = VmHWM of the process so far.\n\n{}",
+             Peak memory = VmHWM of the process so far.{rounds}\n\n{}",
         plan.spp,
         markdown_table(&headers, &rows)
-    )
+    );
+    if !ratio_rows.is_empty() {
+        out.push_str(&format!(
+            "\n### GPU over CPU\n\nEach measurement's GPU samples/s over the CPU's of the same round: the median \
+             and the range over the rounds (`--repeat`).\n\n{}",
+            markdown_table(&["scene", "GPU/CPU", "range", "rounds"], &ratio_rows)
+        ));
+    }
+    out
 }
 
 /// Two renders whose difference removes fixed costs (loading the BVH, packing, kernel
@@ -548,5 +613,17 @@ mod tests {
         assert_eq!(si(1.5e6), "1.50 M");
         assert_eq!(si(12.0), "12.0");
         assert_eq!(growth_line(Device::Cpu, &[1.0], &[1.0]), "- cpu: growth n/a (fewer than two usable points)");
+    }
+
+    #[test]
+    fn medians_and_per_round_ratios() {
+        assert_eq!(median(&[]), None);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), Some(2.5));
+        // A round where either device's rate was lost to timing noise gives no ratio; the
+        // others pair each GPU rate with the CPU rate of its own round.
+        let gpu = Rounds { rates: vec![Some(2.0), None, Some(9.0), Some(4.0)], ..Rounds::default() };
+        let cpu = Rounds { rates: vec![Some(1.0), Some(5.0), None, Some(8.0)], ..Rounds::default() };
+        assert_eq!(round_ratios(&gpu, &cpu), vec![2.0, 0.5]);
     }
 }
