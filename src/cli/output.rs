@@ -1,4 +1,4 @@
-//! Standard output for every subcommand: results go through [`print`], never `println!`,
+//! Standard output for every subcommand: results go through [`print()`], never `println!`,
 //! which panics when stdout is a closed pipe (`lumen check … | head -0`) or a full disk
 //! (`>/dev/full`). A failed write becomes a [`StdoutError`] that [`super::main`] turns into
 //! a quiet exit (broken pipe) or one error line (anything else), both non-zero.
@@ -29,7 +29,7 @@ pub fn print(text: impl fmt::Display) -> Result<(), StdoutError> {
     write!(out, "{text}").and_then(|()| out.flush()).map_err(StdoutError)
 }
 
-/// Collects lines for one [`print`]: commands build their whole result, then write it once.
+/// Collects lines for one [`print()`]: commands build their whole result, then write it once.
 #[derive(Debug, Default)]
 pub struct Lines(String);
 

@@ -17,7 +17,7 @@
 //! scene (with the fixed constants its rays jumped 15 % of its unit on the GPU).
 //!
 //! Constants (f32 originals in brackets), relative to the error scale `s`:
-//! - [`INT_SCALE`] = 2¹⁰ ulps [256]. Errors of the f64 pipeline (object-space root,
+//! - [`INT_SCALE`] = 2¹⁰ ulps \[256\]. Errors of the f64 pipeline (object-space root,
 //!   projection onto the surface, one 4×4 transform of a point) are a handful of ulps of
 //!   the largest term involved; 1024 ulps (relative 2.3·10⁻¹³) leaves a wide margin, also
 //!   for CSG leaves whose transform is a product of several, and stays far below any

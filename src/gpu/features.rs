@@ -96,7 +96,7 @@ pub struct FeatureSet {
 }
 
 impl FeatureSet {
-    /// The features `scene` uses, in its [`crate::prepare::render_form`]. Only materials
+    /// The features `scene` uses, in its [`crate::prepare::render_form()`]. Only materials
     /// actually referenced by a shape count.
     pub fn of(scene: &Scene) -> Self {
         // What the kernels will see: top-level UNITEs split into their parts.

@@ -42,7 +42,7 @@ pub struct CameraRay {
 pub const CAMERA_RAY_TMIN: f64 = 1.0;
 
 impl Camera {
-    /// The ray through screen coordinates (u, v) ∈ [0,1]²: u = 0 is the left edge (+y),
+    /// The ray through screen coordinates (u, v) ∈ \[0,1\]²: u = 0 is the left edge (+y),
     /// v = 0 the bottom (−z).
     ///
     /// ```

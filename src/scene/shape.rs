@@ -198,7 +198,7 @@ impl Shape {
     /// transformation, recursively), anything else itself. A UNITE keeps every child's
     /// surface, so its closest hit along any ray is the closest of its children's and its
     /// occlusion theirs: as separate shapes they go into the BVH one by one instead of being
-    /// evaluated as one CSG tree ([`crate::prepare::render_form`], DESIGN.md
+    /// evaluated as one CSG tree ([`crate::prepare::render_form()`], DESIGN.md
     /// "Top-level UNITEs"). A UNITE holding a mesh stays whole, so that
     /// [`crate::scene::Scene::validate`] still refuses it.
     pub fn top_level_parts(self) -> Vec<Shape> {

@@ -17,7 +17,7 @@
 //! crossings are visited in order of t (ties by leaf, then enter before exit), and each is
 //! classified by one walk of the tree that computes, at every node, whether the node's
 //! solid lies just before and just after the crossing and whether the crossing is where a
-//! piece of that solid begins or ends ([`classify`]). The first crossing the root shows is
+//! piece of that solid begins or ends (`classify`). The first crossing the root shows is
 //! the closest hit. Memory is one span per leaf, whatever the tree; an interval list can
 //! instead grow with the product of its UNITE operands' sizes, and its list operations are
 //! the slow part of CSG on SIMD software GPUs (shaders/csg.wgsl runs this same algorithm).

@@ -90,7 +90,7 @@ pub mod control {
     pub const WORDS: u32 = NAN + 1;
 }
 
-/// Fields of `paths` (vec4<f32> each).
+/// Fields of `paths` (`vec4<f32>` each).
 pub mod path_field {
     /// Ray origin, tmin.
     pub const RAY_ORIGIN: u32 = 0;
@@ -104,7 +104,7 @@ pub mod path_field {
     pub const COUNT: u32 = 4;
 }
 
-/// Fields of `words` (vec4<u32> each).
+/// Fields of `words` (`vec4<u32>` each).
 pub mod word_field {
     /// The closest hit: t (bits), shape, face | HIT_FLIP, top-level object.
     pub const HIT: u32 = 0;
