@@ -9,13 +9,12 @@
 // index of a launch, queue slots and pushes, path fields and the (pixel, sample) a path
 // slot stands for. Which of them a stage gets is decided by src/gpu/wavefront/stages.rs.
 
-// The invocation's index in a launch of WF_WORKGROUP-wide workgroups on a 2-D grid. Every
-// grid is min(groups, WF_MAX_GRID) wide (the host's, contract::launch_grid; indirect ones,
-// sized by the pushes, are one row), so a grid of more than one row is WF_MAX_GRID wide:
-// the index needs no `num_workgroups`, which D3D12 reports as 0 for indirect launches
-// without wgpu's indirect validation (src/gpu/device.rs, instance_flags).
+// The invocation's index in a launch: every launch is one row of workgroups, since a batch
+// has at most contract::MAX_SLOTS = 64 · 65,535 slots. (Not read from
+// `num_workgroups`, which D3D12 reports as 0 for indirect launches without wgpu's indirect
+// validation: src/gpu/device.rs, instance_flags.)
 fn wf_index(gid: vec3<u32>) -> u32 {
-    return gid.y * WF_MAX_GRID * WF_WORKGROUP + gid.x;
+    return gid.x;
 }
 
 // Index of field `f` of path `slot` in the structure-of-arrays `paths` and `words`.
@@ -46,7 +45,7 @@ fn deferred_record(slot: u32, r: u32) -> u32 {
 // Appends path `slot` to queue q (each path is in at most one queue of a kind per bounce,
 // so a queue never holds more than batch.capacity entries). The push that starts a
 // workgroup's worth of entries grows the queue's launch to cover it: the largest such k
-// makes it ⌈length / WF_WORKGROUP⌉ workgroups, one row (batch.capacity ≤ 64 · WF_MAX_GRID),
+// makes it ⌈length / WF_WORKGROUP⌉ workgroups, one row (batch.capacity ≤ contract::MAX_SLOTS),
 // so no control kernel has to turn lengths into launch arguments between stages.
 fn wf_push(q: u32, slot: u32) {
     let k = atomicAdd(&control[CTRL_COUNT + q], 1u);

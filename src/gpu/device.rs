@@ -154,14 +154,14 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 ///
 /// That validation runs an extra compute dispatch before every `dispatch_workgroups_indirect`
 /// to clamp its arguments; the wavefront renderer makes most of its launches indirect, so on
-/// lavapipe, where a launch costs about 0.1 ms whatever its size, it doubled their number for
-/// nothing (skybox.sl rendered 7 % faster without it, DESIGN.md "Queues and launches").
+/// lavapipe, where a launch costs about 50 µs whatever its size, it doubled their number for
+/// nothing (skybox.sl rendered 10 % faster without it, DESIGN.md "Queues and launches").
 /// lumen's indirect arguments are written only by the host and its own kernels (the pushes
-/// of `shaders/wf_path.wgsl`), within the limits by construction: x ≤ `WF_MAX_GRID` =
+/// of `shaders/wf_path.wgsl`), within the limits by construction: x ≤ `contract::MAX_GRID` =
 /// 65,535 (WebGPU's minimum `max_compute_workgroups_per_dimension`; a batch has at most
 /// 64 · 65,535 slots), y = z = 1. Without the validation D3D12 would report
-/// `num_workgroups` as 0, so no kernel reads that builtin (`wf_index` follows from the grid
-/// rule instead).
+/// `num_workgroups` as 0, so no kernel reads that builtin (every launch is one row, and
+/// `wf_index` is the invocation's x).
 fn instance_flags() -> wgpu::InstanceFlags {
     wgpu::InstanceFlags::from_build_config() - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL
 }

@@ -33,7 +33,7 @@ pub use stages::{csg_queue, has_shadow_rays, Stage};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use contract::{control, launch_grid, path_field, word_field, WORKGROUP};
+use contract::{control, launch_groups, path_field, word_field};
 pub use contract::{csg_pool_entries, CSG_POOL_ENTRY_BYTES, CSG_PRIVATE_POOL_MAX};
 use schedule::BatchRunner;
 
@@ -94,7 +94,9 @@ pub fn capacity(
 
 /// Where launch-argument buffer `b` is in `StateBuffer::ARGS` (and `Runner::args`).
 fn args_index(b: StateBuffer) -> usize {
-    StateBuffer::ARGS.iter().position(|a| *a == b).unwrap_or(0)
+    let i = StateBuffer::ARGS.iter().position(|a| *a == b);
+    debug_assert!(i.is_some(), "{b:?} holds no launch arguments");
+    i.unwrap_or(0)
 }
 
 /// Device counters read at the end of a render.
@@ -341,8 +343,7 @@ impl<'a> Runner<'a> {
     fn direct(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize, count: u32) -> Result<(), GpuError> {
         self.launch(pass, stage, |pass| {
             self.bind(pass, stage, film)?;
-            let (x, y) = launch_grid(count.div_ceil(WORKGROUP));
-            pass.dispatch_workgroups(x, y, 1);
+            pass.dispatch_workgroups(launch_groups(count), 1, 1);
             Ok(())
         })
     }
@@ -476,11 +477,11 @@ impl BatchRunner for Runner<'_> {
             let mut words = vec![0u32; (control::COUNT + queue::COUNT) as usize];
             words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
-            // Every launch empty but bounce 0's closest-hit one, one row (launch_grid).
+            // Every launch empty but bounce 0's closest-hit one.
             for (buffer, kind) in self.args.iter().zip(StateBuffer::ARGS) {
                 let mut args = [[0u32, 1, 1]; queue::COUNT as usize];
                 if kind == contract::launch_args(queue::RAY) {
-                    args[queue::RAY as usize][0] = launch_grid(batch.path_count.div_ceil(WORKGROUP)).0;
+                    args[queue::RAY as usize][0] = launch_groups(batch.path_count);
                 }
                 gpu.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&args));
             }
