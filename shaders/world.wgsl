@@ -66,6 +66,9 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     return 1.0 / m;
 }
 
+// #endif
+
+// #if BVH_WALK
 // One BVH walk's state (the scene's tree, or a mesh's bottom-level tree in the same
 // table): the current node, carried from the box test that chose it so that each step
 // loads only the two children (a node fetch is a per-lane loop or gather on llvmpipe), and
@@ -128,6 +131,26 @@ fn bvh_pop(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmi
 }
 // #endif
 
+// #if GEOMETRY
+// Object `r` along `ray` (a CSG tree is only recorded in `deferred` when deferring): true
+// when it is crossed nearer than anything so far, which then becomes `best` and shortens
+// the ray.
+fn nearer(r: u32, ray: ptr<function, Ray>, best: ptr<function, Candidate>) -> bool {
+// #if CSG
+    if (defer_csg(r)) {
+        return false;
+    }
+// #endif
+    let cand = object_first(r, *ray);
+    if (cand.c.t < (*ray).tmax) {
+        *best = cand;
+        (*ray).tmax = cand.c.t;
+        return true;
+    }
+    return false;
+}
+// #endif
+
 // The closest candidate along the ray among planes and BVH leaves (t = OPEN when nothing
 // is hit), CSG trees met being recorded in `deferred` (when CSG_DEFER); with `any_hit` it
 // returns as soon as something is found (occlusion queries).
@@ -139,22 +162,24 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
 // #endif
 // #if PLANE
     for (var i = 0u; i < settings.plane_count; i++) {
-        let r = object_ref(settings.plane_offset + i);
-// #if CSG
-        if (defer_csg(r)) {
-            continue;
+        if (nearer(object_ref(settings.plane_offset + i), &ray, &best) && any_hit) {
+            return best;
         }
+    }
 // #endif
-        let cand = object_first(r, ray);
-        if (cand.c.t < ray.tmax) {
-            best = cand;
-            ray.tmax = cand.c.t;
-            if (any_hit) {
+// #if OBJECT_LIST
+    // A handful of objects (gpu::traversal chose a list): every one in turn behind the root
+    // box, in index order. The index is the same in every lane, so an object's words are
+    // loaded once for the SIMD group and only its own shape kind's code runs, where a walk
+    // loads lane-divergent nodes and objects per lane (DESIGN.md "Object list").
+    if (box_entry(bvh_nodes[0], ray.origin, safe_inverse(ray.dir), ray.tmin, ray.tmax) < OPEN) {
+        for (var k = 0u; k < settings.plane_offset; k++) {
+            if (nearer(object_ref(k), &ray, &best) && any_hit) {
                 return best;
             }
         }
     }
-// #endif
+// #else
 // #if BVH
     let inv_dir = safe_inverse(ray.dir);
     var walk: BvhWalk;
@@ -167,24 +192,14 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     while (more) {
         if (bvh_descend(&walk, ray.origin, inv_dir, ray.tmin, ray.tmax)) {
             for (var k = 0u; k < walk.node.count; k++) {
-                let r = object_ref(walk.node.left_or_first + k);
-// #if CSG
-                if (defer_csg(r)) {
-                    continue;
-                }
-// #endif
-                let cand = object_first(r, ray);
-                if (cand.c.t < ray.tmax) {
-                    best = cand;
-                    ray.tmax = cand.c.t;
-                    if (any_hit) {
-                        return best;
-                    }
+                if (nearer(object_ref(walk.node.left_or_first + k), &ray, &best) && any_hit) {
+                    return best;
                 }
             }
         }
         more = bvh_pop(&walk, ray.origin, inv_dir, ray.tmin, ray.tmax);
     }
+// #endif
 // #endif
     return best;
 }

@@ -365,3 +365,53 @@ fn uniform_and_storage_tables_give_the_same_bits() {
         assert!(bits(&uniform.image) == bits(&storage.image), "scene {k}: the table placement changes the image");
     }
 }
+
+/// A scene of a handful of plain objects is rendered with its objects tested as a list
+/// (`gpu::traversal::prefers_list`); walking its BVH instead must give the same image, bit
+/// for bit, with every renderer: both find the same nearest hit with the same arithmetic.
+/// A scene beyond the list's size walks the tree, and forcing a list there changes nothing
+/// either.
+#[test]
+fn a_list_and_a_walk_give_the_same_image() {
+    use lumen::gpu::pack::pack;
+    use lumen::gpu::render::GpuRenderer;
+    let Some(gpu) = gpu_for_tests("a_list_and_a_walk_give_the_same_image") else { return };
+    let mut renderer = GpuRenderer::new();
+    let mut render_with = |scene: &Scene, list: bool| {
+        let opts = GpuRenderOptions::fixed_passes(Some(4), 4);
+        let mut packed = pack(scene, opts.spp).unwrap();
+        let chosen = packed.features.object_list;
+        packed.features.object_list = list;
+        let out = renderer.render_packed(&gpu, scene, &packed, &opts).unwrap();
+        assert_eq!((out.spp_done, out.non_finite_samples), (4, 0));
+        (chosen, bits(&out.image))
+    };
+    let spread = {
+        let mut b = SceneBuilder::new(12, 9);
+        let m = b.diffuse(Color::gray(0.6));
+        for i in 0..12 {
+            let at = DVec3::new(3.0 + (i / 4) as f64 * 0.7, -1.2 + (i % 4) as f64 * 0.8, 0.0);
+            b.sphere(Transform::translation(at) * Transform::scaling(DVec3::splat(0.3)), m);
+        }
+        b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() })
+            .environment(Environment::Uniform(Color::gray(0.8)))
+            .renderer(pt(2, 3, true));
+        b.build().unwrap()
+    };
+    let mut scenes: Vec<(Scene, bool)> = [
+        pt(2, 4, true),
+        Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
+        Renderer::Flat { background: Color::gray(0.2) },
+        Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) },
+    ]
+    .into_iter()
+    .map(|r| (mixed_scene(r), true))
+    .collect();
+    scenes.push((spread, false));
+    for (k, (scene, listed)) in scenes.iter().enumerate() {
+        let (chosen, list) = render_with(scene, true);
+        let (_, walk) = render_with(scene, false);
+        assert_eq!(chosen, *listed, "scene {k}: lumen's choice");
+        assert!(list == walk, "scene {k}: a list and a walk give different images");
+    }
+}

@@ -24,7 +24,7 @@ use crate::gpu::pack::pack;
 use crate::gpu::render::{assemble_stages, GpuRenderOptions};
 use crate::gpu::Gpu;
 use crate::sampling::Pcg32;
-use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Shape, ShapeKind, Transform};
+use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Transform};
 
 /// Object counts of the scaling study (cut at `--max-spheres`).
 pub const SPHERE_COUNTS: [u32; 6] = [1, 10, 100, 1_000, 10_000, 100_000];
@@ -485,21 +485,19 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
     ))
 }
 
-/// Object counts of the BVH-or-list study: "a handful of shapes" and a little beyond.
-pub const LIST_COUNTS: [u32; 6] = [2, 4, 8, 16, 32, 64];
+/// Object counts of the BVH-or-list study: either side of `traversal::MAX_LIST_OBJECTS`.
+pub const LIST_COUNTS: [u32; 8] = [2, 3, 4, 6, 8, 10, 12, 16];
 /// Most finite top-level objects an example scene may have to enter the BVH-or-list study.
-const LIST_MAX_OBJECTS: usize = 16;
+const LIST_MAX_OBJECTS: u32 = 16;
 
-/// Samples per second of `scene` on the GPU with the packed BVH, or (`flat`) with the BVH
-/// flattened to one leaf, i.e. a plain object list ([`PackedScene::flatten_bvh`]); the
+/// Samples per second of `scene` on the GPU, its finite objects walked through the BVH or
+/// (`list`) tested as a list (`FeatureSet::object_list`, whatever `pack` chose); the
 /// difference of a 1-spp and a (1 + spp)-spp render, as in the scene table. `None`: noise.
-fn packed_rate(device: &OpenDevice, scene: &Scene, spp: u32, flat: bool) -> anyhow::Result<Option<f64>> {
+fn packed_rate(device: &OpenDevice, scene: &Scene, spp: u32, list: bool) -> anyhow::Result<Option<f64>> {
     let OpenDevice::Gpu { gpu, renderer } = device else { bail!("the BVH-or-list study needs a GPU device") };
     let time = |spp: u32| -> anyhow::Result<(f64, u32)> {
         let mut packed = pack(scene, Some(spp)).map_err(|e| anyhow!("{e}"))?;
-        if flat {
-            packed.flatten_bvh();
-        }
+        packed.features.object_list = list;
         let opts = GpuRenderOptions { spp: Some(spp), ..GpuRenderOptions::default() };
         let start = Instant::now();
         let out = renderer.borrow_mut().render_packed(gpu, scene, &packed, &opts).map_err(|e| anyhow!("{e}"))?;
@@ -513,36 +511,44 @@ fn packed_rate(device: &OpenDevice, scene: &Scene, spp: u32, flat: bool) -> anyh
     Ok((t2 > t1 && samples > 0.0).then(|| samples / (t2 - t1)))
 }
 
-/// Finite (BVH) objects of a scene: top-level shapes other than planes.
-fn finite_objects(scene: &Scene) -> usize {
-    scene.shapes.iter().filter(|s| !matches!(s, Shape::Primitive(p) if p.kind == ShapeKind::Plane)).count()
-}
-
 /// Issue 6: "BVH or not (a handful of shapes may be faster without it — measure and
-/// decide)". Each scene is timed with its BVH and with the BVH flattened to one leaf, the
-/// two alternating `ROUNDS` times; the best rate of each is kept (other processes on a
-/// shared machine only ever slow a render down).
+/// decide)", and the data behind `gpu::traversal::prefers_list`. Each scene is timed with
+/// its objects walked through the BVH and tested as a list, the two alternating `ROUNDS`
+/// times; the best rate of each is kept (other processes on a shared machine only ever slow
+/// a render down).
 fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow::Result<String> {
-    const ROUNDS: usize = 2;
+    const ROUNDS: usize = 3;
     let (w, h) = (96, 72);
     let spp = 2 * plan.spp;
     let mut scenes: Vec<(String, Scene)> =
         LIST_COUNTS.iter().map(|&n| (format!("{n} spheres (generated)"), spheres_scene(n, w, h))).collect();
     for file in files {
         match plan.load_scene(file, w, None) {
-            Ok(s) if finite_objects(&s) <= LIST_MAX_OBJECTS => scenes.push((name_of(file), s)),
-            Ok(_) => {}
+            Ok(s) => scenes.push((name_of(file), s)),
             Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),
         }
     }
-    let headers = ["scene", "finite objects", "BVH nodes", "samples/s with BVH", "samples/s as a list", "list / BVH"];
+    let headers = [
+        "scene",
+        "finite objects",
+        "BVH nodes",
+        "samples/s with BVH",
+        "samples/s as a list",
+        "list / BVH",
+        "lumen's choice",
+    ];
     let mut rows = Vec::new();
     for (name, scene) in &scenes {
+        let packed = pack(scene, Some(1)).map_err(|e| anyhow!("{e}"))?;
+        let finite = packed.settings.plane_offset;
+        if finite > LIST_MAX_OBJECTS {
+            continue;
+        }
         eprintln!("{name}: BVH or list ...");
-        let nodes = pack(scene, Some(1)).map_err(|e| anyhow!("{e}"))?.bvh_nodes.len();
         let (mut bvh, mut list) = (0.0f64, 0.0f64);
-        // Compiles the kernel (the same for both: only the buffers differ) outside the timings.
+        // Compiles both kernels outside the timings.
         packed_rate(device, scene, 1, false)?;
+        packed_rate(device, scene, 1, true)?;
         for _ in 0..ROUNDS {
             bvh = bvh.max(packed_rate(device, scene, spp, false)?.unwrap_or(0.0));
             list = list.max(packed_rate(device, scene, spp, true)?.unwrap_or(0.0));
@@ -550,19 +556,21 @@ fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> any
         let ok = |r: f64| if r > 0.0 { si(r) } else { "n/a (timing noise)".into() };
         rows.push(vec![
             name.clone(),
-            finite_objects(scene).to_string(),
-            nodes.to_string(),
+            finite.to_string(),
+            packed.settings.bvh_node_count.to_string(),
             ok(bvh),
             ok(list),
             if bvh > 0.0 && list > 0.0 { format!("{:.2}", list / bvh) } else { "n/a".into() },
+            if packed.features.object_list { "list" } else { "BVH" }.into(),
         ]);
     }
     Ok(format!(
-        "### BVH or a plain object list
+        "### BVH or a list of objects
 
-{w}×{h} px (example scenes at width {w}), {} + 1 spp, the scene's own \
-         kernel; *as a list* = the BVH flattened to one leaf holding every finite object (one box test, then \
-         every object), so only the traversal differs. Kernel compiled beforehand; best of {ROUNDS} alternating runs each.\n\n{}",
+{w}×{h} px (example scenes with at most {LIST_MAX_OBJECTS} finite objects, at width {w}), {} + 1 spp, the \
+         scene's own kernel but for the traversal: *with BVH* walks the tree, *as a list* tests every finite \
+         object in turn behind the root box (`OBJECT_LIST`). Kernels compiled beforehand; best of {ROUNDS} \
+         alternating runs each. *lumen's choice* is `gpu::traversal::prefers_list`.\n\n{}",
         spp,
         markdown_table(&headers, &rows)
     ))

@@ -87,6 +87,9 @@ pub struct FeatureSet {
     pub mesh: bool,
     /// Finite objects exist, traversed through the BVH (planes are tested separately).
     pub bvh: bool,
+    /// The finite objects are tested in turn, as a list behind the root box, instead of
+    /// through a BVH walk ([`super::traversal::prefers_list`] decides).
+    pub object_list: bool,
     /// Next-event estimation with MIS (path tracer with some non-delta material only: light
     /// sampling happens at diffuse and microfacet vertices).
     pub nee: bool,
@@ -190,6 +193,9 @@ impl FeatureSet {
                 Some(Environment::Image { .. }) => EnvKind::Image,
             };
         }
+        // The top-level BVH holds every shape but the planes (`prepare::SceneBvh`).
+        let finite = scene.shapes.iter().filter(|s| !matches!(s, Shape::Primitive(p) if p.kind == ShapeKind::Plane));
+        f.object_list = super::traversal::prefers_list(&f, u32::try_from(finite.count()).unwrap_or(u32::MAX));
         f
     }
 
@@ -225,10 +231,11 @@ impl FeatureSet {
     /// at least [`FULL_CSG_MAX_LEAVES`] and [`FULL_CSG_MAX_DEPTH`]), pigment, BRDF and
     /// light kind and every environment ([`EnvKind::All`]), for this set's renderer.
     ///
-    /// Two things stay the scene's, because they select an algorithm rather than add code:
-    /// the renderer (one integrator per kernel; four full kernels in all) and whether CSG
+    /// Three things stay the scene's, because they select an algorithm rather than add code:
+    /// the renderer (one integrator per kernel), whether CSG
     /// trees are deferred past the BVH traversal (the CPU reference decides that from the
-    /// tree count, `prepare::CSG_DEFER_MAX`; a deferring full kernel gets every deferral slot).
+    /// tree count, `prepare::CSG_DEFER_MAX`; a deferring full kernel gets every deferral
+    /// slot) and whether the finite objects are walked through the BVH or tested as a list.
     /// Run-time switches (`settings.nee`, light counts, `environment.kind`, pigment and
     /// shape kinds) choose among the compiled paths, so the result is the scene's image.
     pub fn full_for(&self) -> FeatureSet {
@@ -261,6 +268,7 @@ impl FeatureSet {
             environment: if shading { EnvKind::All } else { EnvKind::Background },
             renderer: self.renderer,
             bvh: true,
+            object_list: self.object_list,
             nee: path,
             uniform_tables: self.uniform_tables,
         }
@@ -315,7 +323,7 @@ impl FeatureSet {
 
     /// Every feature name a shader may test that the scene decides (see [`Self::names`]; the
     /// table placements' names are [`super::tables::Table::feature`]).
-    pub const ALL_NAMES: [&'static str; 31] = [
+    pub const ALL_NAMES: [&'static str; 33] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -326,6 +334,8 @@ impl FeatureSet {
         "MESH",
         "CSG",
         "BVH",
+        "OBJECT_LIST",
+        "BVH_WALK",
         "SHADING",
         "PIGMENT_UNIFORM",
         "PIGMENT_CHECKERED",
@@ -362,6 +372,9 @@ impl FeatureSet {
             (self.mesh, "MESH"),
             (self.csg, "CSG"),
             (self.bvh, "BVH"),
+            (self.bvh && self.object_list, "OBJECT_LIST"),
+            // Meshes walk their bottom-level BVHs whatever the top level does.
+            ((self.bvh && !self.object_list) || self.mesh, "BVH_WALK"),
             (self.shading(), "SHADING"),
             (self.pigment_uniform, "PIGMENT_UNIFORM"),
             (self.pigment_checkered, "PIGMENT_CHECKERED"),
@@ -482,8 +495,10 @@ mod tests {
             let renderer = spec.renderer;
             let full = spec.full_for();
             assert!(full.covers(&spec) && !spec.covers(&full), "{renderer:?}");
-            // The same kernel for every scene of the renderer: it does not depend on the scene.
-            assert_eq!(full, FeatureSet { renderer, ..FeatureSet::default() }.full_for());
+            // The same kernel for every scene of the renderer and traversal: it does not
+            // depend on the scene's contents.
+            assert!(spec.object_list, "one sphere is a list");
+            assert_eq!(full, FeatureSet { renderer, object_list: true, ..FeatureSet::default() }.full_for());
             assert_eq!(full.environment == EnvKind::All, renderer != RendererKind::OnOff);
             let source: String = crate::gpu::render::assemble_stages(&full)
                 .unwrap_or_else(|e| panic!("{renderer:?}: {e}"))

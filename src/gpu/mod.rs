@@ -17,6 +17,7 @@ pub mod pipeline_cache;
 pub mod render;
 pub mod tables;
 mod test_support;
+pub mod traversal;
 pub mod wavefront;
 
 pub use accumulate::Accumulator;

@@ -55,33 +55,13 @@ pub struct PackedScene {
     pub origin: DVec3,
 }
 
-impl PackedScene {
-    /// Replaces the BVH by one leaf holding every finite object, so the kernel tests them all
-    /// in turn: a plain object list behind one box test (for `lumen bench`'s BVH-or-list
-    /// measurement; the leaf loop takes any count).
-    /// The meshes' bottom-level BVHs (after the top-level nodes) stay, moved down.
-    pub fn flatten_bvh(&mut self) {
-        if let Some(root) = self.bvh_nodes.first().copied() {
-            let top = self.settings.bvh_node_count as usize;
-            let bottom = self.bvh_nodes.split_off(top);
-            self.bvh_nodes = vec![BvhNode { left_or_first: 0, count: self.settings.plane_offset, ..root }];
-            self.bvh_nodes.extend(bottom.into_iter().map(|n| rebased(n, 1, top as u32, 0)));
-            for s in self.shapes.iter_mut().filter(|s| s.kind == layout::shape_kind::MESH) {
-                let root = (s.mesh & layout::mesh_bits::NODE_MASK) + 1 - top as u32;
-                s.mesh = (s.mesh & !layout::mesh_bits::NODE_MASK) | root;
-            }
-            self.settings.bvh_node_count = 1;
-        }
-    }
-}
-
-/// A bottom-level node moved from index base `from` to `to` (its right child moves with
-/// it), leaves' triangle ranges moved by `tri_base`.
-fn rebased(n: BvhNode, to: u32, from: u32, tri_base: u32) -> BvhNode {
+/// A bottom-level node moved to index base `to` (its right child moves with it), leaves'
+/// triangle ranges moved by `tri_base`.
+fn rebased(n: BvhNode, to: u32, tri_base: u32) -> BvhNode {
     if n.count > 0 {
         BvhNode { left_or_first: n.left_or_first + tri_base, ..n }
     } else {
-        BvhNode { left_or_first: n.left_or_first + to - from, ..n }
+        BvhNode { left_or_first: n.left_or_first + to, ..n }
     }
 }
 
@@ -320,6 +300,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         point_light_count: count_u32("point lights", scene.point_lights.len())?,
         bvh_node_count: count_u32("BVH nodes", world.bvh.nodes().len())?,
     };
+    debug_assert_eq!(p.features.object_list, super::traversal::prefers_list(&p.features, plane_offset));
     Ok(p)
 }
 
@@ -346,7 +327,7 @@ fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, P
                 limit: layout::mesh_bits::NODE_MASK as usize,
             });
         }
-        p.bvh_nodes.extend(bvh.nodes().iter().map(|&n| rebased(n, node_base, 0, tri_base)));
+        p.bvh_nodes.extend(bvh.nodes().iter().map(|&n| rebased(n, node_base, tri_base)));
         let mut leaf_of = vec![0u32; mesh.triangle_count()];
         for (k, &t) in bvh.prim_indices().iter().enumerate() {
             leaf_of[t as usize] = tri_base + k as u32;
@@ -827,19 +808,18 @@ mod tests {
     }
 
     #[test]
-    fn a_flattened_bvh_is_one_leaf_over_every_finite_object_and_padding_keeps_bindings_nonempty() {
+    fn a_handful_of_plain_objects_is_listed_and_padding_keeps_bindings_nonempty() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
-        for i in 0..9 {
+        for i in 0..8 {
             b.shape(sphere_at(f64::from(i) * 3.0, m));
         }
         b.plane(Transform::IDENTITY, m);
-        let mut p = pack(&b.build().unwrap(), None).unwrap();
-        let root = p.bvh_nodes[0];
-        assert!(p.bvh_nodes.len() > 1 && p.settings.plane_offset == 9);
-        p.flatten_bvh();
-        assert_eq!(p.bvh_nodes, vec![BvhNode { left_or_first: 0, count: 9, ..root }]);
-        assert_eq!((p.settings.bvh_node_count, p.settings.plane_count), (1, 1));
+        let eight = pack(&b.build().unwrap(), None).unwrap();
+        assert!(eight.features.object_list && eight.settings.plane_offset == 8);
+        b.shape(sphere_at(30.0, m));
+        let p = pack(&b.build().unwrap(), None).unwrap();
+        assert!(!p.features.object_list && p.settings.plane_offset == 9);
         // Padding: empty data becomes one zeroed element, other data is untouched.
         assert_eq!(at_least_one::<layout::PointLight>(&p.point_lights).len(), 1);
         assert_eq!(at_least_one(&p.indices).as_ref(), p.indices.as_slice());

@@ -546,6 +546,7 @@ mod tests {
             point_lights: b(),
             area_lights: b(),
             nee: b(),
+            object_list: b(),
             renderer,
             environment,
             ..FeatureSet::default()

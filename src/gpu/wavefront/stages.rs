@@ -168,7 +168,7 @@ impl Stage {
                 n
             }
             Stage::Intersect => {
-                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "MATERIALS"]].concat());
+                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "BVH_WALK", "MATERIALS"]].concat());
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED"]);
@@ -236,7 +236,7 @@ impl Stage {
                 n
             }
             Stage::Shadow => {
-                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH"]].concat());
+                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "BVH_WALK"]].concat());
                 n.extend(["SHADOWS", "WF_QUEUED", "WF_COUNT", "TRAVERSE", "SPANS"]);
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED", "WF_PUSH"]);
