@@ -80,7 +80,7 @@ fn light_sample_mesh(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
 const UNIFORM_SPHERE_PDF: f32 = 0.0795774715459477;
 
 // #if SHADOWS
-// warp::uniform_sphere.
+// warp::uniform_sphere (sphere lights and the uniform environment).
 fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
     let z = 1.0 - 2.0 * xi0;
     let r = sqrt(max(1.0 - z * z, 0.0));
@@ -90,6 +90,11 @@ fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
 // #endif
 
 // #if AREA_LIGHTS
+// Each kind of area light (SPHERE_LIGHTS, CUBE_LIGHTS, mesh lights with MESH) has its code
+// only where the scene has such a light: on SIMD software GPUs a branch some lane takes
+// costs every lane (DESIGN.md "Software adapters").
+
+// #if SPHERE_LIGHTS
 // warp::cone_one_minus_cos: 1 − cos θmax without cancellation.
 fn cone_one_minus_cos(r: f32, d: f32) -> f32 {
     let sin2 = min((r / d) * (r / d), 1.0);
@@ -101,11 +106,19 @@ fn uniform_cone_pdf(one_minus_cos_max: f32) -> f32 {
     return 1.0 / (TAU * one_minus_cos_max);
 }
 
+// Whether light i is sampled by its cone from x (a sphere, x outside it, not on it).
+fn light_uses_cone(light: AreaLight, x: vec3<f32>, x_object: u32) -> bool {
+    return light.sphere.w > 0.0 && x_object != light.shape && length(light.sphere.xyz - x) > light.sphere.w;
+}
+// #endif
+
 // area_light::object_normal.
 fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
+// #if SPHERE_LIGHTS
     if (kind == SHAPE_SPHERE) {
         return normalize(p);
     }
+// #endif
     let a = abs(p);
     if (a.x >= a.y && a.x >= a.z) {
         return vec3<f32>(sign(p.x), 0.0, 0.0);
@@ -114,11 +127,6 @@ fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
         return vec3<f32>(0.0, sign(p.y), 0.0);
     }
     return vec3<f32>(0.0, 0.0, sign(p.z));
-}
-
-// Whether light i is sampled by its cone from x (a sphere, x outside it, not on it).
-fn light_uses_cone(light: AreaLight, x: vec3<f32>, x_object: u32) -> bool {
-    return light.sphere.w > 0.0 && x_object != light.shape && length(light.sphere.xyz - x) > light.sphere.w;
 }
 
 // AreaLight::area_pdf_solid_angle.
@@ -137,6 +145,7 @@ fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>
 }
 
 // #if SHADOWS
+// #if CUBE_LIGHTS
 // area_light::sample_cube_surface: the face pair by its world-area share, then uniform.
 fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
     var axis = 2u;
@@ -169,8 +178,10 @@ fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2
     }
 }
 // #endif
+// #endif
 
 // #if SHADOWS
+// #if SPHERE_LIGHTS
 // area_light::sample_cone: a point on the sphere's visible cap, uniform in the cone of
 // directions it subtends from x.
 fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
@@ -205,13 +216,16 @@ fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
     return LightPoint(point, scale, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max), vec2<f32>(0.0));
 }
 // #endif
+// #endif
 
 // #if SHADOWS
 // AreaLight::sample.
 fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32) -> LightPoint {
+// #if SPHERE_LIGHTS
     if (light_uses_cone(light, x, x_object)) {
         return light_sample_cone(light, x, xi0, xi1);
     }
+// #endif
 // #if MESH
     if (light.mesh_triangles > 0u) {
         return light_sample_mesh(light, x, xi0, xi1);
@@ -220,14 +234,19 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     let s = shapes[light.shape];
     var p_obj: vec3<f32>;
     var n_obj: vec3<f32>;
+// #if SPHERE_LIGHTS
     if (s.kind == SHAPE_SPHERE) {
         p_obj = uniform_sphere(xi0, xi1);
         n_obj = p_obj;
-    } else {
+    }
+// #endif
+// #if CUBE_LIGHTS
+    if (s.kind == SHAPE_CUBE) {
         let pn = sample_cube_surface(light.face_cdf, xi0, xi1);
         p_obj = pn[0];
         n_obj = pn[1];
     }
+// #endif
     let y = affine_point(s.to_world, p_obj);
     let pdf = light_area_pdf(light, x, y, n_obj);
     let scale = affine_error_scale(s.to_world, p_obj);
@@ -238,9 +257,11 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
 
 // AreaLight::pdf: density of light_sample producing y (geometric normal n_y) from x.
 fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: vec3<f32>) -> f32 {
+// #if SPHERE_LIGHTS
     if (light_uses_cone(light, x, x_object)) {
         return uniform_cone_pdf(cone_one_minus_cos(light.sphere.w, length(light.sphere.xyz - x)));
     }
+// #endif
 // #if MESH
     if (light.mesh_triangles > 0u) {
         return mesh_light_pdf(light, x, y, n_y);
@@ -263,6 +284,7 @@ fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
 // #endif
     let n = light_object_normal(s.kind, lp.object_point);
     var face = 0u;
+// #if CUBE_LIGHTS
     if (s.kind == SHAPE_CUBE) {
         let a = abs(n);
         var axis = 0u;
@@ -273,6 +295,7 @@ fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
         }
         face = 2u * axis + select(0u, 1u, n[axis] > 0.0);
     }
+// #endif
     let uv = primitive_surface(s.kind, lp.object_point, face).uv;
     return pigment_color(m.emitted, uv);
 }

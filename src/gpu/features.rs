@@ -81,6 +81,10 @@ pub struct FeatureSet {
     pub plastic: bool,
     pub point_lights: bool,
     pub area_lights: bool,
+    /// Some area light is a sphere (sampled by its cone, or uniformly from inside).
+    pub sphere_lights: bool,
+    /// Some area light is a cube (sampled by its faces' areas).
+    pub cube_lights: bool,
     pub environment: EnvKind,
     pub renderer: RendererKind,
     /// Triangle mesh instances (bottom-level BVHs under the top-level one).
@@ -183,7 +187,13 @@ impl FeatureSet {
         if let Renderer::PathTracer(p) = &scene.renderer {
             // Light sampling happens only at non-delta vertices.
             f.nee = p.nee && f.non_delta();
-            f.area_lights = f.nee && !scene.area_lights().is_empty();
+            let lights = scene.area_lights();
+            f.area_lights = f.nee && !lights.is_empty();
+            let kind = |k: ShapeKind| {
+                lights.iter().any(|l| matches!(&scene.shapes[l.shape], Shape::Primitive(p) if p.kind == k))
+            };
+            f.sphere_lights = f.area_lights && kind(ShapeKind::Sphere);
+            f.cube_lights = f.area_lights && kind(ShapeKind::Cube);
         }
         if f.renderer != RendererKind::OnOff {
             f.environment = match &scene.environment {
@@ -265,6 +275,8 @@ impl FeatureSet {
             plastic: scatters,
             point_lights: scatters,
             area_lights: path,
+            sphere_lights: path,
+            cube_lights: path,
             environment: if shading { EnvKind::All } else { EnvKind::Background },
             renderer: self.renderer,
             bvh: true,
@@ -323,7 +335,7 @@ impl FeatureSet {
 
     /// Every feature name a shader may test that the scene decides (see [`Self::names`]; the
     /// table placements' names are [`super::tables::Table::feature`]).
-    pub const ALL_NAMES: [&'static str; 33] = [
+    pub const ALL_NAMES: [&'static str; 35] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -349,6 +361,8 @@ impl FeatureSet {
         "PLASTIC",
         "POINT_LIGHTS",
         "AREA_LIGHTS",
+        "SPHERE_LIGHTS",
+        "CUBE_LIGHTS",
         "NEE",
         "ENV_UNIFORM",
         "ENV_GRADIENT",
@@ -388,6 +402,8 @@ impl FeatureSet {
             (self.plastic, "PLASTIC"),
             (self.point_lights, "POINT_LIGHTS"),
             (self.area_lights, "AREA_LIGHTS"),
+            (self.area_lights && self.sphere_lights, "SPHERE_LIGHTS"),
+            (self.area_lights && self.cube_lights, "CUBE_LIGHTS"),
             (self.nee, "NEE"),
             (
                 matches!(self.environment, EnvKind::Uniform | EnvKind::Background | EnvKind::All) && self.shading(),
@@ -476,6 +492,24 @@ mod tests {
         b.renderer(Renderer::PathTracer(PathTracerSettings { nee: false, ..Default::default() }));
         let f = FeatureSet::of(&b.build().unwrap());
         assert!(!f.nee && f.point_lights);
+    }
+
+    #[test]
+    fn each_kind_of_area_light_is_compiled_only_where_the_scene_has_one() {
+        let mut b = SceneBuilder::new(4, 4);
+        let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::WHITE)));
+        let wall = b.diffuse(Color::gray(0.5));
+        b.sphere(Transform::IDENTITY, wall).cube(Transform::translation(DVec3::X * 3.0), lamp);
+        let f = FeatureSet::of(&b.build().unwrap());
+        assert!(f.area_lights && f.cube_lights && !f.sphere_lights);
+        assert!(f.names().contains(&"CUBE_LIGHTS") && !f.names().contains(&"SPHERE_LIGHTS"));
+        b.sphere(Transform::translation(DVec3::Y * 3.0), lamp);
+        let f = FeatureSet::of(&b.build().unwrap());
+        assert!(f.cube_lights && f.sphere_lights);
+        // Without NEE no light is sampled: neither kind's code.
+        b.renderer(Renderer::PathTracer(PathTracerSettings { nee: false, ..Default::default() }));
+        let names = FeatureSet::of(&b.build().unwrap()).names();
+        assert!(!names.contains(&"CUBE_LIGHTS") && !names.contains(&"SPHERE_LIGHTS"));
     }
 
     #[test]

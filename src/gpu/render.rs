@@ -583,6 +583,8 @@ mod tests {
         }
         f.nee = f.nee && f.non_delta() && renderer == RendererKind::PathTracer;
         f.area_lights = f.area_lights && f.nee;
+        f.sphere_lights = f.area_lights && rng.next_u32() % 2 == 0;
+        f.cube_lights = f.area_lights && rng.next_u32() % 2 == 0;
         f
     }
 

@@ -200,6 +200,8 @@ impl Stage {
                     "PIGMENT_CHECKERED",
                     "PIGMENT_IMAGE",
                     "AREA_LIGHTS",
+                    "SPHERE_LIGHTS",
+                    "CUBE_LIGHTS",
                     "NEE",
                 ];
                 allowed.extend(SHAPES);
