@@ -273,7 +273,7 @@ impl GpuRenderer {
     }
 
     /// Renders `packed`, which [`pack`] made from `scene` with `opts.spp` (and a benchmark may
-    /// have altered, e.g. [`PackedScene::flatten_bvh`]).
+    /// have altered, e.g. its traversal through [`FeatureSet::object_list`]).
     pub fn render_packed(
         &mut self,
         gpu: &Gpu,
