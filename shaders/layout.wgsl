@@ -28,10 +28,13 @@ struct Shape {
 // A CSG tree: its program (layout::csg_instr) at indices[program..], `length` instructions,
 // and its leaves, shapes first_leaf .. first_leaf + leaf_count.
 struct CsgTree {
+    min: vec3<f32>,
     program: u32,
+    max: vec3<f32>,
     length: u32,
     first_leaf: u32,
     leaf_count: u32,
+    _pad: vec2<u32>,
 }
 
 // The microfacet kinds' α, energy rows (offset in `floats`), conductor index and

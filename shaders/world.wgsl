@@ -137,6 +137,16 @@ fn bvh_pop(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmi
 // the ray.
 fn nearer(r: u32, ray: ptr<function, Ray>, best: ptr<function, Candidate>) -> bool {
 // #if CSG
+// #if OBJECT_LIST
+    // A list meets every tree: like a walk, go on only where the ray crosses its box.
+    if ((r & CSG_NODE_BIT) != 0u) {
+        let tree = csg_trees[r & ~CSG_NODE_BIT];
+        let b = BvhNode(tree.min, 0u, tree.max, 0u);
+        if (box_entry(b, (*ray).origin, safe_inverse((*ray).dir), (*ray).tmin, (*ray).tmax) >= OPEN) {
+            return false;
+        }
+    }
+// #endif
     if (defer_csg(r)) {
         return false;
     }

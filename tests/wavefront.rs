@@ -408,6 +408,23 @@ fn a_list_and_a_walk_give_the_same_image() {
     .map(|r| (mixed_scene(r), true))
     .collect();
     scenes.push((spread, false));
+    // CSG trees in a list go on to the CSG stage (path tracer) or are evaluated in place
+    // (PointLight) only where the ray crosses their boxes.
+    for renderer in [pt(2, 4, true), Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) }]
+    {
+        let mut b = SceneBuilder::new(12, 9);
+        let m = b.diffuse(Color::new(0.7, 0.5, 0.3));
+        let at = |x: f64, y: f64, r: f64| {
+            Transform::translation(DVec3::new(x, y, 0.0)) * Transform::scaling(DVec3::splat(r))
+        };
+        let ball = |x, y, r| Shape::primitive(ShapeKind::Sphere, at(x, y, r), m);
+        let carved = Shape::csg(CsgOp::Diff, vec![ball(4.0, -0.8, 1.0), ball(3.4, -0.8, 0.6)], Transform::IDENTITY);
+        b.shape(Shape::csg(CsgOp::Intersect, vec![carved, ball(4.0, -0.8, 0.95)], Transform::IDENTITY));
+        b.shape(Shape::csg(CsgOp::Unite, vec![ball(5.0, 1.2, 0.5), ball(5.3, 1.2, 0.5)], Transform::IDENTITY));
+        common::add_lit_props(&mut b);
+        b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() }).renderer(renderer);
+        scenes.push((b.build().unwrap(), true));
+    }
     for (k, (scene, listed)) in scenes.iter().enumerate() {
         let (chosen, list) = render_with(scene, true);
         let (_, walk) = render_with(scene, false);

@@ -24,6 +24,11 @@ pub struct BvhNode {
 const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);
 
 impl BvhNode {
+    /// A node of `bounds` (rounded outward to f32) and nothing else: a box for the GPU.
+    pub fn from_bounds(bounds: &Aabb) -> Self {
+        Self::new(bounds, 0, 0)
+    }
+
     pub(super) fn new(bounds: &Aabb, left_or_first: u32, count: u32) -> Self {
         let lo = bounds.min.to_array().map(round_down);
         let hi = bounds.max.to_array().map(round_up);

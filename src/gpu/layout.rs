@@ -138,15 +138,20 @@ pub struct Shape {
 }
 
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct CsgTree {
+    /// The tree's bounds (f32, rounded outward): an object list hands a tree to the CSG
+    /// stage only when the ray crosses them (`gpu::traversal`).
+    pub min: [f32; 3],
     /// Index in `indices` of the program's first word.
     pub program: u32,
+    pub max: [f32; 3],
     /// Instructions in the program.
     pub length: u32,
     /// Shape index of the first leaf.
     pub first_leaf: u32,
     pub leaf_count: u32,
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -394,7 +399,7 @@ mod tests {
         vec![
             expect!(Affine, "Affine", [r0, r1, r2]),
             expect!(Shape, "Shape", [to_object, to_world, kind, material, light, mesh]),
-            expect!(CsgTree, "CsgTree", [program, length, first_leaf, leaf_count]),
+            expect!(CsgTree, "CsgTree", [min, program, max, length, first_leaf, leaf_count, _pad]),
             expect!(
                 Material,
                 "Material",

@@ -560,11 +560,15 @@ fn pack_csg(
         .chunks(per_word)
         .map(|chunk| chunk.iter().enumerate().fold(0u32, |w, (k, &i)| w | i << (k as u32 * layout::csg_instr::BITS)))
         .collect();
+    let bounds = crate::accel::BvhNode::from_bounds(&s.bounds());
     p.csg_trees.push(layout::CsgTree {
+        min: bounds.min,
         program: 0,
+        max: bounds.max,
         length: count_u32("CSG program instructions", code.len())?,
         first_leaf,
         leaf_count: count_u32("shapes", p.shapes.len())? - first_leaf,
+        _pad: [0; 2],
     });
     let tree = count_u32("CSG trees", p.csg_trees.len())? - 1;
     programs.push((tree as usize, words));

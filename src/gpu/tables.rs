@@ -131,8 +131,8 @@ impl Table {
             Table::Shapes => &["GEOMETRY"],
             Table::Indices => &["SPANS"],
             Table::BvhNodes => &["BVH"],
-            // With the CSG queue the CSG stage reads the trees through its deferred records.
-            Table::CsgTrees => &["CSG", "!CSG_QUEUE"],
+            // Where trees are evaluated, and object lists (their bounds).
+            Table::CsgTrees => &["CSG_TREES"],
             Table::Materials => &["MATERIALS"],
             Table::Pigments => &["PIGMENTS"],
             Table::PointLights => &["POINT_LIGHTS"],

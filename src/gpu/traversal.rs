@@ -17,12 +17,12 @@ pub const MAX_LIST_OBJECTS: u32 = 8;
 
 /// True when the kernels for a scene with features `f` and `finite` finite top-level objects
 /// should test those objects as a list rather than walk the BVH: 1 to [`MAX_LIST_OBJECTS`]
-/// objects, none of them a CSG tree or a mesh.
+/// objects, none of them a mesh.
 ///
-/// A walk reaches a CSG tree only when the ray crosses the tree's box and hands only those
-/// trees to the CSG stage, where a list would hand it every tree for every ray; a mesh
-/// instance's test is a walk of its own bottom-level BVH, which the top-level walk skips
-/// whenever the ray misses the instance's box.
+/// A mesh instance's test is a walk of its own bottom-level BVH, which the top-level walk
+/// skips whenever the ray misses the instance's box (measured: a tie at best). A CSG tree in
+/// a list goes to the CSG stage only when the ray crosses the tree's own box
+/// (`layout::CsgTree::min`/`max`), as a walk hands on only the trees whose leaf it reaches.
 ///
 /// ```
 /// use lumen::gpu::features::FeatureSet;
@@ -30,10 +30,11 @@ pub const MAX_LIST_OBJECTS: u32 = 8;
 /// let spheres = FeatureSet { sphere: true, bvh: true, ..FeatureSet::default() };
 /// assert!(prefers_list(&spheres, 8));
 /// assert!(!prefers_list(&spheres, 9));
-/// assert!(!prefers_list(&FeatureSet { csg: true, ..spheres }, 2));
+/// assert!(prefers_list(&FeatureSet { csg: true, ..spheres }, 2));
+/// assert!(!prefers_list(&FeatureSet { mesh: true, ..spheres }, 2));
 /// ```
 pub fn prefers_list(f: &FeatureSet, finite: u32) -> bool {
-    (1..=MAX_LIST_OBJECTS).contains(&finite) && !f.csg && !f.mesh
+    (1..=MAX_LIST_OBJECTS).contains(&finite) && !f.mesh
 }
 
 #[cfg(test)]
@@ -48,6 +49,6 @@ mod tests {
         assert!((1..=8).all(|n| prefers_list(&plain, n)));
         assert!(!prefers_list(&plain, 9) && !prefers_list(&plain, 10_000));
         assert!(!prefers_list(&FeatureSet { mesh: true, ..plain }, 3));
-        assert!(!prefers_list(&FeatureSet { csg: true, ..plain }, 3));
+        assert!(prefers_list(&FeatureSet { csg: true, ..plain }, 3));
     }
 }

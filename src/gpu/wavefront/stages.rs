@@ -298,6 +298,11 @@ impl Stage {
         if names.contains(&"CSG") && csg_pool_private(f) {
             names.push("CSG_POOL_PRIVATE");
         }
+        // The tree records: where trees are evaluated, and where an object list reads
+        // their bounds.
+        if names.contains(&"CSG") && (!names.contains(&"CSG_QUEUE") || names.contains(&"OBJECT_LIST")) {
+            names.push("CSG_TREES");
+        }
         names.sort();
         names.dedup();
         names
@@ -318,8 +323,9 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 31] = [
+    pub const NAMES: [&'static str; 32] = [
         "CSG_POOL_PRIVATE",
+        "CSG_TREES",
         "WF_HIT_STORE",
         "WF_HIT_LOAD",
         "AFFINE",
