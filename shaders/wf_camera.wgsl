@@ -5,7 +5,7 @@
 // throughput 1 and the camera a delta "previous vertex" (load_beta); the host has cleared
 // the radiance.
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = wf_index(gid);
     if (slot >= batch.path_count) {

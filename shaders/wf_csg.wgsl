@@ -10,7 +10,7 @@
 // contributions it then adds. Only this kernel holds CSG code, and it calls csg_first from
 // one place (Mesa inlines every call site).
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let index = wf_index(gid);
     let closest_count = atomicLoad(&control[CTRL_COUNT + Q_CSG]);

@@ -2,7 +2,7 @@
 // Escape stage: rays of this bounce that hit nothing add the environment's radiance,
 // MIS-weighted against NEE (cpu::path_tracer), and their paths end.
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn escape_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = wf_slot(Q_ESCAPE, wf_index(gid));
     if (slot == WF_NONE) {

@@ -15,7 +15,7 @@ fn unfolded(x: vec3<f32>) -> vec3<f32> {
     return bitcast<vec3<f32>>(bitcast<vec3<u32>>(x) ^ vec3<u32>(batch.zero));
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = wf_index(gid);
     if (p >= batch.pixel_count) {

@@ -3,7 +3,7 @@
 // sample is one closest-hit query and a few shadow rays, too little to gain from queues.
 // One invocation per camera sample writes its estimate to the path's radiance.
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn first_hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = wf_index(gid);
     if (slot >= batch.path_count) {

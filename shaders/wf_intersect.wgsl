@@ -4,7 +4,7 @@
 // candidate so far, instead of being evaluated here (DESIGN.md "Software adapters": code
 // reachable in this kernel costs every ray on SIMD software GPUs).
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
     let index = wf_index(gid);

@@ -113,7 +113,7 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, d: vec3<f32>, xi0: f
 // #endif
 // #endif
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = wf_slot(SHADE_QUEUE, wf_index(gid));
     if (slot == WF_NONE) {

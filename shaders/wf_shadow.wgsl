@@ -6,7 +6,7 @@
 // record and the path goes to Q_SHADOW_CSG: the CSG stage evaluates them after this stage
 // and adds those rays' contributions (in ray order, after the ones added here).
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WF_WORKGROUP)
 fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = wf_slot(Q_SHADOW, wf_index(gid));
     if (slot == WF_NONE) {
