@@ -6,7 +6,9 @@
 //! whole group and only the code of the object's own shape kind runs. Measured on lavapipe
 //! (BENCHMARKS.md "Object list", `lumen bench --shaders`), the list is faster up to about
 //! eight objects whatever their layout (a room whose walls' boxes overlap and spheres
-//! spread over a floor alike) and slower from ten on. The surface-area heuristic's expected
+//! spread over a floor alike); beyond, it lost in most measurements (spheres on a floor from
+//! ten, materials.sl's fifteen, streetlamp.sl's ten) though a cloud of spheres under a sky
+//! still gained up to twelve. The surface-area heuristic's expected
 //! work did not separate the winners from the losers better than the count did, so the count
 //! decides (DESIGN.md "Object list").
 
