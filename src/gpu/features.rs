@@ -203,8 +203,12 @@ impl FeatureSet {
                 Some(Environment::Image { .. }) => EnvKind::Image,
             };
         }
-        // The top-level BVH holds every shape but the planes (`prepare::SceneBvh`).
-        let finite = scene.shapes.iter().filter(|s| !matches!(s, Shape::Primitive(p) if p.kind == ShapeKind::Plane));
+        // The objects of the top-level BVH, as `prepare::SceneBvh` places them (unbounded CSG
+        // trees join the planes' list; empty ones are nowhere).
+        let finite = scene
+            .shapes
+            .iter()
+            .filter(|s| matches!(crate::prepare::Placement::of(s), crate::prepare::Placement::Tree(_)));
         f.object_list = super::traversal::prefers_list(&f, u32::try_from(finite.count()).unwrap_or(u32::MAX));
         f
     }

@@ -14,7 +14,7 @@ use glam::{DMat3, DVec3};
 use crate::accel::{Bvh, BvhItem};
 use crate::image::HdrImage;
 use crate::sampling::Distribution2D;
-use crate::scene::{Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
+use crate::scene::{Aabb, Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
 
 pub use mesh_bvh::{mesh_bvh, MeshBvhs};
 pub use pixel_samples::PixelSamples;
@@ -40,18 +40,39 @@ pub struct SceneBvh {
     pub unbounded: Vec<u32>,
 }
 
+/// Where [`SceneBvh`] puts a top-level shape.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Placement {
+    /// In the BVH, with these (finite) bounds.
+    Tree(Aabb),
+    /// In the list every ray tests.
+    Unbounded,
+    /// Nowhere: its bounds are empty.
+    Nowhere,
+}
+
+impl Placement {
+    pub fn of(s: &Shape) -> Self {
+        let b = s.bounds();
+        if b.is_empty() {
+            Placement::Nowhere
+        } else if b.is_finite() {
+            Placement::Tree(b)
+        } else {
+            Placement::Unbounded
+        }
+    }
+}
+
 impl SceneBvh {
     pub fn from_shapes(shapes: &[Shape]) -> Self {
         let mut items = Vec::new();
         let mut unbounded = Vec::new();
         for (i, s) in shapes.iter().enumerate() {
-            let b = s.bounds();
-            if b.is_empty() {
-                // Nothing to hit.
-            } else if b.is_finite() {
-                items.push(BvhItem { id: i as u32, bounds: b });
-            } else {
-                unbounded.push(i as u32);
+            match Placement::of(s) {
+                Placement::Tree(bounds) => items.push(BvhItem { id: i as u32, bounds }),
+                Placement::Unbounded => unbounded.push(i as u32),
+                Placement::Nowhere => {}
             }
         }
         Self { bvh: Bvh::build(&items), unbounded }
