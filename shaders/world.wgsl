@@ -59,13 +59,14 @@ fn box_entry(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tm
     let exit = min(min(hi.x, hi.y), min(hi.z, tmax)) * 1.0000004;
     return select(OPEN, enter, enter <= exit);
 }
+// #endif
 
+// #if GEOMETRY
 fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     let tiny = vec3<f32>(1e-30);
     let m = select(d, select(-tiny, tiny, d >= vec3<f32>(0.0)), abs(d) < tiny);
     return 1.0 / m;
 }
-
 // #endif
 
 // #if BVH_WALK
@@ -134,15 +135,15 @@ fn bvh_pop(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmi
 // #if GEOMETRY
 // Object `r` along `ray` (a CSG tree is only recorded in `deferred` when deferring): true
 // when it is crossed nearer than anything so far, which then becomes `best` and shortens
-// the ray.
-fn nearer(r: u32, ray: ptr<function, Ray>, best: ptr<function, Candidate>) -> bool {
+// the ray. `inv_dir` = safe_inverse(ray.dir), for the box tests of listed CSG trees.
+fn nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<function, Candidate>) -> bool {
 // #if CSG
 // #if OBJECT_LIST
     // A list meets every tree: like a walk, go on only where the ray crosses its box.
     if ((r & CSG_NODE_BIT) != 0u) {
         let tree = csg_trees[r & ~CSG_NODE_BIT];
         let b = BvhNode(tree.min, 0u, tree.max, 0u);
-        if (box_entry(b, (*ray).origin, safe_inverse((*ray).dir), (*ray).tmin, (*ray).tmax) >= OPEN) {
+        if (box_entry(b, (*ray).origin, inv_dir, (*ray).tmin, (*ray).tmax) >= OPEN) {
             return false;
         }
     }
@@ -167,12 +168,15 @@ fn nearer(r: u32, ray: ptr<function, Ray>, best: ptr<function, Candidate>) -> bo
 fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     var ray = ray_in;
     var best = no_candidate();
+// #if GEOMETRY
+    let inv_dir = safe_inverse(ray.dir);
+// #endif
 // #if CSG
     deferred.count = 0u;
 // #endif
 // #if PLANE
     for (var i = 0u; i < settings.plane_count; i++) {
-        if (nearer(object_ref(settings.plane_offset + i), &ray, &best) && any_hit) {
+        if (nearer(object_ref(settings.plane_offset + i), &ray, inv_dir, &best) && any_hit) {
             return best;
         }
     }
@@ -182,16 +186,15 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     // box, in index order. The index is the same in every lane, so an object's words are
     // loaded once for the SIMD group and only its own shape kind's code runs, where a walk
     // loads lane-divergent nodes and objects per lane (DESIGN.md "Object list").
-    if (box_entry(bvh_nodes[0], ray.origin, safe_inverse(ray.dir), ray.tmin, ray.tmax) < OPEN) {
+    if (box_entry(bvh_nodes[0], ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
         for (var k = 0u; k < settings.plane_offset; k++) {
-            if (nearer(object_ref(k), &ray, &best) && any_hit) {
+            if (nearer(object_ref(k), &ray, inv_dir, &best) && any_hit) {
                 return best;
             }
         }
     }
 // #else
 // #if BVH
-    let inv_dir = safe_inverse(ray.dir);
     var walk: BvhWalk;
     walk.index = 0u;
     walk.node = bvh_nodes[0];
@@ -202,7 +205,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     while (more) {
         if (bvh_descend(&walk, ray.origin, inv_dir, ray.tmin, ray.tmax)) {
             for (var k = 0u; k < walk.node.count; k++) {
-                if (nearer(object_ref(walk.node.left_or_first + k), &ray, &best) && any_hit) {
+                if (nearer(object_ref(walk.node.left_or_first + k), &ray, inv_dir, &best) && any_hit) {
                     return best;
                 }
             }
