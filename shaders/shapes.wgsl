@@ -56,15 +56,9 @@ fn shape_span(i: u32, ray: Ray) -> Span {
 // #endif
 
 // #if TRAVERSE
-// The first finite crossing of shape `i` with t in the open range (tmin, tmax); t = OPEN
-// when there is none.
-fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
-// #if MESH
-    if (shapes[i].kind == SHAPE_MESH) {
-        return mesh_first_crossing(i, ray);
-    }
-// #endif
-    let sp = shape_span(i, ray);
+// The first finite crossing in `sp` with t in the open range (tmin, tmax); t = OPEN when
+// there is none.
+fn span_first_crossing(sp: Span, ray: Ray) -> Crossing {
     if (sp.valid) {
         if (sp.enter.t > ray.tmin && sp.enter.t < ray.tmax && abs(sp.enter.t) < OPEN) {
             return sp.enter;
@@ -75,6 +69,27 @@ fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
     }
     return Crossing(OPEN, 0u);
 }
+
+// #if BVH
+// The first finite crossing of bounded shape `i` with t in the open range (tmin, tmax);
+// t = OPEN when there is none.
+fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
+// #if MESH
+    if (shapes[i].kind == SHAPE_MESH) {
+        return mesh_first_crossing(i, ray);
+    }
+// #endif
+    return span_first_crossing(shape_span(i, ray), ray);
+}
+// #endif
+
+// #if PLANE
+// The first finite crossing of plane `i` with t in (tmin, tmax), as shape_first_crossing.
+fn plane_first_crossing(i: u32, ray: Ray) -> Crossing {
+    let s = shapes[i];
+    return span_first_crossing(plane_span(affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir)), ray);
+}
+// #endif
 // #endif
 
 // #if SHADING

@@ -9,23 +9,6 @@
 // ray. Mirrors cpu::World. With CSG_QUEUE (the wavefront's closest-hit stage) the CSG trees
 // a traversal meets are only recorded in `deferred`; the CSG stage evaluates them.
 
-// #if GEOMETRY
-// The first crossing of object reference `r` inside (tmin, tmax). With CSG_DEFER the
-// traversal never passes a CSG reference here (it defers them), and the CSG branch is
-// compiled out: reachable CSG code in the traversal loop would cost every iteration on
-// SIMD software GPUs (DESIGN.md, "Software adapters").
-fn object_first(r: u32, ray: Ray) -> Candidate {
-// #if CSG
-// #if !CSG_QUEUE
-    if (!CSG_DEFER && (r & CSG_NODE_BIT) != 0u) {
-        return csg_first(r & ~CSG_NODE_BIT, ray, r);
-    }
-// #endif
-// #endif
-    return Candidate(shape_first_crossing(r, ray), r, false, r);
-}
-// #endif
-
 // #if CSG
 // CSG references met by one traversal, evaluated after it (as cpu::World does).
 struct Deferred {
@@ -133,32 +116,70 @@ fn bvh_pop(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmi
 // #endif
 
 // #if GEOMETRY
-// Object `r` along `ray` (a CSG tree is only recorded in `deferred` when deferring): true
-// when it is crossed nearer than anything so far, which then becomes `best` and shortens
-// the ray. `inv_dir` = safe_inverse(ray.dir), for the box tests of listed CSG trees.
-fn nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<function, Candidate>) -> bool {
-// #if CSG
-// #if OBJECT_LIST
-    // A list meets every tree: like a walk, go on only where the ray crosses its box.
-    if ((r & CSG_NODE_BIT) != 0u) {
-        let tree = csg_trees[r & ~CSG_NODE_BIT];
-        let b = BvhNode(tree.min, 0u, tree.max, 0u);
-        if (box_entry(b, (*ray).origin, inv_dir, (*ray).tmin, (*ray).tmax) >= OPEN) {
-            return false;
-        }
-    }
-// #endif
-    if (defer_csg(r)) {
-        return false;
-    }
-// #endif
-    let cand = object_first(r, *ray);
+// Keeps `cand` when it is crossed nearer than anything so far: it becomes `best` and
+// shortens the ray.
+fn keep_nearer(cand: Candidate, ray: ptr<function, Ray>, best: ptr<function, Candidate>) -> bool {
     if (cand.c.t < (*ray).tmax) {
         *best = cand;
         (*ray).tmax = cand.c.t;
         return true;
     }
     return false;
+}
+// #endif
+
+// #if CSG
+// CSG tree reference `r` along `ray`, as `keep_nearer`: recorded in `deferred` when
+// deferring (CSG_DEFER), else evaluated here (without CSG_DEFER the CSG code is compiled
+// into the traversal loop, which costs every iteration on SIMD software GPUs: DESIGN.md,
+// "Software adapters"). `inv_dir` = safe_inverse(ray.dir), for the box test of a listed tree.
+fn csg_nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<function, Candidate>) -> bool {
+// #if OBJECT_LIST
+    // A list meets every tree: like a walk, go on only where the ray crosses its box.
+    let tree = csg_trees[r & ~CSG_NODE_BIT];
+    let b = BvhNode(tree.min, 0u, tree.max, 0u);
+    if (box_entry(b, (*ray).origin, inv_dir, (*ray).tmin, (*ray).tmax) >= OPEN) {
+        return false;
+    }
+// #endif
+    if (defer_csg(r)) {
+        return false;
+    }
+// #if !CSG_QUEUE
+    if (!CSG_DEFER) {
+        return keep_nearer(csg_first(r & ~CSG_NODE_BIT, *ray, r), ray, best);
+    }
+// #endif
+    return false;
+}
+// #endif
+
+// #if BVH
+// Object `r` of the BVH or the list (a bounded shape or CSG tree) along `ray`, as
+// `keep_nearer`.
+fn nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<function, Candidate>) -> bool {
+// #if CSG
+    if ((r & CSG_NODE_BIT) != 0u) {
+        return csg_nearer(r, ray, inv_dir, best);
+    }
+// #endif
+    return keep_nearer(Candidate(shape_first_crossing(r, *ray), r, false, r), ray, best);
+}
+// #endif
+
+// #if PLANE
+// Object `r` of the unbounded list along `ray`, as `keep_nearer`. The list holds planes
+// and CSG trees only (prepare::SceneBvh lists what has infinite bounds, and any other
+// shape would need a transform beyond f32's range, which pack refuses), so only the
+// plane's test is compiled here: the general test would inline every shape kind's code,
+// meshes' bottom-level walks included, a second time into each traversing kernel.
+fn nearer_unbounded(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<function, Candidate>) -> bool {
+// #if CSG
+    if ((r & CSG_NODE_BIT) != 0u) {
+        return csg_nearer(r, ray, inv_dir, best);
+    }
+// #endif
+    return keep_nearer(Candidate(plane_first_crossing(r, *ray), r, false, r), ray, best);
 }
 // #endif
 
@@ -176,7 +197,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
 // #endif
 // #if PLANE
     for (var i = 0u; i < settings.plane_count; i++) {
-        if (nearer(object_ref(settings.plane_offset + i), &ray, inv_dir, &best) && any_hit) {
+        if (nearer_unbounded(object_ref(settings.plane_offset + i), &ray, inv_dir, &best) && any_hit) {
             return best;
         }
     }

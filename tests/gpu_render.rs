@@ -452,6 +452,65 @@ fn csg_matches_the_cpu() {
     }
 }
 
+/// CSG trees with infinite bounds (a floor with a spherical pit, a slab cut out of a
+/// half-space) sit in the list every ray tests, beside a plain plane; the kernels test that
+/// list's trees apart from its planes (shaders/world.wgsl `nearer_unbounded`), so a tree
+/// tested as a plane, or skipped, shows as a floor without its pit or a missing slab.
+#[test]
+fn unbounded_csg_trees_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("unbounded_csg_trees_match_the_cpu") else { return };
+    for renderer in [
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.02) },
+        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
+    ] {
+        println!("{}", renderer.name());
+        let mut b = SceneBuilder::new(24, 18);
+        let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
+        let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
+        let green = b.diffuse(Color::new(0.2, 0.7, 0.2));
+        let p = |k: ShapeKind, t: Transform, m: MaterialId| Shape::primitive(k, t, m);
+        let pit = Shape::csg(
+            CsgOp::Diff,
+            vec![
+                p(ShapeKind::Plane, Transform::translation(DVec3::new(0.0, 0.0, -1.0)), green),
+                p(ShapeKind::Sphere, Transform::translation(DVec3::new(4.0, 0.0, -1.3)), red),
+            ],
+            Transform::IDENTITY,
+        );
+        // z ≤ 0.8 minus z ≤ 0.5, tilted: a slab 0.3 thick seen edge-on across the view.
+        let slab = Shape::csg(
+            CsgOp::Diff,
+            vec![
+                p(ShapeKind::Plane, Transform::translation(DVec3::new(0.0, 0.0, 0.8)), blue),
+                p(ShapeKind::Plane, Transform::translation(DVec3::new(0.0, 0.0, 0.5)), red),
+            ],
+            Transform::translation(DVec3::new(6.0, 0.0, 0.0)) * Transform::rotation_y(-60.0),
+        );
+        b.shape(pit)
+            .shape(slab)
+            .shape(p(
+                ShapeKind::Sphere,
+                Transform::translation(DVec3::new(3.0, 1.2, 0.2)) * Transform::scaling(DVec3::splat(0.4)),
+                blue,
+            ))
+            .plane(Transform::translation(DVec3::new(0.0, 0.0, 3.0)) * Transform::rotation_x(180.0), red)
+            .point_light(PointLight {
+                position: DVec3::new(0.0, 1.0, 2.0),
+                color: Color::gray(1.0),
+                linear_radius: 0.0,
+            })
+            .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
+            .renderer(renderer)
+            .environment(Environment::Uniform(Color::gray(0.5)))
+            .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
+        let scene = b.build().unwrap();
+        let world = lumen::prepare::SceneBvh::from_shapes(&scene.shapes);
+        assert_eq!(world.unbounded.len(), 3, "both trees and the ceiling in the unbounded list");
+        assert_matches_cpu(&gpu, &scene, None, 0.99);
+    }
+}
+
 /// Two CSG trees above a floor plane at height z, in a grey sky, 24×18 pixels at 4 spp.
 fn csg_pair_scene(mut b: SceneBuilder, trees: [Shape; 2], floor: (f64, MaterialId), renderer: Renderer) -> Scene {
     let [first, second] = trees;

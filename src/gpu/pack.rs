@@ -220,6 +220,19 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     }
     p.indices.extend(world.bvh.prim_indices().iter().map(|&i| object_ref[i as usize]));
     let plane_offset = count_u32("indices", p.indices.len())?;
+    // The kernels test an unbounded-list entry that is not a CSG tree as a plane (shaders/
+    // world.wgsl, nearer_unbounded). Nothing else has infinite bounds unless its transform
+    // overflows f32 (refused by check_range above); refuse it here too rather than render
+    // it wrongly.
+    for &i in &world.unbounded {
+        let what = match &shifted[i as usize] {
+            Shape::Csg(_) => continue,
+            Shape::Primitive(p) if p.kind == ShapeKind::Plane => continue,
+            Shape::Primitive(p) => p.kind.name(),
+            Shape::Mesh(_) => "mesh instance",
+        };
+        return Err(PackError::OutOfRange { shape: i as usize, what, magnitude: f64::INFINITY });
+    }
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
     for (tree, words) in csg_programs {
