@@ -20,7 +20,7 @@ struct LightPoint {
 }
 
 // #if AREA_LIGHTS
-// #if MESH
+// #if MESH_LIGHTS
 // 1 / (world area) as a solid-angle density at x, for a light point y of normal n.
 fn mesh_light_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n: vec3<f32>) -> f32 {
     let to_light = y - x;
@@ -90,9 +90,11 @@ fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
 // #endif
 
 // #if AREA_LIGHTS
-// Each kind of area light (SPHERE_LIGHTS, CUBE_LIGHTS, mesh lights with MESH) has its code
-// only where the scene has such a light: on SIMD software GPUs a branch some lane takes
-// costs every lane (DESIGN.md "Software adapters").
+// Each kind of area light (SPHERE_LIGHTS, CUBE_LIGHTS, MESH_LIGHTS) has its code only where
+// the scene has such a light: on SIMD software GPUs a branch some lane takes costs every
+// lane (DESIGN.md "Software adapters"), and on llvmpipe every table load compiled in costs
+// compile time whether it runs or not. PRIMITIVE_LIGHTS (sphere or cube lights, or lights
+// not known to be meshes) holds what spheres and cubes share.
 
 // #if SPHERE_LIGHTS
 // warp::cone_one_minus_cos: 1 − cos θmax without cancellation.
@@ -112,6 +114,7 @@ fn light_uses_cone(light: AreaLight, x: vec3<f32>, x_object: u32) -> bool {
 }
 // #endif
 
+// #if PRIMITIVE_LIGHTS
 // area_light::object_normal.
 fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
 // #if SPHERE_LIGHTS
@@ -143,6 +146,8 @@ fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>
     }
     return dist2 / (cos_light * area);
 }
+
+// #endif
 
 // #if SHADOWS
 // #if CUBE_LIGHTS
@@ -226,11 +231,16 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
         return light_sample_cone(light, x, xi0, xi1);
     }
 // #endif
-// #if MESH
+// #if MESH_LIGHTS
+// #if PRIMITIVE_LIGHTS
     if (light.mesh_triangles > 0u) {
+// #endif
         return light_sample_mesh(light, x, xi0, xi1);
+// #if PRIMITIVE_LIGHTS
     }
 // #endif
+// #endif
+// #if PRIMITIVE_LIGHTS
     let s = shapes[light.shape];
     var p_obj: vec3<f32>;
     var n_obj: vec3<f32>;
@@ -252,6 +262,7 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     let scale = affine_error_scale(s.to_world, p_obj);
     let n_world = normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0));
     return LightPoint(y, scale, n_world, p_obj, pdf, vec2<f32>(0.0));
+// #endif
 }
 // #endif
 
@@ -262,14 +273,20 @@ fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: v
         return uniform_cone_pdf(cone_one_minus_cos(light.sphere.w, length(light.sphere.xyz - x)));
     }
 // #endif
-// #if MESH
+// #if MESH_LIGHTS
+// #if PRIMITIVE_LIGHTS
     if (light.mesh_triangles > 0u) {
+// #endif
         return mesh_light_pdf(light, x, y, n_y);
+// #if PRIMITIVE_LIGHTS
     }
 // #endif
+// #endif
+// #if PRIMITIVE_LIGHTS
     let s = shapes[light.shape];
     let p_obj = affine_point(s.to_object, y);
     return light_area_pdf(light, x, y, light_object_normal(s.kind, p_obj));
+// #endif
 }
 
 // #if SHADOWS
@@ -277,11 +294,16 @@ fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: v
 fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
     let s = shapes[light.shape];
     let m = materials[s.material];
-// #if MESH
+// #if MESH_LIGHTS
+// #if PRIMITIVE_LIGHTS
     if (light.mesh_triangles > 0u) {
+// #endif
         return pigment_color(m.emitted, lp.uv);
+// #if PRIMITIVE_LIGHTS
     }
 // #endif
+// #endif
+// #if PRIMITIVE_LIGHTS
     let n = light_object_normal(s.kind, lp.object_point);
     var face = 0u;
 // #if CUBE_LIGHTS
@@ -298,6 +320,7 @@ fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
 // #endif
     let uv = primitive_surface(s.kind, lp.object_point, face).uv;
     return pigment_color(m.emitted, uv);
+// #endif
 }
 // #endif
 // #endif

@@ -307,7 +307,8 @@ fn gpu_matches_cpu(gpu: &lumen::gpu::Gpu, scene: &Scene, min_share: f64) -> lume
 /// A mesh scene on both devices: a smooth icosphere with uvs (a checkered pigment reads
 /// them), a flat one, a rough conductor mesh, on a plane, under a point light, a sky and an
 /// emissive mesh (an area light with a checkered emission, sampled by NEE); path traced with
-/// NEE and without, and by the three simple renderers.
+/// NEE and without, and by the three simple renderers; with NEE also beside an emissive
+/// cube (kernels then hold both kinds of light, else only the mesh lights' code).
 #[test]
 fn mesh_scenes_render_on_the_gpu_as_on_the_cpu() {
     let Some(gpu) = gpu_for_tests("mesh_scenes_render_on_the_gpu_as_on_the_cpu") else { return };
@@ -327,14 +328,18 @@ fn mesh_scenes_render_on_the_gpu_as_on_the_cpu() {
         text += &format!("f {0}/{0}/{0} {1}/{1}/{1} {2}/{2}/{2}\n", a + 1, b + 1, c + 1);
     }
     std::fs::write(dir.path().join("ball.obj"), text).unwrap();
-    let renderers = [
-        "Renderer.PathTracer(.n 4, .max_depth 4, .roulette_depth 2, .nee 1)",
-        "Renderer.PathTracer(.n 4, .max_depth 4, .roulette_depth 2, .nee 0)",
-        "Renderer.OnOff()",
-        "Renderer.Flat()",
-        "Renderer.PointLight(.ambient_color <0.02, 0.02, 0.02>)",
+    let nee = "Renderer.PathTracer(.n 4, .max_depth 4, .roulette_depth 2, .nee 1)";
+    let cube_lamp = "Shape.Cube(.material Material(Brdf.Diffuse(<0, 0, 0>), <4, 4, 3>),
+                                .transformation TRANSLATE(3, -2, 2.5) * SCALE 0.4)";
+    let cases = [
+        (nee, ""),
+        (nee, cube_lamp),
+        ("Renderer.PathTracer(.n 4, .max_depth 4, .roulette_depth 2, .nee 0)", ""),
+        ("Renderer.OnOff()", ""),
+        ("Renderer.Flat()", ""),
+        ("Renderer.PointLight(.ambient_color <0.02, 0.02, 0.02>)", ""),
     ];
-    for renderer in renderers {
+    for (renderer, extra) in cases {
         let scene = load(
             dir.path(),
             &format!(
@@ -347,12 +352,18 @@ fn mesh_scenes_render_on_the_gpu_as_on_the_cpu() {
                        Shape.Plane(.material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>)), .transformation TRANSLATE(.Z -1))
                        Shape.Mesh(.file \"ball.obj\", .transformation TRANSLATE(4, 0, 2.6) * SCALE(0.6, 0.8, 0.05),
                                   .material Material(Brdf.Diffuse(<0, 0, 0>), Pigment.Checkered(4, <6, 5, 4>, <1, 1, 2>)))
+                       {extra}
                        Light(.position {{1, 2, 4}}, .color <3, 3, 3>)
                  USING Camera.Perspective(.aspect_ratio 1.5) Image(30, 20) Tracer(.samples_per_side 2) {renderer}
                        Environment.Gradient(<0.3, 0.4, 0.8>, <0.6, 0.6, 0.6>, <0.1, 0.1, 0.1>)"
             ),
         );
-        println!("{renderer}");
+        println!("{renderer} {extra}");
+        let names = lumen::gpu::features::FeatureSet::of(&scene).names();
+        if renderer == nee {
+            assert!(names.contains(&"MESH_LIGHTS"));
+            assert_eq!(names.contains(&"PRIMITIVE_LIGHTS"), !extra.is_empty(), "{names:?}");
+        }
         gpu_matches_cpu(&gpu, &scene, 0.99);
     }
 }

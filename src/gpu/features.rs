@@ -85,6 +85,9 @@ pub struct FeatureSet {
     pub sphere_lights: bool,
     /// Some area light is a cube (sampled by its faces' areas).
     pub cube_lights: bool,
+    /// Some area light is a triangle mesh (sampled by its triangles' areas). Without
+    /// sphere or cube lights, the primitive lights' code is left out (PRIMITIVE_LIGHTS).
+    pub mesh_lights: bool,
     pub environment: EnvKind,
     pub renderer: RendererKind,
     /// Triangle mesh instances (bottom-level BVHs under the top-level one).
@@ -194,6 +197,7 @@ impl FeatureSet {
             };
             f.sphere_lights = f.area_lights && kind(ShapeKind::Sphere);
             f.cube_lights = f.area_lights && kind(ShapeKind::Cube);
+            f.mesh_lights = f.area_lights && lights.iter().any(|l| matches!(&scene.shapes[l.shape], Shape::Mesh(_)));
         }
         if f.renderer != RendererKind::OnOff {
             f.environment = match &scene.environment {
@@ -281,6 +285,7 @@ impl FeatureSet {
             area_lights: path,
             sphere_lights: path,
             cube_lights: path,
+            mesh_lights: path,
             environment: if shading { EnvKind::All } else { EnvKind::Background },
             renderer: self.renderer,
             bvh: true,
@@ -339,7 +344,7 @@ impl FeatureSet {
 
     /// Every feature name a shader may test that the scene decides (see [`Self::names`]; the
     /// table placements' names are [`super::tables::Table::feature`]).
-    pub const ALL_NAMES: [&'static str; 35] = [
+    pub const ALL_NAMES: [&'static str; 37] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -367,6 +372,8 @@ impl FeatureSet {
         "AREA_LIGHTS",
         "SPHERE_LIGHTS",
         "CUBE_LIGHTS",
+        "MESH_LIGHTS",
+        "PRIMITIVE_LIGHTS",
         "NEE",
         "ENV_UNIFORM",
         "ENV_GRADIENT",
@@ -408,6 +415,13 @@ impl FeatureSet {
             (self.area_lights, "AREA_LIGHTS"),
             (self.area_lights && self.sphere_lights, "SPHERE_LIGHTS"),
             (self.area_lights && self.cube_lights, "CUBE_LIGHTS"),
+            (self.area_lights && self.mesh && self.mesh_lights, "MESH_LIGHTS"),
+            // The sphere and cube lights' shared code, left out only when every area light
+            // is known to be a mesh.
+            (
+                self.area_lights && (self.sphere_lights || self.cube_lights || !(self.mesh && self.mesh_lights)),
+                "PRIMITIVE_LIGHTS",
+            ),
             (self.nee, "NEE"),
             (
                 matches!(self.environment, EnvKind::Uniform | EnvKind::Background | EnvKind::All) && self.shading(),
@@ -510,10 +524,25 @@ mod tests {
         b.sphere(Transform::translation(DVec3::Y * 3.0), lamp);
         let f = FeatureSet::of(&b.build().unwrap());
         assert!(f.cube_lights && f.sphere_lights);
+        assert!(f.names().contains(&"PRIMITIVE_LIGHTS") && !f.names().contains(&"MESH_LIGHTS"));
         // Without NEE no light is sampled: neither kind's code.
         b.renderer(Renderer::PathTracer(PathTracerSettings { nee: false, ..Default::default() }));
         let names = FeatureSet::of(&b.build().unwrap()).names();
         assert!(!names.contains(&"CUBE_LIGHTS") && !names.contains(&"SPHERE_LIGHTS"));
+        assert!(!names.contains(&"PRIMITIVE_LIGHTS"));
+
+        // A mesh light alone: only the mesh lights' code; beside a sphere light, both.
+        let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let mesh = std::sync::Arc::new(crate::scene::TriangleMesh::from_obj_bytes("t", triangle.as_bytes()).unwrap());
+        let mut b = SceneBuilder::new(4, 4);
+        let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(Color::WHITE)));
+        let wall = b.diffuse(Color::gray(0.5));
+        b.sphere(Transform::IDENTITY, wall).shape(Shape::mesh(mesh, "t", Transform::IDENTITY, lamp, false));
+        let names = FeatureSet::of(&b.build().unwrap()).names();
+        assert!(names.contains(&"MESH_LIGHTS") && !names.contains(&"PRIMITIVE_LIGHTS"), "{names:?}");
+        b.sphere(Transform::translation(DVec3::Y * 3.0), lamp);
+        let names = FeatureSet::of(&b.build().unwrap()).names();
+        assert!(names.contains(&"MESH_LIGHTS") && names.contains(&"PRIMITIVE_LIGHTS"), "{names:?}");
     }
 
     #[test]

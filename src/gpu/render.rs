@@ -585,6 +585,7 @@ mod tests {
         f.area_lights = f.area_lights && f.nee;
         f.sphere_lights = f.area_lights && rng.next_u32() % 2 == 0;
         f.cube_lights = f.area_lights && rng.next_u32() % 2 == 0;
+        f.mesh_lights = f.area_lights && f.mesh && rng.next_u32() % 2 == 0;
         f
     }
 

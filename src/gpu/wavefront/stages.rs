@@ -202,6 +202,8 @@ impl Stage {
                     "AREA_LIGHTS",
                     "SPHERE_LIGHTS",
                     "CUBE_LIGHTS",
+                    "MESH_LIGHTS",
+                    "PRIMITIVE_LIGHTS",
                     "NEE",
                 ];
                 allowed.extend(SHAPES);
@@ -221,7 +223,7 @@ impl Stage {
                     n.retain(|x| *x != "NEE");
                 }
                 // Sampling mesh lights reads their triangle tables in `floats`.
-                let mesh_lights = ["AREA_LIGHTS", "MESH", "SHADOWS"].iter().all(|x| n.contains(x));
+                let mesh_lights = ["MESH_LIGHTS", "SHADOWS"].iter().all(|x| n.contains(x));
                 if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") || microfacet_kind(kind) || mesh_lights {
                     n.push("TEXTURES");
                 }
