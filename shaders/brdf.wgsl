@@ -31,7 +31,23 @@ struct BsdfSample {
     delta: bool,
     // False when nothing is scattered.
     valid: bool,
+    // A microfacet lobe's direction, whose f and pdf (hence weight) the shading stage still
+    // evaluates (bsdf_finish), at the one call site of eval_bsdf and pdf_bsdf it also
+    // evaluates light directions at: llvmpipe inlines every call, so a second call site
+    // compiles the whole BSDF again. The CPU evaluates the same quantities in the local
+    // frame (cpu::microfacet::finish); here the world-frame direction is taken back to it.
+    pending: bool,
 }
+
+// #if MICROFACET
+// microfacet::finish: the sample in direction `dir` (unit) whose BSDF value is f and
+// density pdf, invalid when nothing scatters; `n` is the shading normal.
+fn bsdf_finish(dir: vec3<f32>, f: vec3<f32>, pdf: f32, n: vec3<f32>) -> BsdfSample {
+    let weight = f * (abs(dot(n, dir)) / pdf);
+    let valid = pdf > 0.0 && !non_finite(dir) && any(f != vec3<f32>(0.0)) && !non_finite(weight);
+    return BsdfSample(dir, weight, pdf, false, valid, false);
+}
+// #endif
 
 // #if DIELECTRIC
 // Refraction, or a zero vector on total internal reflection: fresnel::refract.
@@ -47,7 +63,7 @@ fn refract_dir(d: vec3<f32>, n: vec3<f32>, eta: f32) -> vec3<f32> {
 
 fn sample_dielectric(color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, eta: f32, xi_lobe: f32) -> BsdfSample {
     let f = fresnel_dielectric(-dot(d, n), eta);
-    let reflected = BsdfSample(reflect(d, n), color, 0.0, true, true);
+    let reflected = BsdfSample(reflect(d, n), color, 0.0, true, true, false);
     if (xi_lobe < f) {
         return reflected;
     }
@@ -55,7 +71,7 @@ fn sample_dielectric(color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, eta: f32, xi_
     if (all(t == vec3<f32>(0.0))) {
         return reflected;
     }
-    return BsdfSample(normalize(t), color / (eta * eta), 0.0, true, true);
+    return BsdfSample(normalize(t), color / (eta * eta), 0.0, true, true, false);
 }
 // #endif
 
@@ -65,7 +81,7 @@ fn sample_diffuse(color: vec3<f32>, n: vec3<f32>, xi0: f32, xi1: f32) -> BsdfSam
     let frame = onb(n);
     let dir = normalize(frame.t * local.x + frame.b * local.y + n * local.z);
     let pdf = cosine_hemisphere_pdf(local.z);
-    return BsdfSample(dir, color, pdf, false, pdf > 0.0);
+    return BsdfSample(dir, color, pdf, false, pdf > 0.0, false);
 }
 // #endif
 
@@ -74,7 +90,7 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
                xi1: f32) -> BsdfSample {
 // #if SPECULAR
     if (m.brdf == BRDF_SPECULAR) {
-        return BsdfSample(reflect(d, n), color, 0.0, true, true);
+        return BsdfSample(reflect(d, n), color, 0.0, true, true, false);
     }
 // #endif
 // #if DIELECTRIC
@@ -90,28 +106,27 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
 // #if CONDUCTOR
     if (m.brdf == BRDF_CONDUCTOR) {
         if (m.alpha == 0.0) {
-            return BsdfSample(reflect(d, n), color * conductor_fresnel(m, -dot(d, n)), 0.0, true, true);
+            return BsdfSample(reflect(d, n), color * conductor_fresnel(m, -dot(d, n)), 0.0, true, true, false);
         }
         let f = frame_of(n);
-        let s = conductor_sample(m, to_local(f, -d), xi_lobe, xi0, xi1);
-        return BsdfSample(normalize(to_world(f, s.dir)), s.weight * color, s.pdf, s.delta, s.valid);
+        return world_sample(f, conductor_sample(m, to_local(f, -d), xi_lobe, xi0, xi1), color);
     }
 // #endif
 // #if ROUGH_DIELECTRIC
     if (m.brdf == BRDF_ROUGH_DIELECTRIC) {
         let f = frame_of(n);
         let s = rough_dielectric_sample(m, dielectric_side(m, front_face), to_local(f, -d), xi_lobe, xi0, xi1);
-        return BsdfSample(normalize(to_world(f, s.dir)), s.weight * color, s.pdf, s.delta, s.valid);
+        return world_sample(f, s, color);
     }
 // #endif
 // #if PLASTIC
     if (m.brdf == BRDF_PLASTIC) {
         let f = frame_of(n);
-        let s = plastic_sample(m, color, to_local(f, -d), xi_lobe, xi0, xi1);
-        return BsdfSample(normalize(to_world(f, s.dir)), s.weight, s.pdf, s.delta, s.valid);
+        // The smooth coat's delta weight is 1 (the pigment is the base's).
+        return world_sample(f, plastic_sample(m, to_local(f, -d), xi_lobe, xi0, xi1), vec3<f32>(1.0));
     }
 // #endif
-    return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true, false);
+    return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true, false, false);
 }
 
 // #if SHADOWS
@@ -129,7 +144,6 @@ fn bsdf_is_delta(m: Material) -> bool {
 
 // #endif
 
-// #if SHADOWS
 // bsdf::eval_bsdf: f for light from `l` seen along −d (0 for delta BSDFs).
 fn eval_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_face: bool, l: vec3<f32>)
     -> vec3<f32> {
@@ -158,10 +172,8 @@ fn eval_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_fa
 // #endif
     return vec3<f32>(0.0);
 }
-// #endif
 
-// #if NEE
-// #if SHADOWS
+// #if PATHTRACER
 // bsdf::pdf_bsdf: the density with which sample_bsdf produces `l` (0 for delta BSDFs).
 fn pdf_bsdf(m: Material, d: vec3<f32>, n: vec3<f32>, front_face: bool, l: vec3<f32>) -> f32 {
 // #if DIFFUSE
@@ -189,5 +201,4 @@ fn pdf_bsdf(m: Material, d: vec3<f32>, n: vec3<f32>, front_face: bool, l: vec3<f
 // #endif
     return 0.0;
 }
-// #endif
 // #endif

@@ -59,6 +59,6 @@ fn conductor_sample(m: Material, o: vec3<f32>, xi_lobe: f32, xi0: f32, xi1: f32)
     } else {
         i = cosine_hemisphere(xi0, xi1);
     }
-    return local_sample(i, conductor_eval(m, o, i), conductor_pdf(m, o, i), false);
+    return local_direction(i);
 }
 // #endif

@@ -80,6 +80,9 @@ fn ggx_visible_pdf(alpha: f32, o: vec3<f32>, h: vec3<f32>) -> f32 {
 }
 
 // A local-frame sample: direction, f·|cos|/pdf, pdf; `delta` for the smooth plastic coat.
+// A non-delta lobe leaves weight and pdf to the shading stage, which evaluates the BSDF at
+// the sampled direction through the call site it evaluates the lights' directions at
+// (wf_shade.wgsl): each call site would compile the whole BSDF again.
 struct LocalSample {
     dir: vec3<f32>,
     weight: vec3<f32>,
@@ -88,11 +91,19 @@ struct LocalSample {
     valid: bool,
 }
 
-// microfacet::finish: the weight of a sampled direction, invalid when nothing scatters.
-fn local_sample(i: vec3<f32>, f: vec3<f32>, pdf: f32, delta: bool) -> LocalSample {
-    let weight = f * (abs(i.z) / pdf);
-    let valid = pdf > 0.0 && !non_finite(i) && any(f != vec3<f32>(0.0)) && !non_finite(weight);
-    return LocalSample(i, weight, pdf, delta, valid);
+// A sampled non-delta direction, its f and density still to evaluate.
+fn local_direction(i: vec3<f32>) -> LocalSample {
+    return LocalSample(i, vec3<f32>(0.0), 0.0, false, !non_finite(i));
+}
+
+// A local sample in the world frame (brdf.wgsl's BsdfSample; pending unless a delta lobe,
+// whose weight is scaled by `delta_weight`).
+fn world_sample(f: Frame, s: LocalSample, delta_weight: vec3<f32>) -> BsdfSample {
+    let dir = normalize(to_world(f, s.dir));
+    if (s.delta) {
+        return BsdfSample(dir, s.weight * delta_weight, s.pdf, true, s.valid, false);
+    }
+    return BsdfSample(dir, vec3<f32>(0.0), 0.0, false, s.valid, s.valid);
 }
 // #endif
 

@@ -46,7 +46,7 @@ fn plastic_pdf(m: Material, o: vec3<f32>, i: vec3<f32>) -> f32 {
     return p * coat + (1.0 - p) * cosine_hemisphere_pdf(i.z);
 }
 
-fn plastic_sample(m: Material, rho: vec3<f32>, o: vec3<f32>, xi_lobe: f32, xi0: f32, xi1: f32) -> LocalSample {
+fn plastic_sample(m: Material, o: vec3<f32>, xi_lobe: f32, xi0: f32, xi1: f32) -> LocalSample {
     let p = coat_albedo(m, o.z);
     var i: vec3<f32>;
     if (xi_lobe < p) {
@@ -58,6 +58,6 @@ fn plastic_sample(m: Material, rho: vec3<f32>, o: vec3<f32>, xi_lobe: f32, xi0: 
     } else {
         i = cosine_hemisphere(xi0, xi1);
     }
-    return local_sample(i, plastic_eval(m, rho, o, i), plastic_pdf(m, o, i), false);
+    return local_direction(i);
 }
 // #endif

@@ -128,6 +128,6 @@ fn rough_dielectric_sample(m: Material, s: DielectricSide, o: vec3<f32>, xi_lobe
         let c = cosine_hemisphere(xi0, xi1);
         i = select(c, vec3<f32>(c.x, c.y, -c.z), u < s.lobe.x);
     }
-    return local_sample(i, vec3<f32>(rough_dielectric_eval(m, s, o, i)), rough_dielectric_pdf(m, s, o, i), false);
+    return local_direction(i);
 }
 // #endif

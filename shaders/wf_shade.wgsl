@@ -41,30 +41,29 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
 
 // #if NEE
 // #if SHADOWS
-// Next-event estimation at a non-delta vertex: one light chosen by ξ0, a point by ξ1 ξ2.
-// Returns the shadow ray and its contribution f·Le·cosθ·w/p (valid = false: nothing to
-// trace).
-struct LightRay {
-    ray: Ray,
-    value: vec3<f32>,
+// Next-event estimation's light sample at a non-delta vertex: one light chosen by ξ0, a
+// point by ξ1 ξ2. The direction to it, its radiance and density (solid angle, the choice
+// included); for an area light the point, normal and error scale that end the shadow ray.
+// valid = false: nothing to trace.
+struct NeeSample {
+    dir: vec3<f32>,
+    radiance: vec3<f32>,
+    pdf: f32,
+    area: bool,
+    y: vec3<f32>,
+    ny: vec3<f32>,
+    sy: f32,
     valid: bool,
 }
 
-fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, d: vec3<f32>, xi0: f32, xi1: f32, xi2: f32) -> LightRay {
-    let none = LightRay(Ray(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0), vec3<f32>(0.0), false);
+fn pt_sample_light(hit: Hit, xi0: f32, xi1: f32, xi2: f32) -> NeeSample {
+    var l = NeeSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
     let n = light_count();
     if (n == 0u) {
-        return none;
+        return l;
     }
     let select_pdf = light_selection_pdf();
     let choice = min(u32(xi0 * f32(n)), n - 1u);
-    var dir: vec3<f32>;
-    var radiance: vec3<f32>;
-    var pdf: f32;
-    var is_area = false;
-    var y = vec3<f32>(0.0);
-    var ny = vec3<f32>(0.0);
-    var sy = 0.0;
 // #if AREA_LIGHTS
     if (choice < settings.area_light_count) {
         let light = area_lights[choice];
@@ -72,43 +71,48 @@ fn pt_sample_light(hit: Hit, m: Material, color: vec3<f32>, d: vec3<f32>, xi0: f
         let to = lp.point - hit.point;
         let dist = length(to);
         if (!(lp.pdf > 0.0) || !(dist > 0.0)) {
-            return none;
+            return l;
         }
-        dir = to / dist;
-        radiance = light_emission(light, lp);
-        pdf = select_pdf * lp.pdf;
-        is_area = true;
-        y = lp.point;
-        ny = lp.normal;
-        sy = lp.scale;
+        return NeeSample(to / dist, light_emission(light, lp), select_pdf * lp.pdf, true, lp.point, lp.normal, lp.scale, true);
     }
 // #endif
-    if (!is_area) {
-        let s = env_sample(xi1, xi2);
-        if (!(s.w > 0.0)) {
-            return none;
-        }
-        dir = s.xyz;
-        radiance = escape_radiance(dir);
-        pdf = select_pdf * s.w;
+    let s = env_sample(xi1, xi2);
+    if (!(s.w > 0.0)) {
+        return l;
     }
-    let f = eval_bsdf(m, color, d, hit.normal, hit.front_face, dir);
-    if (all(f == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) {
+    l.dir = s.xyz;
+    l.radiance = escape_radiance(l.dir);
+    l.pdf = select_pdf * s.w;
+    l.valid = true;
+    return l;
+}
+
+// The shadow ray of light sample `l` and its contribution f·Le·|cosθ|·w/p, where f and
+// `bsdf_pdf` are the BSDF's value and density at l.dir (valid = false: nothing to trace).
+struct LightRay {
+    ray: Ray,
+    value: vec3<f32>,
+    valid: bool,
+}
+
+fn pt_light_ray(hit: Hit, l: NeeSample, f: vec3<f32>, bsdf_pdf: f32) -> LightRay {
+    let none = LightRay(Ray(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0), vec3<f32>(0.0), false);
+    if (all(f == vec3<f32>(0.0)) || all(l.radiance == vec3<f32>(0.0))) {
         return none;
     }
-    if ((dot(dir, hit.normal) > 0.0) != (dot(dir, hit.geometric) > 0.0)) {
+    if ((dot(l.dir, hit.normal) > 0.0) != (dot(l.dir, hit.geometric) > 0.0)) {
         // Shading normals never take light from behind the facet (cpu Hit::consistent).
         return none;
     }
-    let o = offset_origin(hit.point, hit.scale, hit.geometric, dir);
-    var ray = Ray(o, dir, 0.0, OPEN);
-    if (is_area) {
-        let e = offset_origin(y, sy, ny, hit.point - y);
+    let o = offset_origin(hit.point, hit.scale, hit.geometric, l.dir);
+    var ray = Ray(o, l.dir, 0.0, OPEN);
+    if (l.area) {
+        let e = offset_origin(l.y, l.sy, l.ny, hit.point - l.y);
         ray = Ray(o, e - o, 0.0, 1.0);
     }
-    let weight = power_heuristic(pdf, pdf_bsdf(m, d, hit.normal, hit.front_face, dir));
+    let weight = power_heuristic(l.pdf, bsdf_pdf);
     // |cos|: a rough dielectric also receives light from behind (transmission).
-    return LightRay(ray, f * radiance * (abs(dot(hit.normal, dir)) * weight / pdf), true);
+    return LightRay(ray, f * l.radiance * (abs(dot(hit.normal, l.dir)) * weight / l.pdf), true);
 }
 // #endif
 // #endif
@@ -140,31 +144,84 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let d = normalize(ray.dir);
+    var s = sample_bsdf(m, color, d, hit.normal, hit.front_face, xi[3], xi[4], xi[5]);
+    // The directions where this vertex evaluates its BSDF, all through the one call site of
+    // eval_bsdf and pdf_bsdf in the loop below (llvmpipe inlines every call: each call site
+    // would compile the whole BSDF again): at a non-delta vertex each point light in front
+    // and the NEE light sample, which become shadow rays, then the sampled direction when
+    // its lobe left f and the density to evaluate (s.pending).
+    var point = 0u;
+    var nee = 0u;
 // #if SHADOWS
-    // Non-delta vertex: every point light in front, then NEE, as shadow rays.
     var shadows = 0u;
     if (!bsdf_is_delta(m)) {
 // #if POINT_LIGHTS
-        for (var i = 0u; i < settings.point_light_count; i++) {
-            let s = point_light_sample(i, hit);
-            if (s.lit) {
-                let cos_theta = dot(hit.normal, s.l);
-                let f = eval_bsdf(m, color, d, hit.normal, hit.front_face, s.l);
-                queue_shadow(slot, shadows, s.ray, beta * (f * s.radiance * cos_theta));
-                shadows++;
+        point = settings.point_light_count;
+// #endif
+// #if NEE
+        nee = select(0u, 1u, settings.nee != 0u);
+// #endif
+    }
+// #if NEE
+    var light: NeeSample;
+    if (nee != 0u) {
+        light = pt_sample_light(hit, xi[0], xi[1], xi[2]);
+    }
+// #endif
+// #endif
+// #if MICROFACET
+    let count = point + nee + select(0u, 1u, s.pending);
+// #else
+    let count = point + nee;
+// #endif
+    for (var k = 0u; k < count; k++) {
+        var dir = s.dir;
+// #if POINT_LIGHTS
+        var pl: PointLightSample;
+        if (k < point) {
+            pl = point_light_sample(k, hit);
+            if (!pl.lit) {
+                continue;
             }
+            dir = pl.l;
         }
 // #endif
 // #if NEE
-        if (settings.nee != 0u) {
-            let lr = pt_sample_light(hit, m, color, d, xi[0], xi[1], xi[2]);
+// #if SHADOWS
+        if (k == point && nee != 0u) {
+            if (!light.valid) {
+                continue;
+            }
+            dir = light.dir;
+        }
+// #endif
+// #endif
+        let f = eval_bsdf(m, color, d, hit.normal, hit.front_face, dir);
+// #if POINT_LIGHTS
+        if (k < point) {
+            queue_shadow(slot, shadows, pl.ray, beta * (f * pl.radiance * dot(hit.normal, pl.l)));
+            shadows++;
+            continue;
+        }
+// #endif
+        let pdf = pdf_bsdf(m, d, hit.normal, hit.front_face, dir);
+// #if NEE
+// #if SHADOWS
+        if (k == point && nee != 0u) {
+            let lr = pt_light_ray(hit, light, f, pdf);
             if (lr.valid) {
                 queue_shadow(slot, shadows, lr.ray, beta * lr.value);
                 shadows++;
             }
+            continue;
         }
 // #endif
+// #endif
+// #if MICROFACET
+        s = bsdf_finish(dir, f, pdf, hit.normal);
+// #endif
     }
+// #if SHADOWS
     if (shadows > 0u) {
 // #if POINT_LIGHTS
         // Without point lights a vertex queues at most the one NEE ray, a full list.
@@ -173,7 +230,6 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         wf_push(Q_SHADOW, slot);
     }
 // #endif
-    let s = sample_bsdf(m, color, d, hit.normal, hit.front_face, xi[3], xi[4], xi[5]);
     if (!s.valid || (dot(s.dir, hit.normal) > 0.0) != (dot(s.dir, hit.geometric) > 0.0)) {
         return;
     }

@@ -297,6 +297,13 @@ impl Stage {
         if f.renderer == RendererKind::PathTracer && self != Stage::FirstHit {
             names.push("PATHTRACER");
         }
+        // A microfacet kind's sampled direction is evaluated in the shading stage's loop over
+        // directions (wf_shade.wgsl, BsdfSample::pending); other kinds sample in closed form.
+        if let Stage::Shade(kind) = self {
+            if microfacet_kind(kind) {
+                names.push("MICROFACET");
+            }
+        }
         if names.contains(&"CSG") && csg_pool_private(f) {
             names.push("CSG_POOL_PRIVATE");
         }
@@ -325,7 +332,8 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 32] = [
+    pub const NAMES: [&'static str; 33] = [
+        "MICROFACET",
         "CSG_POOL_PRIVATE",
         "CSG_TREES",
         "WF_HIT_STORE",
