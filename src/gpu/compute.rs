@@ -58,6 +58,9 @@ pub struct ComputeKernel {
     pub layouts: Vec<wgpu::BindGroupLayout>,
     /// Declared bindings per group, sorted by binding number.
     pub bindings: Vec<Vec<(u32, BindingKind)>>,
+    /// The smallest buffer each of those bindings accepts (the declared type's size, one
+    /// element of a runtime-sized array), in the same order.
+    pub binding_bytes: Vec<Vec<u64>>,
     /// `@workgroup_size` of the entry point.
     pub workgroup_size: [u32; 3],
 }
@@ -136,7 +139,7 @@ impl Gpu {
             .ok_or_else(|| GpuError::NoEntryPoint { label: label.into(), entry: entry.into() })?;
         let workgroup_size = ep.workgroup_size;
 
-        let mut groups: BTreeMap<u32, Vec<(u32, BindingKind)>> = BTreeMap::new();
+        let mut groups: BTreeMap<u32, Vec<(u32, BindingKind, u64)>> = BTreeMap::new();
         for (_, var) in module.global_variables.iter() {
             let Some(rb) = &var.binding else { continue };
             let kind = match var.space {
@@ -153,7 +156,8 @@ impl Gpu {
                     })
                 }
             };
-            groups.entry(rb.group).or_default().push((rb.binding, kind));
+            let bytes = u64::from(module.types[var.ty].inner.size(module.to_ctx()));
+            groups.entry(rb.group).or_default().push((rb.binding, kind, bytes));
         }
         let n_groups = groups.keys().next_back().map_or(0, |g| g + 1) as usize;
         if n_groups > self.limits.max_bind_groups as usize {
@@ -163,7 +167,7 @@ impl Gpu {
             )));
         }
         let storage =
-            groups.values().flatten().filter(|(_, k)| matches!(k, BindingKind::Storage { .. })).count() as u32;
+            groups.values().flatten().filter(|(_, k, _)| matches!(k, BindingKind::Storage { .. })).count() as u32;
         if storage > self.limits.max_storage_buffers_per_shader_stage {
             return Err(GpuError::Validation(format!(
                 "shader {label:?} needs {storage} storage buffers; this adapter allows {} per shader stage",
@@ -171,9 +175,11 @@ impl Gpu {
             )));
         }
         let mut bindings = vec![Vec::new(); n_groups];
+        let mut binding_bytes = vec![Vec::new(); n_groups];
         for (g, mut list) in groups {
             list.sort_by_key(|b| b.0);
-            bindings[g as usize] = list;
+            bindings[g as usize] = list.iter().map(|&(b, k, _)| (b, k)).collect();
+            binding_bytes[g as usize] = list.iter().map(|b| b.2).collect();
         }
 
         self.scoped(|| {
@@ -227,7 +233,7 @@ impl Gpu {
             if let Some(cache) = &self.pipeline_cache {
                 let _ = cache.save();
             }
-            ComputeKernel { label: label.into(), pipeline, layouts, bindings, workgroup_size }
+            ComputeKernel { label: label.into(), pipeline, layouts, bindings, binding_bytes, workgroup_size }
         })
     }
 

@@ -283,7 +283,30 @@ impl Gpu {
         Self::open(adapter)
     }
 
+    /// A second device on this device's adapter, opened through a wgpu instance of its own
+    /// and without the pipeline cache file: for work that must not share this device's
+    /// queue (`parallel_jit`). `None` when the adapter is no longer found.
+    pub(crate) fn twin(&self) -> Option<Gpu> {
+        let same = |i: &wgpu::AdapterInfo| {
+            (i.name.as_str(), i.backend, i.device_type, i.vendor, i.device, i.driver.as_str())
+                == (
+                    self.adapter_info.name.as_str(),
+                    self.adapter_info.backend,
+                    self.adapter_info.device_type,
+                    self.adapter_info.vendor,
+                    self.adapter_info.device,
+                    self.adapter_info.driver.as_str(),
+                )
+        };
+        let adapter = enumerate().into_iter().find(|a| same(&a.get_info()))?;
+        Self::open_with(adapter, false).ok()
+    }
+
     fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
+        Self::open_with(adapter, true)
+    }
+
+    fn open_with(adapter: wgpu::Adapter, pipeline_cache: bool) -> Result<Gpu, GpuError> {
         let adapter_info = adapter.get_info();
         let limits = adapter.limits();
         let desc = wgpu::DeviceDescriptor {
@@ -313,6 +336,7 @@ impl Gpu {
             }
         });
         let pipeline_cache = super::pipeline_cache::cache_dir_from_env()
+            .filter(|_| pipeline_cache)
             .and_then(|dir| super::pipeline_cache::DiskPipelineCache::open(&device, &adapter_info, &dir));
         Ok(Gpu { device, queue, adapter_info, limits, pipeline_cache, sink })
     }

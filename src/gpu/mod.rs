@@ -13,6 +13,7 @@ pub mod features;
 mod kernel_cache;
 pub mod layout;
 pub mod pack;
+mod parallel_jit;
 pub mod pipeline_cache;
 pub mod render;
 pub mod tables;

@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use super::features::{FeatureSet, RendererKind};
 use super::pack::{at_least_one, pack, PackedScene};
+use super::parallel_jit;
 use super::tables::{Table, TablePlacement, UniformTables};
 use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
 use super::{Assembled, BindingKind, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary};
@@ -314,8 +315,18 @@ impl GpuRenderer {
                 .map(|h| h.join().unwrap_or_else(|_| Err(GpuError::Internal("kernel compilation panicked".into()))))
                 .collect()
         });
-        for b in built {
-            let (stage, source, kernel) = b?;
+        let built = built.into_iter().collect::<Result<Vec<_>, _>>()?;
+        // llvmpipe compiles a kernel at its first launch, one at a time: compile the new ones
+        // now, in parallel over more devices where that helps (gpu::parallel_jit).
+        let labels: Vec<String> =
+            built.iter().map(|(stage, _, _)| format!("{} stage (assembled)", stage.label())).collect();
+        let jobs: Vec<parallel_jit::Job> = built
+            .iter()
+            .zip(&labels)
+            .map(|((stage, source, kernel), label)| parallel_jit::Job { kernel, label, source, entry: stage.entry().1 })
+            .collect();
+        parallel_jit::compile_ahead(gpu, &jobs)?;
+        for (stage, source, kernel) in built {
             kernels.insert(stage, self.kernels.insert(&source, stage.entry().1, kernel));
         }
         Ok(StageKernels { kernels })

@@ -1,0 +1,194 @@
+//! A scene's new kernels compiled in parallel on llvmpipe (Mesa's lavapipe).
+//!
+//! llvmpipe keeps only the NIR when a pipeline is created and compiles a kernel with LLVM at
+//! its first launch, on the one thread that runs the device's queue: however many threads
+//! create the pipelines, a scene's kernels compile one after another in its first round
+//! (DESIGN.md "Parallel kernel compilation"). The code it compiles goes to Mesa's on-disk
+//! shader cache, keyed by the kernel's NIR, where every device of the driver looks first.
+//! So before the first round each new kernel is launched once over an empty grid, which
+//! compiles it and runs nothing, from several devices at once: this device and its *twins*
+//! (more devices on the same adapter, each with a queue thread of its own) take kernels
+//! from one list, largest first, and what a twin compiles reaches this device through the
+//! cache. Twins are dropped before the render starts (their driver instances shut down,
+//! which finishes the cache's writes), so the first round finds their code; a kernel not
+//! found there is compiled again at its first launch: time lost, never a different result.
+//!
+//! Only where it can help: an llvmpipe adapter, more than one core, at least two new
+//! kernels, and Mesa's shader cache not switched off (`MESA_SHADER_CACHE_DISABLE`).
+//! `LUMEN_PARALLEL_JIT=0` turns it off.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use super::compute::{BindingKind, ComputeKernel, MIN_BUFFER_BYTES};
+use super::device::{Gpu, GpuError};
+
+/// Most devices compiling at once (this one included): each twin is a driver instance
+/// with its own threads and memory.
+const MAX_DEVICES: usize = 8;
+
+/// A kernel to compile ahead: the compiled pipeline, and what a twin compiles it from.
+pub(crate) struct Job<'a> {
+    pub kernel: &'a ComputeKernel,
+    pub label: &'a str,
+    pub source: &'a str,
+    pub entry: &'a str,
+}
+
+/// Whether a Mesa boolean environment variable is set to true (as Mesa reads it).
+fn env_true(name: &str) -> bool {
+    std::env::var(name).is_ok_and(|v| matches!(v.to_ascii_lowercase().as_str(), "1" | "true" | "yes" | "y"))
+}
+
+/// Twins to open for `jobs` new kernels on a device described by `info` with `cores`
+/// cores (0: leave each kernel to compile at its first launch).
+fn twins_for(info: &wgpu::AdapterInfo, jobs: usize, cores: usize) -> usize {
+    let lazy_jit = info.device_type == wgpu::DeviceType::Cpu && info.name.to_ascii_lowercase().contains("llvmpipe");
+    let cache_off = env_true("MESA_SHADER_CACHE_DISABLE") || env_true("MESA_GLSL_CACHE_DISABLE");
+    let off = std::env::var("LUMEN_PARALLEL_JIT").is_ok_and(|v| v.trim() == "0");
+    if !lazy_jit || cache_off || off || jobs < 2 {
+        return 0;
+    }
+    cores.min(jobs).min(MAX_DEVICES).saturating_sub(1)
+}
+
+/// Compiles `jobs` (kernels of `gpu`) before their first real launch, in parallel over
+/// twins of `gpu` where that helps (see the module documentation); does nothing elsewhere.
+/// Errors are this device's: a twin that fails only gives its share back.
+pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let twins = twins_for(&gpu.adapter_info, jobs.len(), cores);
+    if twins == 0 {
+        return Ok(());
+    }
+    // Largest source first: the last kernel to finish decides when all are done.
+    let mut order: Vec<&Job> = jobs.iter().collect();
+    order.sort_by_key(|j| std::cmp::Reverse(j.source.len()));
+    let next = AtomicUsize::new(0);
+    let take = || order.get(next.fetch_add(1, Ordering::Relaxed)).copied();
+    let take = &take;
+    std::thread::scope(|scope| {
+        for _ in 0..twins {
+            scope.spawn(move || {
+                let Some(twin) = gpu.twin() else { return };
+                while let Some(job) = take() {
+                    // Failing here only moves the kernel's compilation to its first launch.
+                    if let Ok(kernel) = twin.compute_kernel(job.label, job.source, job.entry) {
+                        let _ = launch_empty(&twin, &kernel);
+                    }
+                }
+            });
+        }
+        while let Some(job) = take() {
+            launch_empty(gpu, job.kernel)?;
+        }
+        Ok(())
+    })
+}
+
+/// Launches `kernel` over an empty grid, which makes llvmpipe compile it: every binding
+/// gets a buffer of the least size it accepts, which nothing reads.
+fn launch_empty(gpu: &Gpu, kernel: &ComputeKernel) -> Result<(), GpuError> {
+    let buffers = gpu.scoped(|| {
+        kernel
+            .bindings
+            .iter()
+            .zip(&kernel.binding_bytes)
+            .map(|(list, bytes)| {
+                list.iter()
+                    .zip(bytes)
+                    .map(|(&(_, kind), &size)| {
+                        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("empty launch"),
+                            size: size.max(MIN_BUFFER_BYTES).next_multiple_of(16),
+                            usage: match kind {
+                                BindingKind::Uniform => wgpu::BufferUsages::UNIFORM,
+                                BindingKind::Storage { .. } => wgpu::BufferUsages::STORAGE,
+                            },
+                            mapped_at_creation: false,
+                        })
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect::<Vec<_>>()
+    })?;
+    let groups = buffers
+        .iter()
+        .enumerate()
+        .map(|(g, list)| kernel.bind_group(gpu, g as u32, &list.iter().collect::<Vec<_>>()))
+        .collect::<Result<Vec<_>, _>>()?;
+    gpu.dispatch(kernel, &groups.iter().collect::<Vec<_>>(), [0, 0, 0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn adapter(name: &str, device_type: wgpu::DeviceType) -> wgpu::AdapterInfo {
+        wgpu::AdapterInfo { name: name.into(), ..wgpu::AdapterInfo::new(device_type, wgpu::Backend::Vulkan) }
+    }
+
+    /// Kernels compiled ahead (twins and empty launches, where this adapter has them) still
+    /// do their work: a uniform struct, a fixed-size and a runtime-sized storage array get
+    /// their least sizes for the empty launches, then real buffers.
+    #[test]
+    fn kernels_compiled_ahead_run_as_compiled() {
+        let Some(gpu) = crate::gpu::gpu_for_tests("kernels_compiled_ahead_run_as_compiled") else { return };
+        let sources = [
+            "struct P { k: vec4<u32> }
+             @group(0) @binding(0) var<uniform> p: P;
+             @group(0) @binding(1) var<storage, read_write> v: array<u32>;
+             @compute @workgroup_size(64)
+             fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+                 if (id.x < arrayLength(&v)) { v[id.x] = v[id.x] * p.k.x; }
+             }",
+            "@group(0) @binding(0) var<storage, read> table: array<u32, 4>;
+             @group(1) @binding(0) var<storage, read_write> v: array<u32>;
+             @compute @workgroup_size(64)
+             fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+                 if (id.x < arrayLength(&v)) { v[id.x] = v[id.x] + table[id.x % 4u]; }
+             }",
+        ];
+        let kernels: Vec<ComputeKernel> = sources.iter().map(|s| gpu.compute_kernel("t", s, "main").unwrap()).collect();
+        let jobs: Vec<Job> = kernels
+            .iter()
+            .zip(&sources)
+            .map(|(kernel, source)| Job { kernel, label: "t", source, entry: "main" })
+            .collect();
+        compile_ahead(&gpu, &jobs).unwrap();
+        let v = gpu.storage_buffer("v", &[1u32, 2, 3, 4, 5]).unwrap();
+        let p = gpu.uniform_buffer("p", &[3u32, 0, 0, 0]).unwrap();
+        let table = gpu.storage_buffer("table", &[10u32, 20, 30, 40]).unwrap();
+        let g = kernels[0].bind_group(&gpu, 0, &[&p, &v]).unwrap();
+        gpu.dispatch(&kernels[0], &[&g], kernels[0].workgroups_for([5, 1, 1])).unwrap();
+        let g0 = kernels[1].bind_group(&gpu, 0, &[&table]).unwrap();
+        let g1 = kernels[1].bind_group(&gpu, 1, &[&v]).unwrap();
+        gpu.dispatch(&kernels[1], &[&g0, &g1], kernels[1].workgroups_for([5, 1, 1])).unwrap();
+        assert_eq!(gpu.read_buffer::<u32>(&v, 5).unwrap(), [13, 26, 39, 52, 25]);
+        assert_eq!(kernels[1].binding_bytes, [vec![16], vec![4]]);
+        assert_eq!(kernels[0].binding_bytes, [vec![16, 4]]);
+    }
+
+    /// Twins only for llvmpipe, with cores and kernels to share; never more than the
+    /// kernels or MAX_DEVICES allow. (The environment switches are read as Mesa reads them;
+    /// the test leaves them as the run has them and checks only the cases they allow.)
+    #[test]
+    fn twins_only_where_llvmpipe_compiles_serially() {
+        let llvmpipe = adapter("llvmpipe (LLVM 15.0.6, 128 bits)", wgpu::DeviceType::Cpu);
+        let gpu = adapter("NVIDIA H200", wgpu::DeviceType::DiscreteGpu);
+        let swiftshader = adapter("SwiftShader Device", wgpu::DeviceType::Cpu);
+        for cores in [1, 2, 16] {
+            assert_eq!(twins_for(&gpu, 9, cores), 0);
+            assert_eq!(twins_for(&swiftshader, 9, cores), 0);
+            assert_eq!(twins_for(&llvmpipe, 1, cores), 0);
+        }
+        assert_eq!(twins_for(&llvmpipe, 9, 1), 0);
+        let on = !(env_true("MESA_SHADER_CACHE_DISABLE")
+            || env_true("MESA_GLSL_CACHE_DISABLE")
+            || std::env::var("LUMEN_PARALLEL_JIT").is_ok_and(|v| v.trim() == "0"));
+        if on {
+            assert_eq!(twins_for(&llvmpipe, 9, 2), 1);
+            assert_eq!(twins_for(&llvmpipe, 3, 16), 2);
+            assert_eq!(twins_for(&llvmpipe, 20, 16), MAX_DEVICES - 1);
+        }
+    }
+}
