@@ -13,7 +13,7 @@
 //! which finishes the cache's writes), so the first round finds their code; a kernel not
 //! found there is compiled again at its first launch: time lost, never a different result.
 //!
-//! Only where it can help: an llvmpipe adapter, more than one core, at least two new
+//! Only where it can help: llvmpipe through Vulkan, more than one core, at least two new
 //! kernels, and Mesa's shader cache not switched off (`MESA_SHADER_CACHE_DISABLE`).
 //! `LUMEN_PARALLEL_JIT=0` turns it off.
 
@@ -42,7 +42,11 @@ fn env_true(name: &str) -> bool {
 /// Twins to open for `jobs` new kernels on a device described by `info` with `cores`
 /// cores (0: leave each kernel to compile at its first launch).
 fn twins_for(info: &wgpu::AdapterInfo, jobs: usize, cores: usize) -> usize {
-    let lazy_jit = info.device_type == wgpu::DeviceType::Cpu && info.name.to_ascii_lowercase().contains("llvmpipe");
+    // Vulkan only: wgpu's OpenGL backend also reaches llvmpipe, but through EGL contexts
+    // that a second device on another thread would have to share with care.
+    let lazy_jit = info.backend == wgpu::Backend::Vulkan
+        && info.device_type == wgpu::DeviceType::Cpu
+        && info.name.to_ascii_lowercase().contains("llvmpipe");
     let cache_off = env_true("MESA_SHADER_CACHE_DISABLE") || env_true("MESA_GLSL_CACHE_DISABLE");
     let off = std::env::var("LUMEN_PARALLEL_JIT").is_ok_and(|v| v.trim() == "0");
     if !lazy_jit || cache_off || off || jobs < 2 {
@@ -176,9 +180,11 @@ mod tests {
         let llvmpipe = adapter("llvmpipe (LLVM 15.0.6, 128 bits)", wgpu::DeviceType::Cpu);
         let gpu = adapter("NVIDIA H200", wgpu::DeviceType::DiscreteGpu);
         let swiftshader = adapter("SwiftShader Device", wgpu::DeviceType::Cpu);
+        let gl = wgpu::AdapterInfo { backend: wgpu::Backend::Gl, ..llvmpipe.clone() };
         for cores in [1, 2, 16] {
             assert_eq!(twins_for(&gpu, 9, cores), 0);
             assert_eq!(twins_for(&swiftshader, 9, cores), 0);
+            assert_eq!(twins_for(&gl, 9, cores), 0);
             assert_eq!(twins_for(&llvmpipe, 1, cores), 0);
         }
         assert_eq!(twins_for(&llvmpipe, 9, 1), 0);
