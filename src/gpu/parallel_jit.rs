@@ -13,11 +13,15 @@
 //! which finishes the cache's writes), so the first round finds their code; a kernel not
 //! found there is compiled again at its first launch: time lost, never a different result.
 //!
+//! A twin first waits up to `WARM_PROBE` for this device's first launch: when that ends so
+//! soon, the cache was warm and the twin is not opened.
+//!
 //! Only where it can help: llvmpipe through Vulkan, more than one core, at least two new
 //! kernels, and Mesa's shader cache not switched off (`MESA_SHADER_CACHE_DISABLE`).
 //! `LUMEN_PARALLEL_JIT=0` turns it off.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
 
 use super::compute::{BindingKind, ComputeKernel, MIN_BUFFER_BYTES};
 use super::device::{Gpu, GpuError};
@@ -25,6 +29,10 @@ use super::device::{Gpu, GpuError};
 /// Most devices compiling at once (this one included): each twin is a driver instance
 /// with its own threads and memory.
 const MAX_DEVICES: usize = 8;
+
+/// How long a twin waits for this device's first launch before opening: a launch that
+/// finds its kernel in the cache takes 1–2 ms, one that compiles 0.05–1 s.
+const WARM_PROBE: Duration = Duration::from_millis(20);
 
 /// A kernel to compile ahead: the compiled pipeline, and what a twin compiles it from.
 pub(crate) struct Job<'a> {
@@ -70,9 +78,20 @@ pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
     let next = AtomicUsize::new(0);
     let take = || order.get(next.fetch_add(1, Ordering::Relaxed)).copied();
     let take = &take;
+    let first_done = AtomicBool::new(false);
+    let first_done = &first_done;
     std::thread::scope(|scope| {
         for _ in 0..twins {
             scope.spawn(move || {
+                // A warm cache answers this device's first launch (the largest kernel) in a
+                // few milliseconds, and then a twin would only cost its opening (~30 ms).
+                let probe = Instant::now();
+                while !first_done.load(Ordering::Acquire) && probe.elapsed() < WARM_PROBE {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                if first_done.load(Ordering::Acquire) {
+                    return;
+                }
                 let Some(twin) = gpu.twin() else { return };
                 while let Some(job) = take() {
                     // Failing here only moves the kernel's compilation to its first launch.
@@ -83,7 +102,9 @@ pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
             });
         }
         while let Some(job) = take() {
-            launch_empty(gpu, job.kernel)?;
+            let result = launch_empty(gpu, job.kernel);
+            first_done.store(true, Ordering::Release);
+            result?;
         }
         Ok(())
     })
