@@ -152,8 +152,9 @@ mod tests {
         wgpu::AdapterInfo { name: name.into(), ..wgpu::AdapterInfo::new(device_type, wgpu::Backend::Vulkan) }
     }
 
-    /// Kernels compiled ahead (twins and empty launches, where this adapter has them) still
-    /// do their work: a uniform struct, a fixed-size and a runtime-sized storage array get
+    /// Kernels compiled ahead (empty launches where this adapter is llvmpipe, and twins
+    /// where the first of those launches compiles for longer than `WARM_PROBE`) still do
+    /// their work: a uniform struct, a fixed-size and a runtime-sized storage array get
     /// their least sizes for the empty launches, then real buffers.
     #[test]
     fn kernels_compiled_ahead_run_as_compiled() {
