@@ -34,10 +34,10 @@ const MAX_DEVICES: usize = 8;
 /// finds its kernel in the cache takes 1–2 ms, one that compiles 0.05–1 s.
 const WARM_PROBE: Duration = Duration::from_millis(20);
 
-/// A kernel to compile ahead: the compiled pipeline, and what a twin compiles it from.
+/// A kernel to compile ahead: the pipeline, and the WGSL and entry point a twin compiles
+/// it from.
 pub(crate) struct Job<'a> {
     pub kernel: &'a ComputeKernel,
-    pub label: &'a str,
     pub source: &'a str,
     pub entry: &'a str,
 }
@@ -95,7 +95,7 @@ pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
                 let Some(twin) = gpu.twin() else { return };
                 while let Some(job) = take() {
                     // Failing here only moves the kernel's compilation to its first launch.
-                    if let Ok(kernel) = twin.compute_kernel(job.label, job.source, job.entry) {
+                    if let Ok(kernel) = twin.compute_kernel(&job.kernel.label, job.source, job.entry) {
                         let _ = launch_empty(&twin, &kernel);
                     }
                 }
@@ -175,11 +175,8 @@ mod tests {
              }",
         ];
         let kernels: Vec<ComputeKernel> = sources.iter().map(|s| gpu.compute_kernel("t", s, "main").unwrap()).collect();
-        let jobs: Vec<Job> = kernels
-            .iter()
-            .zip(&sources)
-            .map(|(kernel, source)| Job { kernel, label: "t", source, entry: "main" })
-            .collect();
+        let jobs: Vec<Job> =
+            kernels.iter().zip(&sources).map(|(kernel, source)| Job { kernel, source, entry: "main" }).collect();
         compile_ahead(&gpu, &jobs).unwrap();
         let v = gpu.storage_buffer("v", &[1u32, 2, 3, 4, 5]).unwrap();
         let p = gpu.uniform_buffer("p", &[3u32, 0, 0, 0]).unwrap();

@@ -318,12 +318,9 @@ impl GpuRenderer {
         let built = built.into_iter().collect::<Result<Vec<_>, _>>()?;
         // llvmpipe compiles a kernel at its first launch, one at a time: compile the new ones
         // now, in parallel over more devices where that helps (gpu::parallel_jit).
-        let labels: Vec<String> =
-            built.iter().map(|(stage, _, _)| format!("{} stage (assembled)", stage.label())).collect();
         let jobs: Vec<parallel_jit::Job> = built
             .iter()
-            .zip(&labels)
-            .map(|((stage, source, kernel), label)| parallel_jit::Job { kernel, label, source, entry: stage.entry().1 })
+            .map(|(stage, source, kernel)| parallel_jit::Job { kernel, source, entry: stage.entry().1 })
             .collect();
         parallel_jit::compile_ahead(gpu, &jobs)?;
         for (stage, source, kernel) in built {
