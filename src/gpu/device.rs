@@ -287,18 +287,7 @@ impl Gpu {
     /// and without the pipeline cache file: for work that must not share this device's
     /// queue (`parallel_jit`). `None` when the adapter is no longer found.
     pub(crate) fn twin(&self) -> Option<Gpu> {
-        let same = |i: &wgpu::AdapterInfo| {
-            (i.name.as_str(), i.backend, i.device_type, i.vendor, i.device, i.driver.as_str())
-                == (
-                    self.adapter_info.name.as_str(),
-                    self.adapter_info.backend,
-                    self.adapter_info.device_type,
-                    self.adapter_info.vendor,
-                    self.adapter_info.device,
-                    self.adapter_info.driver.as_str(),
-                )
-        };
-        let adapter = enumerate().into_iter().find(|a| same(&a.get_info()))?;
+        let adapter = enumerate().into_iter().find(|a| a.get_info() == self.adapter_info)?;
         Self::open_with(adapter, false).ok()
     }
 

@@ -192,12 +192,12 @@ impl FeatureSet {
             f.nee = p.nee && f.non_delta();
             let lights = scene.area_lights();
             f.area_lights = f.nee && !lights.is_empty();
-            let kind = |k: ShapeKind| {
-                lights.iter().any(|l| matches!(&scene.shapes[l.shape], Shape::Primitive(p) if p.kind == k))
-            };
-            f.sphere_lights = f.area_lights && kind(ShapeKind::Sphere);
-            f.cube_lights = f.area_lights && kind(ShapeKind::Cube);
-            f.mesh_lights = f.area_lights && lights.iter().any(|l| matches!(&scene.shapes[l.shape], Shape::Mesh(_)));
+            let some_light =
+                |is: &dyn Fn(&Shape) -> bool| f.area_lights && lights.iter().any(|l| is(&scene.shapes[l.shape]));
+            let kind = |k: ShapeKind| move |s: &Shape| matches!(s, Shape::Primitive(p) if p.kind == k);
+            f.sphere_lights = some_light(&kind(ShapeKind::Sphere));
+            f.cube_lights = some_light(&kind(ShapeKind::Cube));
+            f.mesh_lights = some_light(&|s| matches!(s, Shape::Mesh(_)));
         }
         if f.renderer != RendererKind::OnOff {
             f.environment = match &scene.environment {

@@ -47,6 +47,14 @@ fn env_true(name: &str) -> bool {
     std::env::var(name).is_ok_and(|v| matches!(v.to_ascii_lowercase().as_str(), "1" | "true" | "yes" | "y"))
 }
 
+/// Whether the environment rules twins out: Mesa's shader cache switched off (they could
+/// hand nothing over), or `LUMEN_PARALLEL_JIT=0`.
+fn switched_off() -> bool {
+    env_true("MESA_SHADER_CACHE_DISABLE")
+        || env_true("MESA_GLSL_CACHE_DISABLE")
+        || std::env::var("LUMEN_PARALLEL_JIT").is_ok_and(|v| v.trim() == "0")
+}
+
 /// Twins to open for `jobs` new kernels on a device described by `info` with `cores`
 /// cores (0: leave each kernel to compile at its first launch).
 fn twins_for(info: &wgpu::AdapterInfo, jobs: usize, cores: usize) -> usize {
@@ -55,9 +63,7 @@ fn twins_for(info: &wgpu::AdapterInfo, jobs: usize, cores: usize) -> usize {
     let lazy_jit = info.backend == wgpu::Backend::Vulkan
         && info.device_type == wgpu::DeviceType::Cpu
         && info.name.to_ascii_lowercase().contains("llvmpipe");
-    let cache_off = env_true("MESA_SHADER_CACHE_DISABLE") || env_true("MESA_GLSL_CACHE_DISABLE");
-    let off = std::env::var("LUMEN_PARALLEL_JIT").is_ok_and(|v| v.trim() == "0");
-    if !lazy_jit || cache_off || off || jobs < 2 {
+    if !lazy_jit || switched_off() || jobs < 2 {
         return 0;
     }
     cores.min(jobs).min(MAX_DEVICES).saturating_sub(1)
@@ -207,10 +213,7 @@ mod tests {
             assert_eq!(twins_for(&llvmpipe, 1, cores), 0);
         }
         assert_eq!(twins_for(&llvmpipe, 9, 1), 0);
-        let on = !(env_true("MESA_SHADER_CACHE_DISABLE")
-            || env_true("MESA_GLSL_CACHE_DISABLE")
-            || std::env::var("LUMEN_PARALLEL_JIT").is_ok_and(|v| v.trim() == "0"));
-        if on {
+        if !switched_off() {
             assert_eq!(twins_for(&llvmpipe, 9, 2), 1);
             assert_eq!(twins_for(&llvmpipe, 3, 16), 2);
             assert_eq!(twins_for(&llvmpipe, 20, 16), MAX_DEVICES - 1);
