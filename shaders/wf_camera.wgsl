@@ -1,7 +1,7 @@
 // #requires wf_path camera
 // Camera stage of the path tracer: one invocation per path slot of the batch writes its
 // camera ray. The rest of a path's start is implicit, to save two per-lane stores here and
-// loads later: bounce 0's ray queue is every slot in order (wf_trace.wgsl), its
+// loads later: bounce 0's ray queue is every slot in order (wf_intersect.wgsl), its
 // throughput 1 and the camera a delta "previous vertex" (load_beta); the host has cleared
 // the radiance.
 

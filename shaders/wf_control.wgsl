@@ -19,7 +19,7 @@ fn empty_queue(q: u32) {
     wf_clear_launch(q);
 }
 
-// After the trace stage's shadow launch: the bounce's closest-hit CSG queue has been evaluated, so it is
+// After the shadow stage: the bounce's closest-hit CSG queue has been evaluated, so it is
 // emptied and the CSG stage's second launch covers the shadow rays' trees alone.
 @compute @workgroup_size(1)
 fn shadow_csg_args() {

@@ -4,8 +4,8 @@
 // #endif
 // CSG stage: the trees a query deferred (in the order it met them, as cpu::World evaluates
 // them). Launched twice per bounce over two queues, one of them empty each time
-// (wf_control.wgsl): after the trace stage's closest-hit launch, over Q_CSG, the rays whose closest-hit
-// query met trees, against the best candidate the traversal found; after its shadow launch
+// (wf_control.wgsl): after the closest-hit stage over Q_CSG, the rays whose closest-hit
+// query met trees, against the best candidate the traversal found; after the shadow stage
 // over Q_SHADOW_CSG, the paths whose shadow rays met trees and nothing else, whose
 // contributions it then adds. Only this kernel holds CSG code, and it calls csg_first from
 // one place (Mesa inlines every call site).
@@ -42,7 +42,7 @@ fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
 // #if WF_SHADOW_CSG
         var value = vec3<f32>(0.0);
         if (shadows) {
-            // Shadow ray q, when the trace stage left its trees to evaluate.
+            // Shadow ray q, when the shadow stage left its trees to evaluate.
             let s = load_shadow_ray(slot, q);
             if (!s.present) {
                 break;

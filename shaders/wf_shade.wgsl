@@ -12,7 +12,7 @@
 // kind the scene uses, each with only its BRDF's code): one path vertex of
 // cpu::path_tracer per invocation. Seven draws, emission MIS-weighted against NEE; at
 // non-delta vertices the point lights and NEE become shadow rays with their contribution
-// (traced by the trace stage's shadow launch, pbrt-v4's deferred scheme); then BSDF sampling, Russian
+// (traced by the shadow stage, pbrt-v4's deferred scheme); then BSDF sampling, Russian
 // roulette and the next ray.
 
 // path_tracer::roulette_probability.

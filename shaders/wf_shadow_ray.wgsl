@@ -2,7 +2,7 @@
 // A path's shadow rays in `shadow`: batch.shadow_rays records per path slot of three vec4
 // (origin and tmin; direction and tmax; contribution and 1), a record whose last word is 0
 // ending the list (StateBuffer::Shadow: 48 bytes per ray). The shading stages write them,
-// the trace stage's shadow launch and the CSG stage's second launch read them.
+// the shadow stage and the CSG stage's second launch read them.
 
 fn shadow_index(slot: u32, k: u32) -> u32 {
     return 3u * (slot * batch.shadow_rays + k);

@@ -6,7 +6,7 @@
 // #endif
 // Closest hit and occlusion over the scene: the flattened BVH of finite objects (the
 // same 32-byte nodes the CPU traverses) plus the list of infinite planes tested by every
-// ray. Mirrors cpu::World. With CSG_QUEUE (the wavefront's trace stage) the CSG trees
+// ray. Mirrors cpu::World. With CSG_QUEUE (the wavefront's closest-hit stage) the CSG trees
 // a traversal meets are only recorded in `deferred`; the CSG stage evaluates them.
 
 // #if CSG
@@ -264,7 +264,7 @@ fn evaluate_deferred(ray_in: Ray, best_in: Candidate, any_hit: bool) -> Candidat
 
 // #if WF_COUNT
 // Queries this invocation made (stages that trace several rays per path count them here
-// and add the total once; closest-hit rays are counted by queue length).
+// and add the total once; the closest-hit stage's rays are counted by queue length).
 var<private> rays_traced: u32;
 // #endif
 
@@ -309,11 +309,15 @@ fn closest_hit(ray: Ray) -> Hit {
 // #endif
 // #endif
 
-// #if ONOFF
-// True when something lies on the ray strictly inside (tmin, tmax): the OnOff integrator's
-// one query. (The PointLight integrator and the trace stage call world_first or traverse
-// directly, from one call site each.)
+// #if SHADOWS
+// #if !POINTLIGHT
+// #if !CSG_QUEUE
+// True when something lies on the ray strictly inside (tmin, tmax). (The PointLight
+// integrator queries world_first directly, from one call site; with CSG_QUEUE the shadow
+// stage traverses and hands CSG trees to the CSG stage.)
 fn occluded(ray: Ray) -> bool {
     return world_first(ray, true).c.t < OPEN;
 }
+// #endif
+// #endif
 // #endif

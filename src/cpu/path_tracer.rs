@@ -129,8 +129,8 @@ fn escaped(ctx: &Context, settings: &PathTracerSettings, prev: &Previous, dir: D
 }
 
 /// Direct light from every point light (always on: point lights cannot be hit), each one's
-/// throughput-weighted contribution added on its own, as the GPU's trace stage adds each
-/// shadow ray's (`shaders/wf_shade.wgsl`, `wf_trace.wgsl`). (The vertex's state is passed
+/// throughput-weighted contribution added on its own, as the GPU's shadow stage adds each
+/// shadow ray's (`shaders/wf_shade.wgsl`, `wf_shadow.wgsl`). (The vertex's state is passed
 /// apart rather than bundled, to keep that per-light order of additions visible.)
 #[allow(clippy::too_many_arguments)]
 fn add_point_lights(

@@ -20,7 +20,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 48] = [
+const MODULES: [(&str, &str); 49] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -63,11 +63,12 @@ const MODULES: [(&str, &str); 48] = [
     ("shaders/wf_first_hit.wgsl", include_str!("../../shaders/wf_first_hit.wgsl")),
     ("shaders/wf_hit.wgsl", include_str!("../../shaders/wf_hit.wgsl")),
     ("shaders/wf_classify.wgsl", include_str!("../../shaders/wf_classify.wgsl")),
-    ("shaders/wf_trace.wgsl", include_str!("../../shaders/wf_trace.wgsl")),
+    ("shaders/wf_intersect.wgsl", include_str!("../../shaders/wf_intersect.wgsl")),
     ("shaders/wf_csg.wgsl", include_str!("../../shaders/wf_csg.wgsl")),
     ("shaders/wf_escape.wgsl", include_str!("../../shaders/wf_escape.wgsl")),
     ("shaders/wf_shade.wgsl", include_str!("../../shaders/wf_shade.wgsl")),
     ("shaders/wf_shadow_ray.wgsl", include_str!("../../shaders/wf_shadow_ray.wgsl")),
+    ("shaders/wf_shadow.wgsl", include_str!("../../shaders/wf_shadow.wgsl")),
     ("shaders/wf_film.wgsl", include_str!("../../shaders/wf_film.wgsl")),
 ];
 
@@ -211,7 +212,7 @@ pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>,
 /// b.sphere(Transform::IDENTITY, m);
 /// let src = lumen::gpu::render::shader_source(&b.build().unwrap()).unwrap();
 /// assert!(src.contains("fn sphere_span") && !src.contains("fn cylinder_span"));
-/// assert!(src.contains("fn trace_stage") && !src.contains("fn csg_stage"));
+/// assert!(src.contains("fn intersect_stage") && !src.contains("fn csg_stage"));
 /// ```
 pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
     let mut out = String::new();
@@ -697,8 +698,12 @@ mod tests {
         assert!(all.contains("sphere_span") && all.contains("sample_diffuse"), "{all:?}");
         // The closest-hit stage has no shading code; the shading stage no traversal.
         let names_of = |s: Stage| function_names(&modules.iter().find(|(x, _)| *x == s).unwrap().1);
-        let trace = names_of(Stage::Trace);
-        assert!(trace.contains("traverse") && !trace.contains("sample_bsdf") && !trace.contains("pigment_color"));
+        let intersect = names_of(Stage::Intersect);
+        assert!(
+            intersect.contains("traverse")
+                && !intersect.contains("sample_bsdf")
+                && !intersect.contains("pigment_color")
+        );
         let shade = names_of(Stage::Shade(crate::gpu::layout::brdf_kind::DIFFUSE));
         assert!(shade.contains("sample_diffuse") && !shade.contains("traverse") && !shade.contains("sphere_span"));
     }

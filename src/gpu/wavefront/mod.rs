@@ -297,7 +297,7 @@ impl<'a> Runner<'a> {
             path_tracer: features.renderer == RendererKind::PathTracer,
             csg: kernels.kernels.contains_key(&Stage::Csg),
             shade,
-            shadow: has_shadow_rays(features),
+            shadow: kernels.kernels.contains_key(&Stage::Shadow),
             shadow_csg: kernels.kernels.contains_key(&Stage::ShadowCsgArgs),
             max_depth,
             profiler: None,
@@ -370,7 +370,7 @@ impl<'a> Runner<'a> {
     /// queue (wf_push), so only `advance` (and, for shadow rays' CSG trees, one more) runs
     /// between stages.
     fn bounce(&self, pass: &mut wgpu::ComputePass<'_>, bounce: u32) -> Result<(), GpuError> {
-        self.indirect(pass, Stage::Trace, queue::RAY + (bounce & 1))?;
+        self.indirect(pass, Stage::Intersect, queue::RAY + (bounce & 1))?;
         if self.csg {
             self.indirect(pass, Stage::Csg, queue::CSG)?;
         }
@@ -381,8 +381,7 @@ impl<'a> Runner<'a> {
             }
         }
         if self.shadow {
-            // The same kernel: Q_SHADOW holds entries now, and only now (wf_trace.wgsl).
-            self.indirect(pass, Stage::Trace, queue::SHADOW)?;
+            self.indirect(pass, Stage::Shadow, queue::SHADOW)?;
             if self.shadow_csg {
                 // The shadow rays' CSG trees, through the one kernel that holds CSG code.
                 self.control_kernel(pass, Stage::ShadowCsgArgs)?;

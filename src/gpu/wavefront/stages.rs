@@ -20,19 +20,19 @@ pub enum Stage {
     /// The whole estimate of OnOff, Flat and PointLight: one closest-hit query and the
     /// point lights' shadow rays per camera sample.
     FirstHit,
-    /// Closest hit over the BVH and planes (CSG trees met go to the CSG queue), then, in a
-    /// second launch per bounce, the shadow rays (any-hit) with their deferred
-    /// contributions: one kernel, so the traversal is compiled once (`wf_trace.wgsl`).
-    Trace,
+    /// Closest hit over the BVH and planes; CSG trees met go to the CSG queue.
+    Intersect,
     /// Deferred CSG trees of the rays that met some.
     Csg,
     /// Rays that hit nothing: environment radiance, MIS-weighted.
     Escape,
     /// One path vertex at a surface of one BRDF kind (`Material::brdf`).
     Shade(u32),
+    /// Shadow rays, any-hit, with their deferred contributions.
+    Shadow,
     /// Per-pixel sums of the batch's paths in a fixed order.
     Film,
-    /// After the shadow rays' launch of the trace stage: the closest-hit CSG work of the bounce is done; its queue is
+    /// After the shadow stage: the closest-hit CSG work of the bounce is done; its queue is
     /// emptied so that the CSG stage's second launch covers the shadow rays' trees.
     ShadowCsgArgs,
     /// End of a bounce: count rays, empty the consumed queues and their launches.
@@ -45,13 +45,16 @@ impl Stage {
         if f.renderer != RendererKind::PathTracer {
             return vec![Stage::FirstHit, Stage::Film];
         }
-        let mut stages = vec![Stage::Camera, Stage::Trace, Stage::Escape];
+        let mut stages = vec![Stage::Camera, Stage::Intersect, Stage::Escape];
         if csg_queue(f) {
             stages.push(Stage::Csg);
         }
         stages.extend(shade_kinds(f).into_iter().map(Stage::Shade));
-        if has_shadow_rays(f) && csg_queue(f) {
-            stages.push(Stage::ShadowCsgArgs);
+        if has_shadow_rays(f) {
+            stages.push(Stage::Shadow);
+            if csg_queue(f) {
+                stages.push(Stage::ShadowCsgArgs);
+            }
         }
         stages.extend([Stage::Film, Stage::Advance]);
         stages
@@ -70,10 +73,11 @@ impl Stage {
         match self {
             Stage::Camera => ("wf_camera", "camera_stage"),
             Stage::FirstHit => ("wf_first_hit", "first_hit_stage"),
-            Stage::Trace => ("wf_trace", "trace_stage"),
+            Stage::Intersect => ("wf_intersect", "intersect_stage"),
             Stage::Csg => ("wf_csg", "csg_stage"),
             Stage::Escape => ("wf_escape", "escape_stage"),
             Stage::Shade(_) => ("wf_shade", "shade_stage"),
+            Stage::Shadow => ("wf_shadow", "shadow_stage"),
             Stage::Film => ("wf_film", "film_stage"),
             Stage::ShadowCsgArgs => ("wf_control", "shadow_csg_args"),
             Stage::Advance => ("wf_control", "advance"),
@@ -96,23 +100,12 @@ impl Stage {
             Stage::Camera => vec![Batch, Paths],
             Stage::FirstHit if f.csg => vec![Batch, Control, Paths, CsgPool],
             Stage::FirstHit => vec![Batch, Control, Paths],
-            Stage::Trace => {
-                let mut b = vec![Batch, Control, Queues, Paths];
-                if f.bvh || f.plane || f.csg {
-                    // The hit record (nothing to hit: every ray escapes and none is recorded).
-                    b.push(Words);
-                }
-                if has_shadow_rays(f) {
-                    b.push(Shadow);
-                }
-                if csg_queue(f) {
-                    b.push(DeferredRefs);
-                } else if f.csg {
-                    // Trees evaluated where the traversal meets them.
-                    b.push(CsgPool);
-                }
-                b
-            }
+            Stage::Intersect if csg_queue(f) => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
+            // Trees evaluated where the traversal meets them.
+            Stage::Intersect if f.csg => vec![Batch, Control, Queues, Paths, Words, CsgPool],
+            Stage::Intersect if f.bvh || f.plane => vec![Batch, Control, Queues, Paths, Words],
+            // Nothing to hit: every ray escapes and no hit is recorded.
+            Stage::Intersect => vec![Batch, Control, Queues, Paths],
             Stage::Csg if has_shadow_rays(f) => {
                 vec![Batch, Control, Queues, Paths, Words, Shadow, DeferredRefs, CsgPool]
             }
@@ -122,6 +115,10 @@ impl Stage {
                 vec![Batch, Control, Queues, Paths, Words, Shadow]
             }
             Stage::Shade(_) => vec![Batch, Control, Queues, Paths, Words],
+            // Trees met are handed to the CSG stage.
+            Stage::Shadow if csg_queue(f) => vec![Batch, Control, Queues, Paths, Shadow, DeferredRefs],
+            Stage::Shadow if f.csg => vec![Batch, Control, Queues, Paths, Shadow, CsgPool],
+            Stage::Shadow => vec![Batch, Control, Queues, Paths, Shadow],
             Stage::Film => vec![Batch, Control, Paths, Film],
             Stage::ShadowCsgArgs | Stage::Advance => vec![Control],
         };
@@ -139,9 +136,10 @@ impl Stage {
     fn launch_args_written(self, f: &FeatureSet) -> Vec<StateBuffer> {
         use StateBuffer::*;
         match self {
-            Stage::Trace if csg_queue(f) => vec![ArgsHits, ArgsCsg],
-            Stage::Trace | Stage::Csg => vec![ArgsHits],
+            Stage::Intersect if csg_queue(f) => vec![ArgsHits, ArgsCsg],
+            Stage::Intersect | Stage::Csg => vec![ArgsHits],
             Stage::Shade(_) => vec![ArgsRays],
+            Stage::Shadow if csg_queue(f) => vec![ArgsCsg],
             // The control kernels share one module (wf_control.wgsl), so one set of bindings.
             Stage::ShadowCsgArgs | Stage::Advance if csg_queue(f) => vec![ArgsRays, ArgsHits, ArgsCsg],
             Stage::ShadowCsgArgs | Stage::Advance => vec![ArgsRays, ArgsHits],
@@ -169,12 +167,9 @@ impl Stage {
                 }
                 n
             }
-            Stage::Trace => {
+            Stage::Intersect => {
                 let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "BVH_WALK", "MATERIALS"]].concat());
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
-                if has_shadow_rays(f) {
-                    n.extend(["SHADOWS", "WF_COUNT"]);
-                }
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED"]);
                 }
@@ -244,6 +239,14 @@ impl Stage {
                 ]);
                 n
             }
+            Stage::Shadow => {
+                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "BVH_WALK"]].concat());
+                n.extend(["SHADOWS", "WF_QUEUED", "WF_COUNT", "TRAVERSE", "SPANS"]);
+                if csg_queue(f) {
+                    n.extend(["CSG_QUEUE", "WF_DEFERRED", "WF_PUSH"]);
+                }
+                n
+            }
             Stage::Film | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
         // Where the tables are read from (their bindings are declared only where used).
@@ -251,7 +254,7 @@ impl Stage {
         if !scene.contains(&"GEOMETRY") {
             // Nothing to intersect: no spans or traversal helpers to call.
             names.retain(|n| !["SPANS", "TRAVERSE"].contains(n));
-            if self == Stage::Trace {
+            if self == Stage::Intersect {
                 names.retain(|n| *n != "MATERIALS");
             }
         }
@@ -259,21 +262,21 @@ impl Stage {
         let geometry = scene.contains(&"GEOMETRY");
         // The hit record: stored where a query ends (if anything can be hit), read back by
         // the CSG and shading stages.
-        if geometry && matches!(self, Stage::Trace | Stage::Csg) {
+        if geometry && matches!(self, Stage::Intersect | Stage::Csg) {
             names.push("WF_HIT_STORE");
         }
         if matches!(self, Stage::Csg | Stage::Shade(_)) {
             names.push("WF_HIT_LOAD");
         }
         if matches!(self, Stage::Camera | Stage::FirstHit)
-            || (geometry && matches!(self, Stage::Trace | Stage::Csg | Stage::Shade(_)))
+            || (geometry && matches!(self, Stage::Intersect | Stage::Csg | Stage::Shade(_) | Stage::Shadow))
         {
             names.push("AFFINE");
         }
         // The settings uniform, for the stages that read it.
         let settings = match self {
             Stage::Camera | Stage::FirstHit | Stage::Shade(_) => true,
-            Stage::Trace => geometry,
+            Stage::Intersect | Stage::Shadow => geometry,
             Stage::Escape => names.contains(&"NEE"),
             _ => false,
         };
@@ -318,17 +321,18 @@ impl Stage {
         match self {
             Stage::Camera => "STAGE_CAMERA",
             Stage::FirstHit => "STAGE_FIRST_HIT",
-            Stage::Trace => "STAGE_TRACE",
+            Stage::Intersect => "STAGE_INTERSECT",
             Stage::Csg => "STAGE_CSG",
             Stage::Escape => "STAGE_ESCAPE",
             Stage::Shade(_) => "STAGE_SHADE",
+            Stage::Shadow => "STAGE_SHADOW",
             Stage::Film => "STAGE_FILM",
             Stage::ShadowCsgArgs | Stage::Advance => "STAGE_CONTROL",
         }
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 32] = [
+    pub const NAMES: [&'static str; 33] = [
         "MICROFACET",
         "CSG_POOL_PRIVATE",
         "CSG_TREES",
@@ -356,10 +360,11 @@ impl Stage {
         "WF_SHADOW_CSG",
         "STAGE_CAMERA",
         "STAGE_FIRST_HIT",
-        "STAGE_TRACE",
+        "STAGE_INTERSECT",
         "STAGE_CSG",
         "STAGE_ESCAPE",
         "STAGE_SHADE",
+        "STAGE_SHADOW",
         "STAGE_FILM",
     ];
 
@@ -439,10 +444,11 @@ mod tests {
     /// The queues a stage's launches cover (`Runner::bounce`).
     fn launched_from(stage: Stage) -> Vec<u32> {
         match stage {
-            Stage::Trace => vec![queue::RAY, queue::RAY + 1, queue::SHADOW],
+            Stage::Intersect => vec![queue::RAY, queue::RAY + 1],
             Stage::Csg => vec![queue::CSG, queue::SHADOW_CSG],
             Stage::Escape => vec![queue::ESCAPE],
             Stage::Shade(kind) => vec![queue::shade(kind)],
+            Stage::Shadow => vec![queue::SHADOW],
             _ => vec![],
         }
     }

@@ -1,0 +1,45 @@
+// #requires wf_classify world
+// Closest-hit stage: BVH and planes for every ray of this bounce's ray queue. With
+// CSG_QUEUE, the CSG trees the traversal met are handed to the CSG stage with the best
+// candidate so far, instead of being evaluated here (DESIGN.md "Software adapters": code
+// reachable in this kernel costs every ray on SIMD software GPUs).
+
+@compute @workgroup_size(WF_WORKGROUP)
+fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let bounce = atomicLoad(&control[CTRL_BOUNCE]);
+    let index = wf_index(gid);
+    // Bounce 0's queue is every slot in order: the camera stage writes no entries.
+    var slot = WF_NONE;
+    if (bounce == 0u) {
+        if (index < batch.path_count) {
+            slot = index;
+        }
+    } else {
+        slot = wf_slot(Q_RAY + (bounce & 1u), index);
+    }
+    if (slot == WF_NONE) {
+        return;
+    }
+// #if CSG
+// #if !CSG_QUEUE
+    csg_use_slot(slot);
+// #endif
+// #endif
+    let ray = load_ray(slot);
+// #if CSG_QUEUE
+    let best = traverse(ray, false);
+    if (deferred.count > 0u) {
+        let base = deferred_record(slot, 0u);
+        deferred_refs[base] = deferred.count;
+        for (var k = 0u; k < deferred.count; k++) {
+            deferred_refs[base + 1u + k] = deferred.refs[k];
+        }
+        store_hit(slot, best);
+        wf_push(Q_CSG, slot);
+        return;
+    }
+    classify(slot, best);
+// #else
+    classify(slot, world_first(ray, false));
+// #endif
+}
