@@ -432,3 +432,28 @@ fn a_list_and_a_walk_give_the_same_image() {
         assert!(list == walk, "scene {k}: a list and a walk give different images");
     }
 }
+
+/// `GpuRenderOutput::kernel_seconds` and `kernels_compiled`: a renderer's first render of a
+/// scene creates every stage kernel, within the render's wall time; a second render of the
+/// same scene finds them all in the renderer's cache and creates none.
+#[test]
+fn kernel_creation_is_counted_once_per_renderer() {
+    use lumen::gpu::render::GpuRenderer;
+    let Some(gpu) = gpu_for_tests("kernel_creation_is_counted_once_per_renderer") else { return };
+    let scene = mixed_scene(pt(1, 3, true));
+    let opts = GpuRenderOptions::fixed_passes(Some(1), 1);
+    let mut renderer = GpuRenderer::new();
+    let first = renderer.render(&gpu, &scene, &opts).unwrap();
+    let stages = lumen::gpu::wavefront::Stage::for_scene(&first.features).len();
+    assert_eq!(first.kernels_compiled, stages);
+    assert!(
+        first.kernel_seconds > 0.0 && first.kernel_seconds <= first.seconds,
+        "{} of {} s",
+        first.kernel_seconds,
+        first.seconds
+    );
+    let second = renderer.render(&gpu, &scene, &opts).unwrap();
+    assert_eq!(second.kernels_compiled, 0);
+    assert!(second.kernel_seconds < first.kernel_seconds);
+    assert!(bits(&first.image) == bits(&second.image));
+}

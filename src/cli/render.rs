@@ -244,6 +244,16 @@ fn render_on_cpu(scene: &Scene, args: &RenderArgs, range: SampleRange) -> anyhow
     })
 }
 
+/// What the render's kernels cost: "kernels from cache", or how many were created and in
+/// how long (on llvmpipe their JIT compilation included).
+fn kernel_note(compiled: usize, seconds: f64) -> String {
+    match compiled {
+        0 => "kernels from cache".into(),
+        1 => format!("1 kernel created in {seconds:.2} s"),
+        n => format!("{n} kernels created in {seconds:.2} s"),
+    }
+}
+
 /// Says why a render stopped early (the same words for both renderers); returns whether it did.
 fn report_stop(stop: StopReason, spp_done: u64) -> bool {
     match stop {
@@ -284,7 +294,7 @@ fn render_on_gpu(
     }
     let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
     eprintln!(
-        "{}×{} {} on the GPU ({}): {} of {} samples per pixel, {} samples in {:.2} s ({:.2} Msamples/s)",
+        "{}×{} {} on the GPU ({}): {} of {} samples per pixel, {} samples in {:.2} s ({:.2} Msamples/s; {})",
         scene.width,
         scene.height,
         scene.renderer.name(),
@@ -293,7 +303,8 @@ fn render_on_gpu(
         out.spp_requested,
         samples,
         out.seconds,
-        samples as f64 / out.seconds.max(1e-9) / 1e6
+        samples as f64 / out.seconds.max(1e-9) / 1e6,
+        kernel_note(out.kernels_compiled, out.kernel_seconds)
     );
     let stopped_early = report_stop(out.stop, u64::from(out.spp_done));
     if out.spp_done == 0 {
@@ -458,6 +469,13 @@ fn make_video(output: &Path, count: u32) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn kernel_notes_say_what_was_created() {
+        assert_eq!(kernel_note(0, 0.001), "kernels from cache");
+        assert_eq!(kernel_note(1, 0.25), "1 kernel created in 0.25 s");
+        assert_eq!(kernel_note(9, 1.234), "9 kernels created in 1.23 s");
+    }
 
     #[test]
     fn frames_parse_and_space_evenly() {

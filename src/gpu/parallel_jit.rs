@@ -16,9 +16,11 @@
 //! A twin first waits up to `WARM_PROBE` for this device's first launch: when that ends so
 //! soon, the cache was warm and the twin is not opened.
 //!
-//! Only where it can help: llvmpipe through Vulkan, more than one core, at least two new
-//! kernels, and Mesa's shader cache not switched off (`MESA_SHADER_CACHE_DISABLE`).
-//! `LUMEN_PARALLEL_JIT=0` turns it off.
+//! Twins only where they can help: llvmpipe through Vulkan, more than one core, at least two
+//! new kernels, and Mesa's shader cache not switched off (`MESA_SHADER_CACHE_DISABLE`);
+//! `LUMEN_PARALLEL_JIT=0` turns them off. Without twins llvmpipe's kernels are still
+//! compiled here, one after another on this device, so that kernel creation ends before the
+//! render starts wherever it runs and is timed as such (`GpuRenderOutput::kernel_seconds`).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -55,29 +57,34 @@ fn switched_off() -> bool {
         || std::env::var("LUMEN_PARALLEL_JIT").is_ok_and(|v| v.trim() == "0")
 }
 
-/// Twins to open for `jobs` new kernels on a device described by `info` with `cores`
-/// cores (0: leave each kernel to compile at its first launch).
-fn twins_for(info: &wgpu::AdapterInfo, jobs: usize, cores: usize) -> usize {
-    // Vulkan only: wgpu's OpenGL backend also reaches llvmpipe, but through EGL contexts
-    // that a second device on another thread would have to share with care.
-    let lazy_jit = info.backend == wgpu::Backend::Vulkan
+/// Whether the device compiles a kernel at its first launch (llvmpipe through Vulkan;
+/// wgpu's OpenGL backend also reaches llvmpipe, but through EGL contexts that a second
+/// device on another thread would have to share with care).
+fn lazy_jit(info: &wgpu::AdapterInfo) -> bool {
+    info.backend == wgpu::Backend::Vulkan
         && info.device_type == wgpu::DeviceType::Cpu
-        && info.name.to_ascii_lowercase().contains("llvmpipe");
-    if !lazy_jit || switched_off() || jobs < 2 {
+        && info.name.to_ascii_lowercase().contains("llvmpipe")
+}
+
+/// Twins to open for `jobs` new kernels on a device described by `info` with `cores`
+/// cores (0: this device compiles them alone).
+fn twins_for(info: &wgpu::AdapterInfo, jobs: usize, cores: usize) -> usize {
+    if !lazy_jit(info) || switched_off() || jobs < 2 {
         return 0;
     }
     cores.min(jobs).min(MAX_DEVICES).saturating_sub(1)
 }
 
-/// Compiles `jobs` (kernels of `gpu`) before their first real launch, in parallel over
-/// twins of `gpu` where that helps (see the module documentation); does nothing elsewhere.
-/// Errors are this device's: a twin that fails only gives its share back.
+/// Compiles `jobs` (kernels of `gpu`) before their first real launch where the device
+/// compiles lazily, in parallel over twins of `gpu` where that helps (see the module
+/// documentation); does nothing elsewhere. Errors are this device's: a twin that fails
+/// only gives its share back.
 pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let twins = twins_for(&gpu.adapter_info, jobs.len(), cores);
-    if twins == 0 {
+    if !lazy_jit(&gpu.adapter_info) {
         return Ok(());
     }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let twins = twins_for(&gpu.adapter_info, jobs.len(), cores);
     // Largest source first: the last kernel to finish decides when all are done.
     let mut order: Vec<&Job> = jobs.iter().collect();
     order.sort_by_key(|j| std::cmp::Reverse(j.source.len()));

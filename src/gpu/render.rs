@@ -120,6 +120,11 @@ pub struct GpuRenderOutput {
     pub spp_requested: u32,
     /// Wall time, including packing and kernel compilation.
     pub seconds: f64,
+    /// Wall time of kernel creation within `seconds`: assembling, validating and creating
+    /// the scene's new kernels and, on llvmpipe, their JIT compilation (issue 12's goal 3).
+    pub kernel_seconds: f64,
+    /// Kernels created for this render (the others came from the renderer's cache).
+    pub kernels_compiled: usize,
     /// Path (or camera-sample) estimates that were NaN or infinite, written as 0.
     pub non_finite_samples: u64,
     pub stop: StopReason,
@@ -316,6 +321,7 @@ impl GpuRenderer {
                 .collect()
         });
         let built = built.into_iter().collect::<Result<Vec<_>, _>>()?;
+        let compiled = built.len();
         // llvmpipe compiles a kernel at its first launch, one at a time: compile the new ones
         // now, in parallel over more devices where that helps (gpu::parallel_jit).
         let jobs: Vec<parallel_jit::Job> = built
@@ -326,7 +332,7 @@ impl GpuRenderer {
         for (stage, source, kernel) in built {
             kernels.insert(stage, self.kernels.insert(&source, stage.entry().1, kernel));
         }
-        Ok(StageKernels { kernels })
+        Ok(StageKernels { kernels, compiled })
     }
 
     fn render_from(
@@ -344,7 +350,9 @@ impl GpuRenderer {
             gpu.adapter_info.device_type,
             gpu.limits.max_uniform_buffer_binding_size,
         );
+        let kernel_start = Instant::now();
         let kernels = self.stage_kernels(gpu, &f)?;
+        let kernel_seconds = kernel_start.elapsed().as_secs_f64();
         let buffers = SceneBuffers::upload(gpu, &kernels, packed)?;
         let s = &packed.settings;
         let path_tracer = f.renderer == RendererKind::PathTracer;
@@ -382,6 +390,8 @@ impl GpuRenderer {
             spp_done: acc.spp_done,
             spp_requested: end - first,
             seconds: start.elapsed().as_secs_f64(),
+            kernel_seconds,
+            kernels_compiled: kernels.compiled,
             non_finite_samples: counters.non_finite + acc.nonfinite,
             stop: acc.stop,
             features: FeatureSet { uniform_tables: UniformTables::NONE, ..f },

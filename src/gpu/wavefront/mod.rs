@@ -45,6 +45,9 @@ use crate::gpu::features::{FeatureSet, RendererKind};
 #[derive(Debug, Clone)]
 pub struct StageKernels {
     pub kernels: BTreeMap<Stage, Arc<ComputeKernel>>,
+    /// How many of them were new to the renderer (assembled, validated, created and, on
+    /// llvmpipe, JIT-compiled for this render) rather than found in its cache.
+    pub compiled: usize,
 }
 
 impl StageKernels {
