@@ -107,12 +107,12 @@ fn world_sample(f: Frame, s: LocalSample, delta_weight: vec3<f32>) -> BsdfSample
 }
 // #endif
 
-// The albedo row at `offset` in `floats` (`n` nodes uniform in √μ) read at μ.
+// The albedo row at `offset` in `rows` (`n` nodes uniform in √μ) read at μ.
 fn albedo_row(offset: u32, n: u32, mu: f32) -> f32 {
     let t = clamp(sqrt(max(mu, 0.0)), 0.0, 1.0) * f32(n - 1u);
     let j = min(u32(floor(t)), n - 2u);
     let w = t - f32(j);
-    return float_at(offset + j) * (1.0 - w) + float_at(offset + j + 1u) * w;
+    return row_at(offset + j) * (1.0 - w) + row_at(offset + j + 1u) * w;
 }
 
 // (1 − E(μo))(1 − E(μi)) · scale (optics::compensation::ms_lobe).

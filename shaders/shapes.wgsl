@@ -19,6 +19,7 @@
 
 // #if GEOMETRY
 // #if SPANS
+// #if SHAPE_SPANS
 fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
     switch kind {
 // #if SPHERE
@@ -52,6 +53,7 @@ fn shape_span(i: u32, ray: Ray) -> Span {
     let s = shapes[i];
     return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
 }
+// #endif
 
 // #endif
 

@@ -228,7 +228,12 @@ impl FeatureSet {
     /// True when the `floats` buffer is read: texels (image pigments or an image
     /// environment), or the energy rows of microfacet materials.
     pub fn textures(&self) -> bool {
-        self.pigment_image || self.env_image() || (self.microfacet() && self.materials())
+        self.pigment_image || self.env_image()
+    }
+
+    /// Microfacet materials' energy rows (their own table: `tables::Table::Rows`).
+    pub fn energy_rows(&self) -> bool {
+        self.microfacet() && self.materials()
     }
 
     /// Some BRDF kind that uses GGX microfacets.
@@ -344,7 +349,7 @@ impl FeatureSet {
 
     /// Every feature name a shader may test that the scene decides (see [`Self::names`]; the
     /// table placements' names are [`super::tables::Table::feature`]).
-    pub const ALL_NAMES: [&'static str; 37] = [
+    pub const ALL_NAMES: [&'static str; 38] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -362,6 +367,7 @@ impl FeatureSet {
         "PIGMENT_CHECKERED",
         "PIGMENT_IMAGE",
         "TEXTURES",
+        "ENERGY_ROWS",
         "DIFFUSE",
         "SPECULAR",
         "DIELECTRIC",
@@ -405,6 +411,7 @@ impl FeatureSet {
             (self.pigment_checkered, "PIGMENT_CHECKERED"),
             (self.pigment_image, "PIGMENT_IMAGE"),
             (self.textures(), "TEXTURES"),
+            (self.energy_rows(), "ENERGY_ROWS"),
             (self.diffuse, "DIFFUSE"),
             (self.specular, "SPECULAR"),
             (self.dielectric, "DIELECTRIC"),

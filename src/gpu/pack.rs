@@ -42,8 +42,12 @@ pub struct PackedScene {
     pub csg_trees: Vec<layout::CsgTree>,
     pub materials: Vec<layout::Material>,
     pub pigments: Vec<layout::Pigment>,
-    /// Texels, then the environment's importance-sampling tables.
+    /// Texels, the environment's importance-sampling tables and mesh lights' CDFs.
     pub floats: Vec<f32>,
+    /// The microfacet materials' energy rows (`layout::Material::rows` indexes them): a
+    /// table of its own, small enough for a uniform buffer where `floats` is not (an image
+    /// environment makes it megabytes).
+    pub rows: Vec<f32>,
     pub point_lights: Vec<layout::PointLight>,
     pub area_lights: Vec<layout::AreaLight>,
     /// Triangles of every distinct mesh, in bottom-level BVH leaf order
@@ -186,6 +190,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
         materials: Vec::new(),
         pigments: Vec::new(),
         floats: Vec::new(),
+        rows: Vec::new(),
         point_lights: Vec::new(),
         area_lights: Vec::new(),
         tri_positions: Vec::new(),
@@ -249,7 +254,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
     for m in &scene.materials {
         let pigment = push_pigment(&mut p, &mut textures, m.brdf.pigment())?;
         let emitted = push_pigment(&mut p, &mut textures, &m.emitted)?;
-        let material = pack_material(&m.brdf, pigment, emitted, &mut p.floats);
+        let material = pack_material(&m.brdf, pigment, emitted, &mut p.rows);
         p.materials.push(material);
     }
     p.environment = pack_environment(scene, &mut p.floats, &mut textures)?;
@@ -373,12 +378,12 @@ struct PackedMesh {
 /// A material's kind and constants. The microfacet kinds get what depends on their α and η
 /// only, computed here in f64 once (the CPU reference computes the same per query through
 /// the same functions): the compensation constants, and the energy tables' rows at the
-/// material's α and η, appended to `floats`, so the kernel interpolates in μ alone.
-fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, floats: &mut Vec<f32>) -> layout::Material {
-    let mut m = layout::Material { pigment, emitted, ior: 1.0, rows: floats.len() as u32, ..Zeroable::zeroed() };
+/// material's α and η, appended to `rows`, so the kernel interpolates in μ alone.
+fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, rows: &mut Vec<f32>) -> layout::Material {
+    let mut m = layout::Material { pigment, emitted, ior: 1.0, rows: rows.len() as u32, ..Zeroable::zeroed() };
     // Generated on first use (a few tenths of a second), so only for the microfacet kinds.
     let tables = energy_tables;
-    let mut push_row = |row: &[f64]| floats.extend(row.iter().map(|&v| v as f32));
+    let mut push_row = |row: &[f64]| rows.extend(row.iter().map(|&v| v as f32));
     let three = |c: Color, w: f64| [c.r as f32, c.g as f32, c.b as f32, w as f32];
     match *brdf {
         Brdf::Diffuse { .. } => m.brdf = layout::brdf_kind::DIFFUSE,
@@ -789,7 +794,7 @@ mod tests {
         assert_eq!(kinds, [CONDUCTOR, CONDUCTOR, ROUGH_DIELECTRIC, PLASTIC, PLASTIC, DIELECTRIC]);
         let rows = |i: usize, n: usize| {
             let start = p.materials[i].rows as usize;
-            p.floats[start..start + n].iter().map(|&v| f64::from(v)).collect::<Vec<f64>>()
+            p.rows[start..start + n].iter().map(|&v| f64::from(v)).collect::<Vec<f64>>()
         };
         let t = energy_tables();
         let (m0, m1) = (p.materials[0], p.materials[1]);

@@ -39,10 +39,12 @@ pub enum Table {
     AreaLights,
     /// Texels and sampling tables (f32), packed four to a `vec4<f32>` in the uniform form.
     Floats,
+    /// The microfacet materials' energy rows (f32), packed like `Floats`.
+    Rows,
 }
 
 impl Table {
-    pub const ALL: [Table; 9] = [
+    pub const ALL: [Table; 10] = [
         Table::Shapes,
         Table::Indices,
         Table::BvhNodes,
@@ -52,6 +54,7 @@ impl Table {
         Table::PointLights,
         Table::AreaLights,
         Table::Floats,
+        Table::Rows,
     ];
 
     /// The `@group(1) @binding` of the table.
@@ -66,6 +69,7 @@ impl Table {
             Table::PointLights => 11,
             Table::AreaLights => 12,
             Table::Floats => 10,
+            Table::Rows => 15,
         }
     }
 
@@ -86,6 +90,7 @@ impl Table {
             Table::PointLights => "UNIFORM_POINT_LIGHTS",
             Table::AreaLights => "UNIFORM_AREA_LIGHTS",
             Table::Floats => "UNIFORM_FLOATS",
+            Table::Rows => "UNIFORM_ROWS",
         }
     }
 
@@ -106,6 +111,7 @@ impl Table {
             Table::PointLights => "point_lights",
             Table::AreaLights => "area_lights",
             Table::Floats => "floats",
+            Table::Rows => "rows",
         }
     }
 
@@ -121,7 +127,7 @@ impl Table {
             Table::Pigments => "Pigment",
             Table::PointLights => "PointLight",
             Table::AreaLights => "AreaLight",
-            Table::Floats => "f32",
+            Table::Floats | Table::Rows => "f32",
         }
     }
 
@@ -138,6 +144,7 @@ impl Table {
             Table::PointLights => &["POINT_LIGHTS"],
             Table::AreaLights => &["AREA_LIGHTS"],
             Table::Floats => &["TEXTURES"],
+            Table::Rows => &["ENERGY_ROWS"],
         }
     }
 
@@ -151,8 +158,9 @@ impl Table {
             Table::Floats => Some((
                 "float_at",
                 "texels (rgb triples) of image pigments and the environment, the environment's \
-                 importance-sampling arrays, energy rows and mesh-light CDFs",
+                 importance-sampling arrays and mesh-light CDFs",
             )),
+            Table::Rows => Some(("row_at", "the microfacet materials' energy rows (Material::rows)")),
             _ => None,
         }
     }
@@ -160,7 +168,7 @@ impl Table {
     /// Bytes of one element of the storage form (a binding holds at least one).
     pub fn storage_element_bytes(self) -> usize {
         match self {
-            Table::Indices | Table::Floats => 4,
+            Table::Indices | Table::Floats | Table::Rows => 4,
             _ => self.stride(),
         }
     }
@@ -171,7 +179,7 @@ impl Table {
         use std::mem::size_of;
         match self {
             Table::Shapes => size_of::<layout::Shape>(),
-            Table::Indices | Table::Floats => 16,
+            Table::Indices | Table::Floats | Table::Rows => 16,
             Table::BvhNodes => size_of::<BvhNode>(),
             Table::CsgTrees => size_of::<layout::CsgTree>(),
             Table::Materials => size_of::<layout::Material>(),
@@ -198,6 +206,7 @@ impl Table {
             Table::PointLights => bytemuck::cast_slice(&p.point_lights),
             Table::AreaLights => bytemuck::cast_slice(&p.area_lights),
             Table::Floats => bytemuck::cast_slice(&p.floats),
+            Table::Rows => bytemuck::cast_slice(&p.rows),
         }
     }
 

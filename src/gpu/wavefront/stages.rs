@@ -208,6 +208,10 @@ impl Stage {
                 ];
                 allowed.extend(SHAPES);
                 allowed.push(kind_name(kind));
+                if microfacet_kind(kind) {
+                    // Their energy rows (tables::Table::Rows).
+                    allowed.push("ENERGY_ROWS");
+                }
                 if casts_shadow_rays(kind) {
                     allowed.push("POINT_LIGHTS");
                     if f.nee {
@@ -224,7 +228,7 @@ impl Stage {
                 }
                 // Sampling mesh lights reads their triangle tables in `floats`.
                 let mesh_lights = ["MESH_LIGHTS", "SHADOWS"].iter().all(|x| n.contains(x));
-                if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") || microfacet_kind(kind) || mesh_lights {
+                if n.contains(&"PIGMENT_IMAGE") || n.contains(&"ENV_IMAGE") || mesh_lights {
                     n.push("TEXTURES");
                 }
                 n.extend([
@@ -257,6 +261,11 @@ impl Stage {
             if self == Stage::Intersect {
                 names.retain(|n| *n != "MATERIALS");
             }
+        }
+        // Finite shapes' spans: for BVH leaves and CSG leaves (planes alone cross by their
+        // own test).
+        if names.contains(&"SPANS") && (scene.contains(&"BVH") || scene.contains(&"CSG")) {
+            names.push("SHAPE_SPANS");
         }
         // Placed shapes and the camera transform points; nothing else does.
         let geometry = scene.contains(&"GEOMETRY");
@@ -332,7 +341,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 33] = [
+    pub const NAMES: [&'static str; 34] = [
         "MICROFACET",
         "CSG_POOL_PRIVATE",
         "CSG_TREES",
@@ -347,6 +356,7 @@ impl Stage {
         "PIGMENTS",
         "TRAVERSE",
         "SPANS",
+        "SHAPE_SPANS",
         "CSG_QUEUE",
         "WF_QUEUED",
         "WF_PUSH",
