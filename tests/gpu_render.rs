@@ -436,14 +436,20 @@ fn csg_scene(renderer: Renderer) -> Scene {
     b.build().unwrap()
 }
 
-#[test]
-fn csg_matches_the_cpu() {
-    let Some(gpu) = gpu_for_tests("csg_matches_the_cpu") else { return };
-    for renderer in [
+/// The renderers the CSG scenes are checked with: a first-hit one without and one with
+/// shadow rays, and the path tracer.
+fn csg_renderers() -> [Renderer; 3] {
+    [
         Renderer::Flat { background: Color::BLACK },
         Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.02) },
         Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
-    ] {
+    ]
+}
+
+#[test]
+fn csg_matches_the_cpu() {
+    let Some(gpu) = gpu_for_tests("csg_matches_the_cpu") else { return };
+    for renderer in csg_renderers() {
         println!("{}", renderer.name());
         let scene = csg_scene(renderer);
         let f = lumen::gpu::features::FeatureSet::of(&scene);
@@ -459,11 +465,7 @@ fn csg_matches_the_cpu() {
 #[test]
 fn unbounded_csg_trees_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("unbounded_csg_trees_match_the_cpu") else { return };
-    for renderer in [
-        Renderer::Flat { background: Color::BLACK },
-        Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.02) },
-        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
-    ] {
+    for renderer in csg_renderers() {
         println!("{}", renderer.name());
         let mut b = SceneBuilder::new(24, 18);
         let red = b.diffuse(Color::new(0.8, 0.2, 0.1));

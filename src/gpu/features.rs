@@ -225,8 +225,10 @@ impl FeatureSet {
         }
     }
 
-    /// True when the `floats` buffer is read: texels (image pigments or an image
-    /// environment), or the energy rows of microfacet materials.
+    /// True when the `floats` buffer is read for texels (image pigments or an image
+    /// environment, with its sampling tables); the shading stages also read it for mesh
+    /// lights' CDFs (`Stage::names`), and the energy rows have their own table
+    /// ([`Self::energy_rows`]).
     pub fn textures(&self) -> bool {
         self.pigment_image || self.env_image()
     }
