@@ -266,7 +266,9 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
 }
 // #endif
 
-// AreaLight::pdf: density of light_sample producing y (geometric normal n_y) from x.
+// #if EMISSION
+// AreaLight::pdf: density of light_sample producing y (geometric normal n_y) from x (for
+// emission's MIS weight, in the shading stages of kinds with emitters).
 fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: vec3<f32>) -> f32 {
 // #if SPHERE_LIGHTS
     if (light_uses_cone(light, x, x_object)) {
@@ -288,6 +290,7 @@ fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: v
     return light_area_pdf(light, x, y, light_object_normal(s.kind, p_obj));
 // #endif
 }
+// #endif
 
 // #if SHADOWS
 // AreaLight::emission at a sampled point.

@@ -12,6 +12,7 @@
 // vertex a path stores between stages, the power heuristic, and the MIS weight of radiance
 // found by BSDF sampling (escaped rays here; emitters hit in wf_shade.wgsl).
 
+// #if WF_RADIANCE_ADD
 // What the next vertex needs to know about the one that scattered the ray to it.
 struct Previous {
     point: vec3<f32>,
@@ -34,6 +35,7 @@ fn load_previous(slot: u32, beta: vec4<f32>) -> Previous {
     }
     return Previous(bitcast<vec3<f32>>(w.xyz), w.w, delta, beta.w);
 }
+// #endif
 
 // #if NEE
 // path_tracer::power_heuristic a² / (a² + b²), written with the ratio of the smaller density

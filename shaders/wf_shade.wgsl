@@ -20,8 +20,10 @@ fn roulette_probability(color: vec3<f32>) -> f32 {
     return clamp(1.0 - max(max(color.x, color.y), color.z), 0.05, 1.0);
 }
 
+// #if EMISSION
 // Emitted radiance at the hit, MIS-weighted when NEE could also have sampled it (and
-// settings.nee asks for it: see pt_escaped).
+// settings.nee asks for it: see pt_escaped). Only in the stages of BRDF kinds with an
+// emitting material (features::KindUse).
 fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
     let le = pigment_color(m.emitted, hit.uv);
 // #if AREA_LIGHTS
@@ -38,6 +40,7 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
     return le;
 // #endif
 }
+// #endif
 
 // #if NEE
 // #if SHADOWS
@@ -137,9 +140,10 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let m = materials[hit.material];
     let color = pigment_color(m.pigment, hit.uv);
     let beta_pdf = load_beta(slot, bounce);
-    let prev = load_previous(slot, beta_pdf);
     var beta = beta_pdf.xyz;
-    add_radiance(slot, beta * pt_emitted(prev, hit, m));
+// #if EMISSION
+    add_radiance(slot, beta * pt_emitted(load_previous(slot, beta_pdf), hit, m));
+// #endif
     if (bounce == settings.max_depth) {
         return;
     }

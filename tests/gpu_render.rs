@@ -330,6 +330,71 @@ fn path_tracer_matches_the_cpu() {
     assert_matches_cpu(&gpu, &path_traced_scene(true, Some(gradient)), None, 0.99);
 }
 
+/// Each BRDF kind's shading stage compiles only what its own materials use
+/// (`features::KindUse`): here the diffuse materials sit on a plane, a sphere and a
+/// cylinder, but light sampling reaches the checkered emission of a mirror cube (so the
+/// diffuse stage keeps the cube and checkers for the light alone); the mirror emits (its
+/// stage weighs emission against NEE: cube and sphere light densities); the glass emits
+/// nothing and samples no light (no light code at all). The GPU still matches the CPU,
+/// and the specialised kernels give bitwise the full-featured kernels' image.
+#[test]
+fn each_brdf_kind_compiles_only_what_its_materials_use() {
+    use lumen::gpu::features::FeatureSet;
+    use lumen::gpu::layout::brdf_kind;
+    use lumen::gpu::wavefront::Stage;
+    let mut b = SceneBuilder::new(24, 18);
+    let checkers = Pigment::Checkered { n: 4, on: Color::gray(0.8), off: Color::new(0.2, 0.3, 0.6) };
+    let floor = b.material(Material::new(Brdf::Diffuse { pigment: checkers.clone() }, Pigment::Uniform(Color::BLACK)));
+    let clay = b.diffuse(Color::new(0.7, 0.4, 0.3));
+    let lamp = common::emissive(&mut b, 0.2, 5.0);
+    let glowing_mirror = b.material(Material::new(
+        Brdf::Specular {
+            pigment: Pigment::Uniform(Color::gray(0.7)),
+            threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD,
+        },
+        Pigment::Checkered { n: 3, on: Color::new(3.0, 2.0, 1.0), off: Color::gray(0.5) },
+    ));
+    let glass = common::glass(&mut b);
+    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), floor)
+        .sphere(Transform::translation(DVec3::new(4.0, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), clay)
+        .cylinder(Transform::translation(DVec3::new(5.0, -1.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), clay)
+        .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.8)) * Transform::scaling(DVec3::splat(0.3)), lamp)
+        .cube(
+            Transform::translation(DVec3::new(5.5, -0.3, 0.2)) * Transform::scaling(DVec3::new(0.3, 1.2, 1.0)),
+            glowing_mirror,
+        )
+        .sphere(Transform::translation(DVec3::new(3.2, -0.5, -0.5)) * Transform::scaling(DVec3::splat(0.5)), glass)
+        .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
+        .renderer(pt(1, 5, 3, true))
+        .tracer(Tracer { samples_per_side: 2, rng: PcgSeed { state: 3, inc: 9 } });
+    let scene = b.build().unwrap();
+    let f = FeatureSet::of(&scene);
+    let names = |kind| Stage::Shade(kind).names(&f);
+    let has = |kind, all: &[&str]| all.iter().all(|n| names(kind).contains(n));
+    let lacks = |kind, any: &[&str]| !any.iter().any(|n| names(kind).contains(n));
+    assert!(has(brdf_kind::DIFFUSE, &["PLANE", "SPHERE", "CYLINDER", "CUBE", "PIGMENT_CHECKERED", "EMISSION", "NEE"]));
+    assert!(has(brdf_kind::SPECULAR, &["CUBE", "PIGMENT_CHECKERED", "EMISSION", "AREA_LIGHTS", "CUBE_LIGHTS"]));
+    assert!(lacks(brdf_kind::SPECULAR, &["PLANE", "SPHERE", "CYLINDER"]));
+    assert!(has(brdf_kind::DIELECTRIC, &["SPHERE", "PIGMENT_UNIFORM"]));
+    assert!(lacks(
+        brdf_kind::DIELECTRIC,
+        &["PLANE", "CUBE", "CYLINDER", "PIGMENT_CHECKERED", "EMISSION", "AREA_LIGHTS", "NEE", "WF_RADIANCE_ADD"]
+    ));
+    let Some(gpu) = gpu_for_tests("each_brdf_kind_compiles_only_what_its_materials_use") else { return };
+    let own = assert_matches_cpu(&gpu, &scene, None, 0.99);
+    let full = render(
+        &gpu,
+        &scene,
+        &GpuRenderOptions { features: Some(f.full_for()), ..GpuRenderOptions::fixed_passes(None, 4) },
+    )
+    .unwrap();
+    assert!(own
+        .pixels()
+        .iter()
+        .zip(full.image.pixels())
+        .all(|(x, y)| [x.r, x.g, x.b].map(f32::to_bits) == [y.r, y.g, y.b].map(f32::to_bits)));
+}
+
 /// Every CSG operation, nested, with a plane half-space and transformed CSG nodes; flat
 /// shading shows which leaf's material each surface carries, the path tracer the normals.
 fn csg_scene(renderer: Renderer) -> Scene {

@@ -6,7 +6,7 @@
 //! instead of a worst case.
 
 use super::tables::UniformTables;
-use crate::scene::{Brdf, Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
+use crate::scene::{Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
 
 /// CSG bounds compiled into a full-featured kernel ([`FeatureSet::full_for`]): a general
 /// kernel is sized for the worst scene it accepts; these cover every example scene, and a
@@ -38,6 +38,95 @@ impl EnvKind {
         self == scene || self == All || matches!((self, scene), (Background, Uniform) | (Uniform, Background))
     }
 }
+
+/// What one BRDF kind's shading stage needs of the scene's shape and pigment kinds, and
+/// whether it adds emission: a subset of [`KindUse::NAMES`]. The stage compiles only these
+/// (`wavefront::Stage::names`): a mirror kernel in a scene whose checkered floor is diffuse
+/// and whose only emitter is a diffuse sphere holds neither checkers, nor the floor's plane
+/// nor emission's MIS (with its light densities). [`FeatureSet::of`] fills it per kind;
+/// the default is every name (no restriction beyond the scene's own features), which is
+/// what hand-made and full-featured sets get.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct KindUse {
+    /// One bit per entry of [`KindUse::NAMES`].
+    bits: u16,
+}
+
+impl Default for KindUse {
+    fn default() -> Self {
+        Self::ALL
+    }
+}
+
+impl KindUse {
+    /// The feature names a kind may do without. `EMISSION` is the shading stage's own (the
+    /// emitted radiance at a hit and its MIS weight, `wf_shade.wgsl`); the others are scene
+    /// names ([`FeatureSet::names`]) that the stage keeps only when the kind needs them.
+    pub const NAMES: [&'static str; 9] = [
+        "SPHERE",
+        "PLANE",
+        "CUBE",
+        "CYLINDER",
+        "MESH",
+        "PIGMENT_UNIFORM",
+        "PIGMENT_CHECKERED",
+        "PIGMENT_IMAGE",
+        "EMISSION",
+    ];
+    /// Every name.
+    pub const ALL: KindUse = KindUse { bits: (1 << Self::NAMES.len()) - 1 };
+    /// No name.
+    pub const NONE: KindUse = KindUse { bits: 0 };
+
+    /// `self` with `name` (one of [`Self::NAMES`]) added.
+    ///
+    /// ```
+    /// use lumen::gpu::features::KindUse;
+    /// let u = KindUse::NONE.with("SPHERE").with("EMISSION");
+    /// assert!(u.has("SPHERE") && u.has("EMISSION") && !u.has("PLANE"));
+    /// assert!(KindUse::ALL.covers(u) && !u.covers(KindUse::ALL));
+    /// ```
+    pub fn with(self, name: &str) -> Self {
+        let bit = Self::NAMES.iter().position(|n| *n == name).expect("a KindUse name");
+        Self { bits: self.bits | 1 << bit }
+    }
+
+    /// Whether `name` is in the set (false for a name not in [`Self::NAMES`]).
+    pub fn has(self, name: &str) -> bool {
+        Self::NAMES.iter().position(|n| *n == name).is_some_and(|bit| self.bits & 1 << bit != 0)
+    }
+
+    /// Both sets together.
+    pub fn union(self, other: KindUse) -> Self {
+        Self { bits: self.bits | other.bits }
+    }
+
+    /// Whether `self` holds every name of `other`.
+    pub fn covers(self, other: KindUse) -> bool {
+        self.bits & other.bits == other.bits
+    }
+
+    fn with_pigment(self, p: &Pigment) -> Self {
+        self.with(match p {
+            Pigment::Uniform(_) => "PIGMENT_UNIFORM",
+            Pigment::Checkered { .. } => "PIGMENT_CHECKERED",
+            Pigment::Image { .. } => "PIGMENT_IMAGE",
+        })
+    }
+
+    fn shape_name(kind: ShapeKind) -> &'static str {
+        match kind {
+            ShapeKind::Sphere => "SPHERE",
+            ShapeKind::Plane => "PLANE",
+            ShapeKind::Cube => "CUBE",
+            ShapeKind::Cylinder => "CYLINDER",
+        }
+    }
+}
+
+/// BRDF kinds (`layout::brdf_kind::COUNT`), one shading stage each.
+pub const BRDF_KINDS: usize = 6;
+const _: () = assert!(BRDF_KINDS == crate::gpu::layout::brdf_kind::COUNT as usize);
 
 /// Integrator kinds, for specialisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -103,6 +192,12 @@ pub struct FeatureSet {
     /// The tables read from uniform buffers instead of storage buffers: chosen per render
     /// for the adapter ([`UniformTables::choose`]); [`FeatureSet::of`] leaves it empty.
     pub uniform_tables: UniformTables,
+    /// Per BRDF kind (indexed by `layout::brdf_kind`), what the materials of that kind need
+    /// in their shading stage: the shapes they sit on, their pigments, whether one emits.
+    pub shade_use: [KindUse; BRDF_KINDS],
+    /// What sampling the area lights needs beyond a kind's own use (their shapes' kinds and
+    /// their emitted pigments), in the shading stages that sample lights.
+    pub light_use: KindUse,
 }
 
 impl FeatureSet {
@@ -114,6 +209,8 @@ impl FeatureSet {
         let scene = &*form;
         let mut f = FeatureSet { renderer: RendererKind::of(&scene.renderer), ..Default::default() };
         let mut used = vec![false; scene.materials.len()];
+        // The shape kinds each material sits on.
+        let mut carriers = vec![KindUse::NONE; scene.materials.len()];
         for shape in &scene.shapes {
             match shape {
                 Shape::Mesh(m) => {
@@ -121,6 +218,7 @@ impl FeatureSet {
                     f.mesh = true;
                     if let Some(u) = used.get_mut(m.material.0 as usize) {
                         *u = true;
+                        carriers[m.material.0 as usize] = carriers[m.material.0 as usize].with("MESH");
                     }
                 }
                 Shape::Primitive(p) => {
@@ -147,6 +245,8 @@ impl FeatureSet {
                 }
                 if let Some(u) = used.get_mut(p.material.0 as usize) {
                     *u = true;
+                    let c = &mut carriers[p.material.0 as usize];
+                    *c = c.with(KindUse::shape_name(p.kind));
                 }
             });
         }
@@ -155,21 +255,23 @@ impl FeatureSet {
             RendererKind::PointLight => !scene.point_lights.is_empty(),
             _ => true,
         };
-        for (m, _) in scene.materials.iter().zip(&used).filter(|(_, u)| **u) {
+        f.shade_use = [KindUse::NONE; BRDF_KINDS];
+        f.light_use = KindUse::NONE;
+        for ((m, _), carrier) in scene.materials.iter().zip(&used).zip(&carriers).filter(|((_, u), _)| **u) {
             if needs_shading {
                 f.add_pigment(m.brdf.pigment());
-                if !m.emitted.is_black() {
+                if m.is_emissive() {
                     f.add_pigment(&m.emitted);
                 }
             }
-            match m.brdf {
-                Brdf::Diffuse { .. } => f.diffuse = true,
-                Brdf::Specular { .. } => f.specular = true,
-                Brdf::Dielectric { roughness: 0.0, .. } => f.dielectric = true,
-                Brdf::Dielectric { .. } => f.rough_dielectric = true,
-                Brdf::Conductor { .. } => f.conductor = true,
-                Brdf::Plastic { .. } => f.plastic = true,
+            let kind = crate::gpu::layout::brdf_kind::of(&m.brdf);
+            *f.brdf_flag(kind) = true;
+            let mut u = f.shade_use[kind as usize].union(*carrier).with_pigment(m.brdf.pigment());
+            if m.is_emissive() {
+                u = u.with_pigment(&m.emitted).with("EMISSION");
+                f.light_use = f.light_use.with_pigment(&m.emitted);
             }
+            f.shade_use[kind as usize] = u;
         }
         // Only integrators that scatter need BRDF code.
         if !matches!(f.renderer, RendererKind::PathTracer | RendererKind::PointLight) {
@@ -198,6 +300,12 @@ impl FeatureSet {
             f.sphere_lights = some_light(&kind(ShapeKind::Sphere));
             f.cube_lights = some_light(&kind(ShapeKind::Cube));
             f.mesh_lights = some_light(&|s| matches!(s, Shape::Mesh(_)));
+            // A light's emission is looked up at its sampled point (uv from its shape).
+            for (on, name) in [(f.sphere_lights, "SPHERE"), (f.cube_lights, "CUBE"), (f.mesh_lights, "MESH")] {
+                if on {
+                    f.light_use = f.light_use.with(name);
+                }
+            }
         }
         if f.renderer != RendererKind::OnOff {
             f.environment = match &scene.environment {
@@ -215,6 +323,31 @@ impl FeatureSet {
             .filter(|s| matches!(crate::prepare::Placement::of(s), crate::prepare::Placement::Tree(_)));
         f.object_list = super::traversal::prefers_list(&f, u32::try_from(finite.count()).unwrap_or(u32::MAX));
         f
+    }
+
+    /// Whether the scene has materials of BRDF kind `kind` (`layout::brdf_kind`).
+    ///
+    /// ```
+    /// use lumen::gpu::features::FeatureSet;
+    /// use lumen::gpu::layout::brdf_kind;
+    /// let glass = FeatureSet { dielectric: true, ..FeatureSet::default() };
+    /// assert!(glass.has_brdf_kind(brdf_kind::DIELECTRIC) && !glass.has_brdf_kind(brdf_kind::DIFFUSE));
+    /// ```
+    pub fn has_brdf_kind(&self, kind: u32) -> bool {
+        let mut f = *self;
+        *f.brdf_flag(kind)
+    }
+
+    fn brdf_flag(&mut self, kind: u32) -> &mut bool {
+        use crate::gpu::layout::brdf_kind::*;
+        match kind {
+            DIFFUSE => &mut self.diffuse,
+            SPECULAR => &mut self.specular,
+            DIELECTRIC => &mut self.dielectric,
+            CONDUCTOR => &mut self.conductor,
+            ROUGH_DIELECTRIC => &mut self.rough_dielectric,
+            _ => &mut self.plastic,
+        }
     }
 
     fn add_pigment(&mut self, p: &Pigment) {
@@ -299,6 +432,8 @@ impl FeatureSet {
             object_list: self.object_list,
             nee: path,
             uniform_tables: self.uniform_tables,
+            shade_use: [KindUse::ALL; BRDF_KINDS],
+            light_use: KindUse::ALL,
         }
     }
 
@@ -315,6 +450,14 @@ impl FeatureSet {
             scene.names().into_iter().filter(|n| !self.names().contains(n)).map(|n| format!("feature {n}")).collect();
         if self.renderer != scene.renderer {
             missing.push(format!("renderer {:?} (kernel: {:?})", scene.renderer, self.renderer));
+        }
+        for (k, (kernel, needed)) in self.shade_use.iter().zip(&scene.shade_use).enumerate() {
+            if !kernel.covers(*needed) {
+                missing.push(format!("shading names of BRDF kind {k}"));
+            }
+        }
+        if !self.light_use.covers(scene.light_use) {
+            missing.push("light sampling names".to_string());
         }
         if scene.shading() && !self.environment.covers(scene.environment) {
             missing.push(format!("environment {:?} (kernel: {:?})", scene.environment, self.environment));
@@ -471,7 +614,40 @@ mod tests {
 
     use super::*;
     use crate::color::Color;
-    use crate::scene::{CsgOp, Material, PathTracerSettings, PointLight, SceneBuilder, Transform};
+    use crate::scene::{Brdf, CsgOp, Material, PathTracerSettings, PointLight, SceneBuilder, Transform};
+
+    /// Each BRDF kind records the shapes its materials sit on, their pigments and whether
+    /// one emits; the lights add theirs; a kernel that keeps less for a kind is refused.
+    #[test]
+    fn each_brdf_kind_records_what_its_materials_use() {
+        use crate::gpu::layout::brdf_kind::{DIFFUSE, SPECULAR};
+        let mut b = SceneBuilder::new(2, 2);
+        let clay = b.diffuse(Color::gray(0.5));
+        let checkers = Pigment::Checkered { n: 2, on: Color::WHITE, off: Color::gray(2.0) };
+        let mirror = b.material(Material::new(
+            Brdf::Specular { pigment: Pigment::default(), threshold_angle_rad: 0.0 },
+            checkers,
+        ));
+        b.sphere(Transform::IDENTITY, clay).cube(Transform::translation(DVec3::X * 3.0), mirror);
+        let f = FeatureSet::of(&b.build().unwrap());
+        let uniform = KindUse::NONE.with("PIGMENT_UNIFORM");
+        assert_eq!(f.shade_use[DIFFUSE as usize], uniform.with("SPHERE"));
+        let mirror_use = uniform.with("CUBE").with("PIGMENT_CHECKERED").with("EMISSION");
+        assert_eq!(f.shade_use[SPECULAR as usize], mirror_use);
+        // The emitting cube is the one area light: its shape and emitted pigment.
+        assert_eq!(f.light_use, KindUse::NONE.with("CUBE").with("PIGMENT_CHECKERED"));
+        for k in 2..BRDF_KINDS {
+            assert_eq!(f.shade_use[k], KindUse::NONE, "kind {k}");
+        }
+        let full = f.full_for();
+        assert!(full.covers(&f));
+        let mut narrow = full;
+        narrow.shade_use[SPECULAR as usize] = uniform.with("CUBE").with("PIGMENT_CHECKERED");
+        assert_eq!(narrow.missing_for(&f), vec![format!("shading names of BRDF kind {SPECULAR}")]);
+        narrow = full;
+        narrow.light_use = KindUse::NONE.with("CUBE");
+        assert_eq!(narrow.missing_for(&f), vec!["light sampling names".to_string()]);
+    }
 
     #[test]
     fn features_follow_what_the_scene_uses() {
@@ -606,12 +782,10 @@ mod tests {
         // as the CPU reference chooses it) is kept: a deferring kernel cannot take a scene
         // with more trees than its slots, nor a non-deferring one a scene the CPU defers.
         let max = crate::prepare::CSG_DEFER_MAX as u32;
-        let csg = |trees, leaves| FeatureSet {
-            csg: true,
-            csg_trees: trees,
-            csg_max_leaves: leaves,
-            csg_max_depth: 1,
-            ..spheres
+        let csg = |trees, leaves| {
+            let mut f = spheres;
+            (f.csg, f.csg_trees, f.csg_max_leaves, f.csg_max_depth) = (true, trees, leaves, 1);
+            f
         };
         let full = csg(2, 40).full_for();
         assert_eq!((full.csg_trees, full.csg_max_leaves, full.csg_max_depth), (max, 40, FULL_CSG_MAX_DEPTH));

@@ -74,6 +74,26 @@ pub mod brdf_kind {
     pub const PLASTIC: u32 = 5;
     /// Number of kinds (one shading queue and kernel each).
     pub const COUNT: u32 = 6;
+
+    /// The kind of `brdf`: the one mapping, for the packer and the kernels' features.
+    ///
+    /// ```
+    /// use lumen::gpu::layout::brdf_kind;
+    /// use lumen::scene::{Brdf, Pigment};
+    /// let glass = |roughness| Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5, roughness, multiple_scattering: true };
+    /// assert_eq!((brdf_kind::of(&glass(0.0)), brdf_kind::of(&glass(0.3))), (brdf_kind::DIELECTRIC, brdf_kind::ROUGH_DIELECTRIC));
+    /// ```
+    pub fn of(brdf: &crate::scene::Brdf) -> u32 {
+        use crate::scene::Brdf;
+        match brdf {
+            Brdf::Diffuse { .. } => DIFFUSE,
+            Brdf::Specular { .. } => SPECULAR,
+            Brdf::Dielectric { roughness, .. } if *roughness == 0.0 => DIELECTRIC,
+            Brdf::Dielectric { .. } => ROUGH_DIELECTRIC,
+            Brdf::Conductor { .. } => CONDUCTOR,
+            Brdf::Plastic { .. } => PLASTIC,
+        }
+    }
 }
 /// `Pigment::kind` values.
 pub mod pigment_kind {

@@ -385,15 +385,12 @@ fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, rows: &mut Vec<f32>) -
     let tables = energy_tables;
     let mut push_row = |row: &[f64]| rows.extend(row.iter().map(|&v| v as f32));
     let three = |c: Color, w: f64| [c.r as f32, c.g as f32, c.b as f32, w as f32];
+    m.brdf = layout::brdf_kind::of(brdf);
     match *brdf {
-        Brdf::Diffuse { .. } => m.brdf = layout::brdf_kind::DIFFUSE,
-        Brdf::Specular { .. } => m.brdf = layout::brdf_kind::SPECULAR,
+        Brdf::Diffuse { .. } | Brdf::Specular { .. } => {}
         Brdf::Dielectric { ior, roughness, multiple_scattering, .. } => {
             m.ior = ior as f32;
-            if roughness == 0.0 {
-                m.brdf = layout::brdf_kind::DIELECTRIC;
-            } else {
-                m.brdf = layout::brdf_kind::ROUGH_DIELECTRIC;
+            if roughness != 0.0 {
                 let alpha = alpha_of(roughness);
                 m.alpha = alpha as f32;
                 for eta in [ior, 1.0 / ior] {
@@ -411,7 +408,6 @@ fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, rows: &mut Vec<f32>) -
             }
         }
         Brdf::Conductor { roughness, fresnel, multiple_scattering, .. } => {
-            m.brdf = layout::brdf_kind::CONDUCTOR;
             if let Some((eta, k)) = fresnel {
                 (m.eta, m.k) = (three(eta, 1.0), three(k, 0.0));
             }
@@ -427,7 +423,6 @@ fn pack_material(brdf: &Brdf, pigment: u32, emitted: u32, rows: &mut Vec<f32>) -
             }
         }
         Brdf::Plastic { ior, roughness, .. } => {
-            m.brdf = layout::brdf_kind::PLASTIC;
             m.ior = ior as f32;
             let alpha = (roughness > 0.0).then(|| alpha_of(roughness));
             if let Some(a) = alpha {

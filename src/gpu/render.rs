@@ -483,7 +483,7 @@ mod tests {
     use std::collections::BTreeSet;
 
     use super::*;
-    use crate::gpu::features::EnvKind;
+    use crate::gpu::features::{EnvKind, KindUse};
     use crate::sampling::Pcg32;
 
     /// Names of the functions reachable from the entry point (by naga's call statements).
@@ -574,6 +574,12 @@ mod tests {
                 f.uniform_tables = f.uniform_tables.with(t);
             }
         }
+        // What each BRDF kind's shading stage and light sampling keep (FeatureSet::of
+        // leaves out what a kind's materials do not use).
+        let mut some_use =
+            || KindUse::NAMES.iter().fold(KindUse::NONE, |u, n| if rng.next_u32() % 2 == 0 { u.with(n) } else { u });
+        f.shade_use = std::array::from_fn(|_| some_use());
+        f.light_use = some_use();
         f.bvh = f.csg || f.sphere || f.cube || f.cylinder || f.mesh;
         if !f.bvh && !f.plane {
             // Only materials of some shape count.

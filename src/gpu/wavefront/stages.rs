@@ -7,7 +7,7 @@
 //! kernel holds only its own code: the call-graph test below checks that every function and
 //! global of every stage is used, for a covering set of scenes.
 
-use crate::gpu::features::{FeatureSet, RendererKind};
+use crate::gpu::features::{FeatureSet, KindUse, RendererKind};
 use crate::gpu::layout::brdf_kind;
 
 use super::contract::StateBuffer;
@@ -222,6 +222,19 @@ impl Stage {
                     }
                 }
                 let mut n = keep(&allowed);
+                // Only what this kind's materials sit on and read, and where the stage
+                // samples lights, what the lights need (features::KindUse).
+                let mut used = f.shade_use[kind as usize];
+                if casts_shadow_rays(kind) && n.contains(&"NEE") {
+                    used = used.union(f.light_use);
+                }
+                n.retain(|x| !KindUse::NAMES.contains(x) || used.has(x));
+                if used.has("EMISSION") {
+                    n.push("EMISSION");
+                } else if !casts_shadow_rays(kind) {
+                    // Neither emission's MIS nor light sampling: no light code at all.
+                    n.retain(|x| !LIGHT_NAMES.contains(x));
+                }
                 if !casts_shadow_rays(kind) && !n.contains(&"AREA_LIGHTS") {
                     // Only emitters hit after a non-delta vertex need NEE's densities here.
                     n.retain(|x| *x != "NEE");
@@ -239,8 +252,10 @@ impl Stage {
                     "WF_BETA_LOAD",
                     "WF_RAY_STORE",
                     "WF_PATH_ID",
-                    "WF_RADIANCE_ADD",
                 ]);
+                if n.contains(&"EMISSION") {
+                    n.push("WF_RADIANCE_ADD");
+                }
                 n
             }
             Stage::Shadow => {
@@ -341,8 +356,9 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 34] = [
+    pub const NAMES: [&'static str; 35] = [
         "MICROFACET",
+        "EMISSION",
         "CSG_POOL_PRIVATE",
         "CSG_TREES",
         "WF_HIT_STORE",
@@ -410,18 +426,7 @@ pub fn has_shadow_rays(f: &FeatureSet) -> bool {
 
 /// The BRDF kinds a scene shades, each with its own kernel and queue.
 pub fn shade_kinds(f: &FeatureSet) -> Vec<u32> {
-    use brdf_kind::*;
-    [
-        (f.diffuse, DIFFUSE),
-        (f.specular, SPECULAR),
-        (f.dielectric, DIELECTRIC),
-        (f.conductor, CONDUCTOR),
-        (f.rough_dielectric, ROUGH_DIELECTRIC),
-        (f.plastic, PLASTIC),
-    ]
-    .into_iter()
-    .filter_map(|(on, kind)| on.then_some(kind))
-    .collect()
+    (0..brdf_kind::COUNT).filter(|&k| f.has_brdf_kind(k)).collect()
 }
 
 /// The assembly name of a BRDF kind's code.
@@ -435,6 +440,10 @@ pub fn kind_name(kind: u32) -> &'static str {
         _ => "PLASTIC",
     }
 }
+
+/// The area lights' names (FeatureSet::names): a shading stage that neither samples lights
+/// nor weighs emission against them leaves them out.
+const LIGHT_NAMES: [&str; 5] = ["AREA_LIGHTS", "SPHERE_LIGHTS", "CUBE_LIGHTS", "MESH_LIGHTS", "PRIMITIVE_LIGHTS"];
 
 /// Kinds whose vertices may sample lights (a smooth conductor is a delta, decided per
 /// material at run time; the mirror and smooth glass never).
