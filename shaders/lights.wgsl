@@ -35,7 +35,7 @@ fn mesh_light_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n: vec3<f32>) ->
 // #if SHADOWS
 // prepare::MeshLight::choose and AreaLight::sample_mesh: the triangle ξ0 falls in by the
 // CDF of world areas (file order), a uniform point on it by the rest of ξ0 and ξ1.
-fn light_sample_mesh(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
+fn light_sample_mesh(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
     let n = light.mesh_triangles;
     var lo = 0u;
     var hi = n;
@@ -52,7 +52,6 @@ fn light_sample_mesh(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
     let width = float_at(light.mesh_cdf + t) - below;
     let u = select(0.5, clamp((xi0 - below) / width, 0.0, 1.0), width > 0.0);
     let tri = bitcast<u32>(float_at(light.mesh_cdf + n + t));
-    let s = shapes[light.shape];
     let base = MESH_POSITION_VEC4S * tri;
     let p0 = tri_positions[base].xyz;
     let p1 = tri_positions[base + 1u].xyz;
@@ -133,8 +132,7 @@ fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
 }
 
 // AreaLight::area_pdf_solid_angle.
-fn light_area_pdf(light: AreaLight, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>) -> f32 {
-    let s = shapes[light.shape];
+fn light_area_pdf(light: AreaLight, s: Shape, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>) -> f32 {
     let n_world = affine_normal(s.to_object, n_obj);
     let jacobian = light.det * length(n_world);
     let area = select(light.area, 2.0 * TAU * jacobian, s.kind == SHAPE_SPHERE);
@@ -189,7 +187,7 @@ fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2
 // #if SPHERE_LIGHTS
 // area_light::sample_cone: a point on the sphere's visible cap, uniform in the cone of
 // directions it subtends from x.
-fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
+fn light_sample_cone(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
     let c = light.sphere.xyz;
     let r = light.sphere.w;
     let d = length(c - x);
@@ -217,7 +215,6 @@ fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
     // point = c + r·normal, so its terms are |c| and r·|normal|.
     let t = abs(c) + abs(r * normal);
     let scale = max(t.x, max(t.y, t.z));
-    let s = shapes[light.shape];
     return LightPoint(point, scale, normal, affine_point(s.to_object, point), uniform_cone_pdf(omc_max), vec2<f32>(0.0));
 }
 // #endif
@@ -225,23 +222,22 @@ fn light_sample_cone(light: AreaLight, x: vec3<f32>, xi0: f32, xi1: f32) -> Ligh
 
 // #if SHADOWS
 // AreaLight::sample.
-fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32) -> LightPoint {
+fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32) -> LightPoint {
 // #if SPHERE_LIGHTS
     if (light_uses_cone(light, x, x_object)) {
-        return light_sample_cone(light, x, xi0, xi1);
+        return light_sample_cone(light, s, x, xi0, xi1);
     }
 // #endif
 // #if MESH_LIGHTS
 // #if PRIMITIVE_LIGHTS
     if (light.mesh_triangles > 0u) {
 // #endif
-        return light_sample_mesh(light, x, xi0, xi1);
+        return light_sample_mesh(light, s, x, xi0, xi1);
 // #if PRIMITIVE_LIGHTS
     }
 // #endif
 // #endif
 // #if PRIMITIVE_LIGHTS
-    let s = shapes[light.shape];
     var p_obj: vec3<f32>;
     var n_obj: vec3<f32>;
 // #if SPHERE_LIGHTS
@@ -258,7 +254,7 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
     }
 // #endif
     let y = affine_point(s.to_world, p_obj);
-    let pdf = light_area_pdf(light, x, y, n_obj);
+    let pdf = light_area_pdf(light, s, x, y, n_obj);
     let scale = affine_error_scale(s.to_world, p_obj);
     let n_world = normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0));
     return LightPoint(y, scale, n_world, p_obj, pdf, vec2<f32>(0.0));
@@ -269,7 +265,7 @@ fn light_sample(light: AreaLight, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f3
 // #if EMISSION
 // AreaLight::pdf: density of light_sample producing y (geometric normal n_y) from x (for
 // emission's MIS weight, in the shading stages of kinds with emitters).
-fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: vec3<f32>) -> f32 {
+fn light_pdf(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: vec3<f32>) -> f32 {
 // #if SPHERE_LIGHTS
     if (light_uses_cone(light, x, x_object)) {
         return uniform_cone_pdf(cone_one_minus_cos(light.sphere.w, length(light.sphere.xyz - x)));
@@ -285,17 +281,17 @@ fn light_pdf(light: AreaLight, x: vec3<f32>, x_object: u32, y: vec3<f32>, n_y: v
 // #endif
 // #endif
 // #if PRIMITIVE_LIGHTS
-    let s = shapes[light.shape];
     let p_obj = affine_point(s.to_object, y);
-    return light_area_pdf(light, x, y, light_object_normal(s.kind, p_obj));
+    return light_area_pdf(light, s, x, y, light_object_normal(s.kind, p_obj));
 // #endif
 }
 // #endif
 
 // #if SHADOWS
-// AreaLight::emission at a sampled point.
-fn light_emission(light: AreaLight, lp: LightPoint) -> vec3<f32> {
-    let s = shapes[light.shape];
+// AreaLight::emission at a sampled point. (The light functions take the light's shape
+// record `s` from the caller, which loads it once: on llvmpipe each load site of a
+// lane-divergent storage record compiles a per-lane loop per word.)
+fn light_emission(light: AreaLight, s: Shape, lp: LightPoint) -> vec3<f32> {
     let m = materials[s.material];
 // #if MESH_LIGHTS
 // #if PRIMITIVE_LIGHTS

@@ -30,11 +30,11 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
     if (all(le == vec3<f32>(0.0)) || settings.nee == 0u || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
         return le;
     }
-    let i = shapes[hit.object].light;
-    if (i == 0xFFFFFFFFu) {
+    let hs = shapes[hit.object];
+    if (hs.light == 0xFFFFFFFFu) {
         return le;
     }
-    let nee_pdf = light_selection_pdf() * light_pdf(area_lights[i], prev.point, prev.object, hit.point, hit.geometric);
+    let nee_pdf = light_selection_pdf() * light_pdf(area_lights[hs.light], hs, prev.point, prev.object, hit.point, hit.geometric);
     return le * power_heuristic(prev.pdf, nee_pdf);
 // #else
     return le;
@@ -70,13 +70,15 @@ fn pt_sample_light(hit: Hit, xi0: f32, xi1: f32, xi2: f32) -> NeeSample {
 // #if AREA_LIGHTS
     if (choice < settings.area_light_count) {
         let light = area_lights[choice];
-        let lp = light_sample(light, hit.point, hit.object, xi1, xi2);
+        // The light's shape record, loaded once for all the light code below.
+        let ls = shapes[light.shape];
+        let lp = light_sample(light, ls, hit.point, hit.object, xi1, xi2);
         let to = lp.point - hit.point;
         let dist = length(to);
         if (!(lp.pdf > 0.0) || !(dist > 0.0)) {
             return l;
         }
-        return NeeSample(to / dist, light_emission(light, lp), select_pdf * lp.pdf, true, lp.point, lp.normal, lp.scale, true);
+        return NeeSample(to / dist, light_emission(light, ls, lp), select_pdf * lp.pdf, true, lp.point, lp.normal, lp.scale, true);
     }
 // #endif
     let s = env_sample(xi1, xi2);
