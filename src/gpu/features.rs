@@ -273,6 +273,11 @@ impl FeatureSet {
             }
             f.shade_use[kind as usize] = u;
         }
+        if f.renderer != RendererKind::PathTracer {
+            // Only the path tracer has shading stages (the others shade in their first-hit
+            // kernel, with the scene's names).
+            f.shade_use = [KindUse::NONE; BRDF_KINDS];
+        }
         // Only integrators that scatter need BRDF code.
         if !matches!(f.renderer, RendererKind::PathTracer | RendererKind::PointLight) {
             f.diffuse = false;
@@ -306,6 +311,10 @@ impl FeatureSet {
                     f.light_use = f.light_use.with(name);
                 }
             }
+        }
+        if !f.area_lights {
+            // Nothing samples lights (the emitted pigments gathered above go unused).
+            f.light_use = KindUse::NONE;
         }
         if f.renderer != RendererKind::OnOff {
             f.environment = match &scene.environment {
@@ -630,6 +639,9 @@ mod tests {
         ));
         b.sphere(Transform::IDENTITY, clay).cube(Transform::translation(DVec3::X * 3.0), mirror);
         let f = FeatureSet::of(&b.build().unwrap());
+        // Only the path tracer has shading stages.
+        let flat = FeatureSet::of(&b.renderer(Renderer::Flat { background: Color::BLACK }).build().unwrap());
+        assert_eq!((flat.shade_use, flat.light_use), ([KindUse::NONE; BRDF_KINDS], KindUse::NONE));
         let uniform = KindUse::NONE.with("PIGMENT_UNIFORM");
         assert_eq!(f.shade_use[DIFFUSE as usize], uniform.with("SPHERE"));
         let mirror_use = uniform.with("CUBE").with("PIGMENT_CHECKERED").with("EMISSION");
