@@ -84,8 +84,9 @@ fn env_image_pdf(pdf_uv: f32, v: f32) -> f32 {
 // #endif
 
 // #if STAGE_SHADE
-// EnvLight::sample: a unit direction toward the environment (xyz) and its density (w).
-fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
+// EnvLight::sample: a unit direction toward the environment (xyz) and its density (w);
+// `azimuth` is turn(xi1).
+fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> vec4<f32> {
 // #if ENV_IMAGE
     if (environment.kind == ENV_IMAGE) {
         let v = dist1d_sample(environment.dist_offset, environment.tex_height, xi1);
@@ -94,7 +95,7 @@ fn env_sample(xi0: f32, xi1: f32) -> vec4<f32> {
         return vec4<f32>(dir, env_image_pdf(u.y * v.y, v.x));
     }
 // #endif
-    return vec4<f32>(uniform_sphere(xi0, xi1), UNIFORM_SPHERE_PDF);
+    return vec4<f32>(uniform_sphere(xi0, azimuth), UNIFORM_SPHERE_PDF);
 }
 // #endif
 

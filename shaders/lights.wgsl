@@ -79,12 +79,20 @@ fn light_sample_mesh(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f3
 const UNIFORM_SPHERE_PDF: f32 = 0.0795774715459477;
 
 // #if SHADOWS
-// warp::uniform_sphere (sphere lights and the uniform environment).
-fn uniform_sphere(xi0: f32, xi1: f32) -> vec3<f32> {
+// (cos φ, sin φ) of φ = 2π·ξ: the azimuth every light sample of a vertex draws from the
+// same ξ (cone, sphere and uniform environment alike), computed once for them all (each
+// call of cos and sin compiles its own polynomial on llvmpipe).
+fn turn(xi: f32) -> vec2<f32> {
+    let phi = TAU * xi;
+    return vec2<f32>(cos(phi), sin(phi));
+}
+
+// warp::uniform_sphere (sphere lights and the uniform environment), its azimuth given as
+// turn(ξ1).
+fn uniform_sphere(xi0: f32, azimuth: vec2<f32>) -> vec3<f32> {
     let z = 1.0 - 2.0 * xi0;
     let r = sqrt(max(1.0 - z * z, 0.0));
-    let phi = TAU * xi1;
-    return vec3<f32>(r * cos(phi), r * sin(phi), z);
+    return vec3<f32>(r * azimuth.x, r * azimuth.y, z);
 }
 // #endif
 
@@ -187,7 +195,7 @@ fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2
 // #if SPHERE_LIGHTS
 // area_light::sample_cone: a point on the sphere's visible cap, uniform in the cone of
 // directions it subtends from x.
-fn light_sample_cone(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f32) -> LightPoint {
+fn light_sample_cone(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, azimuth: vec2<f32>) -> LightPoint {
     let c = light.sphere.xyz;
     let r = light.sphere.w;
     let d = length(c - x);
@@ -196,8 +204,7 @@ fn light_sample_cone(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f3
     let one_minus_cos = xi0 * omc_max;
     let cos_theta = 1.0 - one_minus_cos;
     let sin_theta0 = sqrt(max(one_minus_cos * (2.0 - one_minus_cos), 0.0));
-    let phi = TAU * xi1;
-    let local = vec3<f32>(sin_theta0 * cos(phi), sin_theta0 * sin(phi), cos_theta);
+    let local = vec3<f32>(sin_theta0 * azimuth.x, sin_theta0 * azimuth.y, cos_theta);
     let sin2_theta = local.x * local.x + local.y * local.y;
     let sin_theta_max = r / d;
     let cos_alpha = sin2_theta / sin_theta_max
@@ -222,10 +229,11 @@ fn light_sample_cone(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f3
 
 // #if SHADOWS
 // AreaLight::sample.
-fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32) -> LightPoint {
+// `azimuth` is turn(xi1).
+fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f32, xi1: f32, azimuth: vec2<f32>) -> LightPoint {
 // #if SPHERE_LIGHTS
     if (light_uses_cone(light, x, x_object)) {
-        return light_sample_cone(light, s, x, xi0, xi1);
+        return light_sample_cone(light, s, x, xi0, azimuth);
     }
 // #endif
 // #if MESH_LIGHTS
@@ -242,7 +250,7 @@ fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f3
     var n_obj: vec3<f32>;
 // #if SPHERE_LIGHTS
     if (s.kind == SHAPE_SPHERE) {
-        p_obj = uniform_sphere(xi0, xi1);
+        p_obj = uniform_sphere(xi0, azimuth);
         n_obj = p_obj;
     }
 // #endif

@@ -67,12 +67,13 @@ fn pt_sample_light(hit: Hit, xi0: f32, xi1: f32, xi2: f32) -> NeeSample {
     }
     let select_pdf = light_selection_pdf();
     let choice = min(u32(xi0 * f32(n)), n - 1u);
+    let azimuth = turn(xi2);
 // #if AREA_LIGHTS
     if (choice < settings.area_light_count) {
         let light = area_lights[choice];
         // The light's shape record, loaded once for all the light code below.
         let ls = shapes[light.shape];
-        let lp = light_sample(light, ls, hit.point, hit.object, xi1, xi2);
+        let lp = light_sample(light, ls, hit.point, hit.object, xi1, xi2, azimuth);
         let to = lp.point - hit.point;
         let dist = length(to);
         if (!(lp.pdf > 0.0) || !(dist > 0.0)) {
@@ -81,7 +82,7 @@ fn pt_sample_light(hit: Hit, xi0: f32, xi1: f32, xi2: f32) -> NeeSample {
         return NeeSample(to / dist, light_emission(light, ls, lp), select_pdf * lp.pdf, true, lp.point, lp.normal, lp.scale, true);
     }
 // #endif
-    let s = env_sample(xi1, xi2);
+    let s = env_sample(xi1, xi2, azimuth);
     if (!(s.w > 0.0)) {
         return l;
     }
