@@ -122,7 +122,8 @@ fn light_uses_cone(light: AreaLight, x: vec3<f32>, x_object: u32) -> bool {
 // #endif
 
 // #if PRIMITIVE_LIGHTS
-// area_light::object_normal.
+// #if LIGHT_NORMALS
+// area_light::object_normal (for emission's MIS density and a textured light's face).
 fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
 // #if SPHERE_LIGHTS
     if (kind == SHAPE_SPHERE) {
@@ -138,6 +139,7 @@ fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
     }
     return vec3<f32>(0.0, 0.0, sign(p.z));
 }
+// #endif
 
 // AreaLight::area_pdf_solid_angle.
 fn light_area_pdf(light: AreaLight, s: Shape, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>) -> f32 {
@@ -301,6 +303,11 @@ fn light_pdf(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, y: vec3<f3
 // lane-divergent storage record compiles a per-lane loop per word.)
 fn light_emission(light: AreaLight, s: Shape, lp: LightPoint) -> vec3<f32> {
     let m = materials[s.material];
+// #if !TEXTURED_LIGHTS
+    // Every area light emits a uniform pigment (its colour is `a`, as pigment_color reads
+    // it): no surface point to find on the light.
+    return pigments[m.emitted].a.xyz;
+// #else
 // #if MESH_LIGHTS
 // #if PRIMITIVE_LIGHTS
     if (light.mesh_triangles > 0u) {
@@ -327,6 +334,7 @@ fn light_emission(light: AreaLight, s: Shape, lp: LightPoint) -> vec3<f32> {
 // #endif
     let uv = primitive_surface(s.kind, lp.object_point, face).uv;
     return pigment_color(m.emitted, uv);
+// #endif
 // #endif
 }
 // #endif

@@ -335,7 +335,8 @@ fn path_tracer_matches_the_cpu() {
 /// cylinder, but light sampling reaches the checkered emission of a mirror cube (so the
 /// diffuse stage keeps the cube and checkers for the light alone); the mirror emits (its
 /// stage weighs emission against NEE: cube and sphere light densities); the glass emits
-/// nothing and samples no light (no light code at all). The GPU still matches the CPU,
+/// nothing and samples no light (no light code at all). (Lights of uniform emission,
+/// without `TEXTURED_LIGHTS`, are every other path-traced test's.) The GPU still matches the CPU,
 /// and the specialised kernels give bitwise the full-featured kernels' image.
 #[test]
 fn each_brdf_kind_compiles_only_what_its_materials_use() {
@@ -373,6 +374,8 @@ fn each_brdf_kind_compiles_only_what_its_materials_use() {
     let has = |kind, all: &[&str]| all.iter().all(|n| names(kind).contains(n));
     let lacks = |kind, any: &[&str]| !any.iter().any(|n| names(kind).contains(n));
     assert!(has(brdf_kind::DIFFUSE, &["PLANE", "SPHERE", "CYLINDER", "CUBE", "PIGMENT_CHECKERED", "EMISSION", "NEE"]));
+    // The mirror's checkered emission is looked up where NEE samples it.
+    assert!(has(brdf_kind::DIFFUSE, &["TEXTURED_LIGHTS"]) && lacks(brdf_kind::SPECULAR, &["TEXTURED_LIGHTS"]));
     assert!(has(brdf_kind::SPECULAR, &["CUBE", "PIGMENT_CHECKERED", "EMISSION", "AREA_LIGHTS", "CUBE_LIGHTS"]));
     assert!(lacks(brdf_kind::SPECULAR, &["PLANE", "SPHERE", "CYLINDER"]));
     assert!(has(brdf_kind::DIELECTRIC, &["SPHERE", "PIGMENT_UNIFORM"]));

@@ -229,6 +229,17 @@ impl Stage {
                     used = used.union(f.light_use);
                 }
                 n.retain(|x| !KindUse::NAMES.contains(x) || used.has(x));
+                let samples_lights = casts_shadow_rays(kind) && n.contains(&"NEE") && n.contains(&"SHADOWS");
+                if samples_lights && ["PIGMENT_CHECKERED", "PIGMENT_IMAGE"].iter().any(|p| f.light_use.has(p)) {
+                    // Some light's emission varies over its surface: NEE finds the uv at
+                    // the sampled point (else it reads the uniform colour).
+                    n.push("TEXTURED_LIGHTS");
+                }
+                if used.has("EMISSION") || n.contains(&"TEXTURED_LIGHTS") {
+                    // The lights' object normals: for emission's MIS density, and for the
+                    // face of a textured light's sampled point.
+                    n.push("LIGHT_NORMALS");
+                }
                 if used.has("EMISSION") {
                     n.push("EMISSION");
                 } else if !casts_shadow_rays(kind) {
@@ -356,9 +367,11 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 35] = [
+    pub const NAMES: [&'static str; 37] = [
         "MICROFACET",
         "EMISSION",
+        "TEXTURED_LIGHTS",
+        "LIGHT_NORMALS",
         "CSG_POOL_PRIVATE",
         "CSG_TREES",
         "WF_HIT_STORE",
