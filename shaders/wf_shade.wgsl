@@ -25,7 +25,12 @@ fn roulette_probability(color: vec3<f32>) -> f32 {
 // settings.nee asks for it: see pt_escaped). Only in the stages of BRDF kinds with an
 // emitting material (features::KindUse).
 fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
+// #if TEXTURED_EMISSION
     let le = pigment_color(m.emitted, hit.uv);
+// #else
+    // Every emission of this kind is uniform: its colour (`a`, as pigment_color reads it).
+    let le = pigments[m.emitted].a.xyz;
+// #endif
 // #if AREA_LIGHTS
     if (all(le == vec3<f32>(0.0)) || settings.nee == 0u || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
         return le;

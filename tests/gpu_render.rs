@@ -376,6 +376,8 @@ fn each_brdf_kind_compiles_only_what_its_materials_use() {
     assert!(has(brdf_kind::DIFFUSE, &["PLANE", "SPHERE", "CYLINDER", "CUBE", "PIGMENT_CHECKERED", "EMISSION", "NEE"]));
     // The mirror's checkered emission is looked up where NEE samples it.
     assert!(has(brdf_kind::DIFFUSE, &["TEXTURED_LIGHTS"]) && lacks(brdf_kind::SPECULAR, &["TEXTURED_LIGHTS"]));
+    // The mirror's emission at a hit is looked up at the hit's uv; the diffuse lamp's is uniform.
+    assert!(has(brdf_kind::SPECULAR, &["TEXTURED_EMISSION"]) && lacks(brdf_kind::DIFFUSE, &["TEXTURED_EMISSION"]));
     assert!(has(brdf_kind::SPECULAR, &["CUBE", "PIGMENT_CHECKERED", "EMISSION", "AREA_LIGHTS", "CUBE_LIGHTS"]));
     assert!(lacks(brdf_kind::SPECULAR, &["PLANE", "SPHERE", "CYLINDER"]));
     assert!(has(brdf_kind::DIELECTRIC, &["SPHERE", "PIGMENT_UNIFORM"]));

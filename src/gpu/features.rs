@@ -59,10 +59,12 @@ impl Default for KindUse {
 }
 
 impl KindUse {
-    /// The feature names a kind may do without. `EMISSION` is the shading stage's own (the
-    /// emitted radiance at a hit and its MIS weight, `wf_shade.wgsl`); the others are scene
-    /// names ([`FeatureSet::names`]) that the stage keeps only when the kind needs them.
-    pub const NAMES: [&'static str; 9] = [
+    /// The feature names a kind may do without. `EMISSION` (the emitted radiance at a hit
+    /// and its MIS weight, `wf_shade.wgsl`) and `TEXTURED_EMISSION` (some such material's
+    /// emission is checkered or an image: looked up at the hit's uv) are the shading stage's
+    /// own; the others are scene names ([`FeatureSet::names`]) that the stage keeps only when
+    /// the kind needs them.
+    pub const NAMES: [&'static str; 10] = [
         "SPHERE",
         "PLANE",
         "CUBE",
@@ -72,6 +74,7 @@ impl KindUse {
         "PIGMENT_CHECKERED",
         "PIGMENT_IMAGE",
         "EMISSION",
+        "TEXTURED_EMISSION",
     ];
     /// Every name.
     pub const ALL: KindUse = KindUse { bits: (1 << Self::NAMES.len()) - 1 };
@@ -269,6 +272,9 @@ impl FeatureSet {
             let mut u = f.shade_use[kind as usize].union(*carrier).with_pigment(m.brdf.pigment());
             if m.is_emissive() {
                 u = u.with_pigment(&m.emitted).with("EMISSION");
+                if !matches!(m.emitted, Pigment::Uniform(_)) {
+                    u = u.with("TEXTURED_EMISSION");
+                }
                 f.light_use = f.light_use.with_pigment(&m.emitted);
             }
             f.shade_use[kind as usize] = u;
@@ -644,7 +650,7 @@ mod tests {
         assert_eq!((flat.shade_use, flat.light_use), ([KindUse::NONE; BRDF_KINDS], KindUse::NONE));
         let uniform = KindUse::NONE.with("PIGMENT_UNIFORM");
         assert_eq!(f.shade_use[DIFFUSE as usize], uniform.with("SPHERE"));
-        let mirror_use = uniform.with("CUBE").with("PIGMENT_CHECKERED").with("EMISSION");
+        let mirror_use = uniform.with("CUBE").with("PIGMENT_CHECKERED").with("EMISSION").with("TEXTURED_EMISSION");
         assert_eq!(f.shade_use[SPECULAR as usize], mirror_use);
         // The emitting cube is the one area light: its shape and emitted pigment.
         assert_eq!(f.light_use, KindUse::NONE.with("CUBE").with("PIGMENT_CHECKERED"));

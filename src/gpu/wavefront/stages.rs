@@ -242,6 +242,9 @@ impl Stage {
                 }
                 if used.has("EMISSION") {
                     n.push("EMISSION");
+                    if used.has("TEXTURED_EMISSION") {
+                        n.push("TEXTURED_EMISSION");
+                    }
                 } else if !casts_shadow_rays(kind) {
                     // Neither emission's MIS nor light sampling: no light code at all.
                     n.retain(|x| !LIGHT_NAMES.contains(x));
@@ -367,9 +370,10 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 37] = [
+    pub const NAMES: [&'static str; 38] = [
         "MICROFACET",
         "EMISSION",
+        "TEXTURED_EMISSION",
         "TEXTURED_LIGHTS",
         "LIGHT_NORMALS",
         "CSG_POOL_PRIVATE",
