@@ -51,8 +51,7 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
 // normal (sidedness and offsets; the winding's normal is the outside), the shading normal
 // (vertex normals interpolated when MESH_SMOOTH, turned to the facet's side) and uv (the
 // file's when MESH_UVS, else the barycentric (b1, b2)).
-fn mesh_surface_hit(i: u32, ray: Ray, c: Crossing, object: u32) -> Hit {
-    let s = shapes[i];
+fn mesh_surface_hit(s: Shape, ray: Ray, c: Crossing, object: u32) -> Hit {
     let o = affine_point(s.to_object, ray.origin);
     let d = affine_vector(s.to_object, ray.dir);
     let tri = c.face;

@@ -125,11 +125,10 @@ fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
 
 // The hit at crossing `c` of shape `i`; `flip` reverses the outward normal (surfaces
 // carved by a subtracted CSG child).
-fn shape_surface_hit(i: u32, ray: Ray, c: Crossing, flip: bool, object: u32) -> Hit {
-    let s = shapes[i];
+fn shape_surface_hit(s: Shape, ray: Ray, c: Crossing, flip: bool, object: u32) -> Hit {
 // #if MESH
     if (s.kind == SHAPE_MESH) {
-        return mesh_surface_hit(i, ray, c, object);
+        return mesh_surface_hit(s, ray, c, object);
     }
 // #endif
     let o = affine_point(s.to_object, ray.origin);

@@ -24,7 +24,8 @@ fn roulette_probability(color: vec3<f32>) -> f32 {
 // Emitted radiance at the hit, MIS-weighted when NEE could also have sampled it (and
 // settings.nee asks for it: see pt_escaped). Only in the stages of BRDF kinds with an
 // emitting material (features::KindUse).
-fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
+// `hs` is the hit shape's record (the hit object's, unless that is a CSG tree).
+fn pt_emitted(prev: Previous, hit: Hit, m: Material, hs: Shape) -> vec3<f32> {
 // #if TEXTURED_EMISSION
     let le = pigment_color(m.emitted, hit.uv);
 // #else
@@ -35,7 +36,6 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material) -> vec3<f32> {
     if (all(le == vec3<f32>(0.0)) || settings.nee == 0u || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
         return le;
     }
-    let hs = shapes[hit.object];
     if (hs.light == 0xFFFFFFFFu) {
         return le;
     }
@@ -137,7 +137,9 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
     let ray = load_ray(slot);
     let c = load_hit(slot);
-    let hit = shape_surface_hit(c.shape, ray, c.c, c.flip, c.object);
+    // The hit shape's record, loaded once for the surface and the emission's MIS weight.
+    let hs = shapes[c.shape];
+    let hit = shape_surface_hit(hs, ray, c.c, c.flip, c.object);
     // The seven draws of this vertex, used or not.
     let id = path_id(slot);
     var rng = stream(settings.tracer_seed.xy, settings.tracer_seed.zw, id.pixel, id.sample, bounce);
@@ -150,7 +152,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let beta_pdf = load_beta(slot, bounce);
     var beta = beta_pdf.xyz;
 // #if EMISSION
-    add_radiance(slot, beta * pt_emitted(load_previous(slot, beta_pdf), hit, m));
+    add_radiance(slot, beta * pt_emitted(load_previous(slot, beta_pdf), hit, m, hs));
 // #endif
     if (bounce == settings.max_depth) {
         return;

@@ -294,7 +294,7 @@ fn hit_of(cand: Candidate, ray: Ray) -> Hit {
         return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
     }
 // #if GEOMETRY
-    return shape_surface_hit(cand.shape, ray, cand.c, cand.flip, cand.object);
+    return shape_surface_hit(shapes[cand.shape], ray, cand.c, cand.flip, cand.object);
 // #else
     return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
 // #endif
