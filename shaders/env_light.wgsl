@@ -84,18 +84,27 @@ fn env_image_pdf(pdf_uv: f32, v: f32) -> f32 {
 // #endif
 
 // #if STAGE_SHADE
-// EnvLight::sample: a unit direction toward the environment (xyz) and its density (w);
-// `azimuth` is turn(xi1).
-fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> vec4<f32> {
+// EnvLight::sample: a unit direction toward the environment, its density and the radiance
+// along it (an image's: the sampled texel's, cpu::env_light::EnvSample); `azimuth` is
+// turn(xi1).
+struct EnvSample {
+    dir: vec3<f32>,
+    pdf: f32,
+    radiance: vec3<f32>,
+}
+
+fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> EnvSample {
 // #if ENV_IMAGE
     if (environment.kind == ENV_IMAGE) {
         let v = dist1d_sample(environment.dist_offset, environment.tex_height, xi1);
         let u = dist1d_sample(env_row_base(u32(v.z)), environment.tex_width, xi0);
         let dir = equirect_dir(u.x, v.x, environment.rotation_rad);
-        return vec4<f32>(dir, env_image_pdf(u.y * v.y, v.x));
+        let radiance = texel(environment.tex_offset, environment.tex_width, u32(u.z), u32(v.z)) * environment.intensity;
+        return EnvSample(dir, env_image_pdf(u.y * v.y, v.x), radiance);
     }
 // #endif
-    return vec4<f32>(uniform_sphere(xi0, azimuth), UNIFORM_SPHERE_PDF);
+    let dir = uniform_sphere(xi0, azimuth);
+    return EnvSample(dir, UNIFORM_SPHERE_PDF, escape_radiance(dir));
 }
 // #endif
 

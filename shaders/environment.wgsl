@@ -1,11 +1,17 @@
 // #requires bindings ray
 // #if ENV_IMAGE
-// #requires textures angles
+// #requires textures
+// #if !STAGE_SHADE
+// #requires angles
+// #endif
 // #endif
 // What escaping rays see: mirrors scene::Environment::radiance and cpu::env_light. Without
 // a scene environment the packer stores a uniform one of the background colour.
 
 // #if ENV_IMAGE
+// #if !STAGE_SHADE
+// (A shading stage meets the image only through NEE, whose sample carries its texel's
+// radiance: env_sample.)
 // (u, v) of a unit direction on the equirectangular map: scene::equirect_uv.
 fn equirect_uv(d: vec3<f32>, rotation_rad: f32) -> vec2<f32> {
     var u = (atan2_precise(d.y, d.x) - rotation_rad) / TAU;
@@ -24,6 +30,7 @@ fn env_image_radiance(uv: vec2<f32>) -> vec3<f32> {
     let row = min(u32(uv.y * f32(h)), h - 1u);
     return texel(environment.tex_offset, w, col, row) * environment.intensity;
 }
+// #endif
 // #endif
 
 // #if ENV_GRADIENT
@@ -49,9 +56,11 @@ fn escape_radiance(dir: vec3<f32>) -> vec3<f32> {
     }
 // #endif
 // #if ENV_IMAGE
+// #if !STAGE_SHADE
     if (environment.kind == ENV_IMAGE) {
         return env_image_radiance(equirect_uv(d, environment.rotation_rad));
     }
+// #endif
 // #endif
     return environment.a.xyz;
 }

@@ -88,12 +88,12 @@ fn pt_sample_light(hit: Hit, xi0: f32, xi1: f32, xi2: f32) -> NeeSample {
     }
 // #endif
     let s = env_sample(xi1, xi2, azimuth);
-    if (!(s.w > 0.0)) {
+    if (!(s.pdf > 0.0)) {
         return l;
     }
-    l.dir = s.xyz;
-    l.radiance = escape_radiance(l.dir);
-    l.pdf = select_pdf * s.w;
+    l.dir = s.dir;
+    l.radiance = s.radiance;
+    l.pdf = select_pdf * s.pdf;
     l.valid = true;
     return l;
 }

@@ -12,9 +12,22 @@ use glam::DVec3;
 
 use crate::color::Color;
 use crate::sampling::Distribution2D;
-use crate::scene::{equirect_uv, Environment, Scene};
+use crate::scene::{equirect_uv, texel_radiance, Environment, Scene};
 
 use super::warp::{uniform_sphere, UNIFORM_SPHERE_PDF};
+
+/// A direction toward the environment drawn by [`EnvLight::sample`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnvSample {
+    /// Unit direction.
+    pub dir: DVec3,
+    /// Its solid-angle density (0: unusable).
+    pub pdf: f64,
+    /// The radiance arriving along it: for an image, the sampled texel's (as pbrt's image
+    /// light does), which is what [`EnvLight::radiance`] gives for every direction in that
+    /// texel, without mapping the direction back (which can round into the neighbour).
+    pub radiance: Color,
+}
 
 /// The environment light of a scene.
 #[derive(Debug, Clone)]
@@ -41,15 +54,19 @@ impl EnvLight {
         self.environment.radiance(dir)
     }
 
-    /// A unit direction toward the environment and its solid-angle density (0: unusable).
-    pub fn sample(&self, xi0: f64, xi1: f64) -> (DVec3, f64) {
+    /// A direction toward the environment, its density and radiance.
+    pub fn sample(&self, xi0: f64, xi1: f64) -> EnvSample {
         match (&self.environment, &self.distribution) {
-            (Environment::Image { rotation_deg, .. }, Some(dist)) => {
+            (Environment::Image { image, intensity, rotation_deg }, Some(dist)) => {
                 let s = dist.sample(xi0, xi1);
                 let dir = equirect_dir(s.u, s.v, *rotation_deg);
-                (dir, image_pdf(s.pdf, s.v))
+                let radiance = texel_radiance(image, *intensity, s.col, s.row);
+                EnvSample { dir, pdf: image_pdf(s.pdf, s.v), radiance }
             }
-            _ => (uniform_sphere(xi0, xi1), UNIFORM_SPHERE_PDF),
+            _ => {
+                let dir = uniform_sphere(xi0, xi1);
+                EnvSample { dir, pdf: UNIFORM_SPHERE_PDF, radiance: self.radiance(dir) }
+            }
         }
     }
 
@@ -133,14 +150,17 @@ mod tests {
         let mut sum = 0.0;
         let mut mismatches = 0;
         for _ in 0..n {
-            let (d, pdf) = light.sample(rng.next_f64(), rng.next_f64());
+            let EnvSample { dir: d, pdf, radiance } = light.sample(rng.next_f64(), rng.next_f64());
             assert!((d.length() - 1.0).abs() < 1e-12);
             // Round-tripping (u, v) → direction → (u, v) may land in the neighbouring texel
-            // only when the sample lies within rounding of a texel edge.
+            // only when the sample lies within rounding of a texel edge; elsewhere the
+            // sampled texel's radiance is the direction's.
             if (light.pdf(d) / pdf - 1.0).abs() > 1e-9 {
                 mismatches += 1;
+            } else {
+                assert_eq!(radiance, light.radiance(d));
             }
-            sum += light.radiance(d).luminance() / pdf;
+            sum += radiance.luminance() / pdf;
         }
         let est = sum / n as f64;
         assert!(mismatches <= 5, "{mismatches} samples whose pdf disagrees with their texel");

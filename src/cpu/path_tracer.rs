@@ -214,11 +214,11 @@ fn choose_and_sample_light(ctx: &Context, hit: &Hit, xi: &VertexDraws) -> Option
         }
         LightChoice::Env => {
             let env = ctx.lights.env.as_ref()?;
-            let (dir, pdf) = env.sample(a, b);
-            if pdf <= 0.0 {
+            let s = env.sample(a, b);
+            if s.pdf <= 0.0 {
                 return None;
             }
-            Some(LightSample { dir, radiance: env.radiance(dir), pdf: select * pdf, end: None })
+            Some(LightSample { dir: s.dir, radiance: s.radiance, pdf: select * s.pdf, end: None })
         }
     }
 }

@@ -124,6 +124,9 @@ pub struct Sample2D {
     pub v: f64,
     /// Density with respect to du dv.
     pub pdf: f64,
+    /// The cell (column, row) holding (u, v).
+    pub col: usize,
+    pub row: usize,
 }
 
 impl Distribution2D {
@@ -141,7 +144,7 @@ impl Distribution2D {
     pub fn sample(&self, xi_u: f64, xi_v: f64) -> Sample2D {
         let v = self.marginal.sample(xi_v);
         let u = self.conditional[v.cell].sample(xi_u);
-        Sample2D { u: u.x, v: v.x, pdf: u.pdf * v.pdf }
+        Sample2D { u: u.x, v: v.x, pdf: u.pdf * v.pdf, col: u.cell, row: v.cell }
     }
 
     /// Density at (u, v) with respect to du dv.

@@ -45,10 +45,16 @@ impl Environment {
                 let (w, h) = (image.width(), image.height());
                 let col = ((u * w as f64) as usize).min(w - 1);
                 let row = ((v * h as f64) as usize).min(h - 1);
-                Color::from(image.get(col, row)) * *intensity
+                texel_radiance(image, *intensity, col, row)
             }
         }
     }
+}
+
+/// An image environment's radiance over texel (`col`, `row`): what every direction in the
+/// texel sees (the lookup is nearest-texel).
+pub fn texel_radiance(image: &HdrImage, intensity: f64, col: usize, row: usize) -> Color {
+    Color::from(image.get(col, row)) * intensity
 }
 
 /// (u, v) of a unit direction on the equirectangular map, rotated by `rotation_deg` about z.

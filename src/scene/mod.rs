@@ -21,7 +21,7 @@ pub use bounds::Aabb;
 pub use brdf::{Brdf, DEFAULT_THRESHOLD_ANGLE_RAD};
 pub use builder::SceneBuilder;
 pub use camera::{Camera, CameraRay, Projection, CAMERA_RAY_TMIN};
-pub use environment::{equirect_uv, Environment};
+pub use environment::{equirect_uv, texel_radiance, Environment};
 pub use light::PointLight;
 pub use material::{Material, MaterialId};
 pub use mesh::{MeshError, MeshErrorKind, MeshFormat, MeshLocation, MeshParts, TriangleMesh, MAX_MESH_ELEMENTS};
