@@ -99,8 +99,7 @@ fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> EnvSample {
         let v = dist1d_sample(environment.dist_offset, environment.tex_height, xi1);
         let u = dist1d_sample(env_row_base(u32(v.z)), environment.tex_width, xi0);
         let dir = equirect_dir(u.x, v.x, environment.rotation_rad);
-        let radiance = texel(environment.tex_offset, environment.tex_width, u32(u.z), u32(v.z)) * environment.intensity;
-        return EnvSample(dir, env_image_pdf(u.y * v.y, v.x), radiance);
+        return EnvSample(dir, env_image_pdf(u.y * v.y, v.x), env_texel_radiance(u32(u.z), u32(v.z)));
     }
 // #endif
     let dir = uniform_sphere(xi0, azimuth);

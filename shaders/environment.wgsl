@@ -9,6 +9,11 @@
 // a scene environment the packer stores a uniform one of the background colour.
 
 // #if ENV_IMAGE
+// The image's radiance over texel (col, row): scene::texel_radiance.
+fn env_texel_radiance(col: u32, row: u32) -> vec3<f32> {
+    return texel(environment.tex_offset, environment.tex_width, col, row) * environment.intensity;
+}
+
 // #if !STAGE_SHADE
 // (A shading stage meets the image only through NEE, whose sample carries its texel's
 // radiance: env_sample.)
@@ -28,7 +33,7 @@ fn env_image_radiance(uv: vec2<f32>) -> vec3<f32> {
     let h = environment.tex_height;
     let col = min(u32(uv.x * f32(w)), w - 1u);
     let row = min(u32(uv.y * f32(h)), h - 1u);
-    return texel(environment.tex_offset, w, col, row) * environment.intensity;
+    return env_texel_radiance(col, row);
 }
 // #endif
 // #endif

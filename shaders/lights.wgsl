@@ -304,9 +304,8 @@ fn light_pdf(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, y: vec3<f3
 fn light_emission(light: AreaLight, s: Shape, lp: LightPoint) -> vec3<f32> {
     let m = materials[s.material];
 // #if !TEXTURED_LIGHTS
-    // Every area light emits a uniform pigment (its colour is `a`, as pigment_color reads
-    // it): no surface point to find on the light.
-    return pigments[m.emitted].a.xyz;
+    // Every area light emits a uniform pigment: no surface point to find on the light.
+    return uniform_pigment_color(m.emitted);
 // #else
 // #if MESH_LIGHTS
 // #if PRIMITIVE_LIGHTS

@@ -34,6 +34,12 @@ fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {
 }
 // #endif
 
+// A uniform pigment's colour (its `a`): what pigment_color gives it anywhere, read without
+// the other kinds' code where only uniform pigments can reach the call.
+fn uniform_pigment_color(index: u32) -> vec3<f32> {
+    return pigments[index].a.xyz;
+}
+
 fn pigment_color(index: u32, uv: vec2<f32>) -> vec3<f32> {
     let p = pigments[index];
 // #if PIGMENT_CHECKERED
@@ -52,5 +58,5 @@ fn pigment_color(index: u32, uv: vec2<f32>) -> vec3<f32> {
         return image_lookup(p, uv.x, uv.y);
     }
 // #endif
-    return p.a.xyz;
+    return uniform_pigment_color(index);
 }

@@ -123,7 +123,8 @@ fn primitive_surface(kind: u32, p: vec3<f32>, face: u32) -> SurfacePoint {
     }
 }
 
-// The hit at crossing `c` of shape `i`; `flip` reverses the outward normal (surfaces
+// The hit at crossing `c` of the shape whose record is `s` (loaded by the caller, which may
+// need it again); `flip` reverses the outward normal (surfaces
 // carved by a subtracted CSG child).
 fn shape_surface_hit(s: Shape, ray: Ray, c: Crossing, flip: bool, object: u32) -> Hit {
 // #if MESH

@@ -29,8 +29,8 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material, hs: Shape) -> vec3<f32> {
 // #if TEXTURED_EMISSION
     let le = pigment_color(m.emitted, hit.uv);
 // #else
-    // Every emission of this kind is uniform: its colour (`a`, as pigment_color reads it).
-    let le = pigments[m.emitted].a.xyz;
+    // Every emission of this kind is uniform.
+    let le = uniform_pigment_color(m.emitted);
 // #endif
 // #if AREA_LIGHTS
     if (all(le == vec3<f32>(0.0)) || settings.nee == 0u || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {

@@ -109,6 +109,11 @@ impl KindUse {
         self.bits & other.bits == other.bits
     }
 
+    /// Whether the set holds a pigment kind that varies over a surface (checkered or image).
+    pub fn textured(self) -> bool {
+        self.has("PIGMENT_CHECKERED") || self.has("PIGMENT_IMAGE")
+    }
+
     fn with_pigment(self, p: &Pigment) -> Self {
         self.with(match p {
             Pigment::Uniform(_) => "PIGMENT_UNIFORM",

@@ -230,7 +230,7 @@ impl Stage {
                 }
                 n.retain(|x| !KindUse::NAMES.contains(x) || used.has(x));
                 let samples_lights = casts_shadow_rays(kind) && n.contains(&"NEE") && n.contains(&"SHADOWS");
-                if samples_lights && ["PIGMENT_CHECKERED", "PIGMENT_IMAGE"].iter().any(|p| f.light_use.has(p)) {
+                if samples_lights && f.light_use.textured() {
                     // Some light's emission varies over its surface: NEE finds the uv at
                     // the sampled point (else it reads the uniform colour).
                     n.push("TEXTURED_LIGHTS");
