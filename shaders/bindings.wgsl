@@ -3,8 +3,9 @@
 // src/gpu/wavefront/contract.rs). src/gpu/render.rs binds them in binding order. Only those
 // a stage's features need are declared; only those are uploaded. The read-only tables
 // (shapes, object references, BVH and CSG nodes, materials, pigments, floats, point and
-// area lights) are declared by the generated `scene_tables` module (src/gpu/tables.rs),
-// as uniform or storage arrays.
+// area lights, mesh triangles) are declared by the generated `scene_tables` module
+// (src/gpu/tables.rs) as uniform arrays, textures or storage arrays, each read through its
+// accessor (shape_at, bvh_node_at, ...).
 
 // #if SETTINGS
 @group(1) @binding(0) var<uniform> settings: Settings;
@@ -14,12 +15,4 @@
 // #endif
 // #if ENVIRONMENT
 @group(1) @binding(9) var<uniform> environment: Environment;
-// #endif
-// #if MESH
-// Triangles of the meshes in bottom-level leaf order: vertices (MESH_POSITION_VEC4S vec4
-// each), and for shading their vertex normals and uvs (MESH_SHADING_VEC4S).
-@group(1) @binding(13) var<storage, read> tri_positions: array<vec4<f32>>;
-// #if SHADING
-@group(1) @binding(14) var<storage, read> tri_shading: array<vec4<f32>>;
-// #endif
 // #endif

@@ -182,7 +182,7 @@ fn csg_offer(next: ptr<function, CsgBatch>, t: f32, k: u32, after_t: f32, after_
 
 // The closest surface of tree `root` inside (tmin, tmax): csg::CsgTree::closest.
 fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
-    let tree = csg_trees[root];
+    let tree = csg_tree_at(root);
     let none = CsgBatch(vec3<f32>(ray.tmax), vec3<u32>(0u));
     // The leaves' spans, and the first crossings after tmin.
     var batch = none;

@@ -26,7 +26,7 @@ fn radiance_flat(ray: Ray) -> vec3<f32> {
     if (hit.t >= OPEN) {
         return escape_radiance(ray.dir);
     }
-    let m = materials[hit.material];
+    let m = material_at(hit.material);
     return pigment_color(m.emitted, hit.uv) + pigment_color(m.pigment, hit.uv);
 }
 // #endif
@@ -65,7 +65,7 @@ fn radiance_point_light(ray: Ray) -> vec3<f32> {
             }
             hit = hit_of(cand, ray);
 // #if POINT_LIGHTS
-            m = materials[hit.material];
+            m = material_at(hit.material);
             emitted = pigment_color(m.emitted, hit.uv);
             color = pigment_color(m.pigment, hit.uv);
 // #endif

@@ -53,9 +53,9 @@ fn light_sample_mesh(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f3
     let u = select(0.5, clamp((xi0 - below) / width, 0.0, 1.0), width > 0.0);
     let tri = bitcast<u32>(float_at(light.mesh_cdf + n + t));
     let base = MESH_POSITION_VEC4S * tri;
-    let p0 = tri_positions[base].xyz;
-    let p1 = tri_positions[base + 1u].xyz;
-    let p2 = tri_positions[base + 2u].xyz;
+    let p0 = tri_position_at(base).xyz;
+    let p1 = tri_position_at(base + 1u).xyz;
+    let p2 = tri_position_at(base + 2u).xyz;
     let su = sqrt(u);
     let b0 = 1.0 - su;
     let b1 = xi1 * su;
@@ -66,8 +66,8 @@ fn light_sample_mesh(light: AreaLight, s: Shape, x: vec3<f32>, xi0: f32, xi1: f3
     var uv = vec2<f32>(b1, b2);
     if ((s.mesh & MESH_UVS) != 0u) {
         let sh = MESH_SHADING_VEC4S * tri;
-        let uv01 = tri_shading[sh + 3u];
-        uv = b0 * uv01.xy + b1 * uv01.zw + b2 * tri_shading[sh + 4u].xy;
+        let uv01 = tri_shading_at(sh + 3u);
+        uv = b0 * uv01.xy + b1 * uv01.zw + b2 * tri_shading_at(sh + 4u).xy;
     }
     let scale = affine_error_scale(s.to_world, max(max(abs(p0), abs(p1)), abs(p2)));
     return LightPoint(y, scale, normal, p_obj, mesh_light_pdf(light, x, y, normal), uv);
@@ -302,7 +302,7 @@ fn light_pdf(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, y: vec3<f3
 // record `s` from the caller, which loads it once: on llvmpipe each load site of a
 // lane-divergent storage record compiles a per-lane loop per word.)
 fn light_emission(light: AreaLight, s: Shape, lp: LightPoint) -> vec3<f32> {
-    let m = materials[s.material];
+    let m = material_at(s.material);
 // #if !TEXTURED_LIGHTS
     // Every area light emits a uniform pigment: no surface point to find on the light.
     return uniform_pigment_color(m.emitted);

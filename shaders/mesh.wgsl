@@ -16,7 +16,7 @@
 // The first crossing of mesh instance `i` with t in (tmin, tmax): t = OPEN when none, the
 // face the triangle.
 fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
-    let s = shapes[i];
+    let s = shape_at(i);
     let o = affine_point(s.to_object, ray.origin);
     let d = affine_vector(s.to_object, ray.dir);
     let r = sheared_ray(o, d);
@@ -26,7 +26,7 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
     var tmax = ray.tmax;
     var walk: BvhWalk;
     walk.index = root;
-    walk.node = bvh_nodes[root];
+    walk.node = bvh_node_at(root);
     walk.top = 0u;
     var more = box_entry(walk.node, o, inv_dir, ray.tmin, tmax) < OPEN;
     while (more) {
@@ -59,9 +59,9 @@ fn mesh_surface_hit(s: Shape, ray: Ray, c: Crossing, object: u32) -> Hit {
     let h = triangle_crossing(sheared_ray(o, d), tri, -OPEN, OPEN);
     let b = h.yzw;
     let base = MESH_POSITION_VEC4S * tri;
-    let p0 = tri_positions[base].xyz;
-    let p1 = tri_positions[base + 1u].xyz;
-    let p2 = tri_positions[base + 2u].xyz;
+    let p0 = tri_position_at(base).xyz;
+    let p1 = tri_position_at(base + 1u).xyz;
+    let p2 = tri_position_at(base + 2u).xyz;
     let p_obj = b.x * p0 + b.y * p1 + b.z * p2;
     let point = affine_point(s.to_world, p_obj);
     let scale = affine_error_scale(s.to_world, max(max(abs(p0), abs(p1)), abs(p2)));
@@ -71,7 +71,7 @@ fn mesh_surface_hit(s: Shape, ray: Ray, c: Crossing, object: u32) -> Hit {
     var normal = geometric;
     let sh = MESH_SHADING_VEC4S * tri;
     if ((s.mesh & MESH_SMOOTH) != 0u) {
-        let n = b.x * tri_shading[sh].xyz + b.y * tri_shading[sh + 1u].xyz + b.z * tri_shading[sh + 2u].xyz;
+        let n = b.x * tri_shading_at(sh).xyz + b.y * tri_shading_at(sh + 1u).xyz + b.z * tri_shading_at(sh + 2u).xyz;
         let ns = normalize_or(affine_normal(s.to_object, n), vec3<f32>(0.0));
         if (any(ns != vec3<f32>(0.0))) {
             normal = select(ns, -ns, dot(ns, geometric) < 0.0);
@@ -79,8 +79,8 @@ fn mesh_surface_hit(s: Shape, ray: Ray, c: Crossing, object: u32) -> Hit {
     }
     var uv = vec2<f32>(b.y, b.z);
     if ((s.mesh & MESH_UVS) != 0u) {
-        let uv01 = tri_shading[sh + 3u];
-        let uv2 = tri_shading[sh + 4u].xy;
+        let uv01 = tri_shading_at(sh + 3u);
+        let uv2 = tri_shading_at(sh + 4u).xy;
         uv = b.x * uv01.xy + b.y * uv01.zw + b.z * uv2;
     }
     return Hit(c.t, point, scale, normal, geometric, front_face, uv, s.material, object);

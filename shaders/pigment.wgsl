@@ -37,11 +37,11 @@ fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {
 // A uniform pigment's colour (its `a`): what pigment_color gives it anywhere, read without
 // the other kinds' code where only uniform pigments can reach the call.
 fn uniform_pigment_color(index: u32) -> vec3<f32> {
-    return pigments[index].a.xyz;
+    return pigment_at(index).a.xyz;
 }
 
 fn pigment_color(index: u32, uv: vec2<f32>) -> vec3<f32> {
-    let p = pigments[index];
+    let p = pigment_at(index);
 // #if PIGMENT_CHECKERED
     if (p.kind == PIGMENT_CHECKERED) {
         let n = f32(p.n);

@@ -12,7 +12,7 @@ struct PointLightSample {
 }
 
 fn point_light_sample(i: u32, hit: Hit) -> PointLightSample {
-    let light = point_lights[i];
+    let light = point_light_at(i);
     let to_light = light.position.xyz - hit.point;
     let dist = length(to_light);
     let l = to_light / dist;

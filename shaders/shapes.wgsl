@@ -50,7 +50,7 @@ fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
 
 // The span of the ray's whole line through shape `i`.
 fn shape_span(i: u32, ray: Ray) -> Span {
-    let s = shapes[i];
+    let s = shape_at(i);
     return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
 }
 // #endif
@@ -77,7 +77,7 @@ fn span_first_crossing(sp: Span, ray: Ray) -> Crossing {
 // t = OPEN when there is none.
 fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
 // #if MESH
-    if (shapes[i].kind == SHAPE_MESH) {
+    if (shape_at(i).kind == SHAPE_MESH) {
         return mesh_first_crossing(i, ray);
     }
 // #endif
@@ -88,7 +88,7 @@ fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
 // #if PLANE
 // The first finite crossing of plane `i` with t in (tmin, tmax), as shape_first_crossing.
 fn plane_first_crossing(i: u32, ray: Ray) -> Crossing {
-    let s = shapes[i];
+    let s = shape_at(i);
     return span_first_crossing(plane_span(affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir)), ray);
 }
 // #endif

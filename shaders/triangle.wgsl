@@ -42,9 +42,9 @@ fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
 fn triangle_crossing(r: Sheared, tri: u32, tmin: f32, tmax: f32) -> vec4<f32> {
     let none = vec4<f32>(OPEN, 0.0, 0.0, 0.0);
     let base = MESH_POSITION_VEC4S * tri;
-    let a = tri_positions[base].xyz - r.origin;
-    let b = tri_positions[base + 1u].xyz - r.origin;
-    let c = tri_positions[base + 2u].xyz - r.origin;
+    let a = tri_position_at(base).xyz - r.origin;
+    let b = tri_position_at(base + 1u).xyz - r.origin;
+    let c = tri_position_at(base + 2u).xyz - r.origin;
     let k = r.k;
     let ax = a[k.x] - r.s.x * a[k.z];
     let ay = a[k.y] - r.s.y * a[k.z];

@@ -6,7 +6,7 @@ fn classify(slot: u32, cand: Candidate) {
 // #if GEOMETRY
     if (cand.c.t < OPEN) {
         store_hit(slot, cand);
-        let brdf = materials[shapes[cand.shape].material].brdf;
+        let brdf = material_at(shape_at(cand.shape).material).brdf;
         wf_push(Q_SHADE + brdf, slot);
         return;
     }

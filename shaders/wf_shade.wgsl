@@ -39,7 +39,7 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material, hs: Shape) -> vec3<f32> {
     if (hs.light == 0xFFFFFFFFu) {
         return le;
     }
-    let nee_pdf = light_selection_pdf() * light_pdf(area_lights[hs.light], hs, prev.point, prev.object, hit.point, hit.geometric);
+    let nee_pdf = light_selection_pdf() * light_pdf(area_light_at(hs.light), hs, prev.point, prev.object, hit.point, hit.geometric);
     return le * power_heuristic(prev.pdf, nee_pdf);
 // #else
     return le;
@@ -75,9 +75,9 @@ fn pt_sample_light(hit: Hit, xi0: f32, xi1: f32, xi2: f32) -> NeeSample {
     let azimuth = turn(xi2);
 // #if AREA_LIGHTS
     if (choice < settings.area_light_count) {
-        let light = area_lights[choice];
+        let light = area_light_at(choice);
         // The light's shape record, loaded once for all the light code below.
-        let ls = shapes[light.shape];
+        let ls = shape_at(light.shape);
         let lp = light_sample(light, ls, hit.point, hit.object, xi1, xi2, azimuth);
         let to = lp.point - hit.point;
         let dist = length(to);
@@ -138,7 +138,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let ray = load_ray(slot);
     let c = load_hit(slot);
     // The hit shape's record, loaded once for the surface and the emission's MIS weight.
-    let hs = shapes[c.shape];
+    let hs = shape_at(c.shape);
     let hit = shape_surface_hit(hs, ray, c.c, c.flip, c.object);
     // The seven draws of this vertex, used or not.
     let id = path_id(slot);
@@ -147,7 +147,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var k = 0u; k < 7u; k++) {
         xi[k] = pcg_next_f32(&rng);
     }
-    let m = materials[hit.material];
+    let m = material_at(hit.material);
     let color = pigment_color(m.pigment, hit.uv);
     let beta_pdf = load_beta(slot, bounce);
     var beta = beta_pdf.xyz;

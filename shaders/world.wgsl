@@ -72,8 +72,8 @@ fn bvh_descend(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>,
     while ((*w).node.count == 0u) {
         let left = (*w).index + 1u;
         let right = (*w).node.left_or_first;
-        let left_node = bvh_nodes[left];
-        let right_node = bvh_nodes[right];
+        let left_node = bvh_node_at(left);
+        let right_node = bvh_node_at(right);
         let tl = box_entry(left_node, origin, inv_dir, tmin, tmax);
         let tr = box_entry(right_node, origin, inv_dir, tmin, tmax);
         if (tl >= OPEN && tr >= OPEN) {
@@ -104,7 +104,7 @@ fn bvh_pop(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmi
     while ((*w).top > 0u) {
         (*w).top--;
         let index = (*w).stack[(*w).top];
-        let node = bvh_nodes[index];
+        let node = bvh_node_at(index);
         if (box_entry(node, origin, inv_dir, tmin, tmax) < OPEN) {
             (*w).index = index;
             (*w).node = node;
@@ -136,7 +136,7 @@ fn keep_nearer(cand: Candidate, ray: ptr<function, Ray>, best: ptr<function, Can
 fn csg_nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<function, Candidate>) -> bool {
 // #if OBJECT_LIST
     // A list meets every tree: like a walk, go on only where the ray crosses its box.
-    let tree = csg_trees[r & ~CSG_NODE_BIT];
+    let tree = csg_tree_at(r & ~CSG_NODE_BIT);
     let b = BvhNode(tree.min, 0u, tree.max, 0u);
     if (box_entry(b, (*ray).origin, inv_dir, (*ray).tmin, (*ray).tmax) >= OPEN) {
         return false;
@@ -207,7 +207,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     // box, in index order. The index is the same in every lane, so an object's words are
     // loaded once for the SIMD group and only its own shape kind's code runs, where a walk
     // loads lane-divergent nodes and objects per lane (DESIGN.md "Object list").
-    if (box_entry(bvh_nodes[0], ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
+    if (box_entry(bvh_node_at(0u), ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
         for (var k = 0u; k < settings.plane_offset; k++) {
             if (nearer(object_ref(k), &ray, inv_dir, &best) && any_hit) {
                 return best;
@@ -218,7 +218,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
 // #if BVH
     var walk: BvhWalk;
     walk.index = 0u;
-    walk.node = bvh_nodes[0];
+    walk.node = bvh_node_at(0u);
     walk.top = 0u;
     // An empty tree or a missed root box skips the loop (not a return: deferred CSG
     // trees are still to be evaluated).
@@ -294,7 +294,7 @@ fn hit_of(cand: Candidate, ray: Ray) -> Hit {
         return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
     }
 // #if GEOMETRY
-    return shape_surface_hit(shapes[cand.shape], ray, cand.c, cand.flip, cand.object);
+    return shape_surface_hit(shape_at(cand.shape), ray, cand.c, cand.flip, cand.object);
 // #else
     return Hit(OPEN, vec3<f32>(0.0), 0.0, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), true, vec2<f32>(0.0), 0u, 0u);
 // #endif

@@ -532,6 +532,11 @@ mod cli {
         let wgsl = std::fs::read_to_string(dir.path().join("uniform.wgsl")).unwrap();
         assert!(wgsl.contains("var<uniform> shapes: array<Shape, UNIFORM_SHAPES_LEN>;"), "{wgsl}");
         assert!(!wgsl.contains("var<storage, read> shapes"));
+        let out = run(&["shader", "tiny.sl", "--tables", "texture", "-o", "texture.wgsl"]).unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let wgsl = std::fs::read_to_string(dir.path().join("texture.wgsl")).unwrap();
+        assert!(wgsl.contains("var shapes: texture_2d<u32>;") && wgsl.contains("fn shape_at(k: u32) -> Shape {"));
+        assert!(!wgsl.contains("var<storage, read> shapes") && !wgsl.contains("var<uniform> shapes"));
         let out = run(&["check", "tiny.sl"]).unwrap();
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(stdout.contains("GPU kernel features:") && stdout.contains(" SPHERE ") && stdout.contains("FLAT"));

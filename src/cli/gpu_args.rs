@@ -56,10 +56,12 @@ pub struct GpuArgs {
     /// clamped). Images do not depend on it.
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..=1 << 30))]
     pub batch_paths: Option<u32>,
-    /// Where GPU kernels read the scene's small tables (shapes, BVH nodes, materials, ...)
-    /// from: `auto` puts each table that fits 64 KiB in a uniform buffer on a software
-    /// adapter (much faster on lavapipe) and in a storage buffer on hardware GPUs; `uniform`
-    /// and `storage` force one placement (for measurements). Images do not depend on it.
+    /// Where GPU kernels read the scene's tables (shapes, BVH nodes, materials, triangles,
+    /// texels, ...) from: `auto` puts each table that fits 64 KiB in a uniform buffer and
+    /// each larger one in a texture on a software adapter (both compile much faster on
+    /// lavapipe than storage buffers), and every table in a storage buffer on hardware GPUs;
+    /// `uniform` (where a table fits, else storage), `texture` and `storage` force a
+    /// placement (for measurements). Images do not depend on it.
     #[arg(long, value_enum, default_value_t = TablePlacement::Auto)]
     pub tables: TablePlacement,
 }

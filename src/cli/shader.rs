@@ -10,7 +10,7 @@ use super::script_args::ScriptArgs;
 use crate::gpu::features::FeatureSet;
 use crate::gpu::pack::pack;
 use crate::gpu::render::assemble_stages;
-use crate::gpu::tables::{TablePlacement, UniformTables, UNIFORM_TABLE_BYTES};
+use crate::gpu::tables::{TableForms, TableLimits, TablePlacement};
 use crate::image::write_atomically;
 
 /// Arguments of `lumen shader`.
@@ -23,28 +23,22 @@ pub struct ShaderArgs {
     pub output: Option<PathBuf>,
     #[command(flatten)]
     pub script: ScriptArgs,
-    /// Which table placement to print the kernels for: `storage` (what hardware GPUs run)
-    /// or `uniform` (what software adapters run: each table that fits 64 KiB in a uniform
-    /// buffer; `lumen render --tables`).
-    #[arg(long, value_enum, default_value_t = ShaderTables::Storage)]
-    pub tables: ShaderTables,
-}
-
-/// `lumen shader --tables`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ShaderTables {
-    Uniform,
-    Storage,
+    /// Which table placement to print the kernels for, as `lumen render --tables` places
+    /// them on a software adapter: `storage` (what hardware GPUs run), `auto` (what
+    /// software adapters run: each table that fits 64 KiB in a uniform buffer, each larger
+    /// one in a texture), `uniform` or `texture`.
+    #[arg(long, value_enum, default_value_t = TablePlacement::Storage)]
+    pub tables: TablePlacement,
 }
 
 /// Loads the scene, assembles and validates its kernel (naga), and prints it.
 pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     let scene = args.script.load(&args.scene)?;
     let mut features = FeatureSet::of(&scene);
-    if args.tables == ShaderTables::Uniform {
+    if args.tables != TablePlacement::Storage {
         let packed = pack(&scene, None).map_err(|e| anyhow!("cannot pack the scene for the GPU: {e}"))?;
-        let max = UNIFORM_TABLE_BYTES as u64;
-        features.uniform_tables = UniformTables::choose(&packed, TablePlacement::Uniform, wgpu::DeviceType::Cpu, max);
+        let limits = TableLimits::webgpu_default();
+        features.tables = TableForms::choose(&packed, args.tables, wgpu::DeviceType::Cpu, limits);
     }
     let stages = assemble_stages(&features).map_err(|e| anyhow!("cannot assemble the kernels: {e}"))?;
     let mut text = format!(

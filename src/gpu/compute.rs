@@ -16,11 +16,15 @@ use super::device::{Gpu, GpuError};
 /// legitimately empty arrays (no lights, no planes). Kernels index by their own counts.
 pub const MIN_BUFFER_BYTES: u64 = 16;
 
-/// What kind of buffer a binding declares.
+/// What kind of resource a binding declares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BindingKind {
     Uniform,
-    Storage { read_only: bool },
+    Storage {
+        read_only: bool,
+    },
+    /// A `texture_2d<u32>` read with `textureLoad` (a scene table: `tables::TableForm`).
+    TextureU32,
 }
 
 /// A validated WGSL module: naga's IR plus its validation info.
@@ -73,23 +77,35 @@ impl ComputeKernel {
 
     /// A bind group for `group` whose bindings are `buffers`, in increasing binding order.
     pub fn bind_group(&self, gpu: &Gpu, group: u32, buffers: &[&wgpu::Buffer]) -> Result<wgpu::BindGroup, GpuError> {
+        let resources: Vec<wgpu::BindingResource> = buffers.iter().map(|b| b.as_entire_binding()).collect();
+        self.bind_group_of(gpu, group, resources)
+    }
+
+    /// A bind group for `group` whose bindings are `resources` (buffers and texture views),
+    /// in increasing binding order.
+    pub fn bind_group_of(
+        &self,
+        gpu: &Gpu,
+        group: u32,
+        resources: Vec<wgpu::BindingResource>,
+    ) -> Result<wgpu::BindGroup, GpuError> {
         let declared = self
             .bindings
             .get(group as usize)
             .ok_or_else(|| GpuError::Validation(format!("kernel {:?} declares no @group({group})", self.label)))?;
-        if declared.len() != buffers.len() {
+        if declared.len() != resources.len() {
             return Err(GpuError::Validation(format!(
-                "kernel {:?} @group({group}) declares {} bindings {:?}, got {} buffers",
+                "kernel {:?} @group({group}) declares {} bindings {:?}, got {} resources",
                 self.label,
                 declared.len(),
                 declared.iter().map(|b| b.0).collect::<Vec<_>>(),
-                buffers.len()
+                resources.len()
             )));
         }
         let entries: Vec<wgpu::BindGroupEntry> = declared
             .iter()
-            .zip(buffers)
-            .map(|(&(binding, _), buf)| wgpu::BindGroupEntry { binding, resource: buf.as_entire_binding() })
+            .zip(resources)
+            .map(|(&(binding, _), resource)| wgpu::BindGroupEntry { binding, resource })
             .collect();
         gpu.scoped(|| {
             gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -147,6 +163,18 @@ impl Gpu {
                 naga::AddressSpace::Storage { access } => {
                     BindingKind::Storage { read_only: !access.contains(naga::StorageAccess::STORE) }
                 }
+                naga::AddressSpace::Handle
+                    if matches!(
+                        module.types[var.ty].inner,
+                        naga::TypeInner::Image {
+                            dim: naga::ImageDimension::D2,
+                            arrayed: false,
+                            class: naga::ImageClass::Sampled { kind: naga::ScalarKind::Uint, multi: false },
+                        }
+                    ) =>
+                {
+                    BindingKind::TextureU32
+                }
                 other => {
                     return Err(GpuError::UnsupportedBinding {
                         label: label.into(),
@@ -191,15 +219,22 @@ impl Gpu {
                         .map(|&(binding, kind)| wgpu::BindGroupLayoutEntry {
                             binding,
                             visibility: wgpu::ShaderStages::COMPUTE,
-                            ty: wgpu::BindingType::Buffer {
-                                ty: match kind {
-                                    BindingKind::Uniform => wgpu::BufferBindingType::Uniform,
-                                    BindingKind::Storage { read_only } => {
-                                        wgpu::BufferBindingType::Storage { read_only }
-                                    }
+                            ty: match kind {
+                                BindingKind::Uniform => wgpu::BindingType::Buffer {
+                                    ty: wgpu::BufferBindingType::Uniform,
+                                    has_dynamic_offset: false,
+                                    min_binding_size: None,
                                 },
-                                has_dynamic_offset: false,
-                                min_binding_size: None,
+                                BindingKind::Storage { read_only } => wgpu::BindingType::Buffer {
+                                    ty: wgpu::BufferBindingType::Storage { read_only },
+                                    has_dynamic_offset: false,
+                                    min_binding_size: None,
+                                },
+                                BindingKind::TextureU32 => wgpu::BindingType::Texture {
+                                    sample_type: wgpu::TextureSampleType::Uint,
+                                    view_dimension: wgpu::TextureViewDimension::D2,
+                                    multisampled: false,
+                                },
                             },
                             count: None,
                         })
@@ -328,6 +363,52 @@ impl Gpu {
 
     /// Writes `bytes` at the start of `buffer` (through the queue, not a mapping: a buffer
     /// that failed to allocate then yields an error instead of wgpu's panic on mapping).
+    /// A 2D `rgba32uint` texture of `rows` rows of `bytes.len() / rows / 16` texels holding
+    /// `bytes`, for `textureLoad` (a scene table in `tables::TableForm::Texture`), and its
+    /// view.
+    pub fn u32_texture(&self, label: &str, bytes: &[u8], rows: u32) -> Result<wgpu::TextureView, GpuError> {
+        let row_bytes = bytes.len() / rows.max(1) as usize;
+        if rows == 0 || row_bytes == 0 || row_bytes % 16 != 0 || row_bytes * rows as usize != bytes.len() {
+            return Err(GpuError::Internal(format!("{label}: {} bytes are not {rows} rows of texels", bytes.len())));
+        }
+        let width = (row_bytes / 16) as u32;
+        let limit = self.limits.max_texture_dimension_2d;
+        if width > limit || rows > limit {
+            return Err(GpuError::TooLarge {
+                what: label.into(),
+                needed: u64::from(width.max(rows)),
+                limit: u64::from(limit),
+                limit_name: "2D texture dimension",
+            });
+        }
+        let size = wgpu::Extent3d { width, height: rows, depth_or_array_layers: 1 };
+        let texture = self.scoped(|| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Uint,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            })
+        })?;
+        self.scoped(|| {
+            self.queue.write_texture(
+                texture.as_image_copy(),
+                bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row_bytes as u32),
+                    rows_per_image: Some(rows),
+                },
+                size,
+            )
+        })?;
+        Ok(texture.create_view(&wgpu::TextureViewDescriptor::default()))
+    }
+
     fn upload(&self, buffer: &wgpu::Buffer, bytes: &[u8]) -> Result<(), GpuError> {
         if bytes.is_empty() {
             return Ok(());

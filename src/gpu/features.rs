@@ -5,7 +5,7 @@
 //! fixed-size arrays (a CSG query's leaf spans, its walk's stack) be sized from the scene
 //! instead of a worst case.
 
-use super::tables::UniformTables;
+use super::tables::TableForms;
 use crate::scene::{Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
 
 /// CSG bounds compiled into a full-featured kernel ([`FeatureSet::full_for`]): a general
@@ -197,9 +197,9 @@ pub struct FeatureSet {
     /// Next-event estimation with MIS (path tracer with some non-delta material only: light
     /// sampling happens at diffuse and microfacet vertices).
     pub nee: bool,
-    /// The tables read from uniform buffers instead of storage buffers: chosen per render
-    /// for the adapter ([`UniformTables::choose`]); [`FeatureSet::of`] leaves it empty.
-    pub uniform_tables: UniformTables,
+    /// The tables read from uniform buffers or textures instead of storage buffers: chosen
+    /// per render for the adapter ([`TableForms::choose`]); [`FeatureSet::of`] leaves it empty.
+    pub tables: TableForms,
     /// Per BRDF kind (indexed by `layout::brdf_kind`), what the materials of that kind need
     /// in their shading stage: the shapes they sit on, their pigments, whether one emits.
     pub shade_use: [KindUse; BRDF_KINDS],
@@ -451,7 +451,7 @@ impl FeatureSet {
             bvh: true,
             object_list: self.object_list,
             nee: path,
-            uniform_tables: self.uniform_tables,
+            tables: self.tables,
             shade_use: [KindUse::ALL; BRDF_KINDS],
             light_use: KindUse::ALL,
         }
@@ -607,7 +607,7 @@ impl FeatureSet {
             (self.renderer == RendererKind::PathTracer, "PATHTRACER"),
         ];
         let mut names: Vec<&'static str> = flags.iter().filter(|(on, _)| *on).map(|(_, n)| *n).collect();
-        names.extend(self.uniform_tables.names());
+        names.extend(self.tables.names());
         names
     }
 

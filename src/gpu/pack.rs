@@ -75,17 +75,6 @@ fn rebased(n: BvhNode, to: u32, tri_base: u32) -> BvhNode {
 /// largest tree (`scene::MAX_CSG_LEAVES`) is well within it.
 pub const MAX_CSG_POOL: usize = 1 << 19;
 
-/// `data`, or one zeroed element when it is empty: what is bound for a buffer the kernel
-/// declares but the scene does not fill (wgpu requires a binding to hold at least one
-/// element of the shader's array type; the kernel never reads it, its counts being 0).
-pub fn at_least_one<T: bytemuck::Pod>(data: &[T]) -> std::borrow::Cow<'_, [T]> {
-    if data.is_empty() {
-        std::borrow::Cow::Owned(vec![<T as bytemuck::Zeroable>::zeroed()])
-    } else {
-        std::borrow::Cow::Borrowed(data)
-    }
-}
-
 /// Why a scene cannot be packed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PackError {
@@ -837,8 +826,9 @@ mod tests {
         let p = pack(&b.build().unwrap(), None).unwrap();
         assert!(!p.features.object_list && p.settings.plane_offset == 9);
         // Padding: empty data becomes one zeroed element, other data is untouched.
-        assert_eq!(at_least_one::<layout::PointLight>(&p.point_lights).len(), 1);
-        assert_eq!(at_least_one(&p.indices).as_ref(), p.indices.as_slice());
+        use crate::gpu::tables::{storage_contents, Table};
+        assert_eq!(storage_contents(Table::PointLights, &p).len(), std::mem::size_of::<layout::PointLight>());
+        assert_eq!(storage_contents(Table::Indices, &p).as_ref(), bytemuck::cast_slice::<u32, u8>(&p.indices));
     }
 
     /// The list's object count is the BVH's: a CSG tree with an unbounded solid is tested

@@ -124,35 +124,48 @@ pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
 }
 
 /// Launches `kernel` over an empty grid, which makes llvmpipe compile it: every binding
-/// gets a buffer of the least size it accepts, which nothing reads.
+/// gets a buffer of the least size it accepts (or a one-texel texture), which nothing reads.
 fn launch_empty(gpu: &Gpu, kernel: &ComputeKernel) -> Result<(), GpuError> {
-    let buffers = gpu.scoped(|| {
-        kernel
-            .bindings
-            .iter()
-            .zip(&kernel.binding_bytes)
-            .map(|(list, bytes)| {
-                list.iter()
-                    .zip(bytes)
-                    .map(|(&(_, kind), &size)| {
-                        gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                            label: Some("empty launch"),
-                            size: size.max(MIN_BUFFER_BYTES).next_multiple_of(16),
-                            usage: match kind {
-                                BindingKind::Uniform => wgpu::BufferUsages::UNIFORM,
-                                BindingKind::Storage { .. } => wgpu::BufferUsages::STORAGE,
-                            },
-                            mapped_at_creation: false,
-                        })
-                    })
-                    .collect::<Vec<_>>()
-            })
-            .collect::<Vec<_>>()
-    })?;
-    let groups = buffers
+    enum Empty {
+        Buffer(wgpu::Buffer),
+        Texture(wgpu::TextureView),
+    }
+    let mut resources = Vec::new();
+    for (list, bytes) in kernel.bindings.iter().zip(&kernel.binding_bytes) {
+        let mut group = Vec::new();
+        for (&(_, kind), &size) in list.iter().zip(bytes) {
+            let usage = match kind {
+                BindingKind::Uniform => wgpu::BufferUsages::UNIFORM,
+                BindingKind::Storage { .. } => wgpu::BufferUsages::STORAGE,
+                BindingKind::TextureU32 => {
+                    group.push(Empty::Texture(gpu.u32_texture("empty launch", &[0; 16], 1)?));
+                    continue;
+                }
+            };
+            group.push(Empty::Buffer(gpu.scoped(|| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("empty launch"),
+                    size: size.max(MIN_BUFFER_BYTES).next_multiple_of(16),
+                    usage,
+                    mapped_at_creation: false,
+                })
+            })?));
+        }
+        resources.push(group);
+    }
+    let groups = resources
         .iter()
         .enumerate()
-        .map(|(g, list)| kernel.bind_group(gpu, g as u32, &list.iter().collect::<Vec<_>>()))
+        .map(|(g, list)| {
+            let bound = list
+                .iter()
+                .map(|r| match r {
+                    Empty::Buffer(b) => b.as_entire_binding(),
+                    Empty::Texture(v) => wgpu::BindingResource::TextureView(v),
+                })
+                .collect();
+            kernel.bind_group_of(gpu, g as u32, bound)
+        })
         .collect::<Result<Vec<_>, _>>()?;
     gpu.dispatch(kernel, &groups.iter().collect::<Vec<_>>(), [0, 0, 0])
 }

@@ -10,9 +10,9 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use super::features::{FeatureSet, RendererKind};
-use super::pack::{at_least_one, pack, PackedScene};
+use super::pack::{pack, PackedScene};
 use super::parallel_jit;
-use super::tables::{Table, TablePlacement, UniformTables};
+use super::tables::{Table, TableForms, TableLimits, TablePlacement};
 use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
 use super::{Assembled, BindingKind, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary};
 use crate::image::HdrImage;
@@ -91,8 +91,8 @@ pub struct GpuRenderOptions {
     /// [`GpuRenderOutput::profile`]. Needs the adapter's timestamp queries; the image is
     /// the same.
     pub profile: bool,
-    /// Which scene tables the kernels read from uniform buffers (`lumen render --tables`;
-    /// [`super::tables::UniformTables::choose`]). The image is the same.
+    /// Which scene tables the kernels read from uniform buffers or textures (`lumen render
+    /// --tables`; [`super::tables::TableForms::choose`]). The image is the same.
     pub tables: TablePlacement,
 }
 
@@ -131,8 +131,9 @@ pub struct GpuRenderOutput {
     /// Features the kernels were compiled for (the scene's, or the override), leaving out
     /// the table placement, which is [`Self::tables`].
     pub features: FeatureSet,
-    /// The tables the kernels read from uniform buffers (chosen for the adapter).
-    pub tables: UniformTables,
+    /// The tables the kernels read from uniform buffers and textures (chosen for the
+    /// adapter).
+    pub tables: TableForms,
     /// Batches run (each a launch of every stage for a run of whole pixels).
     pub batches: u64,
     /// Path slots per batch.
@@ -147,8 +148,9 @@ pub struct GpuRenderOutput {
 
 /// All modules, in a library that knows every feature name.
 pub fn shader_library() -> ShaderLibrary {
-    let tables = super::tables::Table::ALL.map(super::tables::Table::feature);
-    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().chain(&Stage::NAMES).chain(&tables).copied().collect();
+    use super::tables::Table;
+    let tables = Table::ALL.map(Table::feature).into_iter().chain(Table::ALL.map(Table::texture_feature));
+    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().chain(&Stage::NAMES).copied().chain(tables).collect();
     let mut lib = ShaderLibrary::new(&names);
     for (file, src) in &MODULES {
         lib.add(file, src).unwrap_or_else(|e| panic!("built-in shader {file} is malformed: {e}"));
@@ -344,12 +346,7 @@ impl GpuRenderer {
         start: Instant,
     ) -> Result<GpuRenderOutput, GpuError> {
         let mut f = kernel_features(&packed.features, opts.features)?;
-        f.uniform_tables = UniformTables::choose(
-            packed,
-            opts.tables,
-            gpu.adapter_info.device_type,
-            gpu.limits.max_uniform_buffer_binding_size,
-        );
+        f.tables = TableForms::choose(packed, opts.tables, gpu.adapter_info.device_type, TableLimits::of(&gpu.limits));
         let kernel_start = Instant::now();
         let kernels = self.stage_kernels(gpu, &f)?;
         let kernel_seconds = kernel_start.elapsed().as_secs_f64();
@@ -394,8 +391,8 @@ impl GpuRenderer {
             kernels_compiled: kernels.compiled,
             non_finite_samples: counters.non_finite + acc.nonfinite,
             stop: acc.stop,
-            features: FeatureSet { uniform_tables: UniformTables::NONE, ..f },
-            tables: f.uniform_tables,
+            features: FeatureSet { tables: TableForms::NONE, ..f },
+            tables: f.tables,
             batches: acc.batches,
             batch_paths: runner.capacity(),
             rays: counters.rays,
@@ -423,7 +420,22 @@ fn kernel_features(scene: &FeatureSet, kernel: Option<FeatureSet>) -> Result<Fea
 /// kernel declares buffers the scene leaves empty: those get one zeroed element, since a
 /// binding must hold at least one element of its array type (it is never read: counts are 0).
 struct SceneBuffers {
-    buffers: BTreeMap<u32, wgpu::Buffer>,
+    buffers: BTreeMap<u32, SceneResource>,
+}
+
+/// What one group-1 binding holds: a buffer, or a table's texture.
+enum SceneResource {
+    Buffer(wgpu::Buffer),
+    Texture(wgpu::TextureView),
+}
+
+impl SceneResource {
+    fn binding(&self) -> wgpu::BindingResource<'_> {
+        match self {
+            SceneResource::Buffer(b) => b.as_entire_binding(),
+            SceneResource::Texture(v) => wgpu::BindingResource::TextureView(v),
+        }
+    }
 }
 
 impl SceneBuffers {
@@ -435,32 +447,37 @@ impl SceneBuffers {
                     continue;
                 }
                 if let Some(table) = Table::from_binding(binding) {
-                    let buffer = if kind == BindingKind::Uniform {
-                        let contents = super::tables::uniform_contents(table, p).ok_or_else(|| {
-                            GpuError::Internal(format!(
-                                "the {table:?} table does not fit the uniform buffer it was given"
-                            ))
-                        })?;
-                        gpu.uniform_buffer_bytes(table.feature(), &contents)?
-                    } else {
-                        gpu.storage_buffer(table.wgsl_name(), &super::tables::storage_contents(table, p))?
+                    let resource = match kind {
+                        BindingKind::Uniform => {
+                            let contents = super::tables::uniform_contents(table, p).ok_or_else(|| {
+                                GpuError::Internal(format!(
+                                    "the {table:?} table does not fit the uniform buffer it was given"
+                                ))
+                            })?;
+                            SceneResource::Buffer(gpu.uniform_buffer_bytes(table.feature(), &contents)?)
+                        }
+                        BindingKind::TextureU32 => {
+                            let (contents, rows) = super::tables::texture_contents(table, p);
+                            SceneResource::Texture(gpu.u32_texture(table.wgsl_name(), &contents, rows)?)
+                        }
+                        BindingKind::Storage { .. } => SceneResource::Buffer(
+                            gpu.storage_buffer(table.wgsl_name(), &super::tables::storage_contents(table, p))?,
+                        ),
                     };
-                    buffers.insert(binding, buffer);
+                    buffers.insert(binding, resource);
                     continue;
                 }
                 let buffer = match binding {
                     0 => gpu.uniform_buffer("settings", &p.settings)?,
                     1 => gpu.uniform_buffer("camera", &p.camera)?,
                     9 => gpu.uniform_buffer("environment", &p.environment)?,
-                    13 => gpu.storage_buffer("tri_positions", &at_least_one(&p.tri_positions))?,
-                    14 => gpu.storage_buffer("tri_shading", &at_least_one(&p.tri_shading))?,
                     b => {
                         return Err(GpuError::Validation(format!(
                             "a stage kernel declares unknown @group(1) @binding({b})"
                         )))
                     }
                 };
-                buffers.insert(binding, buffer);
+                buffers.insert(binding, SceneResource::Buffer(buffer));
             }
         }
         Ok(Self { buffers })
@@ -471,8 +488,8 @@ impl SceneBuffers {
         let mut groups = BTreeMap::new();
         for (&stage, kernel) in &kernels.kernels {
             let Some(declared) = kernel.bindings.get(1) else { continue };
-            let refs: Vec<&wgpu::Buffer> = declared.iter().map(|(b, _)| &self.buffers[b]).collect();
-            groups.insert(stage, kernel.bind_group(gpu, 1, &refs)?);
+            let resources = declared.iter().map(|(b, _)| self.buffers[b].binding()).collect();
+            groups.insert(stage, kernel.bind_group_of(gpu, 1, resources)?);
         }
         Ok(groups)
     }
@@ -484,6 +501,7 @@ mod tests {
 
     use super::*;
     use crate::gpu::features::{EnvKind, KindUse};
+    use crate::gpu::tables::TableForm;
     use crate::sampling::Pcg32;
 
     /// Names of the functions reachable from the entry point (by naga's call statements).
@@ -571,7 +589,8 @@ mod tests {
         };
         for t in Table::ALL {
             if b() {
-                f.uniform_tables = f.uniform_tables.with(t);
+                let form = if b() { TableForm::Uniform } else { TableForm::Texture };
+                f.tables = f.tables.with(t, form);
             }
         }
         // What each BRDF kind's shading stage and light sampling keep (FeatureSet::of
@@ -625,7 +644,9 @@ mod tests {
                     (true, true, true, true, true, true);
                 all.csg_max_leaves = 4;
                 all.csg_max_depth = 3;
-                all.uniform_tables = UniformTables::all();
+                // Both packed forms, each with every table.
+                let form = if environment == EnvKind::Image { TableForm::Texture } else { TableForm::Uniform };
+                all.tables = TableForms::all(form);
                 let none = random_features(&mut Pcg32::new(0, 0), renderer, environment);
                 let none = FeatureSet { renderer, environment: none.environment, ..FeatureSet::default() };
                 assert_minimal(&none);

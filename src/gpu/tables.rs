@@ -1,21 +1,23 @@
-//! Where the kernels read the scene's small tables from: a storage buffer, or a uniform
-//! buffer of fixed length (DESIGN.md "Uniform scene tables").
+//! Where the kernels read the scene's read-only tables from: a storage buffer, a uniform
+//! buffer of fixed length, or a texture (DESIGN.md "Scene tables").
 //!
 //! On llvmpipe (lavapipe) a storage-buffer load at an index that differs between lanes is
 //! compiled into one branch and one scalar load per lane and word, while a uniform-buffer
-//! load at any index is a straight-line gather. Reading shapes, BVH nodes, materials and
-//! the other read-only tables (texels and sampling tables too, when small) from uniform
-//! buffers halved the cold compile time of cornell.sl and made it render 39 % faster there
-//! (BENCHMARKS.md). Hardware GPUs serve
-//! divergent uniform reads from a constant cache that serialises them, so there the tables
-//! stay in storage buffers. A table goes in a uniform buffer only when it fits one
-//! ([`UNIFORM_TABLE_BYTES`], WebGPU's default limit, which every adapter offers); larger
-//! tables of the same scene stay in storage buffers.
+//! load at any index is a straight-line gather and a `textureLoad` one call of a fetch
+//! function compiled outside the kernel. Reading the small tables from uniform buffers
+//! halved the cold compile time of cornell.sl and made it render 39 % faster there, and
+//! reading the larger ones from textures cut the LLVM IR of meshes.sl's and spheres_10k.sl's
+//! kernels by a sixth to a fifth at the same render speed (BENCHMARKS.md). Hardware GPUs
+//! serve divergent uniform reads from a constant cache that serialises them, so there the
+//! tables stay in storage buffers. A table goes in a uniform buffer only when it fits one
+//! ([`UNIFORM_TABLE_BYTES`], WebGPU's default limit, which every adapter offers), in a
+//! texture only when its rows fit the adapter's texture height.
 //!
-//! Each table is described here once: its binding, WGSL name and element type, the
-//! features that declare it, and its bytes. [`tables_wgsl`] generates the declarations in
-//! either form (and the accessors of the packed ones), and the renderer uploads through
-//! [`Table::bytes`], so no binding number is written twice.
+//! Each table is described here once: its binding, WGSL name, element type and accessor,
+//! the features that declare it, and its bytes. [`tables_wgsl`] generates the declarations
+//! in the three forms and the accessor every read goes through (for textures, built from
+//! `shaders/layout.wgsl`'s member offsets), and the renderer uploads through
+//! [`Table::bytes`], so no binding number or offset is written twice.
 
 use super::layout;
 use super::pack::PackedScene;
@@ -41,10 +43,14 @@ pub enum Table {
     Floats,
     /// The microfacet materials' energy rows (f32), packed like `Floats`.
     Rows,
+    /// Mesh triangles' object-space vertices (`layout::TRI_POSITION_VEC4S` vec4 each).
+    TriPositions,
+    /// Their vertex normals and uvs (`layout::TRI_SHADING_VEC4S` vec4 each).
+    TriShading,
 }
 
 impl Table {
-    pub const ALL: [Table; 10] = [
+    pub const ALL: [Table; 12] = [
         Table::Shapes,
         Table::Indices,
         Table::BvhNodes,
@@ -55,6 +61,8 @@ impl Table {
         Table::AreaLights,
         Table::Floats,
         Table::Rows,
+        Table::TriPositions,
+        Table::TriShading,
     ];
 
     /// The `@group(1) @binding` of the table.
@@ -70,6 +78,8 @@ impl Table {
             Table::AreaLights => 12,
             Table::Floats => 10,
             Table::Rows => 15,
+            Table::TriPositions => 13,
+            Table::TriShading => 14,
         }
     }
 
@@ -91,6 +101,26 @@ impl Table {
             Table::AreaLights => "UNIFORM_AREA_LIGHTS",
             Table::Floats => "UNIFORM_FLOATS",
             Table::Rows => "UNIFORM_ROWS",
+            Table::TriPositions => "UNIFORM_TRI_POSITIONS",
+            Table::TriShading => "UNIFORM_TRI_SHADING",
+        }
+    }
+
+    /// The assembly feature that declares the table as a texture.
+    pub fn texture_feature(self) -> &'static str {
+        match self {
+            Table::Shapes => "TEXTURE_SHAPES",
+            Table::Indices => "TEXTURE_INDICES",
+            Table::BvhNodes => "TEXTURE_BVH_NODES",
+            Table::CsgTrees => "TEXTURE_CSG_TREES",
+            Table::Materials => "TEXTURE_MATERIALS",
+            Table::Pigments => "TEXTURE_PIGMENTS",
+            Table::PointLights => "TEXTURE_POINT_LIGHTS",
+            Table::AreaLights => "TEXTURE_AREA_LIGHTS",
+            Table::Floats => "TEXTURE_FLOATS",
+            Table::Rows => "TEXTURE_ROWS",
+            Table::TriPositions => "TEXTURE_TRI_POSITIONS",
+            Table::TriShading => "TEXTURE_TRI_SHADING",
         }
     }
 
@@ -112,6 +142,8 @@ impl Table {
             Table::AreaLights => "area_lights",
             Table::Floats => "floats",
             Table::Rows => "rows",
+            Table::TriPositions => "tri_positions",
+            Table::TriShading => "tri_shading",
         }
     }
 
@@ -128,6 +160,7 @@ impl Table {
             Table::PointLights => "PointLight",
             Table::AreaLights => "AreaLight",
             Table::Floats | Table::Rows => "f32",
+            Table::TriPositions | Table::TriShading => "vec4<f32>",
         }
     }
 
@@ -145,22 +178,39 @@ impl Table {
             Table::AreaLights => &["AREA_LIGHTS"],
             Table::Floats => &["TEXTURES"],
             Table::Rows => &["ENERGY_ROWS"],
+            Table::TriPositions => &["MESH"],
+            Table::TriShading => &["MESH", "SHADING"],
         }
     }
 
-    /// For the u32 and f32 tables, the accessor every read goes through (the uniform form
-    /// holds them packed) and what the table holds.
-    fn accessor(self) -> Option<(&'static str, &'static str)> {
+    /// The function every read of an element goes through, whatever the table's form.
+    pub fn accessor(self) -> &'static str {
         match self {
-            Table::Indices => {
-                Some(("object_ref", "BVH leaf object references from 0, then the plane list and CSG children"))
-            }
-            Table::Floats => Some((
-                "float_at",
+            Table::Shapes => "shape_at",
+            Table::Indices => "object_ref",
+            Table::BvhNodes => "bvh_node_at",
+            Table::CsgTrees => "csg_tree_at",
+            Table::Materials => "material_at",
+            Table::Pigments => "pigment_at",
+            Table::PointLights => "point_light_at",
+            Table::AreaLights => "area_light_at",
+            Table::Floats => "float_at",
+            Table::Rows => "row_at",
+            Table::TriPositions => "tri_position_at",
+            Table::TriShading => "tri_shading_at",
+        }
+    }
+
+    /// For the u32 and f32 tables, held four to a vec4 in the uniform and texture forms:
+    /// what the table holds.
+    fn packed(self) -> Option<&'static str> {
+        match self {
+            Table::Indices => Some("BVH leaf object references from 0, then the plane list and CSG children"),
+            Table::Floats => Some(
                 "texels (rgb triples) of image pigments and the environment, the environment's \
                  importance-sampling arrays and mesh-light CDFs",
-            )),
-            Table::Rows => Some(("row_at", "the microfacet materials' energy rows (Material::rows)")),
+            ),
+            Table::Rows => Some("the microfacet materials' energy rows (Material::rows)"),
             _ => None,
         }
     }
@@ -179,7 +229,7 @@ impl Table {
         use std::mem::size_of;
         match self {
             Table::Shapes => size_of::<layout::Shape>(),
-            Table::Indices | Table::Floats | Table::Rows => 16,
+            Table::Indices | Table::Floats | Table::Rows | Table::TriPositions | Table::TriShading => 16,
             Table::BvhNodes => size_of::<BvhNode>(),
             Table::CsgTrees => size_of::<layout::CsgTree>(),
             Table::Materials => size_of::<layout::Material>(),
@@ -207,6 +257,8 @@ impl Table {
             Table::AreaLights => bytemuck::cast_slice(&p.area_lights),
             Table::Floats => bytemuck::cast_slice(&p.floats),
             Table::Rows => bytemuck::cast_slice(&p.rows),
+            Table::TriPositions => bytemuck::cast_slice(&p.tri_positions),
+            Table::TriShading => bytemuck::cast_slice(&p.tri_shading),
         }
     }
 
@@ -215,119 +267,286 @@ impl Table {
     }
 }
 
-/// Which tables a render's kernels read from uniform buffers (the others: storage buffers).
+/// How a kernel reads one table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TableForm {
+    /// A runtime-sized storage array (hardware GPUs; any table).
+    Storage,
+    /// A fixed-length uniform array of [`UNIFORM_TABLE_BYTES`] (software adapters, small
+    /// tables).
+    Uniform,
+    /// A 2D `rgba32uint` texture of [`TEXTURE_ROW_TEXELS`]-texel rows read with
+    /// `textureLoad` (software adapters, tables too large for a uniform buffer).
+    Texture,
+}
+
+/// Which tables a render's kernels read from uniform buffers and which from textures (the
+/// others: storage buffers).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct UniformTables(u16);
+pub struct TableForms {
+    uniform: u16,
+    texture: u16,
+}
 
 /// How a render places its tables ([`super::render::GpuRenderOptions::tables`]; also
 /// `lumen render --tables`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum TablePlacement {
-    /// Uniform buffers on software adapters (where each table fits), storage elsewhere.
+    /// On software adapters a uniform buffer for each table that fits one and a texture
+    /// for each larger one; storage buffers on hardware GPUs.
     #[default]
     Auto,
-    /// Uniform buffers wherever a table fits, on any adapter (for measurements and tests).
+    /// Uniform buffers wherever a table fits, storage buffers elsewhere, on any adapter
+    /// (for measurements and tests).
     Uniform,
+    /// Textures for every table that fits the adapter's texture size, on any adapter (for
+    /// measurements and tests).
+    Texture,
     /// Storage buffers only.
     Storage,
 }
 
-impl UniformTables {
-    /// No table in a uniform buffer.
-    pub const NONE: UniformTables = UniformTables(0);
+/// What the adapter allows the table forms: the bytes of a uniform binding and the rows
+/// of a 2D texture.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TableLimits {
+    pub max_uniform_bytes: u64,
+    pub max_texture_rows: u32,
+}
 
-    /// Every table in a uniform buffer (what a scene gets when all its tables fit).
-    pub fn all() -> Self {
-        Table::ALL.into_iter().fold(Self::NONE, |s, t| s.with(t))
+impl TableLimits {
+    /// The limits of an adapter.
+    pub fn of(limits: &wgpu::Limits) -> Self {
+        TableLimits {
+            max_uniform_bytes: limits.max_uniform_buffer_binding_size,
+            max_texture_rows: limits.max_texture_dimension_2d,
+        }
     }
 
-    pub fn with(self, t: Table) -> Self {
-        UniformTables(self.0 | t.bit())
+    /// WebGPU's defaults, which every adapter offers.
+    pub fn webgpu_default() -> Self {
+        Self::of(&wgpu::Limits::default())
+    }
+}
+
+impl TableForms {
+    /// Every table in a storage buffer.
+    pub const NONE: TableForms = TableForms { uniform: 0, texture: 0 };
+
+    /// Every table in form `form`.
+    pub fn all(form: TableForm) -> Self {
+        Table::ALL.into_iter().fold(Self::NONE, |s, t| s.with(t, form))
     }
 
-    pub fn contains(self, t: Table) -> bool {
-        self.0 & t.bit() != 0
+    /// This placement with table `t` in form `form`.
+    pub fn with(self, t: Table, form: TableForm) -> Self {
+        let (uniform, texture) = (self.uniform & !t.bit(), self.texture & !t.bit());
+        match form {
+            TableForm::Storage => TableForms { uniform, texture },
+            TableForm::Uniform => TableForms { uniform: uniform | t.bit(), texture },
+            TableForm::Texture => TableForms { uniform, texture: texture | t.bit() },
+        }
     }
 
-    /// The tables of `packed` to read from uniform buffers under `placement`, on an adapter
-    /// of type `device` whose uniform bindings may hold `max_uniform_bytes`.
+    /// The form of table `t`.
+    pub fn form(self, t: Table) -> TableForm {
+        if self.uniform & t.bit() != 0 {
+            TableForm::Uniform
+        } else if self.texture & t.bit() != 0 {
+            TableForm::Texture
+        } else {
+            TableForm::Storage
+        }
+    }
+
+    /// The forms for the tables of `packed` under `placement`, on an adapter of type
+    /// `device` with `limits`.
     ///
     /// ```
-    /// use lumen::gpu::tables::{Table, TablePlacement, UniformTables};
+    /// use lumen::gpu::tables::{Table, TableForm, TableForms, TableLimits, TablePlacement};
     /// let mut b = lumen::scene::SceneBuilder::new(4, 4);
     /// let m = b.diffuse(lumen::color::Color::gray(0.5));
     /// b.sphere(lumen::scene::Transform::IDENTITY, m);
     /// let packed = lumen::gpu::pack::pack(&b.build().unwrap(), None).unwrap();
-    /// let lavapipe = UniformTables::choose(&packed, TablePlacement::Auto, wgpu::DeviceType::Cpu, 65536);
-    /// assert!(lavapipe.contains(Table::Shapes) && lavapipe.contains(Table::BvhNodes));
-    /// let hardware = UniformTables::choose(&packed, TablePlacement::Auto, wgpu::DeviceType::DiscreteGpu, 65536);
-    /// assert_eq!(hardware, UniformTables::NONE);
+    /// let limits = TableLimits::webgpu_default();
+    /// let lavapipe = TableForms::choose(&packed, TablePlacement::Auto, wgpu::DeviceType::Cpu, limits);
+    /// assert_eq!(lavapipe.form(Table::Shapes), TableForm::Uniform);
+    /// let hardware = TableForms::choose(&packed, TablePlacement::Auto, wgpu::DeviceType::DiscreteGpu, limits);
+    /// assert_eq!(hardware, TableForms::NONE);
     /// ```
     pub fn choose(
         packed: &PackedScene,
         placement: TablePlacement,
         device: wgpu::DeviceType,
-        max_uniform_bytes: u64,
+        limits: TableLimits,
     ) -> Self {
-        let wanted = match placement {
-            TablePlacement::Storage => false,
-            TablePlacement::Uniform => true,
-            TablePlacement::Auto => device == wgpu::DeviceType::Cpu,
+        let (uniform, texture) = match placement {
+            TablePlacement::Storage => (false, false),
+            TablePlacement::Uniform => (true, false),
+            TablePlacement::Texture => (false, true),
+            TablePlacement::Auto => (device == wgpu::DeviceType::Cpu, device == wgpu::DeviceType::Cpu),
         };
-        if !wanted || max_uniform_bytes < UNIFORM_TABLE_BYTES as u64 {
-            return Self::NONE;
-        }
-        Table::ALL
-            .into_iter()
-            .filter(|t| t.bytes(packed).len() <= UNIFORM_TABLE_BYTES)
-            .fold(Self::NONE, |s, t| s.with(t))
+        let uniform = uniform && limits.max_uniform_bytes >= UNIFORM_TABLE_BYTES as u64;
+        Table::ALL.into_iter().fold(Self::NONE, |s, t| {
+            let bytes = t.bytes(packed).len();
+            if uniform && bytes <= UNIFORM_TABLE_BYTES {
+                s.with(t, TableForm::Uniform)
+            } else if texture && texture_rows(bytes) <= limits.max_texture_rows as usize {
+                s.with(t, TableForm::Texture)
+            } else {
+                s
+            }
+        })
     }
 
-    /// The assembly features of the tables held in uniform buffers.
+    /// The assembly features of the tables held in uniform buffers and textures.
     pub fn names(self) -> Vec<&'static str> {
-        Table::ALL.into_iter().filter(|t| self.contains(*t)).map(Table::feature).collect()
+        Table::ALL
+            .into_iter()
+            .filter_map(|t| match self.form(t) {
+                TableForm::Storage => None,
+                TableForm::Uniform => Some(t.feature()),
+                TableForm::Texture => Some(t.texture_feature()),
+            })
+            .collect()
     }
+}
+
+/// Texels (16 bytes each) in one row of a table texture: the element at texel index k is at
+/// (k mod 4096, k / 4096), a mask and a shift in WGSL.
+pub const TEXTURE_ROW_TEXELS: usize = 4096;
+
+/// Rows of the texture holding `bytes` (at least one).
+fn texture_rows(bytes: usize) -> usize {
+    bytes.div_ceil(16 * TEXTURE_ROW_TEXELS).max(1)
 }
 
 /// The `scene_tables` WGSL module: for each table, guarded by the features that use it,
 /// its uniform declaration (`UNIFORM_<TABLE>`, a fixed-length array of
-/// `UNIFORM_<TABLE>_LEN` elements) or else its storage declaration, and for the u32 and f32
-/// tables the accessor that reads either form.
+/// `UNIFORM_<TABLE>_LEN` elements), its texture declaration (`TEXTURE_<TABLE>`) or else
+/// its storage declaration, and the accessor every read goes through ([`Table::accessor`]),
+/// which in the texture form assembles the element from its texels, member by member, as
+/// `shaders/layout.wgsl` lays it out.
 pub fn tables_wgsl() -> String {
+    let layout = naga::front::wgsl::parse_str(layout::LAYOUT_WGSL).expect("shaders/layout.wgsl parses");
     let mut out = String::from(
         "// #provides scene_tables\n// #requires layout\n\
          // The scene's read-only tables in bind group 1, generated by src/gpu/tables.rs: uniform\n\
-         // arrays where the render chose so (software adapters), else storage arrays.\n",
+         // arrays or textures where the render chose so (software adapters), else storage arrays.\n",
     );
     for t in Table::ALL {
-        let (b, name, elem) = (t.binding(), t.wgsl_name(), t.wgsl_element());
-        out += &format!("const {}: u32 = {}u;\n", t.length_constant(), t.uniform_length());
+        let (b, name, elem, f) = (t.binding(), t.wgsl_name(), t.wgsl_element(), t.accessor());
+        out += &format!("\nconst {}: u32 = {}u;\n", t.length_constant(), t.uniform_length());
         for guard in t.declared_when() {
             out += &format!("// #if {guard}\n");
         }
-        let packed = t.accessor().map(|(f, what)| (f, what, if elem == "u32" { "vec4<u32>" } else { "vec4<f32>" }));
-        if let Some((_, what, _)) = packed {
-            out += &format!("// {}: {what}.\n", name);
+        let vec4 = if elem == "u32" { "vec4<u32>" } else { "vec4<f32>" };
+        if let Some(what) = t.packed() {
+            out += &format!("// {name}: {what}.\n");
         }
-        let uniform_elem = packed.map_or(elem, |(_, _, v)| v);
+        let uniform_elem = if t.packed().is_some() { vec4 } else { elem };
+        let uniform_read = if t.packed().is_some() { format!("{name}[k >> 2u][k & 3u]") } else { format!("{name}[k]") };
         out += &format!(
-            "// #if {}\n@group(1) @binding({b}) var<uniform> {name}: array<{uniform_elem}, {}>;\n",
+            "// #if {}\n@group(1) @binding({b}) var<uniform> {name}: array<{uniform_elem}, {}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {uniform_read};\n}}\n",
             t.feature(),
             t.length_constant()
         );
-        if let Some((f, _, _)) = packed {
-            out += &format!("\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k >> 2u][k & 3u];\n}}\n");
-        }
-        out += &format!("// #else\n@group(1) @binding({b}) var<storage, read> {name}: array<{elem}>;\n");
-        if let Some((f, _, _)) = packed {
-            out += &format!("\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k];\n}}\n");
-        }
-        out += "// #endif\n";
+        let texture_read = if t.packed().is_some() {
+            let word = format!("{}[k & 3u]", texel_load(name, "k >> 2u"));
+            let value = if elem == "u32" { word } else { format!("bitcast<f32>({word})") };
+            format!("    return {value};\n")
+        } else {
+            texture_element(&layout, t, name, elem)
+        };
+        out += &format!(
+            "// #else\n// #if {}\n@group(1) @binding({b}) var {name}: texture_2d<u32>;\n\nfn {f}(k: u32) -> {elem} {{\n{texture_read}}}\n",
+            t.texture_feature()
+        );
+        out += &format!(
+            "// #else\n@group(1) @binding({b}) var<storage, read> {name}: array<{elem}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k];\n}}\n"
+        );
+        out += "// #endif\n// #endif\n";
         for _ in t.declared_when() {
             out += "// #endif\n";
         }
     }
     out
+}
+
+/// The body of a texture accessor of struct or vec4 table `t`: element k's texels, then
+/// the element built from their words.
+fn texture_element(layout: &naga::Module, t: Table, name: &str, elem: &str) -> String {
+    let texels = t.stride() / 16;
+    let mut body = format!("    let base = k * {texels}u;\n");
+    for i in 0..texels {
+        body += &format!("    let t{i} = {};\n", texel_load(name, &format!("base + {i}u")));
+    }
+    let value = if elem == "vec4<f32>" {
+        "bitcast<vec4<f32>>(t0)".to_string()
+    } else {
+        let (handle, _) = layout
+            .types
+            .iter()
+            .find(|(_, ty)| ty.name.as_deref() == Some(elem))
+            .unwrap_or_else(|| panic!("struct {elem} is not in shaders/layout.wgsl"));
+        decode(layout, handle, 0)
+    };
+    body + &format!("    return {value};\n")
+}
+
+/// WGSL loading texel `index` (an expression) of table texture `name`: column index mod
+/// [`TEXTURE_ROW_TEXELS`], row index / [`TEXTURE_ROW_TEXELS`].
+fn texel_load(name: &str, index: &str) -> String {
+    let (mask, shift) = (TEXTURE_ROW_TEXELS - 1, TEXTURE_ROW_TEXELS.trailing_zeros());
+    format!("textureLoad({name}, vec2<u32>(({index}) & {mask}u, ({index}) >> {shift}u), 0)")
+}
+
+/// WGSL building a value of type `ty` from the texel words at byte `offset` (`t<i>.xyzw`).
+fn decode(module: &naga::Module, ty: naga::Handle<naga::Type>, offset: u32) -> String {
+    use naga::TypeInner;
+    let word = |o: u32| format!("t{}.{}", o / 16, ["x", "y", "z", "w"][(o % 16 / 4) as usize]);
+    let scalar = |s: naga::Scalar, o: u32| match s.kind {
+        naga::ScalarKind::Uint => word(o),
+        naga::ScalarKind::Sint => format!("bitcast<i32>({})", word(o)),
+        naga::ScalarKind::Float => format!("bitcast<f32>({})", word(o)),
+        other => panic!("a table holds no {other:?}"),
+    };
+    let ty = &module.types[ty];
+    match &ty.inner {
+        TypeInner::Scalar(s) => scalar(*s, offset),
+        TypeInner::Vector { size, scalar: s } => {
+            let n = *size as u32;
+            let parts: Vec<String> = (0..n).map(|i| scalar(*s, offset + 4 * i)).collect();
+            format!("vec{n}<{}>({})", scalar_name(*s), parts.join(", "))
+        }
+        TypeInner::Struct { members, .. } => {
+            let parts: Vec<String> = members.iter().map(|m| decode(module, m.ty, offset + m.offset)).collect();
+            format!("{}({})", ty.name.as_deref().expect("structs are named"), parts.join(", "))
+        }
+        TypeInner::Array { base, size: naga::ArraySize::Constant(n), stride } => {
+            let parts: Vec<String> = (0..n.get()).map(|i| decode(module, *base, offset + i * stride)).collect();
+            let base_name = wgsl_type(module, *base);
+            format!("array<{base_name}, {n}>({})", parts.join(", "))
+        }
+        other => panic!("no texture decoding for {other:?}"),
+    }
+}
+
+fn scalar_name(s: naga::Scalar) -> &'static str {
+    match s.kind {
+        naga::ScalarKind::Uint => "u32",
+        naga::ScalarKind::Sint => "i32",
+        _ => "f32",
+    }
+}
+
+fn wgsl_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
+    let ty = &module.types[ty];
+    match &ty.inner {
+        naga::TypeInner::Scalar(s) => scalar_name(*s).into(),
+        naga::TypeInner::Vector { size, scalar } => format!("vec{}<{}>", *size as u32, scalar_name(*scalar)),
+        _ => ty.name.clone().expect("named type"),
+    }
 }
 
 /// The contents of table `t`'s storage buffer: the packed table, or one zeroed element
@@ -351,6 +570,16 @@ pub fn uniform_contents(t: Table, packed: &PackedScene) -> Option<Vec<u8>> {
     let mut out = vec![0u8; t.uniform_length() * t.stride()];
     out[..bytes.len()].copy_from_slice(bytes);
     Some(out)
+}
+
+/// The contents of table `t`'s texture: the packed table zero-padded to whole rows of
+/// [`TEXTURE_ROW_TEXELS`] texels, and the number of rows.
+pub fn texture_contents(t: Table, packed: &PackedScene) -> (Vec<u8>, u32) {
+    let bytes = t.bytes(packed);
+    let rows = texture_rows(bytes.len());
+    let mut out = vec![0u8; rows * TEXTURE_ROW_TEXELS * 16];
+    out[..bytes.len()].copy_from_slice(bytes);
+    (out, rows as u32)
 }
 
 #[cfg(test)]
@@ -382,35 +611,86 @@ mod tests {
         crate::gpu::pack::pack(&b.build().unwrap(), None).unwrap()
     }
 
+    fn limits(max_uniform_bytes: u64, max_texture_rows: u32) -> TableLimits {
+        TableLimits { max_uniform_bytes, max_texture_rows }
+    }
+
     #[test]
-    fn tables_that_do_not_fit_stay_in_storage() {
+    fn tables_too_large_for_a_uniform_buffer_become_textures() {
         let small = spheres(3);
         let cpu = wgpu::DeviceType::Cpu;
-        let all = UniformTables::choose(&small, TablePlacement::Auto, cpu, 1 << 16);
-        assert_eq!(all, UniformTables::all());
+        let all = TableForms::choose(&small, TablePlacement::Auto, cpu, limits(1 << 16, 8192));
+        assert_eq!(all, TableForms::all(TableForm::Uniform));
         // 600 shapes of 112 bytes exceed 64 KiB; their BVH (< 2048 nodes) and material do not.
         let large = spheres(600);
-        let some = UniformTables::choose(&large, TablePlacement::Auto, cpu, 1 << 16);
-        assert!(!some.contains(Table::Shapes));
-        assert!(some.contains(Table::BvhNodes) && some.contains(Table::Materials));
+        let some = TableForms::choose(&large, TablePlacement::Auto, cpu, limits(1 << 16, 8192));
+        assert_eq!(some.form(Table::Shapes), TableForm::Texture);
+        assert_eq!(some.form(Table::BvhNodes), TableForm::Uniform);
+        assert_eq!(some.form(Table::Materials), TableForm::Uniform);
+        // Where the uniform placement is asked for, the shapes stay in storage.
+        let uniform = TableForms::choose(&large, TablePlacement::Uniform, cpu, limits(1 << 16, 8192));
+        assert_eq!(uniform.form(Table::Shapes), TableForm::Storage);
         assert!(uniform_contents(Table::Shapes, &large).is_none());
         let bytes = uniform_contents(Table::Materials, &large).unwrap();
         assert_eq!(bytes.len(), Table::Materials.uniform_length() * Table::Materials.stride());
         assert_eq!(&bytes[..large.materials.len() * 96], bytemuck::cast_slice::<_, u8>(&large.materials));
         assert!(bytes[large.materials.len() * 96..].iter().all(|b| *b == 0));
+        // 600 × 112 bytes = 4200 texels: two rows of 4096, the rest zero.
+        let (texels, rows) = texture_contents(Table::Shapes, &large);
+        assert_eq!((rows, texels.len()), (2, 2 * 4096 * 16));
+        assert_eq!(&texels[..600 * 112], bytemuck::cast_slice::<_, u8>(&large.shapes));
+        assert!(texels[600 * 112..].iter().all(|b| *b == 0));
+        // A table taller than the adapter's textures stays in storage.
+        let low = TableForms::choose(&large, TablePlacement::Texture, cpu, limits(1 << 16, 1));
+        assert_eq!((low.form(Table::Shapes), low.form(Table::Materials)), (TableForm::Storage, TableForm::Texture));
     }
 
     #[test]
     fn placement_follows_the_adapter_and_the_limit() {
         let p = spheres(2);
+        let webgpu = TableLimits::webgpu_default();
         let gpu = wgpu::DeviceType::DiscreteGpu;
-        assert_eq!(UniformTables::choose(&p, TablePlacement::Auto, gpu, 1 << 16), UniformTables::NONE);
-        assert_eq!(UniformTables::choose(&p, TablePlacement::Uniform, gpu, 1 << 16), UniformTables::all());
+        assert_eq!(TableForms::choose(&p, TablePlacement::Auto, gpu, webgpu), TableForms::NONE);
+        assert_eq!(TableForms::choose(&p, TablePlacement::Uniform, gpu, webgpu), TableForms::all(TableForm::Uniform));
+        assert_eq!(TableForms::choose(&p, TablePlacement::Texture, gpu, webgpu), TableForms::all(TableForm::Texture));
         let cpu = wgpu::DeviceType::Cpu;
-        assert_eq!(UniformTables::choose(&p, TablePlacement::Storage, cpu, 1 << 16), UniformTables::NONE);
+        assert_eq!(TableForms::choose(&p, TablePlacement::Storage, cpu, webgpu), TableForms::NONE);
         // An adapter below WebGPU's default limit cannot hold the fixed-length arrays.
-        assert_eq!(UniformTables::choose(&p, TablePlacement::Uniform, cpu, 16384), UniformTables::NONE);
-        let names = UniformTables::NONE.with(Table::Shapes).with(Table::AreaLights).names();
-        assert_eq!(names, ["UNIFORM_SHAPES", "UNIFORM_AREA_LIGHTS"]);
+        assert_eq!(TableForms::choose(&p, TablePlacement::Uniform, cpu, limits(16384, 8192)), TableForms::NONE);
+        let f = TableForms::NONE.with(Table::Shapes, TableForm::Texture).with(Table::AreaLights, TableForm::Uniform);
+        assert_eq!(f.names(), ["TEXTURE_SHAPES", "UNIFORM_AREA_LIGHTS"]);
+        assert_eq!(f.with(Table::Shapes, TableForm::Storage).names(), ["UNIFORM_AREA_LIGHTS"]);
+    }
+
+    /// The texture accessors rebuild each struct from the words at its members' offsets
+    /// (shaders/layout.wgsl, checked against Rust by layout's tests): a BVH node is two
+    /// texels, min in the first three words of the first.
+    #[test]
+    fn texture_accessors_read_members_at_their_offsets() {
+        let wgsl = tables_wgsl();
+        let node = wgsl
+            .split("fn bvh_node_at(k: u32) -> BvhNode {")
+            .nth(2)
+            .expect("texture form")
+            .split("\n}")
+            .next()
+            .unwrap();
+        assert!(node.contains("let base = k * 2u;"), "{node}");
+        assert!(
+            node.contains(
+                "return BvhNode(vec3<f32>(bitcast<f32>(t0.x), bitcast<f32>(t0.y), bitcast<f32>(t0.z)), t0.w, \
+                 vec3<f32>(bitcast<f32>(t1.x), bitcast<f32>(t1.y), bitcast<f32>(t1.z)), t1.w);"
+            ),
+            "{node}"
+        );
+        let floats = wgsl.split("fn float_at(k: u32) -> f32 {").nth(2).unwrap().split("\n}").next().unwrap();
+        assert!(
+            floats.contains(
+                "bitcast<f32>(textureLoad(floats, vec2<u32>((k >> 2u) & 4095u, (k >> 2u) >> 12u), 0)[k & 3u])"
+            ),
+            "{floats}"
+        );
+        let t1 = "let t1 = textureLoad(bvh_nodes, vec2<u32>((base + 1u) & 4095u, (base + 1u) >> 12u), 0);";
+        assert!(node.contains(t1), "{node}");
     }
 }

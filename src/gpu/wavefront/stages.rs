@@ -283,7 +283,7 @@ impl Stage {
             Stage::Film | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
         // Where the tables are read from (their bindings are declared only where used).
-        names.extend(f.uniform_tables.names());
+        names.extend(f.tables.names());
         if !scene.contains(&"GEOMETRY") {
             // Nothing to intersect: no spans or traversal helpers to call.
             names.retain(|n| !["SPANS", "TRAVERSE"].contains(n));
