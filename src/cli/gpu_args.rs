@@ -58,10 +58,11 @@ pub struct GpuArgs {
     pub batch_paths: Option<u32>,
     /// Where GPU kernels read the scene's tables (shapes, BVH nodes, materials, triangles,
     /// texels, ...) from: `auto` puts each table that fits 64 KiB in a uniform buffer and
-    /// each larger one in a texture on a software adapter (both compile much faster on
-    /// lavapipe than storage buffers), and every table in a storage buffer on hardware GPUs;
-    /// `uniform` (where a table fits, else storage), `texture` and `storage` force a
-    /// placement (for measurements). Images do not depend on it.
+    /// each larger one in a texture for the shading stages on a software adapter (both
+    /// compile much faster on lavapipe than storage buffers), and every table in a storage
+    /// buffer on hardware GPUs; `uniform` (where a table fits, else storage), `texture`
+    /// (every stage) and `storage` force a placement (for measurements). Images do not
+    /// depend on it.
     #[arg(long, value_enum, default_value_t = TablePlacement::Auto)]
     pub tables: TablePlacement,
 }

@@ -17,7 +17,7 @@ use super::device::{Gpu, GpuError};
 pub const MIN_BUFFER_BYTES: u64 = 16;
 
 /// What kind of resource a binding declares.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum BindingKind {
     Uniform,
     Storage {

@@ -420,7 +420,9 @@ fn kernel_features(scene: &FeatureSet, kernel: Option<FeatureSet>) -> Result<Fea
 /// kernel declares buffers the scene leaves empty: those get one zeroed element, since a
 /// binding must hold at least one element of its array type (it is never read: counts are 0).
 struct SceneBuffers {
-    buffers: BTreeMap<u32, SceneResource>,
+    /// By binding and kind: a table may be a texture in some stages and a storage buffer
+    /// in others (`TableForms::for_stage`).
+    buffers: BTreeMap<(u32, BindingKind), SceneResource>,
 }
 
 /// What one group-1 binding holds: a buffer, or a table's texture.
@@ -443,7 +445,7 @@ impl SceneBuffers {
         let mut buffers = BTreeMap::new();
         for kernel in kernels.kernels.values() {
             for &(binding, kind) in kernel.bindings.get(1).map(Vec::as_slice).unwrap_or(&[]) {
-                if buffers.contains_key(&binding) {
+                if buffers.contains_key(&(binding, kind)) {
                     continue;
                 }
                 if let Some(table) = Table::from_binding(binding) {
@@ -464,7 +466,7 @@ impl SceneBuffers {
                             gpu.storage_buffer(table.wgsl_name(), &super::tables::storage_contents(table, p))?,
                         ),
                     };
-                    buffers.insert(binding, resource);
+                    buffers.insert((binding, kind), resource);
                     continue;
                 }
                 let buffer = match binding {
@@ -477,7 +479,7 @@ impl SceneBuffers {
                         )))
                     }
                 };
-                buffers.insert(binding, SceneResource::Buffer(buffer));
+                buffers.insert((binding, kind), SceneResource::Buffer(buffer));
             }
         }
         Ok(Self { buffers })
@@ -488,7 +490,7 @@ impl SceneBuffers {
         let mut groups = BTreeMap::new();
         for (&stage, kernel) in &kernels.kernels {
             let Some(declared) = kernel.bindings.get(1) else { continue };
-            let resources = declared.iter().map(|(b, _)| self.buffers[b].binding()).collect();
+            let resources = declared.iter().map(|&(b, kind)| self.buffers[&(b, kind)].binding()).collect();
             groups.insert(stage, kernel.bind_group_of(gpu, 1, resources)?);
         }
         Ok(groups)

@@ -6,12 +6,13 @@
 //! load at any index is a straight-line gather and a `textureLoad` one call of a fetch
 //! function compiled outside the kernel. Reading the small tables from uniform buffers
 //! halved the cold compile time of cornell.sl and made it render 39 % faster there, and
-//! reading the larger ones from textures cut the LLVM IR of meshes.sl's and spheres_10k.sl's
-//! kernels by a sixth to a fifth at the same render speed (BENCHMARKS.md). Hardware GPUs
-//! serve divergent uniform reads from a constant cache that serialises them, so there the
-//! tables stay in storage buffers. A table goes in a uniform buffer only when it fits one
-//! ([`UNIFORM_TABLE_BYTES`], WebGPU's default limit, which every adapter offers), in a
-//! texture only when its rows fit the adapter's texture height.
+//! reading the larger ones from textures in the shading stages cut the LLVM IR of
+//! meshes.sl's and spheres_10k.sl's kernels by 6–10 % at the same render speed; the stages
+//! that walk the BVH keep storage buffers, where a texel fetch (a call) runs slower
+//! (BENCHMARKS.md). Hardware GPUs serve divergent uniform reads from a constant cache that
+//! serialises them, so there the tables stay in storage buffers. A table goes in a uniform
+//! buffer only when it fits one ([`UNIFORM_TABLE_BYTES`], WebGPU's default limit, which
+//! every adapter offers), in a texture only when its rows fit the adapter's texture height.
 //!
 //! Each table is described here once: its binding, WGSL name, element type and accessor,
 //! the features that declare it, and its bytes. [`tables_wgsl`] generates the declarations
@@ -286,21 +287,27 @@ pub enum TableForm {
 pub struct TableForms {
     uniform: u16,
     texture: u16,
+    /// Whether the stages that walk the BVH or evaluate CSG trees read the texture tables
+    /// as textures too; else they read them from storage buffers ([`Self::for_stage`]).
+    hot_textures: bool,
 }
 
 /// How a render places its tables ([`super::render::GpuRenderOptions::tables`]; also
 /// `lumen render --tables`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum TablePlacement {
-    /// On software adapters a uniform buffer for each table that fits one and a texture
-    /// for each larger one; storage buffers on hardware GPUs.
+    /// On software adapters a uniform buffer for each table that fits one and, for each
+    /// larger one, a texture in the stages that read it a few times per path vertex and a
+    /// storage buffer in those that walk the BVH or evaluate CSG trees (a texel fetch is a
+    /// call, slower there: DESIGN.md "Scene tables"), except `floats`, whose CDFs are
+    /// binary-searched (a storage buffer when large); storage buffers on hardware GPUs.
     #[default]
     Auto,
     /// Uniform buffers wherever a table fits, storage buffers elsewhere, on any adapter
     /// (for measurements and tests).
     Uniform,
-    /// Textures for every table that fits the adapter's texture size, on any adapter (for
-    /// measurements and tests).
+    /// Textures for every table that fits the adapter's texture size, in every stage, on
+    /// any adapter (for measurements and tests).
     Texture,
     /// Storage buffers only.
     Storage,
@@ -331,20 +338,39 @@ impl TableLimits {
 
 impl TableForms {
     /// Every table in a storage buffer.
-    pub const NONE: TableForms = TableForms { uniform: 0, texture: 0 };
+    pub const NONE: TableForms = TableForms { uniform: 0, texture: 0, hot_textures: false };
 
-    /// Every table in form `form`.
+    /// Every table in form `form`, in every stage (as [`TablePlacement::Uniform`] or
+    /// [`TablePlacement::Texture`] places a scene's tables that fit).
     pub fn all(form: TableForm) -> Self {
-        Table::ALL.into_iter().fold(Self::NONE, |s, t| s.with(t, form))
+        Table::ALL.into_iter().fold(Self::NONE, |s, t| s.with(t, form)).with_hot_textures(form == TableForm::Texture)
     }
 
     /// This placement with table `t` in form `form`.
     pub fn with(self, t: Table, form: TableForm) -> Self {
         let (uniform, texture) = (self.uniform & !t.bit(), self.texture & !t.bit());
+        let hot_textures = self.hot_textures;
         match form {
-            TableForm::Storage => TableForms { uniform, texture },
-            TableForm::Uniform => TableForms { uniform: uniform | t.bit(), texture },
-            TableForm::Texture => TableForms { uniform, texture: texture | t.bit() },
+            TableForm::Storage => TableForms { uniform, texture, hot_textures },
+            TableForm::Uniform => TableForms { uniform: uniform | t.bit(), texture, hot_textures },
+            TableForm::Texture => TableForms { uniform, texture: texture | t.bit(), hot_textures },
+        }
+    }
+
+    /// This placement, with the texture tables read as textures also by the stages that
+    /// walk the BVH or evaluate CSG trees (`hot`) or not.
+    pub fn with_hot_textures(self, hot: bool) -> Self {
+        TableForms { hot_textures: hot, ..self }
+    }
+
+    /// The placement a stage's kernel reads: the texture tables are storage buffers in a
+    /// stage that walks the BVH or evaluates CSG trees (`hot`), unless the placement asked
+    /// for textures there too.
+    pub fn for_stage(self, hot: bool) -> Self {
+        if hot && !self.hot_textures {
+            TableForms { texture: 0, ..self }
+        } else {
+            self
         }
     }
 
@@ -387,11 +413,16 @@ impl TableForms {
             TablePlacement::Auto => (device == wgpu::DeviceType::Cpu, device == wgpu::DeviceType::Cpu),
         };
         let uniform = uniform && limits.max_uniform_bytes >= UNIFORM_TABLE_BYTES as u64;
-        Table::ALL.into_iter().fold(Self::NONE, |s, t| {
+        let forced = placement == TablePlacement::Texture;
+        let forms = Self::NONE.with_hot_textures(forced);
+        Table::ALL.into_iter().fold(forms, |s, t| {
             let bytes = t.bytes(packed).len();
+            // `floats` is binary-searched (the environment's and mesh lights' CDFs): a
+            // texel fetch per step of a loop runs slower than the storage load it replaces.
+            let fetched = forced || t != Table::Floats;
             if uniform && bytes <= UNIFORM_TABLE_BYTES {
                 s.with(t, TableForm::Uniform)
-            } else if texture && texture_rows(bytes) <= limits.max_texture_rows as usize {
+            } else if texture && fetched && texture_rows(bytes) <= limits.max_texture_rows as usize {
                 s.with(t, TableForm::Texture)
             } else {
                 s
@@ -640,6 +671,14 @@ mod tests {
         assert_eq!((rows, texels.len()), (2, 2 * 4096 * 16));
         assert_eq!(&texels[..600 * 112], bytemuck::cast_slice::<_, u8>(&large.shapes));
         assert!(texels[600 * 112..].iter().all(|b| *b == 0));
+        // Large `floats` (an image environment's texels and CDFs) stay in storage: they are
+        // binary-searched, faster from storage. Only the texture placement moves them.
+        let mut sky = spheres(3);
+        sky.floats = vec![0.5; 20_000];
+        let auto = TableForms::choose(&sky, TablePlacement::Auto, cpu, limits(1 << 16, 8192));
+        assert_eq!((auto.form(Table::Floats), auto.form(Table::Shapes)), (TableForm::Storage, TableForm::Uniform));
+        let forced = TableForms::choose(&sky, TablePlacement::Texture, cpu, limits(1 << 16, 8192));
+        assert_eq!(forced.form(Table::Floats), TableForm::Texture);
         // A table taller than the adapter's textures stays in storage.
         let low = TableForms::choose(&large, TablePlacement::Texture, cpu, limits(1 << 16, 1));
         assert_eq!((low.form(Table::Shapes), low.form(Table::Materials)), (TableForm::Storage, TableForm::Texture));
@@ -660,6 +699,16 @@ mod tests {
         let f = TableForms::NONE.with(Table::Shapes, TableForm::Texture).with(Table::AreaLights, TableForm::Uniform);
         assert_eq!(f.names(), ["TEXTURE_SHAPES", "UNIFORM_AREA_LIGHTS"]);
         assert_eq!(f.with(Table::Shapes, TableForm::Storage).names(), ["UNIFORM_AREA_LIGHTS"]);
+        // The stages that walk the BVH read the textures' tables from storage, unless the
+        // texture placement was asked for.
+        assert_eq!(f.for_stage(false), f);
+        assert_eq!(f.for_stage(true).names(), ["UNIFORM_AREA_LIGHTS"]);
+        assert_eq!(f.with_hot_textures(true).for_stage(true).names(), ["TEXTURE_SHAPES", "UNIFORM_AREA_LIGHTS"]);
+        let large = spheres(600);
+        let auto = TableForms::choose(&large, TablePlacement::Auto, cpu, webgpu);
+        assert_eq!(auto.for_stage(true).form(Table::Shapes), TableForm::Storage);
+        let texture = TableForms::choose(&large, TablePlacement::Texture, cpu, webgpu);
+        assert_eq!(texture.for_stage(true).form(Table::Shapes), TableForm::Texture);
     }
 
     /// The texture accessors rebuild each struct from the words at its members' offsets

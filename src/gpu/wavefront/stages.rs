@@ -283,7 +283,7 @@ impl Stage {
             Stage::Film | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
         // Where the tables are read from (their bindings are declared only where used).
-        names.extend(f.tables.names());
+        names.extend(f.tables.for_stage(self.hot()).names());
         if !scene.contains(&"GEOMETRY") {
             // Nothing to intersect: no spans or traversal helpers to call.
             names.retain(|n| !["SPANS", "TRAVERSE"].contains(n));
@@ -410,6 +410,14 @@ impl Stage {
         "STAGE_SHADOW",
         "STAGE_FILM",
     ];
+
+    /// Whether the stage walks the BVH or evaluates CSG trees, reading the scene's tables
+    /// many times per ray: there a texel fetch (a call on llvmpipe) costs more run time
+    /// than a storage load, so the large tables stay storage buffers
+    /// (`tables::TableForms::for_stage`).
+    pub fn hot(self) -> bool {
+        matches!(self, Stage::FirstHit | Stage::Intersect | Stage::Csg | Stage::Shadow)
+    }
 
     /// A short name for labels and reports.
     pub fn label(self) -> String {
