@@ -361,11 +361,29 @@ impl Gpu {
         Ok(buffer)
     }
 
-    /// Writes `bytes` at the start of `buffer` (through the queue, not a mapping: a buffer
-    /// that failed to allocate then yields an error instead of wgpu's panic on mapping).
     /// A 2D `rgba32uint` texture of `rows` rows of `bytes.len() / rows / 16` texels holding
     /// `bytes`, for `textureLoad` (a scene table in `tables::TableForm::Texture`), and its
     /// view.
+    ///
+    /// ```
+    /// use lumen::gpu::gpu_for_tests;
+    /// let Some(gpu) = gpu_for_tests("u32_texture_doc") else { return };
+    /// let src = "@group(0) @binding(0) var t: texture_2d<u32>;
+    /// @group(0) @binding(1) var<storage, read_write> v: array<u32>;
+    /// @compute @workgroup_size(1)
+    /// fn main() { v[0] = textureLoad(t, vec2<u32>(1u, 1u), 0).z; }";
+    /// let kernel = gpu.compute_kernel("texel.wgsl", src, "main").unwrap();
+    /// // Two rows of two texels: texel (1, 1) holds words 12..16.
+    /// let words: Vec<u32> = (0..16).collect();
+    /// let view = gpu.u32_texture("t", bytemuck::cast_slice(&words), 2).unwrap();
+    /// let out = gpu.storage_buffer("v", &[0u32]).unwrap();
+    /// let group = kernel
+    ///     .bind_group_of(&gpu, 0, vec![wgpu::BindingResource::TextureView(&view), out.as_entire_binding()])
+    ///     .unwrap();
+    /// gpu.dispatch(&kernel, &[&group], [1, 1, 1]).unwrap();
+    /// assert_eq!(gpu.read_buffer::<u32>(&out, 1).unwrap(), [14]);
+    /// assert!(gpu.u32_texture("bad", &[0; 24], 1).is_err(), "not whole texels");
+    /// ```
     pub fn u32_texture(&self, label: &str, bytes: &[u8], rows: u32) -> Result<wgpu::TextureView, GpuError> {
         let row_bytes = bytes.len() / rows.max(1) as usize;
         if rows == 0 || row_bytes == 0 || row_bytes % 16 != 0 || row_bytes * rows as usize != bytes.len() {
@@ -409,6 +427,8 @@ impl Gpu {
         Ok(texture.create_view(&wgpu::TextureViewDescriptor::default()))
     }
 
+    /// Writes `bytes` at the start of `buffer` (through the queue, not a mapping: a buffer
+    /// that failed to allocate then yields an error instead of wgpu's panic on mapping).
     fn upload(&self, buffer: &wgpu::Buffer, bytes: &[u8]) -> Result<(), GpuError> {
         if bytes.is_empty() {
             return Ok(());
