@@ -361,9 +361,10 @@ impl Gpu {
         Ok(buffer)
     }
 
-    /// A 2D `rgba32uint` texture of `rows` rows of `bytes.len() / rows / 16` texels holding
-    /// `bytes`, for `textureLoad` (a scene table in `tables::TableForm::Texture`), and its
-    /// view.
+    /// A 2D `rgba32uint` texture of `row_texels`-texel rows holding `bytes` (words from
+    /// texel (0, 0) on, row after row, the last row zero-padded; one zero row when `bytes`
+    /// is empty), for `textureLoad` (a scene table in `tables::TableForm::Texture`), and its
+    /// view. Whole rows are uploaded straight from `bytes`: only the last row is copied.
     ///
     /// ```
     /// use lumen::gpu::gpu_for_tests;
@@ -371,39 +372,40 @@ impl Gpu {
     /// let src = "@group(0) @binding(0) var t: texture_2d<u32>;
     /// @group(0) @binding(1) var<storage, read_write> v: array<u32>;
     /// @compute @workgroup_size(1)
-    /// fn main() { v[0] = textureLoad(t, vec2<u32>(1u, 1u), 0).z; }";
+    /// fn main() { v[0] = textureLoad(t, vec2<u32>(1u, 1u), 0).x; v[1] = textureLoad(t, vec2<u32>(1u, 1u), 0).z; }";
     /// let kernel = gpu.compute_kernel("texel.wgsl", src, "main").unwrap();
-    /// // Two rows of two texels: texel (1, 1) holds words 12..16.
-    /// let words: Vec<u32> = (0..16).collect();
+    /// // 14 words in rows of two texels: texel (1, 1) holds words 12 and 13, then padding.
+    /// let words: Vec<u32> = (0..14).collect();
     /// let view = gpu.u32_texture("t", bytemuck::cast_slice(&words), 2).unwrap();
-    /// let out = gpu.storage_buffer("v", &[0u32]).unwrap();
+    /// let out = gpu.storage_buffer("v", &[7u32, 7]).unwrap();
     /// let group = kernel
     ///     .bind_group_of(&gpu, 0, vec![wgpu::BindingResource::TextureView(&view), out.as_entire_binding()])
     ///     .unwrap();
     /// gpu.dispatch(&kernel, &[&group], [1, 1, 1]).unwrap();
-    /// assert_eq!(gpu.read_buffer::<u32>(&out, 1).unwrap(), [14]);
-    /// assert!(gpu.u32_texture("bad", &[0; 24], 1).is_err(), "not whole texels");
+    /// assert_eq!(gpu.read_buffer::<u32>(&out, 2).unwrap(), [12, 0]);
+    /// assert!(gpu.u32_texture("bad", &[0; 6], 2).is_err(), "not whole words");
     /// ```
-    pub fn u32_texture(&self, label: &str, bytes: &[u8], rows: u32) -> Result<wgpu::TextureView, GpuError> {
-        let row_bytes = bytes.len() / rows.max(1) as usize;
-        if rows == 0 || row_bytes == 0 || row_bytes % 16 != 0 || row_bytes * rows as usize != bytes.len() {
-            return Err(GpuError::Internal(format!("{label}: {} bytes are not {rows} rows of texels", bytes.len())));
+    pub fn u32_texture(&self, label: &str, bytes: &[u8], row_texels: u32) -> Result<wgpu::TextureView, GpuError> {
+        let row_bytes = row_texels as usize * 16;
+        if row_texels == 0 || bytes.len() % 4 != 0 {
+            return Err(GpuError::Internal(format!("{label}: {} bytes are not words in rows of texels", bytes.len())));
         }
-        let width = (row_bytes / 16) as u32;
+        let rows = bytes.len().div_ceil(row_bytes).max(1);
         let limit = self.limits.max_texture_dimension_2d;
-        if width > limit || rows > limit {
+        if row_texels > limit || rows > limit as usize {
             return Err(GpuError::TooLarge {
                 what: label.into(),
-                needed: u64::from(width.max(rows)),
+                needed: (rows as u64).max(u64::from(row_texels)),
                 limit: u64::from(limit),
                 limit_name: "2D texture dimension",
             });
         }
-        let size = wgpu::Extent3d { width, height: rows, depth_or_array_layers: 1 };
+        let extent =
+            |height: usize| wgpu::Extent3d { width: row_texels, height: height as u32, depth_or_array_layers: 1 };
         let texture = self.scoped(|| {
             self.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
-                size,
+                size: extent(rows),
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -412,18 +414,27 @@ impl Gpu {
                 view_formats: &[],
             })
         })?;
-        self.scoped(|| {
-            self.queue.write_texture(
-                texture.as_image_copy(),
-                bytes,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row_bytes as u32),
-                    rows_per_image: Some(rows),
-                },
-                size,
-            )
-        })?;
+        let write = |first_row: usize, data: &[u8], height: usize| {
+            let at = wgpu::TexelCopyTextureInfo {
+                origin: wgpu::Origin3d { x: 0, y: first_row as u32, z: 0 },
+                ..texture.as_image_copy()
+            };
+            let layout = wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row_bytes as u32),
+                rows_per_image: Some(height as u32),
+            };
+            self.scoped(|| self.queue.write_texture(at, data, layout, extent(height)))
+        };
+        let full = bytes.len() / row_bytes;
+        if full > 0 {
+            write(0, &bytes[..full * row_bytes], full)?;
+        }
+        if full < rows {
+            let mut tail = vec![0u8; row_bytes];
+            tail[..bytes.len() - full * row_bytes].copy_from_slice(&bytes[full * row_bytes..]);
+            write(full, &tail, 1)?;
+        }
         Ok(texture.create_view(&wgpu::TextureViewDescriptor::default()))
     }
 

@@ -138,7 +138,7 @@ fn launch_empty(gpu: &Gpu, kernel: &ComputeKernel) -> Result<(), GpuError> {
                 BindingKind::Uniform => wgpu::BufferUsages::UNIFORM,
                 BindingKind::Storage { .. } => wgpu::BufferUsages::STORAGE,
                 BindingKind::TextureU32 => {
-                    group.push(Empty::Texture(gpu.u32_texture("empty launch", &[0; 16], 1)?));
+                    group.push(Empty::Texture(gpu.u32_texture("empty launch", &[], 1)?));
                     continue;
                 }
             };

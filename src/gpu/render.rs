@@ -459,8 +459,8 @@ impl SceneBuffers {
                             SceneResource::Buffer(gpu.uniform_buffer_bytes(table.feature(), &contents)?)
                         }
                         BindingKind::TextureU32 => {
-                            let (contents, rows) = super::tables::texture_contents(table, p);
-                            SceneResource::Texture(gpu.u32_texture(table.wgsl_name(), &contents, rows)?)
+                            let row = super::tables::TEXTURE_ROW_TEXELS as u32;
+                            SceneResource::Texture(gpu.u32_texture(table.wgsl_name(), table.bytes(p), row)?)
                         }
                         BindingKind::Storage { .. } => SceneResource::Buffer(
                             gpu.storage_buffer(table.wgsl_name(), &super::tables::storage_contents(table, p))?,

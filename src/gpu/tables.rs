@@ -603,16 +603,6 @@ pub fn uniform_contents(t: Table, packed: &PackedScene) -> Option<Vec<u8>> {
     Some(out)
 }
 
-/// The contents of table `t`'s texture: the packed table zero-padded to whole rows of
-/// [`TEXTURE_ROW_TEXELS`] texels, and the number of rows.
-pub fn texture_contents(t: Table, packed: &PackedScene) -> (Vec<u8>, u32) {
-    let bytes = t.bytes(packed);
-    let rows = texture_rows(bytes.len());
-    let mut out = vec![0u8; rows * TEXTURE_ROW_TEXELS * 16];
-    out[..bytes.len()].copy_from_slice(bytes);
-    (out, rows as u32)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -666,11 +656,9 @@ mod tests {
         assert_eq!(bytes.len(), Table::Materials.uniform_length() * Table::Materials.stride());
         assert_eq!(&bytes[..large.materials.len() * 96], bytemuck::cast_slice::<_, u8>(&large.materials));
         assert!(bytes[large.materials.len() * 96..].iter().all(|b| *b == 0));
-        // 600 × 112 bytes = 4200 texels: two rows of 4096, the rest zero.
-        let (texels, rows) = texture_contents(Table::Shapes, &large);
-        assert_eq!((rows, texels.len()), (2, 2 * 4096 * 16));
-        assert_eq!(&texels[..600 * 112], bytemuck::cast_slice::<_, u8>(&large.shapes));
-        assert!(texels[600 * 112..].iter().all(|b| *b == 0));
+        // 600 × 112 bytes = 4200 texels: two rows of 4096 (Gpu::u32_texture pads the last).
+        assert_eq!(texture_rows(Table::Shapes.bytes(&large).len()), 2);
+        assert_eq!((texture_rows(0), texture_rows(16 * 4096), texture_rows(16 * 4096 + 4)), (1, 1, 2));
         // Large `floats` (an image environment's texels and CDFs) stay in storage: they are
         // binary-searched, faster from storage. Only the texture placement moves them.
         let mut sky = spheres(3);
