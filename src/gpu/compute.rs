@@ -27,6 +27,23 @@ pub enum BindingKind {
     TextureU32,
 }
 
+/// What one binding holds: a buffer, or a texture's view (`BindingKind::TextureU32`).
+#[derive(Debug)]
+pub enum BoundResource {
+    Buffer(wgpu::Buffer),
+    Texture(wgpu::TextureView),
+}
+
+impl BoundResource {
+    /// The resource as a bind group entry takes it.
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        match self {
+            BoundResource::Buffer(b) => b.as_entire_binding(),
+            BoundResource::Texture(v) => wgpu::BindingResource::TextureView(v),
+        }
+    }
+}
+
 /// A validated WGSL module: naga's IR plus its validation info.
 #[derive(Debug)]
 pub struct ValidatedModule {

@@ -25,7 +25,7 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use super::compute::{BindingKind, ComputeKernel, MIN_BUFFER_BYTES};
+use super::compute::{BindingKind, BoundResource, ComputeKernel, MIN_BUFFER_BYTES};
 use super::device::{Gpu, GpuError};
 
 /// Most devices compiling at once (this one included): each twin is a driver instance
@@ -126,10 +126,6 @@ pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
 /// Launches `kernel` over an empty grid, which makes llvmpipe compile it: every binding
 /// gets a buffer of the least size it accepts (or a one-texel texture), which nothing reads.
 fn launch_empty(gpu: &Gpu, kernel: &ComputeKernel) -> Result<(), GpuError> {
-    enum Empty {
-        Buffer(wgpu::Buffer),
-        Texture(wgpu::TextureView),
-    }
     let mut resources = Vec::new();
     for (list, bytes) in kernel.bindings.iter().zip(&kernel.binding_bytes) {
         let mut group = Vec::new();
@@ -138,11 +134,11 @@ fn launch_empty(gpu: &Gpu, kernel: &ComputeKernel) -> Result<(), GpuError> {
                 BindingKind::Uniform => wgpu::BufferUsages::UNIFORM,
                 BindingKind::Storage { .. } => wgpu::BufferUsages::STORAGE,
                 BindingKind::TextureU32 => {
-                    group.push(Empty::Texture(gpu.u32_texture("empty launch", &[], 1)?));
+                    group.push(BoundResource::Texture(gpu.u32_texture("empty launch", &[], 1)?));
                     continue;
                 }
             };
-            group.push(Empty::Buffer(gpu.scoped(|| {
+            group.push(BoundResource::Buffer(gpu.scoped(|| {
                 gpu.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("empty launch"),
                     size: size.max(MIN_BUFFER_BYTES).next_multiple_of(16),
@@ -156,16 +152,7 @@ fn launch_empty(gpu: &Gpu, kernel: &ComputeKernel) -> Result<(), GpuError> {
     let groups = resources
         .iter()
         .enumerate()
-        .map(|(g, list)| {
-            let bound = list
-                .iter()
-                .map(|r| match r {
-                    Empty::Buffer(b) => b.as_entire_binding(),
-                    Empty::Texture(v) => wgpu::BindingResource::TextureView(v),
-                })
-                .collect();
-            kernel.bind_group_of(gpu, g as u32, bound)
-        })
+        .map(|(g, list)| kernel.bind_group_of(gpu, g as u32, list.iter().map(BoundResource::binding).collect()))
         .collect::<Result<Vec<_>, _>>()?;
     gpu.dispatch(kernel, &groups.iter().collect::<Vec<_>>(), [0, 0, 0])
 }

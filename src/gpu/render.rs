@@ -14,7 +14,9 @@ use super::pack::{pack, PackedScene};
 use super::parallel_jit;
 use super::tables::{Table, TableForms, TableLimits, TablePlacement};
 use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
-use super::{Assembled, BindingKind, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary};
+use super::{
+    Assembled, BindingKind, BoundResource, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary,
+};
 use crate::image::HdrImage;
 use crate::scene::Scene;
 
@@ -189,7 +191,7 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
     let generated = [
         ("<generated tags>", super::layout::tags_wgsl()),
         ("<generated constants>", constants_module(features)),
-        ("<generated scene tables>", super::tables::tables_wgsl()),
+        ("<generated scene tables>", super::tables::tables_wgsl().to_string()),
         ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features), stage.shade_queue())),
     ];
     for (name, text) in &generated {
@@ -422,22 +424,7 @@ fn kernel_features(scene: &FeatureSet, kernel: Option<FeatureSet>) -> Result<Fea
 struct SceneBuffers {
     /// By binding and kind: a table may be a texture in some stages and a storage buffer
     /// in others (`TableForms::for_stage`).
-    buffers: BTreeMap<(u32, BindingKind), SceneResource>,
-}
-
-/// What one group-1 binding holds: a buffer, or a table's texture.
-enum SceneResource {
-    Buffer(wgpu::Buffer),
-    Texture(wgpu::TextureView),
-}
-
-impl SceneResource {
-    fn binding(&self) -> wgpu::BindingResource<'_> {
-        match self {
-            SceneResource::Buffer(b) => b.as_entire_binding(),
-            SceneResource::Texture(v) => wgpu::BindingResource::TextureView(v),
-        }
-    }
+    buffers: BTreeMap<(u32, BindingKind), BoundResource>,
 }
 
 impl SceneBuffers {
@@ -456,13 +443,13 @@ impl SceneBuffers {
                                     "the {table:?} table does not fit the uniform buffer it was given"
                                 ))
                             })?;
-                            SceneResource::Buffer(gpu.uniform_buffer_bytes(table.feature(), &contents)?)
+                            BoundResource::Buffer(gpu.uniform_buffer_bytes(table.feature(), &contents)?)
                         }
                         BindingKind::TextureU32 => {
                             let row = super::tables::TEXTURE_ROW_TEXELS as u32;
-                            SceneResource::Texture(gpu.u32_texture(table.wgsl_name(), table.bytes(p), row)?)
+                            BoundResource::Texture(gpu.u32_texture(table.wgsl_name(), table.bytes(p), row)?)
                         }
-                        BindingKind::Storage { .. } => SceneResource::Buffer(
+                        BindingKind::Storage { .. } => BoundResource::Buffer(
                             gpu.storage_buffer(table.wgsl_name(), &super::tables::storage_contents(table, p))?,
                         ),
                     };
@@ -479,7 +466,7 @@ impl SceneBuffers {
                         )))
                     }
                 };
-                buffers.insert((binding, kind), SceneResource::Buffer(buffer));
+                buffers.insert((binding, kind), BoundResource::Buffer(buffer));
             }
         }
         Ok(Self { buffers })

@@ -457,8 +457,14 @@ fn texture_rows(bytes: usize) -> usize {
 /// `UNIFORM_<TABLE>_LEN` elements), its texture declaration (`TEXTURE_<TABLE>`) or else
 /// its storage declaration, and the accessor every read goes through ([`Table::accessor`]),
 /// which in the texture form assembles the element from its texels, member by member, as
-/// `shaders/layout.wgsl` lays it out.
-pub fn tables_wgsl() -> String {
+/// `shaders/layout.wgsl` lays it out. The text depends on no scene, so it is generated once
+/// per process (every stage of every render assembles with it).
+pub fn tables_wgsl() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(generate_tables_wgsl)
+}
+
+fn generate_tables_wgsl() -> String {
     let layout = naga::front::wgsl::parse_str(layout::LAYOUT_WGSL).expect("shaders/layout.wgsl parses");
     let mut out = String::from(
         "// #provides scene_tables\n// #requires layout\n\
