@@ -3,10 +3,15 @@
 //! Imageworks"): the energy 1 − E(μ) a microfacet lobe loses to multiple scattering is
 //! returned by a lobe ∝ (1 − E(μo))(1 − E(μi)).
 //!
-//! Generated here at first use, deterministically (a fixed midpoint rule over the two
-//! uniforms of visible-normal sampling, so each entry is an integral computed the same way
-//! on every machine), and read through one interpolation by the CPU reference; the GPU
-//! packer uploads the same numbers.
+//! Generated deterministically (a fixed midpoint rule over the two uniforms of
+//! visible-normal sampling, so each entry is an integral computed the same way on every
+//! machine) and shipped with the crate: `energy_tables.bin` holds what
+//! [`EnergyTables::generate`] gives, which takes about 0.6 s of CPU, a cost every process
+//! rendering a rough material paid before its first sample. A test regenerates the tables
+//! and checks the shipped ones against them; after a change to the integrals, rewrite the
+//! file with `LUMEN_WRITE_ENERGY_TABLES=1 cargo test --release --lib energy_tables`. The
+//! CPU reference reads them through one interpolation; the GPU packer uploads the same
+//! numbers.
 //!
 //! Tables (μ = cos θo, α the GGX roughness, both with nodes uniform in their square root,
 //! η the relative index n_t / n_o):
@@ -52,11 +57,19 @@ pub struct EnergyTables {
     pub transmitted_average: Vec<f64>,
 }
 
-/// The process's tables, generated on first use (about a second on one core).
+/// The process's tables: the shipped ones, decoded on first use.
 pub fn energy_tables() -> &'static EnergyTables {
     static TABLES: OnceLock<EnergyTables> = OnceLock::new();
-    TABLES.get_or_init(EnergyTables::generate)
+    TABLES.get_or_init(EnergyTables::shipped)
 }
+
+/// [`EnergyTables::generate`]'s conductor, reflected and transmitted tables, in that order,
+/// row-major, little-endian f64 (the averages are derived from them on decoding).
+const SHIPPED: &[u8] = include_bytes!("energy_tables.bin");
+/// Values in the shipped file.
+const SHIPPED_VALUES: usize =
+    CONDUCTOR_NODES * CONDUCTOR_NODES + 2 * (2 * ETA_NODES * DIELECTRIC_NODES * DIELECTRIC_NODES);
+const _: () = assert!(SHIPPED.len() == 8 * SHIPPED_VALUES, "energy_tables.bin does not match the table sizes");
 
 /// Node `j` of `n` over [0, 1].
 fn node(j: usize, n: usize) -> f64 {
@@ -177,7 +190,6 @@ impl EnergyTables {
                 conductor_albedo_integral(alpha, view(e % nc, nc), CONDUCTOR_POINTS)
             })
             .collect();
-        let conductor_average = conductor.chunks(nc).map(average).collect();
         let dielectric: Vec<[f64; 2]> = (0..2 * ETA_NODES * nd * nd)
             .into_par_iter()
             .map(|e| {
@@ -188,8 +200,42 @@ impl EnergyTables {
             .collect();
         let reflected: Vec<f64> = dielectric.iter().map(|v| v[0]).collect();
         let transmitted: Vec<f64> = dielectric.iter().map(|v| v[1]).collect();
-        let reflected_average = reflected.chunks(nd).map(average).collect();
-        let transmitted_average = transmitted.chunks(nd).map(average).collect();
+        Self::from_tables(conductor, reflected, transmitted)
+    }
+
+    /// The tables shipped in `energy_tables.bin` (what [`Self::generate`] gives).
+    ///
+    /// ```
+    /// use lumen::optics::energy_tables::EnergyTables;
+    /// let t = EnergyTables::shipped();
+    /// // A rough F = 1 reflector keeps most, not all, of the light at normal incidence.
+    /// let e = t.conductor_albedo(1.0, 0.5);
+    /// assert!(e > 0.8 && e < 1.0);
+    /// ```
+    pub fn shipped() -> Self {
+        let mut values = SHIPPED.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])));
+        let mut take = |n: usize| -> Vec<f64> { values.by_ref().take(n).collect() };
+        let conductor = take(CONDUCTOR_NODES * CONDUCTOR_NODES);
+        let dielectric = 2 * ETA_NODES * DIELECTRIC_NODES * DIELECTRIC_NODES;
+        let reflected = take(dielectric);
+        let transmitted = take(dielectric);
+        Self::from_tables(conductor, reflected, transmitted)
+    }
+
+    /// The shipped file's bytes for these tables (see [`Self::shipped`]).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        [&self.conductor, &self.reflected, &self.transmitted]
+            .into_iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
+    }
+
+    /// The tables with their averages over μ.
+    fn from_tables(conductor: Vec<f64>, reflected: Vec<f64>, transmitted: Vec<f64>) -> Self {
+        let conductor_average = conductor.chunks(CONDUCTOR_NODES).map(average).collect();
+        let reflected_average = reflected.chunks(DIELECTRIC_NODES).map(average).collect();
+        let transmitted_average = transmitted.chunks(DIELECTRIC_NODES).map(average).collect();
         EnergyTables { conductor, conductor_average, reflected, transmitted, reflected_average, transmitted_average }
     }
 
@@ -337,8 +383,38 @@ mod tests {
         }
     }
 
+    /// The shipped tables are what generation gives (within 1e-12 relative: another libm may
+    /// round a sine differently in the last bit). With `LUMEN_WRITE_ENERGY_TABLES` set, the
+    /// test rewrites the shipped file instead.
     #[test]
-    fn generation_is_deterministic() {
-        assert_eq!(*energy_tables(), EnergyTables::generate());
+    fn shipped_energy_tables_are_the_generated_ones() {
+        let fresh = EnergyTables::generate();
+        assert_eq!(fresh, EnergyTables::generate(), "generation is deterministic");
+        if std::env::var_os("LUMEN_WRITE_ENERGY_TABLES").is_some() {
+            let path = concat!(env!("CARGO_MANIFEST_DIR"), "/src/optics/energy_tables.bin");
+            std::fs::write(path, fresh.to_bytes()).unwrap();
+            return;
+        }
+        let shipped = energy_tables();
+        assert_eq!(fresh.to_bytes().len(), SHIPPED.len());
+        let fields = |t: &EnergyTables| {
+            [
+                t.conductor.clone(),
+                t.conductor_average.clone(),
+                t.reflected.clone(),
+                t.transmitted.clone(),
+                t.reflected_average.clone(),
+                t.transmitted_average.clone(),
+            ]
+        };
+        for (k, (a, b)) in fields(&fresh).iter().zip(fields(shipped)).enumerate() {
+            assert_eq!(a.len(), b.len());
+            for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+                assert!(
+                    (x - y).abs() <= 1e-12 * x.abs().max(1e-3),
+                    "table {k} entry {i}: generated {x:e}, shipped {y:e}: regenerate energy_tables.bin (module doc)"
+                );
+            }
+        }
     }
 }
