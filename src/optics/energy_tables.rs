@@ -208,9 +208,10 @@ impl EnergyTables {
     /// ```
     /// use lumen::optics::energy_tables::EnergyTables;
     /// let t = EnergyTables::shipped();
-    /// // A rough F = 1 reflector keeps most, not all, of the light at normal incidence.
-    /// let e = t.conductor_albedo(1.0, 0.5);
-    /// assert!(e > 0.8 && e < 1.0);
+    /// // A smooth F = 1 reflector keeps all the light in single scattering; a rougher one
+    /// // loses more to multiple scattering.
+    /// assert!((t.conductor_albedo(0.5, 0.0) - 1.0).abs() < 1e-3);
+    /// assert!(t.conductor_albedo(0.5, 1.0) < t.conductor_albedo(0.5, 0.3));
     /// ```
     pub fn shipped() -> Self {
         let mut values = SHIPPED.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])));
