@@ -140,6 +140,17 @@ fn bsdf_is_delta(m: Material) -> bool {
 // #endif
     return false;
 }
+
+// #if POINT_LIGHTS
+// scene::Brdf::transmits: point lights behind the surface reach it too (a rough dielectric).
+fn bsdf_transmits(m: Material) -> bool {
+// #if ROUGH_DIELECTRIC
+    return m.brdf == BRDF_ROUGH_DIELECTRIC;
+// #else
+    return false;
+// #endif
+}
+// #endif
 // #endif
 
 // #endif

@@ -50,8 +50,9 @@ fn radiance_point_light(ray: Ray) -> vec3<f32> {
         var query = ray;
 // #if POINT_LIGHTS
         if (q > 0u) {
-            s = point_light_sample(q - 1u, hit);
-            // The shadow ray is traced only for lights in front (as cpu::point_light_factor).
+            // Raytracer.jl's model: the shadow ray is traced only for lights in front (as
+            // cpu::point_light_factor).
+            s = point_light_sample(q - 1u, hit, false);
             if (!s.lit) {
                 continue;
             }

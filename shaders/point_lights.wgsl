@@ -1,8 +1,9 @@
 // #requires bindings offset
 // Point lights at a surface point (cpu::point_light_factor): the direction to light i, its
 // colour times the falloff f(d), and the shadow ray, which stops just short of the light
-// (t < 1, exclusive). `lit` is false when the light is behind the surface: then no shadow
-// ray is traced (and none counted), as on the CPU.
+// (t < 1, exclusive). `lit` is false when the light is behind the surface (unless
+// `two_sided`: a BSDF that transmits, where the shading and geometric normals agree on the
+// light's side): then no shadow ray is traced (and none counted), as on the CPU.
 
 struct PointLightSample {
     l: vec3<f32>,
@@ -11,7 +12,7 @@ struct PointLightSample {
     lit: bool,
 }
 
-fn point_light_sample(i: u32, hit: Hit) -> PointLightSample {
+fn point_light_sample(i: u32, hit: Hit, two_sided: bool) -> PointLightSample {
     let light = point_light_at(i);
     let to_light = light.position.xyz - hit.point;
     let dist = length(to_light);
@@ -23,6 +24,8 @@ fn point_light_sample(i: u32, hit: Hit) -> PointLightSample {
         falloff = q * q;
     }
     let ray = Ray(origin, light.position.xyz - origin, 0.0, 1.0);
-    let lit = dist > 0.0 && dot(hit.normal, l) > 0.0 && dot(hit.geometric, l) > 0.0;
+    let cn = dot(hit.normal, l);
+    let cg = dot(hit.geometric, l);
+    let lit = dist > 0.0 && ((cn > 0.0 && cg > 0.0) || (two_sided && cn < 0.0 && cg < 0.0));
     return PointLightSample(l, light.color.xyz * falloff, ray, lit);
 }

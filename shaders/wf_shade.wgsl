@@ -193,7 +193,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
 // #if POINT_LIGHTS
         var pl: PointLightSample;
         if (k < point) {
-            pl = point_light_sample(k, hit);
+            pl = point_light_sample(k, hit, bsdf_transmits(m));
             if (!pl.lit) {
                 continue;
             }
@@ -213,7 +213,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         let f = eval_bsdf(m, color, d, hit.normal, hit.front_face, dir);
 // #if POINT_LIGHTS
         if (k < point) {
-            queue_shadow(slot, shadows, pl.ray, beta * (f * pl.radiance * dot(hit.normal, pl.l)));
+            queue_shadow(slot, shadows, pl.ray, beta * (f * pl.radiance * abs(dot(hit.normal, pl.l))));
             shadows++;
             continue;
         }

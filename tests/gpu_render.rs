@@ -1075,6 +1075,21 @@ fn rough_materials_conserve_energy_on_the_gpu_as_on_the_cpu() {
     }
 }
 
+/// A point light behind rough glass shines through it (the transmission at the first hit,
+/// tests/cpu_render.rs checks the CPU against a vanishing sphere light), and deeper paths
+/// add the light that reflects inside the glass first: the GPU's image is the CPU's.
+#[test]
+fn a_point_light_behind_rough_glass_shines_through_it_on_the_gpu() {
+    let Some(gpu) = gpu_for_tests("a_point_light_behind_rough_glass_shines_through_it_on_the_gpu") else { return };
+    for depth in [1, 4] {
+        let mut scene = common::rough_glass_lit_from_below(None, 4.0);
+        scene.renderer = pt(1, depth, 10, true);
+        let img = assert_matches_cpu(&gpu, &scene, Some(64), 0.99);
+        let (mean, _) = mean_and_stderr(&img, |_, _| true);
+        assert!(mean > 1e-3, "depth {depth}: no light through the glass ({mean})");
+    }
+}
+
 /// Rough materials lit by point lights, a spherical area light and a gradient sky, with a
 /// checkered diffuse floor: the path tracer (NEE on and off) and the PointLight renderer
 /// (which evaluates the rough BRDFs for each light) give the CPU's image.

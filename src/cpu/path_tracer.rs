@@ -144,7 +144,7 @@ fn add_point_lights(
     counters: &mut Counters,
 ) {
     for light in &ctx.scene.point_lights {
-        if let Some((dir, factor)) = point_light_factor(ctx, hit, light, counters) {
+        if let Some((dir, factor)) = point_light_factor(ctx, hit, light, brdf.transmits(), counters) {
             *radiance += beta * (eval_bsdf(brdf, color, d, hit.normal, hit.front_face, dir) * light.color * factor);
         }
     }

@@ -8,12 +8,15 @@ use super::context::{Context, Counters};
 use super::Hit;
 
 /// For a point light visible from the hit: the unit direction toward it and the factor
-/// `cos θ · f(d)` (θ between the normal and that direction, f the light's falloff).
-/// `None` when the light is behind the surface or occluded.
+/// `|cos θ| · f(d)` (θ between the normal and that direction, f the light's falloff).
+/// `None` when the light is occluded, or behind the surface unless `two_sided` (a BSDF that
+/// transmits, `Brdf::transmits`: then the light may be on either side, where the shading
+/// and geometric normals agree).
 pub fn point_light_factor(
     ctx: &Context,
     hit: &Hit,
     light: &PointLight,
+    two_sided: bool,
     counters: &mut Counters,
 ) -> Option<(DVec3, f64)> {
     let to_light = light.position - hit.point;
@@ -23,11 +26,13 @@ pub fn point_light_factor(
     }
     let dir = to_light / dist;
     let cos = hit.normal.dot(dir);
-    if cos <= 0.0 || hit.geometric.dot(dir) <= 0.0 {
+    let in_front = cos > 0.0 && hit.geometric.dot(dir) > 0.0;
+    let behind = cos < 0.0 && hit.geometric.dot(dir) < 0.0;
+    if !(in_front || (two_sided && behind)) {
         return None;
     }
     if !ctx.segment_clear(hit.point, hit.scale, hit.geometric, light.position, None, counters) {
         return None;
     }
-    Some((dir, cos * light.falloff(dist)))
+    Some((dir, cos.abs() * light.falloff(dist)))
 }

@@ -37,7 +37,8 @@ pub fn point_light_radiance(ctx: &Context, ray: &Ray, ambient: Color, counters: 
     let color = m.brdf.pigment().color_at(hit.uv.x, hit.uv.y);
     let mut radiance = ambient;
     for light in &ctx.scene.point_lights {
-        if let Some((dir, factor)) = point_light_factor(ctx, &hit, light, counters) {
+        // Raytracer.jl's model: only lights in front of the surface.
+        if let Some((dir, factor)) = point_light_factor(ctx, &hit, light, false, counters) {
             radiance += (emitted + eval_bsdf(&m.brdf, color, ray.dir.normalize(), hit.normal, hit.front_face, dir))
                 * light.color
                 * factor;

@@ -53,6 +53,20 @@ impl Brdf {
             Brdf::Dielectric { roughness, .. } | Brdf::Conductor { roughness, .. } => *roughness == 0.0,
         }
     }
+    /// True for BSDFs that transmit at their non-delta vertices, so that light from behind
+    /// the surface reaches the viewer through it: a rough dielectric. (A point light is
+    /// then summed on either side of the surface; on every other BSDF only in front.)
+    ///
+    /// ```
+    /// use lumen::scene::{Brdf, Pigment};
+    /// let rough = Brdf::Dielectric { pigment: Pigment::default(), ior: 1.5, roughness: 0.2, multiple_scattering: true };
+    /// assert!(rough.transmits());
+    /// assert!(!Brdf::smooth_dielectric(Pigment::default(), 1.5).transmits()); // a delta: never sampled
+    /// assert!(!Brdf::default().transmits());
+    /// ```
+    pub fn transmits(&self) -> bool {
+        matches!(self, Brdf::Dielectric { roughness, .. } if *roughness > 0.0)
+    }
     /// The smooth glass of Raytracer.jl scripts' `Brdf.Dielectric` (roughness 0).
     pub fn smooth_dielectric(pigment: Pigment, ior: f64) -> Self {
         Brdf::Dielectric { pigment, ior, roughness: 0.0, multiple_scattering: true }

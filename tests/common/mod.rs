@@ -78,6 +78,44 @@ pub fn dielectric(b: &mut SceneBuilder, ior: f64) -> MaterialId {
     ))
 }
 
+/// A rough glass floor (the plane z = 0, GGX α 0.3, index 1.5) seen from a camera at height 3
+/// looking straight down, lit only from below, inside the glass at depth 1: by a point light
+/// of intensity `intensity` (linear radius 1: falloff 1/d²), or, with `sphere_radius` r, by a
+/// diffuse sphere of radius r and radiance I/(πr²) at the same place, whose irradiance at
+/// distances d ≫ r is the point light's. Depth 1 and a black sky: all the camera sees is the
+/// light transmitted at the first hit.
+pub fn rough_glass_lit_from_below(sphere_radius: Option<f64>, intensity: f64) -> Scene {
+    use lumen::scene::{Camera, Projection};
+    let mut b = SceneBuilder::new(12, 10);
+    let glass = b.material(Material::new(
+        Brdf::Dielectric {
+            pigment: Pigment::Uniform(Color::WHITE),
+            ior: 1.5,
+            roughness: 0.3,
+            multiple_scattering: true,
+        },
+        Pigment::Uniform(Color::BLACK),
+    ));
+    let at = DVec3::new(0.4, -0.1, -1.0);
+    match sphere_radius {
+        Some(r) => {
+            let lamp = emissive(&mut b, 0.0, intensity / (std::f64::consts::PI * r * r));
+            b.sphere(Transform::translation(at) * Transform::scaling(DVec3::splat(r)), lamp);
+        }
+        None => {
+            b.point_light(PointLight { position: at, color: Color::gray(intensity), linear_radius: 1.0 });
+        }
+    }
+    b.plane(Transform::IDENTITY, glass)
+        .camera(Camera {
+            projection: Projection::Perspective { screen_distance: 1.0 },
+            aspect_ratio: 1.2,
+            transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
+        })
+        .renderer(pt(1, 1, 10, true));
+    b.build().unwrap()
+}
+
 /// The path tracer with `n` paths per camera sample, the other settings at their defaults.
 pub fn pt(n: u32, max_depth: u32, roulette_depth: u32, nee: bool) -> Renderer {
     Renderer::PathTracer(PathTracerSettings { n, max_depth, roulette_depth, nee, ..Default::default() })
