@@ -95,21 +95,29 @@ impl CsgTree {
     /// The closest surface with t in (tmin, tmax): the first leaf crossing in that range,
     /// in the order (t, leaf, enter before exit), that the tree shows.
     pub fn closest(&self, ray: &Ray) -> Option<CsgHit> {
-        let spans: Vec<Option<Span>> = self.leaves.iter().map(|l| l.span(ray)).collect();
-        let mut crossings: Vec<(Crossing, u32, bool)> = spans
-            .iter()
-            .zip(0u32..)
-            .filter_map(|(s, leaf)| s.map(|s| [(s.enter, leaf, false), (s.exit, leaf, true)]))
-            .flatten()
-            .filter(|(c, _, _)| c.t.is_finite() && c.t > ray.tmin && c.t < ray.tmax)
-            .collect();
-        crossings.sort_by(|a, b| a.0.t.total_cmp(&b.0.t).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-        crossings.into_iter().find_map(|(c, leaf, exit)| {
-            let s = SLIVER * c.t.abs();
-            let probe = Probe { leaf, exit, before: c.t - s, after: c.t + s };
-            let b = classify(&self.root, &spans, &probe);
-            (b & (ENTERS | EXITS) != 0)
-                .then_some(CsgHit { end: End { t: c.t, leaf, face: c.face, flip: b & FLIP != 0 } })
+        // The spans and crossings live in buffers kept per thread: a query allocating two
+        // vectors made csg.sl render about 12 % slower on the CPU.
+        SCRATCH.with(|scratch| {
+            let Scratch { spans, crossings } = &mut *scratch.borrow_mut();
+            spans.clear();
+            spans.extend(self.leaves.iter().map(|l| l.span(ray)));
+            crossings.clear();
+            crossings.extend(
+                spans
+                    .iter()
+                    .zip(0u32..)
+                    .filter_map(|(s, leaf)| s.map(|s| [(s.enter, leaf, false), (s.exit, leaf, true)]))
+                    .flatten()
+                    .filter(|(c, _, _)| c.t.is_finite() && c.t > ray.tmin && c.t < ray.tmax),
+            );
+            crossings.sort_by(|a, b| a.0.t.total_cmp(&b.0.t).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+            crossings.iter().find_map(|&(c, leaf, exit)| {
+                let s = SLIVER * c.t.abs();
+                let probe = Probe { leaf, exit, before: c.t - s, after: c.t + s };
+                let b = classify(&self.root, spans, &probe);
+                (b & (ENTERS | EXITS) != 0)
+                    .then_some(CsgHit { end: End { t: c.t, leaf, face: c.face, flip: b & FLIP != 0 } })
+            })
         })
     }
 
@@ -141,6 +149,18 @@ fn build(shape: &Shape, parent: &Transform, leaves: &mut Vec<Instance>) -> Node 
 fn build_csg(c: &Csg, parent: &Transform, leaves: &mut Vec<Instance>) -> Node {
     let t = *parent * c.transform;
     Node::Op(c.op, c.children.iter().map(|ch| build(ch, &t, leaves)).collect())
+}
+
+/// A query's working memory: each leaf's span, and the crossings in range with their leaf
+/// and side. `closest` never runs inside another query, so one per thread serves all.
+#[derive(Default)]
+struct Scratch {
+    spans: Vec<Option<Span>>,
+    crossings: Vec<(Crossing, u32, bool)>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
 }
 
 /// The crossing being classified: its leaf and side, and the two probe points.
