@@ -84,11 +84,33 @@ pub enum PackError {
     Scene(#[from] crate::scene::SceneError),
     /// f32 cannot hold the shape's placement: rounding its transform would give ±∞ and a
     /// meaningless render, so the GPU refuses the scene (the CPU renders it in f64).
+    /// `shape` counts the script's shapes in spawn order from 0 (a top-level UNITE, which the
+    /// renderers split, is one shape; `part` says which of its parts).
     #[error(
-        "shape {shape} ({what}): its transform reaches {magnitude:e} in the camera frame, beyond f32's range \
-         (±3.4e38) that the GPU computes in"
+        "shape {} in spawn order{} ({what}): its transform reaches {magnitude:e} in the camera frame, beyond \
+         f32's range (±3.4e38) that the GPU computes in",
+        .shape + 1,
+        part_text(*.part)
     )]
-    OutOfRange { shape: usize, what: &'static str, magnitude: f64 },
+    OutOfRange { shape: usize, part: Option<usize>, what: &'static str, magnitude: f64 },
+}
+
+fn part_text(part: Option<usize>) -> String {
+    part.map(|k| format!(", part {} of its top-level UNITE", k + 1)).unwrap_or_default()
+}
+
+impl PackError {
+    /// The error with its shape located in `scene` (the script's shapes) rather than in
+    /// the render form the packer walks (prepare::render_form).
+    fn located_in(self, scene: &Scene) -> Self {
+        match self {
+            PackError::OutOfRange { shape, what, magnitude, .. } => {
+                let (shape, part) = crate::prepare::source_shape(scene, shape).unwrap_or((shape, None));
+                PackError::OutOfRange { shape, part, what, magnitude }
+            }
+            other => other,
+        }
+    }
 }
 
 /// The camera's position in the world: where the packed frame's origin goes. For a
@@ -143,6 +165,11 @@ fn count_u32(what: &'static str, n: usize) -> Result<u32, PackError> {
 /// ```
 pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, PackError> {
     scene.validate()?;
+    pack_form(scene, spp_override).map_err(|e| e.located_in(scene))
+}
+
+/// [`pack`] once the scene is valid; shapes are located in its render form.
+fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, PackError> {
     let form = crate::prepare::render_form(scene);
     let scene = &*form;
     let features = FeatureSet::of(scene);
@@ -225,7 +252,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
             Shape::Primitive(p) => p.kind.name(),
             Shape::Mesh(_) => "mesh instance",
         };
-        return Err(PackError::OutOfRange { shape: i as usize, what, magnitude: f64::INFINITY });
+        return Err(PackError::OutOfRange { shape: i as usize, part: None, what, magnitude: f64::INFINITY });
     }
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
@@ -484,7 +511,7 @@ fn shifted_shape(s: &Shape, shift: &Transform) -> Shape {
 fn check_range(shape: usize, what: &'static str, to_world: &Transform) -> Result<(), PackError> {
     let magnitude = to_world.matrix().to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if magnitude > f64::from(f32::MAX) {
-        return Err(PackError::OutOfRange { shape, what, magnitude });
+        return Err(PackError::OutOfRange { shape, part: None, what, magnitude });
     }
     Ok(())
 }
@@ -808,8 +835,19 @@ mod tests {
         let huge = Transform::scaling(DVec3::splat(1e300));
         b.shape(Shape::csg(CsgOp::Fuse, vec![sphere_at(0.0, m), Shape::primitive(ShapeKind::Cube, huge, m)], huge));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
-        assert!(matches!(err, PackError::OutOfRange { shape: 2, what: "sphere", .. }), "{err}");
+        assert!(matches!(err, PackError::OutOfRange { shape: 2, part: None, what: "sphere", .. }), "{err}");
+        assert!(err.to_string().starts_with("shape 3 in spawn order (sphere): "), "{err}");
         assert!(err.to_string().contains("beyond f32's range"), "{err}");
+        // Located in the script's shapes: a top-level UNITE (split for rendering) is one
+        // shape, and the message names the part.
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        let far = Shape::primitive(ShapeKind::Cube, Transform::scaling(DVec3::splat(1e39)), m);
+        b.shape(Shape::csg(CsgOp::Unite, vec![sphere_at(0.0, m), sphere_at(3.0, m)], Transform::IDENTITY))
+            .shape(Shape::csg(CsgOp::Unite, vec![sphere_at(6.0, m), far], Transform::IDENTITY));
+        let err = pack(&b.build().unwrap(), None).unwrap_err();
+        assert!(matches!(err, PackError::OutOfRange { shape: 1, part: Some(1), what: "cube", .. }), "{err}");
+        assert!(err.to_string().starts_with("shape 2 in spawn order, part 2 of its top-level UNITE (cube)"), "{err}");
     }
 
     #[test]

@@ -18,7 +18,7 @@ use crate::scene::{Aabb, Environment, MaterialId, Scene, Shape, ShapeKind, Trans
 
 pub use mesh_bvh::{mesh_bvh, MeshBvhs};
 pub use pixel_samples::PixelSamples;
-pub use render_form::render_form;
+pub use render_form::{render_form, source_shape};
 pub use sample_range::{SampleRange, SampleRangeError};
 
 /// Most top-level CSG trees whose evaluation a closest-hit query defers until the

@@ -10,6 +10,33 @@ use std::borrow::Cow;
 
 use crate::scene::{Scene, Shape};
 
+/// Where shape `index` of [`render_form`]`(scene)` comes from: its index in `scene.shapes`
+/// and, for a part of a split top-level UNITE, which part (both from 0); `None` past the
+/// end. For messages that name a shape as the script wrote it.
+///
+/// ```
+/// use lumen::scene::*;
+/// let mut b = SceneBuilder::new(4, 4);
+/// let m = b.diffuse(lumen::color::Color::gray(0.5));
+/// let ball = |x: f64| Shape::primitive(ShapeKind::Sphere, Transform::translation(glam::DVec3::new(x, 0.0, 0.0)), m);
+/// b.shape(Shape::csg(CsgOp::Unite, vec![ball(0.0), ball(3.0)], Transform::IDENTITY)).shape(ball(6.0));
+/// let scene = b.build().unwrap();
+/// assert_eq!(lumen::prepare::source_shape(&scene, 1), Some((0, Some(1))));
+/// assert_eq!(lumen::prepare::source_shape(&scene, 2), Some((1, None)));
+/// assert_eq!(lumen::prepare::source_shape(&scene, 3), None);
+/// ```
+pub fn source_shape(scene: &Scene, index: usize) -> Option<(usize, Option<usize>)> {
+    let mut start = 0;
+    for (k, s) in scene.shapes.iter().enumerate() {
+        let parts = if s.splits_at_top_level() { s.clone().top_level_parts().len() } else { 1 };
+        if index < start + parts {
+            return Some((k, s.splits_at_top_level().then_some(index - start)));
+        }
+        start += parts;
+    }
+    None
+}
+
 /// `scene` itself when no top-level shape splits, else a copy with the parts in place of
 /// each splitting UNITE, in order (textures and meshes are shared, not copied).
 ///

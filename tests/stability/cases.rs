@@ -1222,8 +1222,9 @@ USING Camera.Perspective() Image(8, 8) Renderer.PathTracer(.n 2, .max_depth 3)
             let err = gpu_render(g, &scene, &GpuRenderOptions::fixed_passes(None, 4))
                 .expect_err("the GPU must refuse a shape beyond f32's range");
             let msg = err.to_string();
-            assert!(msg.contains("shape 1 (sphere)") && msg.contains("beyond f32's range"), "{msg}");
-            note = "GPU refuses the scene: shape 1 (sphere) beyond f32's range".into();
+            // The second shape the script spawns.
+            assert!(msg.contains("shape 2 in spawn order (sphere)") && msg.contains("beyond f32's range"), "{msg}");
+            note = "GPU refuses the scene: shape 2 (sphere) beyond f32's range".into();
             None
         }
         g => g,
