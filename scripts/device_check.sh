@@ -13,7 +13,8 @@
 #
 #   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; scripts/device_check.sh "$OUT"
 #
-# It writes to OUT_DIR (default: $OUT, else target/device_check), at most six files:
+# It writes to OUT_DIR (default: $OUT, else target/device_check; relative paths, here and in
+# LUMEN_BIN and MEGAKERNEL_BIN, are from the repository's root), at most six files:
 # - device.txt      the GPU (nvidia-smi) and the adapters lumen sees;
 # - bench.md        `lumen bench` of every scene on the GPU and the CPU reference (the
 #                   scenes' own sizes and samples), with each GPU/CPU ratio;
@@ -25,16 +26,19 @@
 #                   scene, to set beside bench.md's GPU rows;
 # - log.txt         how each step ended.
 # Each step has a time limit, so a slow step costs its own figures, not the others'.
-# QUICK=1 shrinks every size and accepts a software adapter (to try the script anywhere).
+# QUICK=1 shrinks every size and accepts a software adapter (to try the script anywhere;
+# tests/device_check.rs runs it so in CI).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-${OUT:-target/device_check}}
 mkdir -p "$out"
 quick=${QUICK:-0}
 if [ "$quick" = 1 ]; then
+    bench=(--quick --max-spheres 0)
     large=(--width 64 --spp 4)
     cornell=(--width 64 --height 64 --spp 16)
 else
+    bench=(--max-spheres 0)
     large=(--width 1024 --spp 256)
     cornell=(--width 1024 --height 1024 --spp 1024)
 fi
@@ -43,6 +47,8 @@ bin=${LUMEN_BIN:-target/device/lumen}
 mega=${MEGAKERNEL_BIN:-target/device/lumen-megakernel}
 log=$out/log.txt
 : > "$log"
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
 
 # step NAME SECONDS COMMAND...: COMMAND with a time limit; how it ended goes to log.txt.
 step() {
@@ -59,13 +65,13 @@ if [ "$quick" != 1 ] && ! grep -qE "type: (discrete|integrated) GPU" "$out/devic
     echo "no hardware GPU adapter: see device.txt" | tee -a "$log" >&2
     exit 1
 fi
-step bench 240 "$bin" bench --device gpu,cpu --scenes scenes --max-spheres 0 -o "$out/bench.md" > /dev/null 2>&1
+step bench 240 "$bin" bench --device gpu,cpu --scenes scenes "${bench[@]}" -o "$out/bench.md" > /dev/null 2>&1
 step bench_large 240 "$bin" bench --device gpu --scenes scenes --max-spheres 0 "${large[@]}" \
     -o "$out/bench_large.md" > /dev/null 2>&1
 # The whole process's wall time (start-up and kernel creation included) after the render's
 # own summary line and the stage profile.
 step cornell 120 bash -c 'TIMEFORMAT="wall %R s (the whole process)"; time "$@"' _ \
-    "$bin" render scenes/cornell.sl --device gpu "${cornell[@]}" --profile -o /tmp/lumen-device-cornell.exr \
+    "$bin" render scenes/cornell.sl --device gpu "${cornell[@]}" --profile -o "$scratch/cornell.exr" \
     > "$out/cornell.txt" 2>&1
 if [ -x "$mega" ]; then
     step megakernel 240 "$mega" bench --device gpu --scenes scenes --max-spheres 0 -o "$out/megakernel.md" > /dev/null 2>&1

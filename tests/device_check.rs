@@ -1,0 +1,47 @@
+//! scripts/device_check.sh (issue 12, goal 4: the hardware-GPU figures in one run) keeps
+//! working while no hardware GPU is lent: run small (`QUICK=1`, which accepts a software
+//! adapter) with this build's binary, it writes every report it promises, and every step
+//! ends well.
+
+use std::path::Path;
+use std::process::Command;
+
+#[test]
+fn the_device_check_writes_every_report() {
+    if lumen::gpu::gpu_for_tests("the_device_check_writes_every_report").is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/device_check.sh");
+    let o = Command::new("bash")
+        .arg(&script)
+        .arg(out.path())
+        .env("QUICK", "1")
+        .env("LUMEN_BIN", env!("CARGO_BIN_EXE_lumen"))
+        .env_remove("MEGAKERNEL_BIN")
+        .output()
+        .unwrap();
+    let said = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{said}");
+    let read = |name: &str| std::fs::read_to_string(out.path().join(name)).unwrap_or_default();
+    let log = read("log.txt");
+    for step in ["bench", "bench_large", "cornell"] {
+        assert!(log.lines().any(|l| l.starts_with(&format!("{step}: exit 0 "))), "{step}: {log}\n{said}");
+    }
+    assert!(read("device.txt").contains("type: "), "{}", read("device.txt"));
+    // Both devices in the bench, the GPU alone in the large one.
+    let bench = read("bench.md");
+    assert!(bench.contains("| gpu |") && bench.contains("| cpu |") && bench.contains("cornell.sl"), "{bench}");
+    let large = read("bench_large.md");
+    assert!(large.contains("| gpu |") && !large.contains("| cpu |"), "{large}");
+    // The render's summary, the stage profile with the busy fraction, the process's time.
+    let cornell = read("cornell.txt");
+    for want in ["16 of 16 samples per pixel", "device busy", "wall "] {
+        assert!(cornell.contains(want), "{want}: {cornell}");
+    }
+    // Nothing but the reports: the render's image went to a scratch directory.
+    let mut files: Vec<String> =
+        std::fs::read_dir(out.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+    files.sort();
+    assert_eq!(files, ["bench.md", "bench_large.md", "cornell.txt", "device.txt", "log.txt"]);
+}
