@@ -1,8 +1,10 @@
 //! GPU infrastructure tests: device, compute runner, error capture. Every test skips
 //! without an adapter unless LUMEN_REQUIRE_GPU=1 (see `lumen::gpu::gpu_for_tests`).
 
+mod common;
+
 use bytemuck::{Pod, Zeroable};
-use lumen::gpu::{gpu_for_tests, GpuError};
+use lumen::gpu::{gpu_for_tests, gpu_required, GpuError};
 
 const SMOKE: &str = include_str!("../shaders/smoke.wgsl");
 
@@ -148,4 +150,49 @@ fn a_lost_device_is_an_error_not_a_panic() {
         gpu.dispatch(&kernel, &[&g], [1, 1, 1])
     });
     assert!(run.is_err());
+}
+
+/// wgpu's OpenGL backend (EGL, here on Mesa's llvmpipe) runs the same kernels translated to
+/// GLSL, for machines whose GPU has no Vulkan, Metal or DirectX 12 driver: it renders the
+/// example scenes as the Vulkan backend does (not bit for bit: another shader compiler),
+/// through the command line with `WGPU_BACKEND=gl`, which restricts wgpu to that backend.
+#[test]
+fn the_opengl_backend_renders_as_vulkan_does() {
+    if gpu_for_tests("the_opengl_backend_renders_as_vulkan_does").is_none() {
+        return;
+    }
+    let lumen = |gl: bool| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_lumen"));
+        if gl {
+            cmd.env("WGPU_BACKEND", "gl");
+        } else {
+            cmd.env_remove("WGPU_BACKEND");
+        }
+        cmd
+    };
+    let devices = lumen(true).arg("devices").output().unwrap();
+    if !String::from_utf8_lossy(&devices.stdout).contains("backend: gl") {
+        assert!(!gpu_required(), "no OpenGL adapter (`WGPU_BACKEND=gl lumen devices`): {devices:?}");
+        println!("skipped the_opengl_backend_renders_as_vulkan_does: no OpenGL adapter");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    for scene in ["cornell", "csg", "materials", "meshes", "skybox"] {
+        let render = |gl: bool| {
+            let out = dir.path().join(format!("{scene}-{gl}.pfm"));
+            let o = lumen(gl)
+                .arg("render")
+                .arg(scenes.join(format!("{scene}.sl")))
+                .args(["--device", "gpu", "--width", "48", "--spp", "4", "-o"])
+                .arg(&out)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{scene} (gl: {gl}): {}", String::from_utf8_lossy(&o.stderr));
+            lumen::image::read_image(&out).unwrap()
+        };
+        let a = common::agreement(&render(true), &render(false));
+        println!("{scene}: {a}");
+        a.check(common::Tolerance::share(0.99)).unwrap_or_else(|e| panic!("{scene}, OpenGL vs Vulkan: {e}"));
+    }
 }
