@@ -131,8 +131,14 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
 
 // #if SHADOWS
 // Whether the vertex's scattering is a Dirac delta (no light sampling there): among the
-// kinds whose kernels sample lights, only a smooth conductor.
+// kinds whose kernels sample lights, a smooth conductor, and smooth glass where the
+// rough-dielectric stage shades it.
 fn bsdf_is_delta(m: Material) -> bool {
+// #if DIELECTRIC
+    if (m.brdf == BRDF_DIELECTRIC) {
+        return true;
+    }
+// #endif
 // #if CONDUCTOR
     if (m.brdf == BRDF_CONDUCTOR) {
         return m.alpha == 0.0;

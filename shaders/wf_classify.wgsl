@@ -6,7 +6,13 @@ fn classify(slot: u32, cand: Candidate) {
 // #if GEOMETRY
     if (cand.c.t < OPEN) {
         store_hit(slot, cand);
-        let brdf = material_at(shape_at(cand.shape).material).brdf;
+        var brdf = material_at(shape_at(cand.shape).material).brdf;
+// #if SMOOTH_GLASS_AS_ROUGH
+        // Smooth glass is shaded by the rough-dielectric stage (stages::glass_shaded_as_rough).
+        if (brdf == BRDF_DIELECTRIC) {
+            brdf = BRDF_ROUGH_DIELECTRIC;
+        }
+// #endif
         wf_push(Q_SHADE + brdf, slot);
         return;
     }

@@ -173,6 +173,9 @@ impl Stage {
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED"]);
                 }
+                if glass_shaded_as_rough(f) {
+                    n.push("SMOOTH_GLASS_AS_ROUGH");
+                }
                 n
             }
             Stage::Csg => {
@@ -181,6 +184,9 @@ impl Stage {
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "SPANS", "WF_DEFERRED"]);
                 if has_shadow_rays(f) {
                     n.push("WF_SHADOW_CSG");
+                }
+                if glass_shaded_as_rough(f) {
+                    n.push("SMOOTH_GLASS_AS_ROUGH");
                 }
                 n
             }
@@ -208,6 +214,13 @@ impl Stage {
                 ];
                 allowed.extend(SHAPES);
                 allowed.push(kind_name(kind));
+                // The kinds whose vertices this stage shades: its own, and smooth glass in the
+                // rough-dielectric stage of a scene with both (glass_shaded_as_rough).
+                let mut used = f.shade_use[kind as usize];
+                if kind == brdf_kind::ROUGH_DIELECTRIC && glass_shaded_as_rough(f) {
+                    allowed.push(kind_name(brdf_kind::DIELECTRIC));
+                    used = used.union(f.shade_use[brdf_kind::DIELECTRIC as usize]);
+                }
                 if microfacet_kind(kind) {
                     // Their energy rows (tables::Table::Rows).
                     allowed.push("ENERGY_ROWS");
@@ -224,7 +237,6 @@ impl Stage {
                 let mut n = keep(&allowed);
                 // Only what this kind's materials sit on and read, and where the stage
                 // samples lights, what the lights need (features::KindUse).
-                let mut used = f.shade_use[kind as usize];
                 if casts_shadow_rays(kind) && n.contains(&"NEE") {
                     used = used.union(f.light_use);
                 }
@@ -370,7 +382,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 38] = [
+    pub const NAMES: [&'static str; 39] = [
         "MICROFACET",
         "EMISSION",
         "TEXTURED_EMISSION",
@@ -401,6 +413,7 @@ impl Stage {
         "WF_COUNT",
         "WF_DEFERRED",
         "WF_SHADOW_CSG",
+        "SMOOTH_GLASS_AS_ROUGH",
         "STAGE_CAMERA",
         "STAGE_FIRST_HIT",
         "STAGE_INTERSECT",
@@ -449,9 +462,21 @@ pub fn has_shadow_rays(f: &FeatureSet) -> bool {
     f.renderer == RendererKind::PathTracer && f.non_delta() && (f.point_lights || f.nee)
 }
 
-/// The BRDF kinds a scene shades, each with its own kernel and queue.
+/// The BRDF kinds a scene shades, each with its own kernel and queue (smooth glass has
+/// none where `glass_shaded_as_rough`).
 pub fn shade_kinds(f: &FeatureSet) -> Vec<u32> {
-    (0..brdf_kind::COUNT).filter(|&k| f.has_brdf_kind(k)).collect()
+    (0..brdf_kind::COUNT)
+        .filter(|&k| f.has_brdf_kind(k) && !(k == brdf_kind::DIELECTRIC && glass_shaded_as_rough(f)))
+        .collect()
+}
+
+/// Whether smooth glass is shaded by the rough-dielectric stage, as a delta at run time
+/// (as a smooth conductor is in the conductor stage): where a scene has both kinds of
+/// glass, a stage of its own would compile the path state, stream and surface code a second
+/// time for the few lines of a Fresnel choice. A scene with smooth glass alone keeps its
+/// small stage, without GGX.
+pub fn glass_shaded_as_rough(f: &FeatureSet) -> bool {
+    f.renderer == RendererKind::PathTracer && f.dielectric && f.rough_dielectric
 }
 
 /// The assembly name of a BRDF kind's code.
@@ -495,6 +520,39 @@ mod tests {
             Stage::Shadow => vec![queue::SHADOW],
             _ => vec![],
         }
+    }
+
+    /// Smooth glass has a shading stage of its own unless the scene also has rough glass;
+    /// then the rough-dielectric stage holds the smooth kind's code too, and the closest-hit
+    /// stages queue smooth glass there.
+    #[test]
+    fn smooth_glass_goes_to_the_rough_stage_only_beside_rough_glass() {
+        let glass = |rough: bool| FeatureSet {
+            sphere: true,
+            bvh: true,
+            diffuse: true,
+            dielectric: true,
+            rough_dielectric: rough,
+            nee: true,
+            area_lights: true,
+            renderer: RendererKind::PathTracer,
+            ..FeatureSet::default()
+        };
+        let alone = glass(false);
+        assert!(!glass_shaded_as_rough(&alone));
+        assert!(Stage::for_scene(&alone).contains(&Stage::Shade(brdf_kind::DIELECTRIC)));
+        assert!(!Stage::Intersect.names(&alone).contains(&"SMOOTH_GLASS_AS_ROUGH"));
+        let both = glass(true);
+        assert!(glass_shaded_as_rough(&both));
+        let stages = Stage::for_scene(&both);
+        assert!(!stages.contains(&Stage::Shade(brdf_kind::DIELECTRIC)));
+        assert!(stages.contains(&Stage::Shade(brdf_kind::ROUGH_DIELECTRIC)));
+        let rough = Stage::Shade(brdf_kind::ROUGH_DIELECTRIC).names(&both);
+        assert!(rough.contains(&"DIELECTRIC") && rough.contains(&"ROUGH_DIELECTRIC"), "{rough:?}");
+        assert!(!Stage::Shade(brdf_kind::DIFFUSE).names(&both).contains(&"DIELECTRIC"));
+        assert!(Stage::Intersect.names(&both).contains(&"SMOOTH_GLASS_AS_ROUGH"));
+        let with_csg = FeatureSet { csg: true, csg_trees: 1, csg_max_leaves: 2, ..both };
+        assert!(csg_queue(&with_csg) && Stage::Csg.names(&with_csg).contains(&"SMOOTH_GLASS_AS_ROUGH"));
     }
 
     /// wgpu refuses a dispatch that uses one buffer both as its indirect arguments and as
