@@ -173,9 +173,6 @@ impl Stage {
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED"]);
                 }
-                if glass_shaded_as_rough(f) {
-                    n.push("SMOOTH_GLASS_AS_ROUGH");
-                }
                 n
             }
             Stage::Csg => {
@@ -184,9 +181,6 @@ impl Stage {
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "SPANS", "WF_DEFERRED"]);
                 if has_shadow_rays(f) {
                     n.push("WF_SHADOW_CSG");
-                }
-                if glass_shaded_as_rough(f) {
-                    n.push("SMOOTH_GLASS_AS_ROUGH");
                 }
                 n
             }
@@ -314,6 +308,11 @@ impl Stage {
         // the CSG and shading stages.
         if geometry && matches!(self, Stage::Intersect | Stage::Csg) {
             names.push("WF_HIT_STORE");
+        }
+        // Where a query ends (classify), smooth glass goes to the rough-dielectric stage's
+        // queue in a scene with both kinds of glass.
+        if matches!(self, Stage::Intersect | Stage::Csg) && glass_shaded_as_rough(f) {
+            names.push("SMOOTH_GLASS_AS_ROUGH");
         }
         if matches!(self, Stage::Csg | Stage::Shade(_)) {
             names.push("WF_HIT_LOAD");
