@@ -199,3 +199,23 @@ fn the_cpu_renderer_honours_the_time_limit() {
     let img = lumen::image::read_image(&dir.path().join("t.pfm")).unwrap();
     assert_eq!((img.width(), img.height()), (32, 24));
 }
+
+/// A mistyped output path fails before any work: no device opened, nothing rendered or
+/// benchmarked, and the error names the file and the missing directory.
+#[test]
+fn an_output_in_a_missing_directory_fails_before_the_work() {
+    let dir = scene_dir();
+    let commands: [&[&str]; 3] = [
+        &["render", "tiny.sl", "--device", "cpu", "-o", "no/such/dir/out.png"],
+        &["render", "tiny.sl", "--device", "cpu", "-o", "ok.pfm", "-o", "no/out.png", "--frames", "0:1:2"],
+        &["bench", "--device", "cpu", "--scenes", "tiny.sl", "--spp", "1", "--max-spheres", "0", "-o", "no/b.md"],
+    ];
+    for args in commands {
+        let o = lumen(dir.path()).args(args).output().unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("error: cannot write no/") && err.contains("does not exist"), "{args:?}: {err}");
+        assert!(!err.contains("samples per pixel") && !err.contains("warming up"), "{args:?} worked first: {err}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "only tiny.sl is left");
+}

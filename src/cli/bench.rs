@@ -147,6 +147,9 @@ pub fn spheres_scene(n: u32, width: u32, height: u32) -> Scene {
 /// Runs `lumen bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let plan = Plan::of(&args)?;
+    if let Some(path) = &args.output {
+        crate::image::check_destination(path).with_context(|| format!("cannot write {}", path.display()))?;
+    }
     let files = scene_files(&args.scenes)?;
     let devices = args.devices.open();
     if devices.is_empty() {

@@ -324,6 +324,7 @@ fn render_on_gpu(
 fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, Option<Frames>, Part)> {
     for o in outputs {
         ImageFormat::from_path(o).with_context(|| format!("output {}", o.display()))?;
+        crate::image::check_destination(o).with_context(|| format!("cannot write {}", o.display()))?;
     }
     let part = Part::of(args)?;
     let exr = outputs.iter().any(|o| ImageFormat::from_path(o).is_ok_and(|f| f == ImageFormat::Exr));

@@ -24,10 +24,7 @@ use std::path::Path;
 /// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 /// ```
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+    let dir = directory_of(path);
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let mut tmp = tempfile::Builder::new()
         .prefix(&format!(".{name}."))
@@ -38,6 +35,42 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     // On failure the returned file is dropped, which removes it.
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
+}
+
+/// Checks what can be checked of a later [`write_atomically`] to `path` without writing:
+/// its directory exists and `path` is not a directory. Commands call it before long work
+/// (a render, a benchmark), so that a mistyped output path fails at once rather than after
+/// hours; a permission or disk error still shows only at the write.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// assert!(lumen::image::check_destination(&dir.path().join("out.png")).is_ok());
+/// assert!(lumen::image::check_destination(&dir.path().join("missing/out.png")).is_err());
+/// assert!(lumen::image::check_destination(dir.path()).is_err());
+/// ```
+pub fn check_destination(path: &Path) -> std::io::Result<()> {
+    use std::io::{Error, ErrorKind};
+    let dir = directory_of(path);
+    if !dir.is_dir() {
+        let why = if dir.exists() {
+            format!("{} is not a directory", dir.display())
+        } else {
+            format!("directory {} does not exist", dir.display())
+        };
+        return Err(Error::new(ErrorKind::NotFound, why));
+    }
+    if path.is_dir() {
+        return Err(Error::new(ErrorKind::IsADirectory, "it is a directory"));
+    }
+    Ok(())
+}
+
+/// The directory a file at `path` goes in (`.` for a bare name).
+fn directory_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
 }
 
 #[cfg(test)]
@@ -63,5 +96,37 @@ mod tests {
         // A missing directory is reported as the OS reports it.
         let e = write_atomically(&dir.path().join("none/a.bin"), b"x").unwrap_err();
         assert_eq!(e.kind(), ErrorKind::NotFound);
+    }
+
+    /// What `check_destination` refuses is what `write_atomically` would fail on, and it
+    /// accepts what it would write.
+    #[test]
+    fn destinations_are_checked_as_the_write_would_find_them() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("file");
+        std::fs::write(&file, b"x").unwrap();
+        let cases = [
+            (dir.path().join("new.png"), Ok(())),
+            (file.clone(), Ok(())),
+            (dir.path().join("none/a.png"), Err("does not exist")),
+            (file.join("a.png"), Err("is not a directory")),
+            (dir.path().to_path_buf(), Err("it is a directory")),
+        ];
+        for (path, want) in cases {
+            let checked = check_destination(&path);
+            match want {
+                Ok(()) => {
+                    assert!(checked.is_ok(), "{}: {checked:?}", path.display());
+                    write_atomically(&path, b"y").unwrap();
+                }
+                Err(why) => {
+                    let e = checked.unwrap_err();
+                    assert!(e.to_string().contains(why), "{}: {e}", path.display());
+                    assert!(write_atomically(&path, b"y").is_err(), "{}", path.display());
+                }
+            }
+        }
+        // A bare file name goes in the working directory, which exists.
+        assert!(check_destination(Path::new("out.png")).is_ok());
     }
 }
