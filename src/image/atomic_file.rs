@@ -52,12 +52,11 @@ pub fn check_destination(path: &Path) -> std::io::Result<()> {
     use std::io::{Error, ErrorKind};
     let dir = directory_of(path);
     if !dir.is_dir() {
-        let why = if dir.exists() {
-            format!("{} is not a directory", dir.display())
+        return Err(if dir.exists() {
+            Error::new(ErrorKind::NotADirectory, format!("{} is not a directory", dir.display()))
         } else {
-            format!("directory {} does not exist", dir.display())
-        };
-        return Err(Error::new(ErrorKind::NotFound, why));
+            Error::new(ErrorKind::NotFound, format!("directory {} does not exist", dir.display()))
+        });
     }
     if path.is_dir() {
         return Err(Error::new(ErrorKind::IsADirectory, "it is a directory"));
