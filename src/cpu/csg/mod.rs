@@ -15,12 +15,22 @@
 //!
 //! The evaluation classifies crossings instead of building interval lists: the leaves'
 //! crossings are visited in order of t (ties by leaf, then enter before exit), and each is
-//! classified by one walk of the tree that computes, at every node, whether the node's
-//! solid lies just before and just after the crossing and whether the crossing is where a
-//! piece of that solid begins or ends (`classify`). The first crossing the root shows is
-//! the closest hit. Memory is one span per leaf, whatever the tree; an interval list can
+//! classified by computing, at every node, whether the node's solid lies just before and
+//! just after the crossing and whether the crossing is where a piece of that solid begins
+//! or ends (`fold`, `finish`). The first crossing the root shows is the closest hit. Memory
+//! is one span per leaf and a few words per node, whatever the tree; an interval list can
 //! instead grow with the product of its UNITE operands' sizes, and its list operations are
-//! the slow part of CSG on SIMD software GPUs (shaders/csg.wgsl runs this same algorithm).
+//! the slow part of CSG on SIMD software GPUs.
+//!
+//! A query's first crossings are classified by one walk of the whole tree each (`walk`;
+//! shaders/csg.wgsl does only this). A ray can pass up to 2n hidden crossings of a tree of
+//! n leaves (a DIFF that carves away all it has), which would cost O(n²), so later ones are
+//! classified by two sweeps, one per probe, that move along the ray with the crossings.
+//! Nodes off the crossing's path only say whether their solids hold the probes, and those
+//! answers change only where a probe passes a leaf's span end: each sweep keeps, per node,
+//! how many children hold its probe, updated from a leaf up to the first ancestor whose
+//! answer stays the same (`Sweep`). A classification then folds the crossing's own bits up
+//! its path (`classify`), so such a ray costs O(n log n).
 //!
 //! "Just before" and "just after" are the probes `t ∓ SLIVER·|t|`: a piece of a solid no
 //! longer than [`SLIVER`] relative to t does not count, so a subtracted solid whose face
@@ -63,8 +73,61 @@ enum Node {
 #[derive(Debug, Clone, PartialEq)]
 pub struct CsgTree {
     leaves: Vec<Instance>,
+    /// The nodes depth first, the root first: what the sweeps and classifications walk.
+    nodes: Vec<FlatNode>,
+    /// Each leaf's index in `nodes`.
+    leaf_node: Vec<u32>,
+    /// The tree as built, for the interval-list oracle of the tests.
+    #[cfg(test)]
     root: Node,
 }
+
+/// The parent of the root.
+const NO_PARENT: u32 = u32::MAX;
+
+/// A node as the classifications need it: a walk goes down the tree (a node's children
+/// follow it, each after the subtree of the one before), a sweep up from a leaf.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FlatNode {
+    /// The operation, or `None` for a leaf.
+    op: Option<CsgOp>,
+    /// A leaf's index in [`CsgTree::leaves`] (`u32::MAX` for a node).
+    leaf: u32,
+    parent: u32,
+    /// The node's position among its parent's children.
+    pos: u32,
+    children: u32,
+    /// The nodes of its subtree, itself included.
+    size: u32,
+}
+
+/// Appends `node`'s subtree to `nodes` depth first and records where each leaf went.
+fn flatten(node: &Node, parent: u32, pos: u32, nodes: &mut Vec<FlatNode>, leaf_node: &mut [u32]) {
+    let k = nodes.len();
+    match node {
+        Node::Leaf(i) => {
+            nodes.push(FlatNode { op: None, leaf: *i, parent, pos, children: 0, size: 1 });
+            if let Some(slot) = leaf_node.get_mut(*i as usize) {
+                *slot = k as u32;
+            }
+        }
+        Node::Op(op, children) => {
+            let n = children.len() as u32;
+            nodes.push(FlatNode { op: Some(*op), leaf: u32::MAX, parent, pos, children: n, size: 1 });
+            for (j, c) in children.iter().enumerate() {
+                flatten(c, k as u32, j as u32, nodes, leaf_node);
+            }
+            nodes[k].size = (nodes.len() - k) as u32;
+        }
+    }
+}
+
+/// How many of a query's crossings are classified by walking the whole tree before the
+/// sweeps take over. Most rays stop at their first crossing or soon after, and a walk
+/// classifies one in the tree's size, where the sweeps first sort every span end (with 8,
+/// streetlamp.sl's shadow rays, which start inside the lamps, rendered about 5 % slower).
+/// A ray that passes more hidden crossings costs these walks and the sweeps' O(n log n).
+const WALKED_CROSSINGS: usize = 16;
 
 /// The closest surface of a CSG tree along a ray.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,14 +140,27 @@ impl CsgTree {
     pub fn new(shape: &Shape) -> Self {
         let mut leaves = Vec::new();
         let root = build(shape, &Transform::IDENTITY, &mut leaves);
-        Self { leaves, root }
+        Self::prepared(leaves, root)
     }
 
     /// Prepares a CSG node.
     pub fn from_csg(csg: &Csg) -> Self {
         let mut leaves = Vec::new();
         let root = build_csg(csg, &Transform::IDENTITY, &mut leaves);
-        Self { leaves, root }
+        Self::prepared(leaves, root)
+    }
+
+    fn prepared(leaves: Vec<Instance>, root: Node) -> Self {
+        let mut nodes = Vec::new();
+        let mut leaf_node = vec![NO_PARENT; leaves.len()];
+        flatten(&root, NO_PARENT, 0, &mut nodes, &mut leaf_node);
+        Self {
+            leaves,
+            nodes,
+            leaf_node,
+            #[cfg(test)]
+            root,
+        }
     }
 
     /// The leaves, in depth-first order (what [`End::leaf`] indexes).
@@ -95,10 +171,16 @@ impl CsgTree {
     /// The closest surface with t in (tmin, tmax): the first leaf crossing in that range,
     /// in the order (t, leaf, enter before exit), that the tree shows.
     pub fn closest(&self, ray: &Ray) -> Option<CsgHit> {
+        self.closest_walking(ray, WALKED_CROSSINGS)
+    }
+
+    /// [`Self::closest`], its first `walked` crossings classified by walks of the tree and
+    /// the rest by the sweeps (the tests choose either throughout).
+    fn closest_walking(&self, ray: &Ray, walked: usize) -> Option<CsgHit> {
         // The spans and crossings live in buffers kept per thread: a query allocating two
         // vectors made csg.sl render about 12 % slower on the CPU.
         SCRATCH.with(|scratch| {
-            let Scratch { spans, crossings } = &mut *scratch.borrow_mut();
+            let Scratch { spans, crossings, ends, sweeps } = &mut *scratch.borrow_mut();
             spans.clear();
             spans.extend(self.leaves.iter().map(|l| l.span(ray)));
             crossings.clear();
@@ -110,11 +192,27 @@ impl CsgTree {
                     .flatten()
                     .filter(|(c, _, _)| c.t.is_finite() && c.t > ray.tmin && c.t < ray.tmax),
             );
+            if crossings.is_empty() {
+                return None;
+            }
             crossings.sort_by(|a, b| a.0.t.total_cmp(&b.0.t).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-            crossings.iter().find_map(|&(c, leaf, exit)| {
+            crossings.iter().enumerate().find_map(|(i, &(c, leaf, exit))| {
                 let s = SLIVER * c.t.abs();
                 let probe = Probe { leaf, exit, before: c.t - s, after: c.t + s };
-                let b = classify(&self.root, spans, &probe);
+                let b = if i < walked {
+                    self.walk(0, spans, &probe)
+                } else {
+                    if i == walked {
+                        ends.fill(spans);
+                        for sweep in sweeps.iter_mut() {
+                            sweep.reset(self.nodes.len(), spans.len());
+                        }
+                    }
+                    // The probes only move forward (t ∓ SLIVER·|t| grows with t).
+                    sweeps[0].advance(self, ends, probe.before);
+                    sweeps[1].advance(self, ends, probe.after);
+                    self.classify(sweeps, leaf, exit)
+                };
                 (b & (ENTERS | EXITS) != 0)
                     .then_some(CsgHit { end: End { t: c.t, leaf, face: c.face, flip: b & FLIP != 0 } })
             })
@@ -124,6 +222,55 @@ impl CsgTree {
     /// Whether any surface lies in (tmin, tmax).
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.closest(ray).is_some()
+    }
+
+    /// What node `k` says about the crossing of `probe`, by one walk of its subtree.
+    fn walk(&self, k: usize, spans: &[Option<Span>], probe: &Probe) -> u16 {
+        let node = self.nodes[k];
+        let Some(op) = node.op else {
+            if node.leaf == probe.leaf {
+                return OWN | if probe.exit { BEFORE | EXITS } else { AFTER | ENTERS };
+            }
+            let span = spans.get(node.leaf as usize).copied().flatten();
+            return bit(inside(&span, probe.before), BEFORE) | bit(inside(&span, probe.after), AFTER);
+        };
+        let mut acc = 0;
+        let mut child = k + 1;
+        for i in 0..node.children as usize {
+            acc = fold(op, acc, i, self.walk(child, spans, probe));
+            child += self.nodes[child].size as usize;
+        }
+        finish(op, acc)
+    }
+
+    /// What the root says about the crossing of `leaf` (its exit, or its entry), the
+    /// sweeps standing at its two probes: the crossing's own bits folded up its path. At
+    /// each node the other children enter `fold` as one child whose solid holds a probe
+    /// where any of them does (all of them, in an INTERSECT), which is what folding them
+    /// one by one gives; a DIFF's first child is folded on its own, before its cutters.
+    fn classify(&self, sweeps: &[Sweep; 2], leaf: u32, exit: bool) -> u16 {
+        let mut k = self.leaf_node[leaf as usize] as usize;
+        let mut b = OWN | if exit { BEFORE | EXITS } else { AFTER | ENTERS };
+        while let Some(&node) = self.nodes.get(k) {
+            let p = node.parent as usize;
+            let Some(&FlatNode { op: Some(op), children, .. }) = self.nodes.get(p) else { break };
+            let own_is_first = op == CsgOp::Diff && node.pos == 0;
+            let (mut others, mut first) = (0, 0);
+            for (sweep, probe) in sweeps.iter().zip([BEFORE, AFTER]) {
+                // Children other than this one (cutters, in a DIFF) that hold the probe.
+                let n = sweep.count[p] - u32::from(sweep.inside[k] && !own_is_first);
+                others |= bit(if op == CsgOp::Intersect { n + 1 == children } else { n > 0 }, probe);
+                first |= bit(sweep.first[p], probe);
+            }
+            let acc = if op == CsgOp::Diff && !own_is_first {
+                fold(op, fold(op, fold(op, 0, 0, first), 1, others), 2, b)
+            } else {
+                fold(op, fold(op, 0, 0, b), 1, others)
+            };
+            b = finish(op, acc);
+            k = p;
+        }
+        b
     }
 
     /// World-space surface data and material at a hit found by [`Self::closest`].
@@ -151,24 +298,122 @@ fn build_csg(c: &Csg, parent: &Transform, leaves: &mut Vec<Instance>) -> Node {
     Node::Op(c.op, c.children.iter().map(|ch| build(ch, &t, leaves)).collect())
 }
 
-/// A query's working memory: each leaf's span, and the crossings in range with their leaf
-/// and side. `closest` never runs inside another query, so one per thread serves all.
+/// A query's working memory: each leaf's span, the crossings in range with their leaf and
+/// side, the span ends in order and the two sweeps. `closest` never runs inside another
+/// query, so one per thread serves all.
 #[derive(Default)]
 struct Scratch {
     spans: Vec<Option<Span>>,
     crossings: Vec<(Crossing, u32, bool)>,
+    ends: SpanEnds,
+    sweeps: [Sweep; 2],
+}
+
+/// Every leaf's span ends along the line, entries and exits each sorted by t: where a
+/// point moving along the ray enters and leaves each leaf's solid.
+#[derive(Default)]
+struct SpanEnds {
+    enters: Vec<(f64, u32)>,
+    exits: Vec<(f64, u32)>,
+}
+
+impl SpanEnds {
+    fn fill(&mut self, spans: &[Option<Span>]) {
+        self.enters.clear();
+        self.exits.clear();
+        for (span, leaf) in spans.iter().zip(0u32..) {
+            // A NaN end holds no point (as `inside` says): such a leaf never counts.
+            if let Some(s) = span.filter(|s| !s.enter.t.is_nan() && !s.exit.t.is_nan()) {
+                self.enters.push((s.enter.t, leaf));
+                self.exits.push((s.exit.t, leaf));
+            }
+        }
+        self.enters.sort_by(|a, b| a.0.total_cmp(&b.0));
+        self.exits.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+}
+
+/// Which nodes' solids hold a probe point that only moves forward along the ray.
+#[derive(Default)]
+struct Sweep {
+    /// Per node: whether its solid holds the point.
+    inside: Vec<bool>,
+    /// Per node: how many children hold it (a DIFF's cutters only).
+    count: Vec<u32>,
+    /// Per node: whether a DIFF's first child holds it.
+    first: Vec<bool>,
+    /// Per leaf: whether the point is past its span's entry, and past its exit.
+    entered: Vec<bool>,
+    exited: Vec<bool>,
+    /// The next entry and exit in [`SpanEnds`] that the point has not passed.
+    next_enter: usize,
+    next_exit: usize,
+}
+
+impl Sweep {
+    /// The point before every span: no solid holds it.
+    fn reset(&mut self, nodes: usize, leaves: usize) {
+        for v in [&mut self.inside, &mut self.first, &mut self.entered, &mut self.exited] {
+            v.clear();
+        }
+        self.inside.resize(nodes, false);
+        self.first.resize(nodes, false);
+        self.count.clear();
+        self.count.resize(nodes, 0);
+        self.entered.resize(leaves, false);
+        self.exited.resize(leaves, false);
+        self.next_enter = 0;
+        self.next_exit = 0;
+    }
+
+    /// Moves the point to `x`: a leaf holds it when enter < x < exit (`inside`).
+    fn advance(&mut self, tree: &CsgTree, ends: &SpanEnds, x: f64) {
+        while let Some(&(_, leaf)) = ends.enters.get(self.next_enter).filter(|e| e.0 < x) {
+            self.entered[leaf as usize] = true;
+            self.leaf_changed(tree, leaf);
+            self.next_enter += 1;
+        }
+        while let Some(&(_, leaf)) = ends.exits.get(self.next_exit).filter(|e| e.0 <= x) {
+            self.exited[leaf as usize] = true;
+            self.leaf_changed(tree, leaf);
+            self.next_exit += 1;
+        }
+    }
+
+    /// Updates the ancestors of `leaf` after one of its flags changed, up to the first
+    /// node whose answer stays the same.
+    fn leaf_changed(&mut self, tree: &CsgTree, leaf: u32) {
+        let (l, mut k) = (leaf as usize, tree.leaf_node[leaf as usize] as usize);
+        let holds = self.entered[l] && !self.exited[l];
+        if k >= tree.nodes.len() || self.inside[k] == holds {
+            return;
+        }
+        self.inside[k] = holds;
+        while let Some(&FlatNode { op: Some(op), children, .. }) = tree.nodes.get(tree.nodes[k].parent as usize) {
+            let p = tree.nodes[k].parent as usize;
+            if op == CsgOp::Diff && tree.nodes[k].pos == 0 {
+                self.first[p] = self.inside[k];
+            } else if self.inside[k] {
+                self.count[p] += 1;
+            } else {
+                self.count[p] -= 1;
+            }
+            let holds = match op {
+                CsgOp::Unite | CsgOp::Fuse => self.count[p] > 0,
+                CsgOp::Intersect => children > 0 && self.count[p] == children,
+                CsgOp::Diff => self.first[p] && self.count[p] == 0,
+            };
+            if self.inside[p] == holds {
+                return;
+            }
+            self.inside[p] = holds;
+            k = p;
+        }
+    }
 }
 
 thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
-}
-
-/// The crossing being classified: its leaf and side, and the two probe points.
-struct Probe {
-    leaf: u32,
-    exit: bool,
-    before: f64,
-    after: f64,
 }
 
 // What a node says about the crossing (bits of a u16; shaders/csg.wgsl uses the same).
@@ -188,6 +433,21 @@ const FLIP: u16 = 32;
 const CUT_BEFORE: u16 = 64;
 const CUT_AFTER: u16 = 128;
 const CUT_OWN: u16 = 256;
+/// Both probes.
+const SOLID: u16 = BEFORE | AFTER;
+
+/// The crossing being classified: its leaf and side, and the two probe points.
+struct Probe {
+    leaf: u32,
+    exit: bool,
+    before: f64,
+    after: f64,
+}
+
+/// Strictly inside a leaf's span.
+fn inside(span: &Option<Span>, t: f64) -> bool {
+    span.is_some_and(|s| s.enter.t < t && t < s.exit.t)
+}
 
 fn bit(on: bool, bit: u16) -> u16 {
     if on {
@@ -197,28 +457,8 @@ fn bit(on: bool, bit: u16) -> u16 {
     }
 }
 
-/// Strictly inside a leaf's span.
-fn inside(span: &Option<Span>, t: f64) -> bool {
-    span.is_some_and(|s| s.enter.t < t && t < s.exit.t)
-}
-
-fn classify(node: &Node, spans: &[Option<Span>], p: &Probe) -> u16 {
-    match node {
-        Node::Leaf(i) if *i == p.leaf => OWN | if p.exit { BEFORE | EXITS } else { AFTER | ENTERS },
-        Node::Leaf(i) => {
-            let span = spans.get(*i as usize).copied().flatten();
-            bit(inside(&span, p.before), BEFORE) | bit(inside(&span, p.after), AFTER)
-        }
-        Node::Op(op, children) => {
-            let acc = children.iter().enumerate().fold(0, |acc, (i, c)| fold(*op, acc, i, classify(c, spans, p)));
-            finish(*op, acc)
-        }
-    }
-}
-
 /// Adds child number `i`'s classification `b` to a node's accumulator (0 before the first).
 fn fold(op: CsgOp, acc: u16, i: usize, b: u16) -> u16 {
-    const SOLID: u16 = BEFORE | AFTER;
     match op {
         CsgOp::Unite | CsgOp::Fuse => acc | b,
         _ if i == 0 => b,
@@ -324,6 +564,10 @@ mod tests {
                 let got = tree.closest(&ray);
                 assert_eq!(hit_key(got), hit_key(want), "{shape:?}\n{ray:?}");
                 assert_eq!(tree.occluded(&ray), want.is_some());
+                // Each classification alone: walks throughout, sweeps throughout.
+                for walked in [usize::MAX, 0] {
+                    assert_eq!(hit_key(tree.closest_walking(&ray, walked)), hit_key(want), "{walked}: {ray:?}");
+                }
                 rays += 1;
                 hits += usize::from(got.is_some());
                 carved += usize::from(got.is_some_and(|h| h.end.flip));
@@ -333,6 +577,67 @@ mod tests {
             hits > rays / 5 && hits < rays * 9 / 10 && carved > rays / 50,
             "{hits} hits, {carved} carved of {rays}"
         );
+    }
+
+    /// Trees built from copies of one subtree (as SceneLang's SET names share them) cross
+    /// the ray at exactly the same t in many leaves. Walks and sweeps give the same hit,
+    /// the lowest-numbered of the tied leaves (the order `closest` documents), at the t the
+    /// interval lists give; those may end a tied interval on another of the copies.
+    #[test]
+    fn shared_subtrees_agree_with_interval_lists() {
+        let mut next = uniform(0x9E37_79B9_7F4A_7C15);
+        let ops = [CsgOp::Unite, CsgOp::Fuse, CsgOp::Intersect, CsgOp::Diff];
+        let mut hits = 0;
+        for _ in 0..300 {
+            let mut shape = random_tree(&mut next, 2);
+            for _ in 0..3 {
+                let op = ops[(next() * 4.0) as usize % 4];
+                let other = random_tree(&mut next, 1);
+                let children = match (next() * 3.0) as u32 {
+                    0 => vec![shape.clone(), shape],
+                    1 => vec![shape.clone(), other, shape],
+                    _ => vec![other, shape.clone(), shape],
+                };
+                shape = Shape::csg(op, children, Transform::IDENTITY);
+            }
+            let tree = CsgTree::new(&shape);
+            for _ in 0..20 {
+                let origin = DVec3::new(4.0 * next() - 2.0, 4.0 * next() - 2.0, 4.0 * next() - 2.0);
+                let target = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+                let ray = Ray::new(origin, target - origin, 1e-9 * next(), 0.5 + 3.0 * next());
+                let want = interval_oracle::closest(&tree, &ray);
+                let walks = hit_key(tree.closest_walking(&ray, usize::MAX));
+                assert_eq!(walks.map(|h| h.0), want.map(|e| e.t), "{shape:?}\n{ray:?}");
+                for walked in [WALKED_CROSSINGS, 0] {
+                    assert_eq!(hit_key(tree.closest_walking(&ray, walked)), walks, "{walked}: {ray:?}");
+                }
+                hits += usize::from(want.is_some());
+            }
+        }
+        assert!(hits > 300, "{hits} hits: a weak test");
+    }
+
+    /// `SET a1 DIFF(a0, a0) … SET a16 DIFF(a15, a15)`: 65,536 copies of one sphere, each
+    /// DIFF carving away all of its first child, so every one of a ray's 131,072 crossings
+    /// is hidden. Walking the tree for each took minutes per ray (found by tests/fuzz_cli.rs);
+    /// the sweeps take milliseconds. The same chain with FUSE shows the sphere.
+    #[test]
+    fn a_chain_that_carves_everything_away() {
+        let chain = |op| {
+            let mut s = prim(ShapeKind::Sphere, Transform::IDENTITY);
+            for _ in 0..16 {
+                s = Shape::csg(op, vec![s.clone(), s], Transform::IDENTITY);
+            }
+            CsgTree::new(&s)
+        };
+        let (diff, fuse) = (chain(CsgOp::Diff), chain(CsgOp::Fuse));
+        assert_eq!(diff.leaves().len(), 1 << 16);
+        for (o, d) in [(DVec3::new(-3.0, 0.1, 0.2), DVec3::X), (DVec3::new(0.3, -0.2, 5.0), -DVec3::Z)] {
+            let ray = Ray::new(o, d, 0.0, 100.0);
+            assert_eq!(diff.closest(&ray), None);
+            let h = fuse.closest(&ray).expect("the fused sphere").end;
+            assert!((h.t - (o.length() - 1.0)).abs() < 0.1 && !h.flip, "{h:?}");
+        }
     }
 
     /// A cutter whose faces match the first operand's only up to rounding (a box turned by
