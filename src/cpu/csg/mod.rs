@@ -229,7 +229,7 @@ impl CsgTree {
         let node = self.nodes[k];
         let Some(op) = node.op else {
             if node.leaf == probe.leaf {
-                return OWN | if probe.exit { BEFORE | EXITS } else { AFTER | ENTERS };
+                return own_bits(probe.exit);
             }
             let span = spans.get(node.leaf as usize).copied().flatten();
             return bit(inside(&span, probe.before), BEFORE) | bit(inside(&span, probe.after), AFTER);
@@ -250,7 +250,7 @@ impl CsgTree {
     /// one by one gives; a DIFF's first child is folded on its own, before its cutters.
     fn classify(&self, sweeps: &[Sweep; 2], leaf: u32, exit: bool) -> u16 {
         let mut k = self.leaf_node[leaf as usize] as usize;
-        let mut b = OWN | if exit { BEFORE | EXITS } else { AFTER | ENTERS };
+        let mut b = own_bits(exit);
         while let Some(&node) = self.nodes.get(k) {
             let p = node.parent as usize;
             let Some(&FlatNode { op: Some(op), children, .. }) = self.nodes.get(p) else { break };
@@ -442,6 +442,11 @@ struct Probe {
     exit: bool,
     before: f64,
     after: f64,
+}
+
+/// What the crossing's own leaf says: it is entered or left exactly at t.
+fn own_bits(exit: bool) -> u16 {
+    OWN | if exit { BEFORE | EXITS } else { AFTER | ENTERS }
 }
 
 /// Strictly inside a leaf's span.
