@@ -252,7 +252,7 @@ fn a_fuse_of_1000_spheres_renders_like_the_cpu() {
 /// `GpuRenderOptions::profile`: the timestamps change nothing in the image, every stage the
 /// scene has is timed, each as often as the schedule launches it (camera and film once per
 /// batch; closest hit once per bounce and once more for the last one), and the device
-/// time fits in the wall time of the rounds.
+/// time, like the host's recording and waiting, fits in the wall time of the rounds.
 #[test]
 fn a_profiled_render_times_every_stage_and_keeps_the_image() {
     let Some(gpu) = gpu_for_tests("a_profiled_render") else { return };
@@ -283,6 +283,10 @@ fn a_profiled_render_times_every_stage_and_keeps_the_image() {
     assert!(p.stages.values().all(|t| t.seconds.is_finite() && t.seconds >= 0.0));
     let busy = p.busy_fraction();
     assert!(p.device_seconds() > 0.0 && busy > 0.0 && busy <= 1.0 + 1e-6, "busy {busy}");
+    // The host recorded every batch and waited for each read-back, within the rounds.
+    let host = p.host_submit_seconds + p.host_wait_seconds;
+    assert!(p.host_submit_seconds > 0.0 && p.host_wait_seconds > 0.0, "{p:?}");
+    assert!(host <= p.wall_seconds, "host {host} s in rounds of {} s", p.wall_seconds);
 }
 
 /// Where the scene's tables live (`GpuRenderOptions::tables`, DESIGN.md "Scene tables")

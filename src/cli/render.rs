@@ -72,7 +72,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "I/N")]
     pub shard: Option<String>,
     /// On the GPU, time every stage launch with timestamp queries and print, on stderr, each
-    /// stage's device time and the device's busy fraction (the image is the same)
+    /// stage's device time, the device's busy fraction, and the host's time recording launches
+    /// and waiting for read-backs (the image is the same)
     #[arg(long)]
     pub profile: bool,
 }

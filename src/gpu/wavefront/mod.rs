@@ -32,6 +32,7 @@ pub use stages::{csg_queue, has_shadow_rays, Stage};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use contract::{control, launch_groups, path_field, word_field};
 pub use contract::{csg_pool_entries, CSG_POOL_ENTRY_BYTES, CSG_PRIVATE_POOL_MAX};
@@ -169,6 +170,9 @@ pub(crate) struct Runner<'a> {
     profiler: Option<profile::Profiler>,
     /// The path fields, whose radiance region each batch clears before its camera stage.
     paths: wgpu::Buffer,
+    /// Host time in `submit` and in `collect`'s read-back (for the profile).
+    host_submit: Duration,
+    host_wait: Duration,
 }
 
 /// A batch in flight: its film's staging buffer and submission.
@@ -305,6 +309,8 @@ impl<'a> Runner<'a> {
             max_depth,
             profiler: None,
             paths: paths.clone(),
+            host_submit: Duration::ZERO,
+            host_wait: Duration::ZERO,
         })
     }
 
@@ -314,7 +320,8 @@ impl<'a> Runner<'a> {
 
     /// The stage times so far, with the wall time of the rounds (`None` unless profiling).
     pub fn profile(&self, wall_seconds: f64) -> Option<profile::StageProfile> {
-        self.profiler.as_ref().map(|p| p.finish(wall_seconds))
+        let (submit, wait) = (self.host_submit.as_secs_f64(), self.host_wait.as_secs_f64());
+        self.profiler.as_ref().map(|p| p.finish(wall_seconds, submit, wait))
     }
 
     /// Records `launch` of `stage`, timed when profiling.
@@ -469,6 +476,33 @@ impl BatchRunner for Runner<'_> {
     type Pending = Pending;
 
     fn submit(&mut self, batch: &BatchUniform, slot: usize) -> Result<Pending, GpuError> {
+        let t0 = Instant::now();
+        let pending = self.record_batch(batch, slot);
+        self.host_submit += t0.elapsed();
+        pending
+    }
+
+    fn collect(&mut self, pending: Pending) -> Result<Vec<[f64; 3]>, GpuError> {
+        let bytes = u64::from(pending.pixels) * 32;
+        let t0 = Instant::now();
+        let film: Vec<[f32; 4]> =
+            map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission.clone()))?;
+        self.host_wait += t0.elapsed();
+        if let Some(p) = &self.profiler {
+            p.collect(self.gpu, pending.slot, pending.submission)?;
+        }
+        // Each pixel's value and rounding error, summed exactly in f64.
+        Ok(film.chunks_exact(2).map(|v| std::array::from_fn(|c| f64::from(v[0][c]) + f64::from(v[1][c]))).collect())
+    }
+
+    fn drain(&mut self) -> Result<(), GpuError> {
+        self.gpu.wait_idle()
+    }
+}
+
+impl Runner<'_> {
+    /// Records and submits every launch of `batch` ([`BatchRunner::submit`]).
+    fn record_batch(&self, batch: &BatchUniform, slot: usize) -> Result<Pending, GpuError> {
         let gpu = self.gpu;
         if let Some(p) = &self.profiler {
             p.begin_batch(slot);
@@ -534,20 +568,5 @@ impl BatchRunner for Runner<'_> {
             Ok(())
         })?;
         Ok(Pending { slot, pixels, submission })
-    }
-
-    fn collect(&mut self, pending: Pending) -> Result<Vec<[f64; 3]>, GpuError> {
-        let bytes = u64::from(pending.pixels) * 32;
-        let film: Vec<[f32; 4]> =
-            map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission.clone()))?;
-        if let Some(p) = &self.profiler {
-            p.collect(self.gpu, pending.slot, pending.submission)?;
-        }
-        // Each pixel's value and rounding error, summed exactly in f64.
-        Ok(film.chunks_exact(2).map(|v| std::array::from_fn(|c| f64::from(v[0][c]) + f64::from(v[1][c]))).collect())
-    }
-
-    fn drain(&mut self) -> Result<(), GpuError> {
-        self.gpu.wait_idle()
     }
 }

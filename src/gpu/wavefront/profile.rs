@@ -40,6 +40,11 @@ pub struct StageProfile {
     pub wall_seconds: f64,
     /// Launches that ran without timestamps (a batch beyond [`LAUNCHES_PER_BATCH`]).
     pub untimed_launches: u64,
+    /// Host time spent recording and submitting batches' launches: when it nears the
+    /// device time, the host is what keeps the device waiting.
+    pub host_submit_seconds: f64,
+    /// Host time blocked on read-backs (the device still busy, then the copy out).
+    pub host_wait_seconds: f64,
 }
 
 impl StageProfile {
@@ -76,7 +81,10 @@ impl StageProfile {
         if self.untimed_launches > 0 {
             s += &format!("; {} launches untimed", self.untimed_launches);
         }
-        s + ")\n"
+        s + &format!(
+            ")\nhost {:.3} s recording and submitting launches, {:.3} s waiting for read-backs\n",
+            self.host_submit_seconds, self.host_wait_seconds
+        )
     }
 }
 
@@ -185,11 +193,9 @@ impl Profiler {
         Ok(())
     }
 
-    /// The profile so far, with the rounds' wall time.
-    pub fn finish(&self, wall_seconds: f64) -> StageProfile {
-        let mut p = self.profile.borrow().clone();
-        p.wall_seconds = wall_seconds;
-        p
+    /// The profile so far, with the rounds' wall time and the host's times.
+    pub fn finish(&self, wall_seconds: f64, host_submit_seconds: f64, host_wait_seconds: f64) -> StageProfile {
+        StageProfile { wall_seconds, host_submit_seconds, host_wait_seconds, ..self.profile.borrow().clone() }
     }
 }
 
@@ -199,13 +205,14 @@ mod tests {
 
     #[test]
     fn busy_fraction_and_table() {
-        let mut p = StageProfile { wall_seconds: 2.0, ..Default::default() };
+        let mut p = StageProfile { wall_seconds: 2.0, host_submit_seconds: 0.25, ..Default::default() };
         p.stages.insert("intersect".into(), StageTime { launches: 10, seconds: 0.75 });
         p.stages.insert("film".into(), StageTime { launches: 2, seconds: 0.25 });
         assert_eq!((p.device_seconds(), p.busy_fraction()), (1.0, 0.5));
         let t = p.table();
         assert!(t.find("| intersect | 10 | 0.7500 | 75.0 % |").unwrap() < t.find("| film |").unwrap(), "{t}");
         assert!(t.contains("device busy 50.0 % of the rounds' 2.000 s"), "{t}");
+        assert!(t.contains("host 0.250 s recording and submitting launches, 0.000 s waiting"), "{t}");
         assert_eq!(StageProfile::default().busy_fraction(), 0.0);
     }
 }
