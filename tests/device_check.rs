@@ -18,14 +18,15 @@ fn the_device_check_writes_every_report() {
         .arg(out.path())
         .env("QUICK", "1")
         .env("LUMEN_BIN", env!("CARGO_BIN_EXE_lumen"))
-        .env_remove("MEGAKERNEL_BIN")
+        // No megakernel step, even where a build of it lies at the default path.
+        .env("MEGAKERNEL_BIN", "/nonexistent/lumen-megakernel")
         .output()
         .unwrap();
     let said = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{said}");
     let read = |name: &str| std::fs::read_to_string(out.path().join(name)).unwrap_or_default();
     let log = read("log.txt");
-    for step in ["bench", "bench_large", "cornell"] {
+    for step in ["bench", "bench_large", "cornell", "batch 4096"] {
         assert!(log.lines().any(|l| l.starts_with(&format!("{step}: exit 0 "))), "{step}: {log}\n{said}");
     }
     assert!(read("device.txt").contains("type: "), "{}", read("device.txt"));
@@ -36,12 +37,23 @@ fn the_device_check_writes_every_report() {
     assert!(large.contains("| gpu |") && !large.contains("| cpu |"), "{large}");
     // The render's summary, the stage profile with the busy fraction, the process's time.
     let cornell = read("cornell.txt");
-    for want in ["16 of 16 samples per pixel", "device busy", "wall "] {
+    for want in ["16 of 16 samples per pixel", "device busy", "s waiting for read-backs", "wall "] {
         assert!(cornell.contains(want), "{want}: {cornell}");
     }
+    // One line per scene in the log, each scene's table in the bench reports.
+    for scene in ["cornell.sl", "spheres_10k.sl"] {
+        assert!(log.contains(&format!("bench_large {scene}: exit 0 ")), "{scene}: {log}");
+        assert!(large.contains(&format!("| {scene} | gpu |")), "{scene}: {large}");
+    }
+    // The batch sweep's render ran with the size it names.
+    let batch = read("batch.txt");
+    assert!(batch.contains("--batch-paths 4096") && batch.contains("4 of 4 samples per pixel"), "{batch}");
     // Nothing but the reports: the render's image went to a scratch directory.
     let mut files: Vec<String> =
         std::fs::read_dir(out.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
     files.sort();
-    assert_eq!(files, ["bench.md", "bench_large.md", "cornell.txt", "device.txt", "log.txt"]);
+    assert_eq!(
+        files,
+        ["batch.txt", "bench.md", "bench_large.md", "cornell.txt", "device.txt", "log.txt", "stderr.txt"]
+    );
 }
