@@ -178,6 +178,23 @@ fn the_opengl_backend_renders_as_vulkan_does() {
     }
     let dir = tempfile::tempdir().unwrap();
     let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    // wgpu's OpenGL backend cannot build compute pipelines on NVIDIA's EGL driver: it picks
+    // a GLSL version without compute shaders (gfx-rs/wgpu#4751; seen on an H200,
+    // 2026-12-04). lumen reports that as an error; there is nothing to compare. Mesa's
+    // driver, the one CI runs, must not fail so.
+    let listed = String::from_utf8_lossy(&devices.stdout).into_owned();
+    let probe = lumen(true)
+        .arg("render")
+        .arg(scenes.join("cornell.sl"))
+        .args(["--device", "gpu", "--width", "8", "--spp", "1", "-o"])
+        .arg(dir.path().join("probe.pfm"))
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&probe.stderr);
+    if !probe.status.success() && said.contains("doesn't support Features") && !listed.contains("llvmpipe") {
+        println!("skipped the_opengl_backend_renders_as_vulkan_does: wgpu's GL backend has no compute here: {said}");
+        return;
+    }
     for scene in ["cornell", "csg", "materials", "meshes", "skybox"] {
         let render = |gl: bool| {
             let out = dir.path().join(format!("{scene}-{gl}.pfm"));
