@@ -57,3 +57,22 @@ fn the_device_check_writes_every_report() {
         ["batch.txt", "bench.md", "bench_large.md", "cornell.txt", "device.txt", "log.txt", "stderr.txt"]
     );
 }
+
+/// scripts/device_tests.sh (the GPU tests on a lent hardware GPU) refuses a wrong verb with
+/// its usage, and `run` without a pack fails instead of reporting nothing as a pass.
+#[test]
+fn the_device_tests_script_refuses_what_it_cannot_do() {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/device_tests.sh");
+    let o = Command::new("bash").arg(&script).arg("frobnicate").output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("usage: scripts/device_tests.sh pack | run"));
+    // A copy of the script in a checkout with no target/devcarry.
+    let root = tempfile::tempdir().unwrap();
+    std::fs::create_dir(root.path().join("scripts")).unwrap();
+    std::fs::copy(&script, root.path().join("scripts/device_tests.sh")).unwrap();
+    let out = root.path().join("out");
+    let o =
+        Command::new("bash").arg(root.path().join("scripts/device_tests.sh")).arg("run").arg(&out).output().unwrap();
+    assert!(!o.status.success(), "{o:?}");
+    assert_eq!(std::fs::read_to_string(out.join("summary.txt")).unwrap(), "");
+}
