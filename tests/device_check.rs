@@ -37,7 +37,7 @@ fn the_device_check_writes_every_report() {
     assert!(large.contains("| gpu |") && !large.contains("| cpu |"), "{large}");
     // The render's summary, the stage profile with the busy fraction, the process's time.
     let cornell = read("cornell.txt");
-    for want in ["16 of 16 samples per pixel", "device busy", "s waiting for read-backs", "wall "] {
+    for want in ["16 of 16 samples per pixel", "device busy", "s waiting for read-backs", "process: render", "wall "] {
         assert!(cornell.contains(want), "{want}: {cornell}");
     }
     // One line per scene in the log, each scene's table in the bench reports.

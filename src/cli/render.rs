@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command as Process;
+use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context as _};
 use clap::Args;
@@ -73,7 +74,8 @@ pub struct RenderArgs {
     pub shard: Option<String>,
     /// On the GPU, time every stage launch with timestamp queries and print, on stderr, each
     /// stage's device time, the device's busy fraction, and the host's time recording launches
-    /// and waiting for read-backs (the image is the same)
+    /// and waiting for read-backs; and, for any device, the process's time loading the scene,
+    /// starting the device, rendering and writing (the image is the same)
     #[arg(long)]
     pub profile: bool,
 }
@@ -386,16 +388,23 @@ fn render_one(
     };
     let total = layout_spp(args, &scene);
     let range = part.samples(total)?;
+    let started = Instant::now();
     let out = render_on(device, args, &scene, range)?;
+    let rendered = started.elapsed().as_secs_f64();
     if out.non_finite_samples > 0 {
         eprintln!("warning: {} NaN or infinite radiance samples were counted as black", out.non_finite_samples);
     }
     // What was taken: the whole range, or its first `spp` samples when stopped early.
     let taken = SampleRange { begin: range.begin, end: range.begin + out.spp };
     let meta = RenderMetadata::new(taken, fingerprint(&scene, total), &out.device, out.seconds);
+    let writing = Instant::now();
     for o in outputs {
         write_image_with(o, &out.image, tm, Some(&meta)).with_context(|| format!("cannot write {}", o.display()))?;
         eprintln!("wrote {}", o.display());
+    }
+    if args.profile {
+        // The rest of the process's time: a render's own figure leaves these out.
+        eprintln!("process: render {rendered:.3} s, writing {:.3} s", writing.elapsed().as_secs_f64());
     }
     Ok(out.stopped_early)
 }
@@ -410,8 +419,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let (tm, frames, part) = validate(&args, &outputs)?;
     // Load before opening a device: a broken script fails fast, without GPU start-up.
+    let started = Instant::now();
     let mut first = Some(load(&args, frames.map_or(args.script.time, |f| f.time(0)))?);
+    let loaded = started.elapsed().as_secs_f64();
     let device = open(&args)?;
+    if args.profile {
+        eprintln!("process: scene {loaded:.3} s, device start-up {:.3} s", started.elapsed().as_secs_f64() - loaded);
+    }
     let Some(frames) = frames else {
         return render_one(&device, &args, args.script.time, &outputs, &tm, part, first).map(|_| ());
     };
