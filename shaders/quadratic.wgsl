@@ -5,7 +5,9 @@
 // Roots t0 ≤ t1 of |f + t·d|² = r2 (x, y), or none (z = 0 flags a miss). d is rescaled by a
 // power of two first (exact) so that |d|² neither underflows (shapes scaled by ≳ 1e19)
 // nor overflows, and the roots are scaled back. Δ computed from the closest approach
-// (Ray Tracing Gems ch. 7), roots as q/a and c/q.
+// (Ray Tracing Gems ch. 7), corrected once by its own closest approach so that an inexact
+// b/a (a GPU's division may be 2.5 ulp off) does not move it by |f|·ulp, roots as q/a and
+// c/q: cpu::shapes::quadratic says more.
 fn sphere_roots(f: vec3<f32>, d_in: vec3<f32>, r2: f32) -> vec3<f32> {
     let ad = abs(d_in);
     let s = pow2_rescale(max(ad.x, max(ad.y, ad.z)));
@@ -15,7 +17,8 @@ fn sphere_roots(f: vec3<f32>, d_in: vec3<f32>, r2: f32) -> vec3<f32> {
         return vec3<f32>(0.0, 0.0, 0.0);
     }
     let b = dot(f, d);
-    let closest = f - (b / a) * d;
+    let first = f - (b / a) * d;
+    let closest = first - (dot(first, d) / a) * d;
     let disc = a * (r2 - dot(closest, closest));
     if (!(disc >= 0.0)) {
         return vec3<f32>(0.0, 0.0, 0.0);
