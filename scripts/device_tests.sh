@@ -12,7 +12,8 @@
 #   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; scripts/device_tests.sh run "$OUT"
 #
 # `run` writes summary.txt (each binary's exit and libtest's result line) and tests.log
-# (everything) to OUT_DIR. The binaries find the scenes and the lumen binary by the paths
+# (everything) to OUT_DIR. A device call returns at most eight files, which
+# scripts/device_check.sh fills alone: run the two in separate calls, or tar one's folder. The binaries find the scenes and the lumen binary by the paths
 # compiled into them (this checkout's), so `run` links that path to the checkout it runs
 # in. Each binary has a time limit and all stay within BUDGET seconds (default 400); the
 # suites whose tests share the GPU most run one test at a time, so a hang names its test.
