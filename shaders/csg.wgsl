@@ -1,6 +1,10 @@
 // #requires shapes constants bindings wavefront
 // Constructive solid geometry by classifying the leaves' crossings: the algorithm of
-// cpu::csg, which says what the bits mean and why.
+// cpu::csg, which says what the bits mean and why. Every crossing is classified by a walk
+// of the tree, as cpu::csg does for a query's first 16; past those the CPU switches to
+// sweeps that give the same classifications in O(n log n) (DESIGN.md "Sweeps for rays with
+// many hidden crossings"). The GPU has no sweeps yet, so a ray through many hidden
+// crossings costs it O(n²).
 //
 // A query first computes the leaves' spans along the ray's line in one loop, stores them
 // in `csg_pool` (in program order) and gathers the first CSG_BATCH crossings after tmin.

@@ -16,7 +16,8 @@ use crate::cpu::ray::pow2_rescale;
 /// is 0 in exact arithmetic): the first step's error grows with |f| times the error of
 /// `b'/a`, the second's does not. From 1e7 radii away, a quotient one ulp off moved the
 /// closest approach by a whole radius in f32; Vulkan allows 2.5 ulp for division, and an
-/// NVIDIA H200 missed a fifth of a tiny far sphere's samples so (STABILITY.md).
+/// NVIDIA H200 missed a fifth of a tiny far sphere's samples, most likely so (on lavapipe,
+/// quotients made 1 ulp wrong on purpose reproduce it; STABILITY.md).
 /// Used by the sphere (3-D) and by the cylinder's side (with z components zeroed).
 ///
 /// `d` is first rescaled by a power of two (exact) so that its largest component lies in
