@@ -67,27 +67,30 @@ fn pt_escaped(prev: Previous, dir: vec3<f32>) -> vec3<f32> {
     }
     let d = escape_direction(dir);
     var le = environment.a.xyz;
-// #if NEE
-    var pdf = UNIFORM_SPHERE_PDF;
-// #endif
 // #if ENV_GRADIENT
     if (environment.kind == ENV_GRADIENT) {
         le = env_gradient_radiance(d);
     }
 // #endif
 // #if ENV_IMAGE
+    var uv = vec2<f32>(0.0);
     if (environment.kind == ENV_IMAGE) {
-        let uv = equirect_uv(d, environment.rotation_rad);
+        uv = equirect_uv(d, environment.rotation_rad);
         le = env_image_radiance(uv);
-// #if NEE
-        pdf = env_image_pdf_at(uv);
-// #endif
     }
 // #endif
 // #if NEE
+    // The light's density only where MIS weighs it: camera rays and rays leaving delta
+    // surfaces (most of a sky-lit scene's escapes) skip the image's two table reads.
     if (settings.nee == 0u || prev.delta) {
         return le;
     }
+    var pdf = UNIFORM_SPHERE_PDF;
+// #if ENV_IMAGE
+    if (environment.kind == ENV_IMAGE) {
+        pdf = env_image_pdf_at(uv);
+    }
+// #endif
     return le * power_heuristic(prev.pdf, light_selection_pdf() * pdf);
 // #else
     return le;
