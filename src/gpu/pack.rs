@@ -70,9 +70,11 @@ fn rebased(n: BvhNode, to: u32, tri_base: u32) -> BvhNode {
 }
 
 /// Most CSG pool entries one path may need on the GPU (8 bytes each, so 4 MiB;
-/// `wavefront::csg_pool_entries`: two per leaf of the largest tree, so 2¹⁸ leaves). The pool bounds a
-/// batch's paths by its memory budget (256 MiB on a software adapter), so beyond this a batch would hold too few paths to be worth running; SceneLang's
-/// largest tree (`scene::MAX_CSG_LEAVES`) is well within it.
+/// `wavefront::csg_pool_entries`: two per leaf of the largest tree, so 2¹⁸ leaves). The
+/// pool bounds a batch's paths by its memory budget (256 MiB on a software adapter), so
+/// beyond this a batch would hold too few paths to be worth running. SceneLang allows
+/// larger trees (up to `scene::MAX_PRIMITIVES` leaves): the GPU refuses them with this
+/// error, and the CPU renders them.
 pub const MAX_CSG_POOL: usize = 1 << 19;
 
 /// Why a scene cannot be packed.
@@ -770,8 +772,8 @@ mod tests {
     fn a_csg_tree_too_wide_for_the_span_pool_is_a_clear_error() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
-        // A FUSE of n spheres needs 2n pool entries: 270,000 is past the limit (SceneLang refuses
-        // such a tree earlier; a top-level UNITE would be stored as its spheres).
+        // A FUSE of n spheres needs 2n pool entries: 270,000 is past the limit (a top-level
+        // UNITE would be stored as its spheres).
         let many = (0..270_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
         b.shape(Shape::csg(CsgOp::Fuse, many, Transform::IDENTITY));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
