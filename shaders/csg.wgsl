@@ -1,10 +1,12 @@
 // #requires shapes constants bindings wavefront
 // Constructive solid geometry by classifying the leaves' crossings: the algorithm of
-// cpu::csg, which says what the bits mean and why. Every crossing is classified by a walk
-// of the tree, as cpu::csg does for a query's first 16; past those the CPU switches to
-// sweeps that give the same classifications in O(n log n) (DESIGN.md "Sweeps for rays with
-// many hidden crossings"). The GPU has no sweeps yet, so a ray through many hidden
-// crossings costs it O(n²).
+// cpu::csg, which says what the bits mean and why. A query's first crossings are classified
+// by walks of the tree, as cpu::csg does for its first 16. In a tree of more than 64
+// leaves (one with a sweep table) a query that passes CSG_WALKED_RUNS runs of walks goes on
+// with the sweeps at the end of this file, which give the same classifications in
+// O(n log n) (DESIGN.md "Sweeps for rays with many hidden crossings"). Their code is
+// compiled in (CSG_SWEEPS) only once a render needs it: kernels without it give up on such
+// a query and raise CTRL_CSG_OVER, and the host renders again with the sweeps.
 //
 // A query first computes the leaves' spans along the ray's line in one loop, stores them
 // in `csg_pool` (in program order) and gathers the first CSG_BATCH crossings after tmin.
@@ -37,8 +39,6 @@ struct CsgPoolEntry {
     a: u32,
     b: u32,
 }
-
-const CSG_POOL_LEAVES: u32 = CSG_POOL_SIZE / 2u;
 
 // #if CSG_POOL_PRIVATE
 var<private> csg_pool: array<CsgPoolEntry, CSG_POOL_SIZE>;
@@ -184,6 +184,12 @@ fn csg_offer(next: ptr<function, CsgBatch>, t: f32, k: u32, after_t: f32, after_
     (*next).key.x = k;
 }
 
+// #if !CSG_POOL_PRIVATE
+// Runs of walks before the sweeps take over (CSG_BATCH crossings each: about cpu::csg's
+// WALKED_CROSSINGS) in a tree with a sweep table.
+const CSG_WALKED_RUNS: u32 = 6u;
+// #endif
+
 // The closest surface of tree `root` inside (tmin, tmax): csg::CsgTree::closest.
 fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
     let tree = csg_tree_at(root);
@@ -199,8 +205,25 @@ fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
     // variable once mis-executed on wgpu's OpenGL backend over Mesa's llvmpipe (22.3).
     var stack: array<u32, CSG_MAX_DEPTH + 1u>;
     var best = no_candidate();
+// #if !CSG_POOL_PRIVATE
+    var runs = 0u;
+// #endif
     // Each run of the program classifies `batch` and gathers the crossings after it.
     while (batch.t.x < ray.tmax) {
+// #if !CSG_POOL_PRIVATE
+        // A ray still passing hidden crossings of a tree with a sweep table: the sweeps
+        // classify the rest, from the batch's first crossing on. Kernels compiled without
+        // them give up and say so; the host then renders again with them.
+        if (tree.node_count != 0u && runs == CSG_WALKED_RUNS) {
+// #if CSG_SWEEPS
+            best = csg_sweep_first(tree, ray, object, batch.t.x, batch.key.x);
+// #else
+            atomicStore(&control[CTRL_CSG_OVER], 1u);
+// #endif
+            break;
+        }
+        runs++;
+// #endif
         let s = CSG_SLIVER * abs(batch.t);
         let before = batch.t - s;
         let after = batch.t + s;
@@ -275,3 +298,276 @@ fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
     }
     return best;
 }
+
+// #if CSG_SWEEPS
+// Sweeps (cpu::csg's, which say why they give the walks' classifications): after
+// CSG_WALKED_RUNS runs of walks (CSG_BATCH crossings each, about cpu::csg's
+// WALKED_CROSSINGS), a tree with a sweep table (layout::csg_sweep: parents, operations,
+// places and child counts of its nodes in program order, then each leaf's node) classifies
+// its remaining crossings by two sweeps, one per probe, moving forward along the ray. Each
+// keeps per node whether its solid holds the probe and how many children do, updated from a
+// leaf up to the first ancestor whose answer stays the same; a crossing is classified by
+// folding its own bits up its path. With the span ends sorted once (heap sort, in place in
+// the pool), a ray through n leaves' hidden crossings costs O(n log n) instead of a walk of
+// all n per crossing. Pool entries past the faces: CSG_POOL_LEAVES orders (`a` the leaves
+// by entry, `b` by exit), then the nodes' states (`a` the probe before, `b` after).
+// A sweep's node state: whether the node's solid holds the probe, whether a DIFF's first
+// child does, and how many of its other children do.
+const CSG_HOLDS: u32 = 1u;
+const CSG_FIRST_HOLDS: u32 = 2u;
+const CSG_COUNT_ONE: u32 = 4u;
+// Where the orders and the states start in a lane's pool.
+const CSG_ORDERS: u32 = 2u * CSG_POOL_LEAVES;
+const CSG_STATES: u32 = 3u * CSG_POOL_LEAVES;
+
+// Word `side` (0: `a`, 1: `b`) of pool entry i. Every access of the sweeps goes through
+// these two, from as few call sites as possible: llvmpipe inlines each site's per-lane
+// storage access.
+fn csg_word(i: u32, side: u32) -> u32 {
+    let e = csg_pool[csg_base + i];
+    return select(e.a, e.b, side == 1u);
+}
+
+fn csg_set_word(i: u32, side: u32, v: u32) {
+    let e = csg_pool[csg_base + i];
+    csg_pool[csg_base + i] = CsgPoolEntry(select(v, e.a, side == 1u), select(e.b, v, side == 1u));
+}
+
+// An f32 bit pattern as a key whose unsigned order is the floats' (−0 as +0; NaNs past
+// the infinities), so that the orders are total whatever a span holds.
+fn csg_order_key(bits: u32) -> u32 {
+    let b = select(bits, 0u, bits == 0x80000000u);
+    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+// Sorts the leaves by span entry (order `a`) and by exit (`b`), ties by leaf number: heap
+// sort, in place, O(n log n) whatever the spans. Keys are (end key, leaf) pairs.
+fn csg_sort_ends(n: u32) {
+    for (var side = 0u; side < 2u; side++) {
+        for (var i = 0u; i < n; i++) {
+            csg_set_word(CSG_ORDERS + i, side, i);
+        }
+        // Build the heap (sift down from n/2 − 1 to 0), then move the largest to the end
+        // n − 1 times; each sift moves a hole down from `hole` and drops `v` into it.
+        var heap = n;
+        var start = n / 2u;
+        loop {
+            var hole = 0u;
+            var v = 0u;
+            if (start > 0u) {
+                start--;
+                hole = start;
+                v = csg_word(CSG_ORDERS + start, side);
+            } else {
+                if (heap <= 1u) {
+                    break;
+                }
+                heap--;
+                v = csg_word(CSG_ORDERS + heap, side);
+                csg_set_word(CSG_ORDERS + heap, side, csg_word(CSG_ORDERS, side));
+            }
+            let kv = csg_order_key(csg_word(v, side));
+            loop {
+                var child = 2u * hole + 1u;
+                if (child >= heap) {
+                    break;
+                }
+                var c = csg_word(CSG_ORDERS + child, side);
+                var kc = csg_order_key(csg_word(c, side));
+                if (child + 1u < heap) {
+                    let r = csg_word(CSG_ORDERS + child + 1u, side);
+                    let kr = csg_order_key(csg_word(r, side));
+                    if (kc < kr || (kc == kr && c < r)) {
+                        child++;
+                        c = r;
+                        kc = kr;
+                    }
+                }
+                if (!(kv < kc || (kv == kc && v < c))) {
+                    break;
+                }
+                csg_set_word(CSG_ORDERS + hole, side, c);
+                hole = child;
+            }
+            csg_set_word(CSG_ORDERS + hole, side, v);
+        }
+    }
+}
+
+// Node k's sweep-table words: parent, then operation | FIRST_CHILD | children.
+fn csg_sweep_node(tree: CsgTree, k: u32) -> vec2<u32> {
+    return vec2<u32>(object_ref(tree.sweep + 2u * k), object_ref(tree.sweep + 2u * k + 1u));
+}
+
+// The probe of sweep `side` has passed an end of `leaf` (cpu::csg::Sweep::leaf_changed):
+// the leaf's answer at x, then its ancestors' up to the first that stays the same.
+fn csg_leaf_changed(tree: CsgTree, side: u32, leaf: u32, x: f32) {
+    let span = csg_span(leaf);
+    var holds = span.x < x && x < span.y;
+    var k = object_ref(tree.sweep + 2u * tree.node_count + leaf);
+    var s = csg_word(CSG_STATES + k, side);
+    if (((s & CSG_HOLDS) != 0u) == holds) {
+        return;
+    }
+    s ^= CSG_HOLDS;
+    var stop = false;
+    loop {
+        csg_set_word(CSG_STATES + k, side, s);
+        if (stop) {
+            break;
+        }
+        let node = csg_sweep_node(tree, k);
+        if (node.x == CSG_SWEEP_NO_PARENT) {
+            break;
+        }
+        let up = object_ref(tree.sweep + 2u * node.x + 1u);
+        let op = up & CSG_SWEEP_OP_BITS;
+        var sp = csg_word(CSG_STATES + node.x, side);
+        if (op == CSG_DIFF && (node.y & CSG_SWEEP_FIRST_CHILD) != 0u) {
+            sp = select(sp & ~CSG_FIRST_HOLDS, sp | CSG_FIRST_HOLDS, holds);
+        } else if (holds) {
+            sp += CSG_COUNT_ONE;
+        } else {
+            sp -= CSG_COUNT_ONE;
+        }
+        let count = sp / CSG_COUNT_ONE;
+        var now = count > 0u;
+        if (op == CSG_INTERSECT) {
+            now = count == up >> CSG_SWEEP_CHILDREN_SHIFT;
+        } else if (op == CSG_DIFF) {
+            now = (sp & CSG_FIRST_HOLDS) != 0u && count == 0u;
+        }
+        // The parent's count changed; its answer too, or the walk up ends there.
+        stop = ((sp & CSG_HOLDS) != 0u) == now;
+        if (!stop) {
+            sp ^= CSG_HOLDS;
+        }
+        holds = now;
+        k = node.x;
+        s = sp;
+    }
+}
+
+// What the root says about the crossing of `leaf` (its exit when `exit`), the sweeps
+// standing at its probes (cpu::csg::CsgTree::classify): the crossing's own bits folded up
+// its path, each node's other children folded in as one child.
+fn csg_sweep_classify(tree: CsgTree, leaf: u32, exit: bool) -> u32 {
+    var k = object_ref(tree.sweep + 2u * tree.node_count + leaf);
+    var b = select(CSG_OWN | CSG_AFTER | CSG_ENTERS, CSG_OWN | CSG_BEFORE | CSG_EXITS, exit);
+    loop {
+        let node = csg_sweep_node(tree, k);
+        if (node.x == CSG_SWEEP_NO_PARENT) {
+            break;
+        }
+        let up = object_ref(tree.sweep + 2u * node.x + 1u);
+        let op = up & CSG_SWEEP_OP_BITS;
+        let own_is_first = op == CSG_DIFF && (node.y & CSG_SWEEP_FIRST_CHILD) != 0u;
+        var others = 0u;
+        var first = 0u;
+        for (var side = 0u; side < 2u; side++) {
+            let sp = csg_word(CSG_STATES + node.x, side);
+            let own = (csg_word(CSG_STATES + k, side) & CSG_HOLDS) != 0u && !own_is_first;
+            // Children other than this one (cutters, in a DIFF) that hold the probe.
+            let n = sp / CSG_COUNT_ONE - select(0u, 1u, own);
+            var held = n > 0u;
+            if (op == CSG_INTERSECT) {
+                held = n + 1u == up >> CSG_SWEEP_CHILDREN_SHIFT;
+            }
+            others |= select(0u, CSG_BEFORE << side, held);
+            first |= select(0u, CSG_BEFORE << side, (sp & CSG_FIRST_HOLDS) != 0u);
+        }
+        // A DIFF's first child is folded on its own, before the cutters.
+        var acc: u32;
+        if (op == CSG_DIFF && !own_is_first) {
+            acc = csg_fold(op, csg_fold(op, first, false, others), false, b);
+        } else {
+            acc = csg_fold(op, csg_fold(op, 0u, true, b), false, others);
+        }
+        b = csg_finish(op, acc);
+        k = node.x;
+    }
+    return b;
+}
+
+// The closest surface of `tree` along `ray` from the crossing (t0, key0) on, by the
+// sweeps; the leaves' spans are in the pool (csg_first stored them).
+fn csg_sweep_first(tree: CsgTree, ray: Ray, object: u32, t0: f32, key0: u32) -> Candidate {
+    let n = tree.leaf_count;
+    csg_sort_ends(n);
+    for (var k = 0u; k < tree.node_count; k++) {
+        csg_pool[csg_base + CSG_STATES + k] = CsgPoolEntry(0u, 0u);
+    }
+    // Per order: the next end the crossings (`next`) and the two probes have not passed.
+    var next = vec2<u32>(0u);
+    var probe = array<vec2<u32>, 2>(vec2<u32>(0u), vec2<u32>(0u));
+    // The crossings in order are the two orders merged by (t, key): start at (t0, key0).
+    let k0 = csg_order_key(bitcast<u32>(t0));
+    for (var side = 0u; side < 2u; side++) {
+        loop {
+            if (next[side] >= n) {
+                break;
+            }
+            let leaf = csg_word(CSG_ORDERS + next[side], side);
+            let k = csg_order_key(csg_word(leaf, side));
+            if (k > k0 || (k == k0 && 2u * leaf + side >= key0)) {
+                break;
+            }
+            next[side]++;
+        }
+    }
+    loop {
+        // The nearer of the next entry and the next exit (at equal t, by key). Open ends
+        // and NaNs are sorted last: a side that reaches one has no crossing left.
+        var t = OPEN;
+        var key = 0xFFFFFFFFu;
+        for (var side = 0u; side < 2u; side++) {
+            if (next[side] < n) {
+                let leaf = csg_word(CSG_ORDERS + next[side], side);
+                let te = bitcast<f32>(csg_word(leaf, side));
+                if (abs(te) < OPEN && (key == 0xFFFFFFFFu || csg_before(te, 2u * leaf + side, t, key))) {
+                    t = te;
+                    key = 2u * leaf + side;
+                }
+            }
+        }
+        if (key == 0xFFFFFFFFu || !(t < ray.tmax)) {
+            break;
+        }
+        next[key & 1u]++;
+        // Both probes forward: past every entry before the probe, every exit at or before.
+        let s = CSG_SLIVER * abs(t);
+        for (var p = 0u; p < 2u; p++) {
+            let x = select(t - s, t + s, p == 1u);
+            let kx = csg_order_key(bitcast<u32>(x));
+            loop {
+                var leaf = 0xFFFFFFFFu;
+                for (var side = 0u; side < 2u; side++) {
+                    if (leaf == 0xFFFFFFFFu && probe[p][side] < n) {
+                        let l = csg_word(CSG_ORDERS + probe[p][side], side);
+                        let k = csg_order_key(csg_word(l, side));
+                        if (k < kx || (side == 1u && k == kx)) {
+                            leaf = l;
+                            probe[p][side]++;
+                        }
+                    }
+                }
+                if (leaf == 0xFFFFFFFFu) {
+                    break;
+                }
+                csg_leaf_changed(tree, p, leaf, x);
+            }
+        }
+        if (t <= ray.tmin) {
+            continue;
+        }
+        let exit = (key & 1u) != 0u;
+        let b = csg_sweep_classify(tree, key >> 1u, exit);
+        if ((b & (CSG_ENTERS | CSG_EXITS)) != 0u) {
+            let leaf = key >> 1u;
+            let faces = csg_pool[csg_base + CSG_POOL_LEAVES + leaf];
+            return Candidate(Crossing(t, select(faces.a, faces.b, exit)), tree.first_leaf + leaf, (b & CSG_FLIP) != 0u, object);
+        }
+    }
+    return no_candidate();
+}
+// #endif

@@ -34,7 +34,9 @@ struct CsgTree {
     length: u32,
     first_leaf: u32,
     leaf_count: u32,
-    _pad: vec2<u32>,
+    // Its sweep table in `indices` (layout::csg_sweep) and the table's nodes; 0 nodes: none.
+    sweep: u32,
+    node_count: u32,
 }
 
 // The microfacet kinds' α, energy rows (offset in `floats`), conductor index and

@@ -697,6 +697,176 @@ fn csg_trees_with_many_leaves_match_the_cpu() {
     }
 }
 
+/// Rays through many hidden crossings of trees with more than 64 leaves, which the GPU
+/// classifies by sweeps after its first walks (shaders/csg.wgsl, as cpu::csg does after
+/// 16; the render starts without them and switches, with the same image): a chain `a_k = DIFF(a_{k-1}, a_{k-1})` of 128 copies of one sphere (empty, its 256
+/// crossings tied at two t's) fused with a sphere behind it, and a sphere carved by a FUSE
+/// of 80 overlapping spheres that start in front of it, so that rays pass up to 160 hidden
+/// crossings before the sphere's rim or the carved (flipped) surface. Both render as on the
+/// CPU, with a flat renderer (every pixel a surface colour) and the path tracer.
+#[test]
+fn csg_rays_through_many_hidden_crossings_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("csg_rays_through_many_hidden_crossings_match_the_cpu") else { return };
+    for renderer in [
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
+    ] {
+        let mut b = SceneBuilder::new(24, 18);
+        let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
+        let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
+        let green = b.diffuse(Color::new(0.2, 0.7, 0.2));
+        let sphere = |at: DVec3, r: f64, m| {
+            Shape::primitive(ShapeKind::Sphere, Transform::translation(at) * Transform::scaling(DVec3::splat(r)), m)
+        };
+        let mut chain = sphere(DVec3::ZERO, 1.0, green);
+        for _ in 0..7 {
+            chain = Shape::csg(CsgOp::Diff, vec![chain.clone(), chain], Transform::IDENTITY);
+        }
+        let behind = Shape::csg(
+            CsgOp::Fuse,
+            vec![
+                Shape::csg(
+                    CsgOp::Unite,
+                    vec![chain],
+                    Transform::translation(DVec3::new(1.0, 0.9, 0.0)) * Transform::scaling(DVec3::splat(0.5)),
+                ),
+                sphere(DVec3::new(2.2, 0.9, 0.0), 0.9, red),
+            ],
+            Transform::IDENTITY,
+        );
+        let cutters = (0..80).map(|k| sphere(DVec3::new(0.3 + 0.015 * f64::from(k), -0.9, 0.0), 0.3, blue)).collect();
+        let carved = Shape::csg(
+            CsgOp::Diff,
+            vec![sphere(DVec3::new(1.8, -0.9, 0.0), 0.8, red), Shape::csg(CsgOp::Fuse, cutters, Transform::IDENTITY)],
+            Transform::IDENTITY,
+        );
+        let scene = csg_pair_scene(b, [behind, carved], (-1.5, blue), renderer);
+        let f = lumen::gpu::features::FeatureSet::of(&scene);
+        assert!(f.csg && f.csg_max_leaves == 129 && f.csg_sweep_nodes == 129 + 129, "{f:?}");
+        println!("{}", scene.renderer.name());
+        let image = assert_matches_cpu(&gpu, &scene, None, 0.99);
+        // The first kernels gave up on the long rays, and the render went on with sweeps.
+        let out = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap();
+        assert!(out.features.csg_sweeps && out.image.pixels() == image.pixels());
+        // The far sphere shows through the chain, and the carved surface (blue) in the near
+        // sphere: a flat image has red and blue pixels beside the floor's.
+        if matches!(scene.renderer, Renderer::Flat { .. }) {
+            let reds = image.pixels().iter().filter(|p| p.r > 0.5 && p.b < 0.2).count();
+            let map: String = image
+                .pixels()
+                .chunks(24)
+                .map(|row| {
+                    row.iter()
+                        .map(|p| {
+                            if p.r > 0.5 && p.b < 0.2 {
+                                'R'
+                            } else if p.b > 0.5 && p.r < 0.2 {
+                                'B'
+                            } else if p.g > 0.5 {
+                                'G'
+                            } else {
+                                '.'
+                            }
+                        })
+                        .collect::<String>()
+                        + "\n"
+                })
+                .collect();
+            assert!(reds >= 20, "{reds} red pixels\n{map}");
+        }
+    }
+}
+
+/// Random trees of 70 to 100 overlapping leaves (spheres and cubes under every operation,
+/// with shared copies whose crossings tie exactly), so that most rays through them pass far
+/// more crossings than the GPU walks before its sweeps take over: each render switches to
+/// the sweeps, and its flat image agrees with the CPU's.
+#[test]
+fn random_csg_trees_with_many_crossings_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("random_csg_trees_with_many_crossings_match_the_cpu") else { return };
+    let mut rng = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for round in 0..3 {
+        let mut b = SceneBuilder::new(24, 18);
+        let materials: Vec<MaterialId> =
+            (0..4).map(|k| b.diffuse(Color::new(0.2 + 0.2 * f64::from(k), 0.8 - 0.2 * f64::from(k), 0.5))).collect();
+        let mut leaves = 0;
+        let mut pool: Vec<Shape> = Vec::new();
+        while leaves < 70 {
+            let m = materials[(next() * 4.0) as usize % 4];
+            let at = DVec3::new(0.5 + next(), 2.4 * next() - 1.2, 1.8 * next() - 0.9);
+            let size = DVec3::new(0.3 + 0.3 * next(), 0.3 + 0.3 * next(), 0.3 + 0.3 * next());
+            let kind = if next() < 0.6 { ShapeKind::Sphere } else { ShapeKind::Cube };
+            pool.push(Shape::primitive(kind, Transform::translation(at) * Transform::scaling(size), m));
+            leaves += 1;
+            // Now and then join the last few into a node, or copy a finished subtree.
+            if pool.len() >= 3 && next() < 0.5 {
+                let take = 2 + (next() * 2.0) as usize;
+                let op = [CsgOp::Unite, CsgOp::Intersect, CsgOp::Diff, CsgOp::Fuse][(next() * 4.0) as usize % 4];
+                let children = pool.split_off(pool.len() - take.min(pool.len()));
+                pool.push(Shape::csg(op, children, Transform::IDENTITY));
+            }
+            if next() < 0.1 {
+                let copy = pool[(next() * pool.len() as f64) as usize % pool.len()].clone();
+                leaves += copy.leaf_count();
+                pool.push(copy);
+            }
+        }
+        let tree = match round {
+            // Where two fused halves overlap.
+            0 => {
+                let half = pool.split_off(pool.len() / 2);
+                let fused = |p| Shape::csg(CsgOp::Fuse, p, Transform::IDENTITY);
+                Shape::csg(CsgOp::Intersect, vec![fused(pool), fused(half)], Transform::IDENTITY)
+            }
+            // The fused first two thirds carved by the rest.
+            1 => {
+                let mut children = pool.split_off(pool.len() * 2 / 3);
+                children.insert(0, Shape::csg(CsgOp::Fuse, pool, Transform::IDENTITY));
+                Shape::csg(CsgOp::Diff, children, Transform::IDENTITY)
+            }
+            // A UNITE keeps every child's surface (a top-level one would be split into its
+            // children): carve a corner off it.
+            _ => {
+                let corner = Shape::primitive(
+                    ShapeKind::Sphere,
+                    Transform::translation(DVec3::new(0.5, -0.6, 0.4)) * Transform::scaling(DVec3::splat(0.7)),
+                    materials[3],
+                );
+                Shape::csg(
+                    CsgOp::Diff,
+                    vec![Shape::csg(CsgOp::Unite, pool, Transform::IDENTITY), corner],
+                    Transform::IDENTITY,
+                )
+            }
+        };
+        let leaf_count = tree.leaf_count();
+        let floor = b.diffuse(Color::gray(0.3));
+        b.shape(tree)
+            .plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), floor)
+            .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
+            .renderer(Renderer::Flat { background: Color::BLACK })
+            .environment(Environment::Uniform(Color::gray(0.7)))
+            .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
+        let scene = b.build().unwrap();
+        assert!(lumen::gpu::features::FeatureSet::of(&scene).csg_sweep_nodes > 0, "{leaf_count} leaves");
+        println!("round {round}: {leaf_count} leaves");
+        let image = assert_matches_cpu(&gpu, &scene, None, 0.98);
+        // Some queries passed the walk budget: the render went on with the sweeps.
+        let out = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap();
+        assert!(out.features.csg_sweeps && out.image.pixels() == image.pixels());
+        // The tree covers much of the view (the sky and the floor are grey).
+        let tree_pixels = image.pixels().iter().filter(|p| (p.r - p.g).abs() > 0.05).count();
+        println!("{tree_pixels} pixels show the tree");
+        assert!(tree_pixels > 40, "{tree_pixels} pixels show the tree");
+    }
+}
+
 // ---- Analytic answers on the GPU (the CPU's tests/cpu_render.rs, sized for lavapipe) ----
 
 fn gpu_run(gpu: &Gpu, scene: &Scene, spp: Option<u32>) -> HdrImage {

@@ -232,6 +232,9 @@ fn a_fuse_of_1000_spheres_renders_like_the_cpu() {
     let f = lumen::gpu::features::FeatureSet::of(&scene);
     assert!(f.csg && f.csg_max_leaves == 1000, "{f:?}");
     let whole = gpu_render(&gpu, &scene, 2, 0);
+    // No query passes the walk budget (a FUSE shows its first crossing), so the kernels
+    // never needed the sweeps.
+    assert!(!whole.features.csg_sweeps);
     let few = gpu_render(&gpu, &scene, 2, 7);
     assert!(few.batches > whole.batches);
     assert!(bits(&few.image) == bits(&whole.image), "batches of 7 slots change the image");

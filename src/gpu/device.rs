@@ -46,6 +46,10 @@ pub enum GpuError {
     Assemble(#[from] super::assemble::AssembleError),
     #[error("{what} needs {needed} bytes but this adapter allows at most {limit} bytes per {limit_name}")]
     TooLarge { what: String, needed: u64, limit: u64, limit_name: &'static str },
+    /// A ray passed more hidden crossings of a CSG tree than its kernels walk without the
+    /// sweeps: the render starts again with them (`gpu::render`; never returned from it).
+    #[error("a CSG query exceeded the walk budget of kernels without sweeps")]
+    CsgSweepsNeeded,
 }
 
 fn list_or_none(names: &[String]) -> String {

@@ -161,6 +161,15 @@ pub struct FeatureSet {
     pub csg_max_leaves: u32,
     /// Bound on the depth of any CSG tree (sizes the evaluation stack).
     pub csg_max_depth: u32,
+    /// Most nodes (leaves included) of any tree with a sweep table (more than
+    /// `layout::csg_sweep::MIN_LEAVES` leaves; 0 when there is none): the sweeps' per-node
+    /// state in the CSG pool.
+    pub csg_sweep_nodes: u32,
+    /// The kernels classify crossings past their walk budget by sweeps (shaders/csg.wgsl).
+    /// Never set by [`FeatureSet::of`]: a render sets it once a query of kernels without
+    /// the sweeps exceeded that budget, so the sweeps' code (and compile time) reaches only
+    /// the renders that need it.
+    pub csg_sweeps: bool,
     /// Top-level CSG trees: up to `prepare::CSG_DEFER_MAX` of them are evaluated after the BVH
     /// traversal rather than inside it (as `cpu::World` does; DESIGN.md "Software adapters").
     pub csg_trees: u32,
@@ -242,6 +251,10 @@ impl FeatureSet {
                     let leaves = u32::try_from(shape.leaf_count()).unwrap_or(u32::MAX);
                     f.csg_max_leaves = f.csg_max_leaves.max(leaves);
                     f.csg_max_depth = f.csg_max_depth.max(shape.csg_depth() as u32);
+                    if leaves > crate::gpu::layout::csg_sweep::MIN_LEAVES {
+                        let nodes = shape.leaf_count().saturating_add(shape.csg_node_count());
+                        f.csg_sweep_nodes = f.csg_sweep_nodes.max(u32::try_from(nodes).unwrap_or(u32::MAX));
+                    }
                 }
             }
             shape.for_each_primitive(&mut |p, _| {
@@ -431,6 +444,8 @@ impl FeatureSet {
             csg: true,
             csg_max_leaves: self.csg_max_leaves.max(FULL_CSG_MAX_LEAVES),
             csg_max_depth: self.csg_max_depth.max(FULL_CSG_MAX_DEPTH),
+            csg_sweep_nodes: self.csg_sweep_nodes,
+            csg_sweeps: self.csg_sweeps,
             csg_trees: if self.csg_trees > defer_max { self.csg_trees } else { defer_max },
             pigment_uniform: pigments,
             pigment_checkered: pigments,
@@ -483,7 +498,10 @@ impl FeatureSet {
             missing.push(format!("environment {:?} (kernel: {:?})", scene.environment, self.environment));
         }
         if scene.csg {
-            if self.csg_max_leaves < scene.csg_max_leaves || self.csg_max_depth < scene.csg_max_depth {
+            if self.csg_max_leaves < scene.csg_max_leaves
+                || self.csg_max_depth < scene.csg_max_depth
+                || self.csg_sweep_nodes < scene.csg_sweep_nodes
+            {
                 missing.push(format!(
                     "CSG bounds {} leaves, depth {} (kernel: {}, {})",
                     scene.csg_max_leaves, scene.csg_max_depth, self.csg_max_leaves, self.csg_max_depth

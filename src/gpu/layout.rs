@@ -61,6 +61,20 @@ pub mod csg_instr {
     /// Instructions per program word.
     pub const PER_WORD: u32 = 32 / BITS;
 }
+/// A CSG tree's sweep table (`CsgTree::sweep`), for trees of more than `MIN_LEAVES`
+/// leaves, whose rays can pass so many hidden crossings that walking the whole program for
+/// each would cost O(n²) (shaders/csg.wgsl, cpu::csg's sweeps). Its nodes are numbered in
+/// program order (each BEGIN and LEAF starts one), two words each: the parent's number
+/// (`NO_PARENT` at the root), then the node's own operation (`csg_op`, for inner nodes)
+/// in the low `OP_BITS`, `FIRST_CHILD` when it is its parent's first child, and its child
+/// count from `CHILDREN_SHIFT` up. After the nodes, one word per leaf: its node's number.
+pub mod csg_sweep {
+    pub const MIN_LEAVES: u32 = 64;
+    pub const NO_PARENT: u32 = 0xFFFF_FFFF;
+    pub const OP_BITS: u32 = 0x3;
+    pub const FIRST_CHILD: u32 = 0x4;
+    pub const CHILDREN_SHIFT: u32 = 3;
+}
 /// `Material::brdf` values.
 pub mod brdf_kind {
     pub const DIFFUSE: u32 = 0;
@@ -171,7 +185,10 @@ pub struct CsgTree {
     /// Shape index of the first leaf.
     pub first_leaf: u32,
     pub leaf_count: u32,
-    pub _pad: [u32; 2],
+    /// Index in `indices` of the tree's sweep table (`csg_sweep`), 0 when it has none.
+    pub sweep: u32,
+    /// Nodes (leaves included) in the sweep table; 0: the tree is only walked.
+    pub node_count: u32,
 }
 
 #[repr(C)]
@@ -282,7 +299,7 @@ pub mod image_filter_kind {
 /// name tags only through these, so the two sides cannot disagree (a test scans the shaders
 /// for bare tag literals).
 pub fn tags_wgsl() -> String {
-    let groups: [(&str, &[(&str, u32)]); 10] = [
+    let groups: [(&str, &[(&str, u32)]); 11] = [
         (
             "SHAPE",
             &[
@@ -320,6 +337,15 @@ pub fn tags_wgsl() -> String {
                 ("BEGIN", csg_instr::BEGIN),
                 ("BITS", csg_instr::BITS),
                 ("PER_WORD", csg_instr::PER_WORD),
+            ],
+        ),
+        (
+            "CSG_SWEEP",
+            &[
+                ("NO_PARENT", csg_sweep::NO_PARENT),
+                ("OP_BITS", csg_sweep::OP_BITS),
+                ("FIRST_CHILD", csg_sweep::FIRST_CHILD),
+                ("CHILDREN_SHIFT", csg_sweep::CHILDREN_SHIFT),
             ],
         ),
         (
@@ -419,7 +445,7 @@ mod tests {
         vec![
             expect!(Affine, "Affine", [r0, r1, r2]),
             expect!(Shape, "Shape", [to_object, to_world, kind, material, light, mesh]),
-            expect!(CsgTree, "CsgTree", [min, program, max, length, first_leaf, leaf_count, _pad]),
+            expect!(CsgTree, "CsgTree", [min, program, max, length, first_leaf, leaf_count, sweep, node_count]),
             expect!(
                 Material,
                 "Material",

@@ -70,11 +70,12 @@ fn rebased(n: BvhNode, to: u32, tri_base: u32) -> BvhNode {
 }
 
 /// Most CSG pool entries one path may need on the GPU (8 bytes each, so 4 MiB;
-/// `wavefront::csg_pool_entries`: two per leaf of the largest tree, so 2¹⁸ leaves). The
-/// pool bounds a batch's paths by its memory budget (256 MiB on a software adapter), so
-/// beyond this a batch would hold too few paths to be worth running. SceneLang allows
-/// larger trees (up to `scene::MAX_PRIMITIVES` leaves): the GPU refuses them with this
-/// error, and the CPU renders them.
+/// `wavefront::csg_pool_entries`: for a tree of more than 64 leaves three per leaf and one
+/// per node, about five per leaf, so about 100,000 leaves). The pool bounds a batch's paths
+/// by its memory budget (256 MiB on a software adapter), so beyond this a batch would hold
+/// too few paths to be worth running. SceneLang allows larger trees (up to
+/// `scene::MAX_PRIMITIVES` leaves): the GPU refuses them with this error, the CPU renders
+/// them.
 pub const MAX_CSG_POOL: usize = 1 << 19;
 
 /// Why a scene cannot be packed.
@@ -176,10 +177,12 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
     let scene = &*form;
     let features = FeatureSet::of(scene);
     if features.csg {
-        let pool = usize::try_from(crate::gpu::wavefront::csg_pool_entries(&features)).unwrap_or(usize::MAX);
+        // The pool a render switched to the sweeps needs.
+        let swept = FeatureSet { csg_sweeps: true, ..features };
+        let pool = usize::try_from(crate::gpu::wavefront::csg_pool_entries(&swept)).unwrap_or(usize::MAX);
         if pool > MAX_CSG_POOL {
             return Err(PackError::TooMany {
-                what: "CSG pool entries per path (two per leaf of the largest tree)",
+                what: "CSG pool entries per path (about five per leaf of the largest tree)",
                 count: pool,
                 limit: MAX_CSG_POOL,
             });
@@ -220,7 +223,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
     // Objects in scene order: a top-level primitive is one shape, a CSG tree one tree
     // record and its leaves (depth first).
     let mut object_ref = vec![0u32; shifted.len()];
-    let mut csg_programs: Vec<(usize, Vec<u32>)> = Vec::new();
+    let mut csg_programs: Vec<CsgProgram> = Vec::new();
     for (i, s) in shifted.iter().enumerate() {
         object_ref[i] = match s {
             Shape::Mesh(m) => {
@@ -258,9 +261,16 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
     }
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
-    for (tree, words) in csg_programs {
+    for CsgProgram { tree, words, sweep } in csg_programs {
         p.csg_trees[tree].program = count_u32("indices", p.indices.len())?;
         p.indices.extend(words);
+        if !sweep.is_empty() {
+            let leaves = p.csg_trees[tree].leaf_count as usize;
+            p.csg_trees[tree].sweep = count_u32("indices", p.indices.len())?;
+            p.csg_trees[tree].node_count = count_u32("CSG nodes", (sweep.len() - leaves) / 2)?;
+            p.indices.extend(sweep);
+            count_u32("indices", p.indices.len())?;
+        }
     }
     for l in &area_lights {
         let light = packed_area_light(scene, l.shape, object_ref[l.shape], origin, &mesh_roots, &mut p.floats)?;
@@ -539,12 +549,7 @@ fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32
 /// first (so contiguous, in the order the CPU's `CsgTree::leaves` lists them), and its
 /// structure as a program (`layout::csg_instr`), which `programs` collects to append to
 /// `indices` later. Returns the tree's index.
-fn pack_csg(
-    top: usize,
-    s: &Shape,
-    p: &mut PackedScene,
-    programs: &mut Vec<(usize, Vec<u32>)>,
-) -> Result<u32, PackError> {
+fn pack_csg(top: usize, s: &Shape, p: &mut PackedScene, programs: &mut Vec<CsgProgram>) -> Result<u32, PackError> {
     fn emit(
         top: usize,
         s: &Shape,
@@ -598,11 +603,60 @@ fn pack_csg(
         length: count_u32("CSG program instructions", code.len())?,
         first_leaf,
         leaf_count: count_u32("shapes", p.shapes.len())? - first_leaf,
-        _pad: [0; 2],
+        sweep: 0,
+        node_count: 0,
     });
     let tree = count_u32("CSG trees", p.csg_trees.len())? - 1;
-    programs.push((tree as usize, words));
+    let sweep = if p.csg_trees[tree as usize].leaf_count > layout::csg_sweep::MIN_LEAVES {
+        sweep_table(&code)
+    } else {
+        Vec::new()
+    };
+    programs.push(CsgProgram { tree: tree as usize, words, sweep });
     Ok(tree)
+}
+
+/// A packed tree's program words and sweep table (empty if it has none), to append to
+/// `indices` after the BVH's and the plane list's entries.
+struct CsgProgram {
+    tree: usize,
+    words: Vec<u32>,
+    sweep: Vec<u32>,
+}
+
+/// The sweep table (`layout::csg_sweep`) of the tree whose program is `code`: for each node
+/// in program order its parent and its operation, place and child count, then each leaf's
+/// node.
+fn sweep_table(code: &[u32]) -> Vec<u32> {
+    use layout::csg_sweep::{CHILDREN_SHIFT, FIRST_CHILD, NO_PARENT};
+    // Per node: parent, flags; the open nodes' numbers.
+    let mut nodes: Vec<[u32; 2]> = Vec::new();
+    let mut leaf_node = Vec::new();
+    let mut open: Vec<u32> = Vec::new();
+    for &instr in code {
+        if instr == layout::csg_instr::END {
+            open.pop();
+            continue;
+        }
+        let k = nodes.len() as u32;
+        let parent = open.last().copied().unwrap_or(NO_PARENT);
+        let mut flags = 0;
+        if parent != NO_PARENT {
+            let siblings = &mut nodes[parent as usize][1];
+            if *siblings >> CHILDREN_SHIFT == 0 {
+                flags |= FIRST_CHILD;
+            }
+            *siblings += 1 << CHILDREN_SHIFT;
+        }
+        if instr == layout::csg_instr::LEAF {
+            leaf_node.push(k);
+        } else {
+            flags |= instr - layout::csg_instr::BEGIN;
+            open.push(k);
+        }
+        nodes.push([parent, flags]);
+    }
+    nodes.into_iter().flatten().chain(leaf_node).collect()
 }
 
 /// Appends an image's texels (rgb triples, row 0 first) once per image; returns the offset.
@@ -729,6 +783,42 @@ mod tests {
         Shape::primitive(ShapeKind::Sphere, Transform::translation(DVec3::new(x, 0.0, 0.0)), m)
     }
 
+    /// The sweep table of DIFF(a, UNITE(b, c), d), written out by hand: nodes in program
+    /// order (DIFF, a, UNITE, b, c, d) with parent and operation | first child | children,
+    /// then each leaf's node. Only trees of more than 64 leaves get one.
+    #[test]
+    fn sweep_tables_list_parents_places_and_leaf_nodes() {
+        use layout::csg_instr::{BEGIN, END, LEAF};
+        use layout::csg_op::{DIFF, UNITE};
+        use layout::csg_sweep::{CHILDREN_SHIFT as C, FIRST_CHILD as F, NO_PARENT};
+        let code = [BEGIN + DIFF, LEAF, BEGIN + UNITE, LEAF, LEAF, END, LEAF, END];
+        #[rustfmt::skip]
+        let expected = [
+            NO_PARENT, DIFF | 3 << C, // the DIFF: root, three children
+            0, F,                     // a: its first child
+            0, UNITE | 2 << C,        // the UNITE: second child, two children
+            2, F,                     // b
+            2, 0,                     // c
+            0, 0,                     // d
+            1, 3, 4, 5,               // the leaves' nodes
+        ];
+        assert_eq!(sweep_table(&code), expected);
+
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        let fuse =
+            |n: u32| Shape::csg(CsgOp::Fuse, (0..n).map(|i| sphere_at(f64::from(i), m)).collect(), Transform::IDENTITY);
+        b.shape(fuse(64)).shape(fuse(65));
+        let p = pack(&b.build().unwrap(), None).unwrap();
+        let (small, large) = (p.csg_trees[0], p.csg_trees[1]);
+        assert_eq!((small.sweep, small.node_count), (0, 0));
+        assert_eq!(large.node_count, 66);
+        let table = &p.indices[large.sweep as usize..];
+        assert_eq!(table[..4], [NO_PARENT, layout::csg_op::FUSE | 65 << C, 0, F]);
+        assert_eq!(table[2 * 66..2 * 66 + 65], (1..66).collect::<Vec<u32>>());
+        assert_eq!(p.indices.len(), large.sweep as usize + 2 * 66 + 65);
+    }
+
     #[test]
     fn objects_reference_shapes_and_csg_trees_in_the_camera_frame() {
         let mut b = SceneBuilder::new(4, 4);
@@ -772,9 +862,9 @@ mod tests {
     fn a_csg_tree_too_wide_for_the_span_pool_is_a_clear_error() {
         let mut b = SceneBuilder::new(4, 4);
         let m = b.diffuse(Color::gray(0.5));
-        // A FUSE of n spheres needs 2n pool entries: 270,000 is past the limit (a top-level
-        // UNITE would be stored as its spheres).
-        let many = (0..270_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
+        // A FUSE of n spheres needs 3n + n + 1 pool entries: 140,000 is past the limit (a
+        // top-level UNITE would be stored as its spheres).
+        let many = (0..140_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
         b.shape(Shape::csg(CsgOp::Fuse, many, Transform::IDENTITY));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");

@@ -170,6 +170,7 @@ fn constants_module(features: &FeatureSet) -> String {
          const CSG_NODE_BIT: u32 = 0x{:08X}u;\n\
          const CSG_MAX_DEPTH: u32 = {}u;\n\
          const CSG_POOL_SIZE: u32 = {}u;\n\
+         const CSG_POOL_LEAVES: u32 = {}u;\n\
          const CSG_DEFER: bool = {};\n\
          const CSG_DEFER_SLOTS: u32 = {}u;\n\
          const CONDUCTOR_NODES: u32 = {}u;\n\
@@ -178,6 +179,7 @@ fn constants_module(features: &FeatureSet) -> String {
         super::layout::CSG_NODE_BIT,
         depth,
         wavefront::csg_pool_entries(features),
+        features.csg_max_leaves.max(1),
         features.csg_trees as usize <= crate::prepare::CSG_DEFER_MAX,
         features.csg_trees.clamp(1, crate::prepare::CSG_DEFER_MAX as u32),
         crate::optics::energy_tables::CONDUCTOR_NODES,
@@ -349,9 +351,35 @@ impl GpuRenderer {
     ) -> Result<GpuRenderOutput, GpuError> {
         let mut f = kernel_features(&packed.features, opts.features)?;
         f.tables = TableForms::choose(packed, opts.tables, gpu.adapter_info.device_type, TableLimits::of(&gpu.limits));
+        let job = RenderJob { scene, packed, opts, start };
+        let mut created = (0.0, 0);
+        loop {
+            match self.render_with(gpu, &job, f, &mut created) {
+                // A CSG query passed its walk budget: render again with the sweeps, which
+                // classify every crossing as the walks do, so the image is the same (the
+                // batches so far are dropped; kernels without sweeps compile faster, and
+                // most renders never need them).
+                Err(GpuError::CsgSweepsNeeded) if !f.csg_sweeps => f.csg_sweeps = true,
+                result => return result,
+            }
+        }
+    }
+
+    /// [`Self::render_from`] with kernels for features `f`, adding the seconds spent creating
+    /// them and their number to `created`.
+    fn render_with(
+        &mut self,
+        gpu: &Gpu,
+        job: &RenderJob<'_>,
+        f: FeatureSet,
+        created: &mut (f64, usize),
+    ) -> Result<GpuRenderOutput, GpuError> {
+        let RenderJob { scene, packed, opts, start } = *job;
         let kernel_start = Instant::now();
         let kernels = self.stage_kernels(gpu, &f)?;
-        let kernel_seconds = kernel_start.elapsed().as_secs_f64();
+        created.0 += kernel_start.elapsed().as_secs_f64();
+        created.1 += kernels.compiled;
+        let (kernel_seconds, kernels_compiled) = *created;
         let buffers = SceneBuffers::upload(gpu, &kernels, packed)?;
         let s = &packed.settings;
         let path_tracer = f.renderer == RendererKind::PathTracer;
@@ -390,7 +418,7 @@ impl GpuRenderer {
             spp_requested: end - first,
             seconds: start.elapsed().as_secs_f64(),
             kernel_seconds,
-            kernels_compiled: kernels.compiled,
+            kernels_compiled,
             non_finite_samples: counters.non_finite + acc.nonfinite,
             stop: acc.stop,
             features: FeatureSet { tables: TableForms::NONE, ..f },
@@ -401,6 +429,15 @@ impl GpuRenderer {
             profile,
         })
     }
+}
+
+/// What one render draws: the scene, its packed form, the options and when it started.
+#[derive(Clone, Copy)]
+struct RenderJob<'a> {
+    scene: &'a Scene,
+    packed: &'a PackedScene,
+    opts: &'a GpuRenderOptions,
+    start: Instant,
 }
 
 /// The scene's features, or the override when it covers them (a clear error otherwise:
@@ -640,6 +677,11 @@ mod tests {
                 let none = FeatureSet { renderer, environment: none.environment, ..FeatureSet::default() };
                 assert_minimal(&none);
                 assert_minimal(&all);
+                // A tree too large for private memory, whose queries give up after their
+                // walk budget, or go on with the sweeps.
+                for csg_sweeps in [false, true] {
+                    assert_minimal(&FeatureSet { csg_max_leaves: 100, csg_sweep_nodes: 180, csg_sweeps, ..all });
+                }
                 for _ in 0..6 {
                     assert_minimal(&random_features(&mut rng, renderer, environment));
                     count += 1;
@@ -772,7 +814,7 @@ mod tests {
         let (small, large) = (fuse(100), fuse(1000));
         assert_eq!((small.csg_max_leaves, large.csg_max_leaves), (100, 1000));
         let bound_free = |src: &str| -> String {
-            src.lines().filter(|l| !l.starts_with("const CSG_POOL_SIZE")).collect::<Vec<_>>().join("\n")
+            src.lines().filter(|l| !l.starts_with("const CSG_POOL_")).collect::<Vec<_>>().join("\n")
         };
         let (a, b) = (assemble_stages(&small).unwrap(), assemble_stages(&large).unwrap());
         assert_eq!(a.len(), b.len());
@@ -780,7 +822,7 @@ mod tests {
         for ((stage, x), (_, y)) in a.iter().zip(&b) {
             assert_eq!(bound_free(&x.source), bound_free(&y.source), "{stage:?}");
             for line in y.source.lines().filter(|l| l.contains("array<")) {
-                assert!(!line.contains("CSG_POOL_SIZE"), "{stage:?}: {line}");
+                assert!(!line.contains("CSG_POOL_"), "{stage:?}: {line}");
             }
             if y.source.contains("fn csg_first") {
                 csg_stages += 1;

@@ -173,6 +173,9 @@ pub(crate) struct Runner<'a> {
     /// Host time in `submit` and in `collect`'s read-back (for the profile).
     host_submit: Duration,
     host_wait: Duration,
+    /// Whether a CSG query may give up after its walk budget (kernels without the sweeps,
+    /// a tree with a sweep table): `collect` then checks `control::CSG_OVER`.
+    watch_csg: bool,
 }
 
 /// A batch in flight: its film's staging buffer and submission.
@@ -311,6 +314,7 @@ impl<'a> Runner<'a> {
             paths: paths.clone(),
             host_submit: Duration::ZERO,
             host_wait: Duration::ZERO,
+            watch_csg: features.csg_sweep_nodes > 0 && !features.csg_sweeps && !stages::csg_pool_private(features),
         })
     }
 
@@ -427,6 +431,15 @@ impl<'a> Runner<'a> {
         Ok(self.read(&self.probe, 4)?[0])
     }
 
+    /// Whether a CSG query gave up after its walk budget (kernels without the sweeps).
+    fn csg_over(&self) -> Result<bool, GpuError> {
+        self.submit_commands(|e| {
+            e.copy_buffer_to_buffer(&self.control, 4 * u64::from(control::CSG_OVER), &self.probe, 0, 4);
+            Ok(())
+        })?;
+        Ok(self.read(&self.probe, 4)?[0] != 0)
+    }
+
     fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u32>, GpuError> {
         map_read(self.gpu, buffer, bytes, None)
     }
@@ -490,6 +503,9 @@ impl BatchRunner for Runner<'_> {
         self.host_wait += t0.elapsed();
         if let Some(p) = &self.profiler {
             p.collect(self.gpu, pending.slot, pending.submission)?;
+        }
+        if self.watch_csg && self.csg_over()? {
+            return Err(GpuError::CsgSweepsNeeded);
         }
         // Each pixel's value and rounding error, summed exactly in f64.
         Ok(film.chunks_exact(2).map(|v| std::array::from_fn(|c| f64::from(v[0][c]) + f64::from(v[1][c]))).collect())

@@ -356,6 +356,9 @@ impl Stage {
         if names.contains(&"CSG") && csg_pool_private(f) {
             names.push("CSG_POOL_PRIVATE");
         }
+        if names.contains(&"CSG") && !csg_pool_private(f) && f.csg_sweeps && f.csg_sweep_nodes > 0 {
+            names.push("CSG_SWEEPS");
+        }
         // The tree records: where trees are evaluated, and where an object list reads
         // their bounds.
         if names.contains(&"CSG") && (!names.contains(&"CSG_QUEUE") || names.contains(&"OBJECT_LIST")) {
@@ -381,8 +384,9 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 39] = [
+    pub const NAMES: [&'static str; 40] = [
         "MICROFACET",
+        "CSG_SWEEPS",
         "EMISSION",
         "TEXTURED_EMISSION",
         "TEXTURED_LIGHTS",
