@@ -7,7 +7,7 @@
 //! queues and the determinism rule: [`super::wavefront`] and docs/DESIGN.md.
 
 use std::collections::BTreeMap;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::features::{FeatureSet, RendererKind};
 use super::pack::{pack, PackedScene};
@@ -352,34 +352,38 @@ impl GpuRenderer {
         let mut f = kernel_features(&packed.features, opts.features)?;
         f.tables = TableForms::choose(packed, opts.tables, gpu.adapter_info.device_type, TableLimits::of(&gpu.limits));
         let job = RenderJob { scene, packed, opts, start };
-        let mut created = (0.0, 0);
+        let mut attempts = Attempts::default();
         loop {
-            match self.render_with(gpu, &job, f, &mut created) {
+            let begun = Instant::now();
+            match self.render_with(gpu, &job, f, &mut attempts) {
                 // A CSG query passed its walk budget: render again with the sweeps, which
                 // classify every crossing as the walks do, so the image is the same (the
                 // batches so far are dropped; kernels without sweeps compile faster, and
                 // most renders never need them).
-                Err(GpuError::CsgSweepsNeeded) if !f.csg_sweeps => f.csg_sweeps = true,
+                Err(GpuError::CsgSweepsNeeded) if !f.csg_sweeps => {
+                    f.csg_sweeps = true;
+                    attempts.dropped += begun.elapsed();
+                }
                 result => return result,
             }
         }
     }
 
     /// [`Self::render_from`] with kernels for features `f`, adding the seconds spent creating
-    /// them and their number to `created`.
+    /// them and their number to `attempts`.
     fn render_with(
         &mut self,
         gpu: &Gpu,
         job: &RenderJob<'_>,
         f: FeatureSet,
-        created: &mut (f64, usize),
+        attempts: &mut Attempts,
     ) -> Result<GpuRenderOutput, GpuError> {
         let RenderJob { scene, packed, opts, start } = *job;
         let kernel_start = Instant::now();
         let kernels = self.stage_kernels(gpu, &f)?;
-        created.0 += kernel_start.elapsed().as_secs_f64();
-        created.1 += kernels.compiled;
-        let (kernel_seconds, kernels_compiled) = *created;
+        attempts.kernel_seconds += kernel_start.elapsed().as_secs_f64();
+        attempts.kernels += kernels.compiled;
+        let (kernel_seconds, kernels_compiled) = (attempts.kernel_seconds, attempts.kernels);
         let buffers = SceneBuffers::upload(gpu, &kernels, packed)?;
         let s = &packed.settings;
         let path_tracer = f.renderer == RendererKind::PathTracer;
@@ -409,7 +413,10 @@ impl GpuRenderer {
             shadow_rays,
         };
         let rounds = Instant::now();
-        let acc = run_rounds(&mut runner, &plan, &opts.passes)?;
+        // A time limit covers the attempts dropped before this one.
+        let mut passes = opts.passes.clone();
+        passes.time_limit = passes.time_limit.map(|limit| limit.saturating_sub(attempts.dropped));
+        let acc = run_rounds(&mut runner, &plan, &passes)?;
         let profile = runner.profile(rounds.elapsed().as_secs_f64());
         let counters = runner.counters()?;
         Ok(GpuRenderOutput {
@@ -429,6 +436,15 @@ impl GpuRenderer {
             profile,
         })
     }
+}
+
+/// A render's attempts so far: kernels created (seconds, count) and the time of attempts
+/// dropped to start again with other kernels.
+#[derive(Default)]
+struct Attempts {
+    kernel_seconds: f64,
+    kernels: usize,
+    dropped: Duration,
 }
 
 /// What one render draws: the scene, its packed form, the options and when it started.
