@@ -261,10 +261,13 @@ pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRe
 }
 
 /// Renders several scenes (animation frames, re-renders) compiling each distinct kernel
-/// once: kernels are cached by their assembled source and entry point.
+/// once: kernels are cached by their assembled source and entry point. It also remembers
+/// which feature sets needed the CSG sweeps, so that later renders of them start with the
+/// sweeps instead of finding out again.
 #[derive(Debug, Default)]
 pub struct GpuRenderer {
     kernels: KernelCache,
+    swept: std::collections::HashSet<FeatureSet>,
 }
 
 impl GpuRenderer {
@@ -353,6 +356,8 @@ impl GpuRenderer {
         f.tables = TableForms::choose(packed, opts.tables, gpu.adapter_info.device_type, TableLimits::of(&gpu.limits));
         let job = RenderJob { scene, packed, opts, start };
         let mut attempts = Attempts::default();
+        let walked = f;
+        f.csg_sweeps |= self.swept.contains(&walked);
         loop {
             let begun = Instant::now();
             match self.render_with(gpu, &job, f, &mut attempts) {
@@ -362,6 +367,7 @@ impl GpuRenderer {
                 // most renders never need them).
                 Err(GpuError::CsgSweepsNeeded) if !f.csg_sweeps => {
                     f.csg_sweeps = true;
+                    self.swept.insert(walked);
                     attempts.dropped += begun.elapsed();
                 }
                 result => return result,
