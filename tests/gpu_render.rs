@@ -753,8 +753,9 @@ fn csg_rays_through_many_hidden_crossings_match_the_cpu() {
         assert!(out.features.csg_sweeps && out.image.pixels() == image.pixels());
         let again = renderer.render(&gpu, &scene, &opts).unwrap();
         assert!(again.features.csg_sweeps && again.kernels_compiled == 0 && again.image.pixels() == image.pixels());
-        // The far sphere shows through the chain, and the carved surface (blue) in the near
-        // sphere: a flat image has red and blue pixels beside the floor's.
+        // The far sphere shows through the chain, and the near one's rim around its carved
+        // (blue, like the floor) hollow: a flat image has red pixels. On failure the map
+        // shows them (R), blue (B) and the grey sky (G).
         if matches!(scene.renderer, Renderer::Flat { .. }) {
             let reds = image.pixels().iter().filter(|p| p.r > 0.5 && p.b < 0.2).count();
             let map: String = image

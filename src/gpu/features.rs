@@ -503,8 +503,13 @@ impl FeatureSet {
                 || self.csg_sweep_nodes < scene.csg_sweep_nodes
             {
                 missing.push(format!(
-                    "CSG bounds {} leaves, depth {} (kernel: {}, {})",
-                    scene.csg_max_leaves, scene.csg_max_depth, self.csg_max_leaves, self.csg_max_depth
+                    "CSG bounds {} leaves, depth {}, {} swept nodes (kernel: {}, {}, {})",
+                    scene.csg_max_leaves,
+                    scene.csg_max_depth,
+                    scene.csg_sweep_nodes,
+                    self.csg_max_leaves,
+                    self.csg_max_depth,
+                    self.csg_sweep_nodes
                 ));
             }
             let defer_max = crate::prepare::CSG_DEFER_MAX as u32;
