@@ -310,7 +310,9 @@ fn csg_first(root: u32, ray: Ray, object: u32) -> Candidate {
 // folding its own bits up its path. With the span ends sorted once (heap sort, in place in
 // the pool), a ray through n leaves' hidden crossings costs O(n log n) instead of a walk of
 // all n per crossing. Pool entries past the faces: CSG_POOL_LEAVES orders (`a` the leaves
-// by entry, `b` by exit), then the nodes' states (`a` the probe before, `b` after).
+// by entry, `b` by exit), then the nodes' states (`a` the probe before, `b` after). The
+// crossings start at the walks' first unclassified one, after tmin.
+
 // A sweep's node state: whether the node's solid holds the probe, whether a DIFF's first
 // child does, and how many of its other children do.
 const CSG_HOLDS: u32 = 1u;
@@ -399,12 +401,18 @@ fn csg_sweep_node(tree: CsgTree, k: u32) -> vec2<u32> {
     return vec2<u32>(object_ref(tree.sweep + 2u * k), object_ref(tree.sweep + 2u * k + 1u));
 }
 
-// The probe of sweep `side` has passed an end of `leaf` (cpu::csg::Sweep::leaf_changed):
-// the leaf's answer at x, then its ancestors' up to the first that stays the same.
+// The node of leaf `leaf` (the table's words after the nodes').
+fn csg_leaf_node(tree: CsgTree, leaf: u32) -> u32 {
+    return object_ref(tree.sweep + 2u * tree.node_count + leaf);
+}
+
+// The probe of sweep `side` has passed an end of `leaf` (cpu::csg::Sweep::advance and
+// leaf_changed): the leaf's answer at x, read from its span, then its ancestors' up to the
+// first that stays the same.
 fn csg_leaf_changed(tree: CsgTree, side: u32, leaf: u32, x: f32) {
     let span = csg_span(leaf);
     var holds = span.x < x && x < span.y;
-    var k = object_ref(tree.sweep + 2u * tree.node_count + leaf);
+    var k = csg_leaf_node(tree, leaf);
     var s = csg_word(CSG_STATES + k, side);
     if (((s & CSG_HOLDS) != 0u) == holds) {
         return;
@@ -452,7 +460,7 @@ fn csg_leaf_changed(tree: CsgTree, side: u32, leaf: u32, x: f32) {
 // standing at its probes (cpu::csg::CsgTree::classify): the crossing's own bits folded up
 // its path, each node's other children folded in as one child.
 fn csg_sweep_classify(tree: CsgTree, leaf: u32, exit: bool) -> u32 {
-    var k = object_ref(tree.sweep + 2u * tree.node_count + leaf);
+    var k = csg_leaf_node(tree, leaf);
     var b = select(CSG_OWN | CSG_AFTER | CSG_ENTERS, CSG_OWN | CSG_BEFORE | CSG_EXITS, exit);
     loop {
         let node = csg_sweep_node(tree, k);
@@ -556,9 +564,6 @@ fn csg_sweep_first(tree: CsgTree, ray: Ray, object: u32, t0: f32, key0: u32) -> 
                 }
                 csg_leaf_changed(tree, p, leaf, x);
             }
-        }
-        if (t <= ray.tmin) {
-            continue;
         }
         let exit = (key & 1u) != 0u;
         let b = csg_sweep_classify(tree, key >> 1u, exit);

@@ -643,6 +643,20 @@ fn csg_one_level_deep_matches_the_cpu() {
     }
 }
 
+/// The two renderers the CSG tests compare with the CPU: a flat one (every pixel a
+/// surface colour) and the path tracer.
+fn flat_and_path_traced() -> [Renderer; 2] {
+    [
+        Renderer::Flat { background: Color::BLACK },
+        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
+    ]
+}
+
+/// A sphere of radius `r` at `at`.
+fn sphere(at: DVec3, r: f64, m: MaterialId) -> Shape {
+    Shape::primitive(ShapeKind::Sphere, Transform::translation(at) * Transform::scaling(DVec3::splat(r)), m)
+}
+
 /// Trees whose interval lists would be huge: an INTERSECT of 32 two-sphere UNITEs (2³²
 /// pieces along a ray; the GPU once refused it) and a DIFF of a slab by a FUSE of 100
 /// spheres, whose leaves' spans live in the storage pool rather than in private memory
@@ -651,16 +665,10 @@ fn csg_one_level_deep_matches_the_cpu() {
 #[test]
 fn csg_trees_with_many_leaves_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("csg_trees_with_many_leaves_match_the_cpu") else { return };
-    for renderer in [
-        Renderer::Flat { background: Color::BLACK },
-        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
-    ] {
+    for renderer in flat_and_path_traced() {
         let mut b = SceneBuilder::new(24, 18);
         let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
         let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
-        let sphere = |at: DVec3, r: f64, m| {
-            Shape::primitive(ShapeKind::Sphere, Transform::translation(at) * Transform::scaling(DVec3::splat(r)), m)
-        };
         // Radii shrink with k: the solid is the last UNITE's two spheres, and only its
         // surfaces show.
         let unites = (0..32)
@@ -707,17 +715,11 @@ fn csg_trees_with_many_leaves_match_the_cpu() {
 #[test]
 fn csg_rays_through_many_hidden_crossings_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("csg_rays_through_many_hidden_crossings_match_the_cpu") else { return };
-    for renderer in [
-        Renderer::Flat { background: Color::BLACK },
-        Renderer::PathTracer(PathTracerSettings { n: 1, max_depth: 3, ..Default::default() }),
-    ] {
+    for renderer in flat_and_path_traced() {
         let mut b = SceneBuilder::new(24, 18);
         let red = b.diffuse(Color::new(0.8, 0.2, 0.1));
         let blue = b.diffuse(Color::new(0.1, 0.2, 0.8));
         let green = b.diffuse(Color::new(0.2, 0.7, 0.2));
-        let sphere = |at: DVec3, r: f64, m| {
-            Shape::primitive(ShapeKind::Sphere, Transform::translation(at) * Transform::scaling(DVec3::splat(r)), m)
-        };
         let mut chain = sphere(DVec3::ZERO, 1.0, green);
         for _ in 0..7 {
             chain = Shape::csg(CsgOp::Diff, vec![chain.clone(), chain], Transform::IDENTITY);

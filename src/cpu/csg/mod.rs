@@ -205,12 +205,12 @@ impl CsgTree {
                     if i == walked {
                         ends.fill(spans);
                         for sweep in sweeps.iter_mut() {
-                            sweep.reset(self.nodes.len(), spans.len());
+                            sweep.reset(self.nodes.len());
                         }
                     }
                     // The probes only move forward (t ∓ SLIVER·|t| grows with t).
-                    sweeps[0].advance(self, ends, probe.before);
-                    sweeps[1].advance(self, ends, probe.after);
+                    sweeps[0].advance(self, ends, spans, probe.before);
+                    sweeps[1].advance(self, ends, spans, probe.after);
                     self.classify(sweeps, leaf, exit)
                 };
                 (b & (ENTERS | EXITS) != 0)
@@ -342,9 +342,6 @@ struct Sweep {
     count: Vec<u32>,
     /// Per node: whether a DIFF's first child holds it.
     first: Vec<bool>,
-    /// Per leaf: whether the point is past its span's entry, and past its exit.
-    entered: Vec<bool>,
-    exited: Vec<bool>,
     /// The next entry and exit in [`SpanEnds`] that the point has not passed.
     next_enter: usize,
     next_exit: usize,
@@ -352,39 +349,35 @@ struct Sweep {
 
 impl Sweep {
     /// The point before every span: no solid holds it.
-    fn reset(&mut self, nodes: usize, leaves: usize) {
-        for v in [&mut self.inside, &mut self.first, &mut self.entered, &mut self.exited] {
+    fn reset(&mut self, nodes: usize) {
+        for v in [&mut self.inside, &mut self.first] {
             v.clear();
+            v.resize(nodes, false);
         }
-        self.inside.resize(nodes, false);
-        self.first.resize(nodes, false);
         self.count.clear();
         self.count.resize(nodes, 0);
-        self.entered.resize(leaves, false);
-        self.exited.resize(leaves, false);
         self.next_enter = 0;
         self.next_exit = 0;
     }
 
-    /// Moves the point to `x`: a leaf holds it when enter < x < exit (`inside`).
-    fn advance(&mut self, tree: &CsgTree, ends: &SpanEnds, x: f64) {
+    /// Moves the point to `x`, past every span entry before it and every exit at or before
+    /// it: only those leaves' answers (`inside`: enter < x < exit, read from the span) can
+    /// have changed. (shaders/csg.wgsl's sweeps do the same.)
+    fn advance(&mut self, tree: &CsgTree, ends: &SpanEnds, spans: &[Option<Span>], x: f64) {
         while let Some(&(_, leaf)) = ends.enters.get(self.next_enter).filter(|e| e.0 < x) {
-            self.entered[leaf as usize] = true;
-            self.leaf_changed(tree, leaf);
+            self.leaf_changed(tree, leaf, inside(&spans[leaf as usize], x));
             self.next_enter += 1;
         }
         while let Some(&(_, leaf)) = ends.exits.get(self.next_exit).filter(|e| e.0 <= x) {
-            self.exited[leaf as usize] = true;
-            self.leaf_changed(tree, leaf);
+            self.leaf_changed(tree, leaf, inside(&spans[leaf as usize], x));
             self.next_exit += 1;
         }
     }
 
-    /// Updates the ancestors of `leaf` after one of its flags changed, up to the first
-    /// node whose answer stays the same.
-    fn leaf_changed(&mut self, tree: &CsgTree, leaf: u32) {
-        let (l, mut k) = (leaf as usize, tree.leaf_node[leaf as usize] as usize);
-        let holds = self.entered[l] && !self.exited[l];
+    /// Sets whether `leaf` holds the point and updates its ancestors, up to the first node
+    /// whose answer stays the same.
+    fn leaf_changed(&mut self, tree: &CsgTree, leaf: u32, holds: bool) {
+        let mut k = tree.leaf_node[leaf as usize] as usize;
         if k >= tree.nodes.len() || self.inside[k] == holds {
             return;
         }
