@@ -13,10 +13,12 @@
 #
 # `run` writes summary.txt (each binary's exit and libtest's result line) and tests.log
 # (everything) to OUT_DIR. A device call returns at most eight files, which
-# scripts/device_check.sh fills alone: run the two in separate calls, or tar one's folder. The binaries find the scenes and the lumen binary by the paths
-# compiled into them (this checkout's), so `run` links that path to the checkout it runs
-# in. Each binary has a time limit and all stay within BUDGET seconds (default 400); the
-# suites whose tests share the GPU most run one test at a time, so a hang names its test.
+# scripts/device_check.sh fills alone: run the two in separate calls, or tar one's folder.
+# The binaries find the scenes and the lumen binary by the paths compiled into them (this
+# checkout's), so `run` links that path to the checkout it runs in. Each binary has a time
+# limit and all stay within BUDGET seconds (default 400); the suites whose tests share the
+# GPU most run one test at a time, so a hang names its test (the library's and gpu_infra's
+# too: run in parallel on an H200 they stopped making progress, STABILITY.md "Known bugs").
 set -uo pipefail
 cd "$(dirname "$0")/.."
 pack=target/devcarry
@@ -68,7 +70,7 @@ run)
         fi
         limit=$((left < 150 ? left : 150))
         threads=()
-        case $s in stability | gpu_render | wavefront) threads=(--test-threads 1) ;; esac
+        case $s in lib | stability | gpu_render | wavefront | gpu_infra) threads=(--test-threads 1) ;; esac
         echo "=== $s" >> "$out/tests.log"
         t0=$SECONDS
         timeout "$limit" "$bin/$s" "${threads[@]}" >> "$out/tests.log" 2>&1

@@ -144,11 +144,15 @@ struct Settings {
     bvh_node_count: u32,
 }
 
-// accel's flattened node: count = 0 means interior (left child follows, left_or_first is
-// the right child), else a leaf of `count` object references at indices[left_or_first..].
-struct BvhNode {
-    min: vec3<f32>,
-    left_or_first: u32,
-    max: vec3<f32>,
-    count: u32,
+// accel::quantized's node (inner nodes only): each child's bounds are corner + q * 2^e,
+// with the exponents (biased by 127) in the low three bytes of `scales` and, per axis, the
+// grid coordinates q in `grid`'s bytes (left min, left max, right min, right max). An inner
+// left child is the next node, an inner right child node `link`; a leaf child (BVH_*_LEAF,
+// its count at BVH_*_COUNT_SHIFT) starts at `link`, the right one after a left leaf's
+// primitives (accel::QuantizedNode::child).
+struct QuantizedNode {
+    corner: vec3<f32>,
+    scales: u32,
+    grid: vec3<u32>,
+    link: u32,
 }

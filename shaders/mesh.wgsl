@@ -24,15 +24,13 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
     let root = s.mesh & MESH_NODE_MASK;
     var best = Crossing(OPEN, 0u);
     var tmax = ray.tmax;
-    var walk: BvhWalk;
-    walk.index = root;
-    walk.node = bvh_node_at(root);
-    walk.top = 0u;
-    var more = box_entry(walk.node, o, inv_dir, ray.tmin, tmax) < OPEN;
+    var walk = bvh_walk(root);
+    var more = true;
     while (more) {
         if (bvh_descend(&walk, o, inv_dir, ray.tmin, tmax)) {
-            for (var k = 0u; k < walk.node.count; k++) {
-                let tri = walk.node.left_or_first + k;
+            let first = leaf_first(walk);
+            for (var k = 0u; k < leaf_count(walk); k++) {
+                let tri = first + k;
                 let h = triangle_crossing(r, tri, ray.tmin, tmax);
                 if (h.x < tmax) {
                     tmax = h.x;
@@ -40,7 +38,7 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
                 }
             }
         }
-        more = bvh_pop(&walk, o, inv_dir, ray.tmin, tmax);
+        more = bvh_pop(&walk, tmax);
     }
     return best;
 }

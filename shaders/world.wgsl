@@ -31,17 +31,40 @@ fn defer_csg(r: u32) -> bool {
 // #endif
 
 // #if BVH
-// Slab test against a node's box; the exit is widened by 2 ulps-ish (Ize 2013) so f32
+// Slab test against the box [lo, hi]; the exit is widened by 2 ulps-ish (Ize 2013) so f32
 // rounding cannot drop a box the ray grazes. `inv_dir` has no infinities.
-fn box_entry(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
-    let a = (node.min - origin) * inv_dir;
-    let b = (node.max - origin) * inv_dir;
-    let lo = min(a, b);
-    let hi = max(a, b);
-    let enter = max(max(lo.x, lo.y), max(lo.z, tmin));
-    let exit = min(min(hi.x, hi.y), min(hi.z, tmax)) * 1.0000004;
+fn box_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
+    let a = (lo - origin) * inv_dir;
+    let b = (hi - origin) * inv_dir;
+    let near = min(a, b);
+    let far = max(a, b);
+    let enter = max(max(near.x, near.y), max(near.z, tmin));
+    let exit = min(min(far.x, far.y), min(far.z, tmax)) * 1.0000004;
     return select(OPEN, enter, enter <= exit);
 }
+
+// The entries of the ray into inner node `n`'s left (x) and right (y) child boxes (OPEN
+// where it misses), decoded from the node's grid: corner + q * 2^e, where the product is
+// exact, so the bounds are the ones accel::quantized made to contain the children.
+fn child_entries(n: QuantizedNode, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> vec2<f32> {
+    let mask = vec3<u32>((1u << BVH_GRID_BITS) - 1u);
+    let bits = vec3<u32>(BVH_GRID_BITS);
+    let step = bitcast<vec3<f32>>(((vec3<u32>(n.scales) >> vec3<u32>(0u, BVH_GRID_BITS, 2u * BVH_GRID_BITS)) & mask) << vec3<u32>(23u));
+    let g = n.grid;
+    let left_lo = n.corner + vec3<f32>(g & mask) * step;
+    let left_hi = n.corner + vec3<f32>((g >> bits) & mask) * step;
+    let right_lo = n.corner + vec3<f32>((g >> (2u * bits)) & mask) * step;
+    let right_hi = n.corner + vec3<f32>(g >> (3u * bits)) * step;
+    return vec2<f32>(box_entry(left_lo, left_hi, origin, inv_dir, tmin, tmax), box_entry(right_lo, right_hi, origin, inv_dir, tmin, tmax));
+}
+
+// #if OBJECT_LIST
+// The ray's entry into the whole tree rooted at inner node `root` (OPEN where it misses).
+fn tree_entry(root: u32, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
+    let t = child_entries(bvh_node_at(root), origin, inv_dir, tmin, tmax);
+    return min(t.x, t.y);
+}
+// #endif
 // #endif
 
 // #if GEOMETRY
@@ -54,14 +77,39 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 
 // #if BVH_WALK
 // One BVH walk's state (the scene's tree, or a mesh's bottom-level tree in the same
-// table): the current node, carried from the box test that chose it so that each step
-// loads only the two children (a node fetch is a per-lane loop or gather on llvmpipe), and
-// the stack of nodes still to visit.
+// table): the current reference (an inner node's index, or a leaf's range as
+// accel::quantized::LEAF_REF packs it), and the references still to visit with the
+// distances at which the ray enters them. A descent step loads one node for both children
+// and their leaves' ranges (a node fetch is a per-lane loop or gather on llvmpipe), and a
+// pop loads nothing: a pushed child is skipped when its entry lies beyond the nearest hit
+// found since.
 struct BvhWalk {
-    index: u32,
-    node: BvhNode,
+    at: u32,
     top: u32,
     stack: array<u32, BVH_STACK_SIZE>,
+    entry: array<f32, BVH_STACK_SIZE>,
+}
+
+// A walk of the tree whose root node is `root`.
+fn bvh_walk(root: u32) -> BvhWalk {
+    var w: BvhWalk;
+    w.at = root;
+    w.top = 0u;
+    return w;
+}
+
+// The reference to the leaf of `count` primitives from `first`.
+fn leaf_ref(first: u32, count: u32) -> u32 {
+    return BVH_LEAF_REF | (count << BVH_REF_COUNT_SHIFT) | first;
+}
+
+// The first primitive and the count of the leaf the walk is at.
+fn leaf_first(w: BvhWalk) -> u32 {
+    return w.at & ((1u << BVH_REF_COUNT_SHIFT) - 1u);
+}
+
+fn leaf_count(w: BvhWalk) -> u32 {
+    return (w.at >> BVH_REF_COUNT_SHIFT) & BVH_COUNT_MASK;
 }
 
 // Descends from the current node to a leaf, nearer child first, the other pushed; false
@@ -69,45 +117,45 @@ struct BvhWalk {
 // wait here for the others (Aila and Laine's while-while order), so the caller's leaf code
 // runs once per round, not masked on every inner step.
 fn bvh_descend(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
-    while ((*w).node.count == 0u) {
-        let left = (*w).index + 1u;
-        let right = (*w).node.left_or_first;
-        let left_node = bvh_node_at(left);
-        let right_node = bvh_node_at(right);
-        let tl = box_entry(left_node, origin, inv_dir, tmin, tmax);
-        let tr = box_entry(right_node, origin, inv_dir, tmin, tmax);
-        if (tl >= OPEN && tr >= OPEN) {
+    while (((*w).at & BVH_LEAF_REF) == 0u) {
+        let n = bvh_node_at((*w).at);
+        let t = child_entries(n, origin, inv_dir, tmin, tmax);
+        if (t.x >= OPEN && t.y >= OPEN) {
             return false;
         }
+        // accel::QuantizedNode::child: a leaf on the left has a leaf on its right too,
+        // starting where it ends.
+        let left_leaf = (n.scales & BVH_LEFT_LEAF) != 0u;
+        let left_count = (n.scales >> BVH_LEFT_COUNT_SHIFT) & BVH_COUNT_MASK;
+        let right_count = (n.scales >> BVH_RIGHT_COUNT_SHIFT) & BVH_COUNT_MASK;
+        let left = select((*w).at + 1u, leaf_ref(n.link, left_count), left_leaf);
+        let right_first = n.link + select(0u, left_count, left_leaf);
+        let right = select(n.link, leaf_ref(right_first, right_count), (n.scales & BVH_RIGHT_LEAF) != 0u);
         var near = left;
-        var near_node = left_node;
         var far = right;
-        var t_far = tr;
-        if (tr < tl) {
+        var t_far = t.y;
+        if (t.y < t.x) {
             near = right;
-            near_node = right_node;
             far = left;
-            t_far = tl;
+            t_far = t.x;
         }
         if (t_far < OPEN && (*w).top < BVH_STACK_SIZE) {
             (*w).stack[(*w).top] = far;
+            (*w).entry[(*w).top] = t_far;
             (*w).top++;
         }
-        (*w).index = near;
-        (*w).node = near_node;
+        (*w).at = near;
     }
     return true;
 }
 
-// Pops the next node still in front of tmax; false when none is left.
-fn bvh_pop(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+// Pops the next node the ray enters before tmax (widened as box_entry widens its exit);
+// false when none is left.
+fn bvh_pop(w: ptr<function, BvhWalk>, tmax: f32) -> bool {
     while ((*w).top > 0u) {
         (*w).top--;
-        let index = (*w).stack[(*w).top];
-        let node = bvh_node_at(index);
-        if (box_entry(node, origin, inv_dir, tmin, tmax) < OPEN) {
-            (*w).index = index;
-            (*w).node = node;
+        if ((*w).entry[(*w).top] <= tmax * 1.0000004) {
+            (*w).at = (*w).stack[(*w).top];
             return true;
         }
     }
@@ -137,8 +185,7 @@ fn csg_nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<fun
 // #if OBJECT_LIST
     // A list meets every tree: like a walk, go on only where the ray crosses its box.
     let tree = csg_tree_at(r & ~CSG_NODE_BIT);
-    let b = BvhNode(tree.min, 0u, tree.max, 0u);
-    if (box_entry(b, (*ray).origin, inv_dir, (*ray).tmin, (*ray).tmax) >= OPEN) {
+    if (box_entry(tree.min, tree.max, (*ray).origin, inv_dir, (*ray).tmin, (*ray).tmax) >= OPEN) {
         return false;
     }
 // #endif
@@ -207,7 +254,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     // box, in index order. The index is the same in every lane, so an object's words are
     // loaded once for the SIMD group and only its own shape kind's code runs, where a walk
     // loads lane-divergent nodes and objects per lane (DESIGN.md "Object list").
-    if (box_entry(bvh_node_at(0u), ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
+    if (tree_entry(0u, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
         for (var k = 0u; k < settings.plane_offset; k++) {
             if (nearer(object_ref(k), &ray, inv_dir, &best) && any_hit) {
                 return best;
@@ -216,22 +263,20 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     }
 // #else
 // #if BVH
-    var walk: BvhWalk;
-    walk.index = 0u;
-    walk.node = bvh_node_at(0u);
-    walk.top = 0u;
-    // An empty tree or a missed root box skips the loop (not a return: deferred CSG
-    // trees are still to be evaluated).
-    var more = settings.bvh_node_count != 0u && box_entry(walk.node, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN;
+    var walk = bvh_walk(0u);
+    // An empty tree skips the loop (not a return: deferred CSG trees are still to be
+    // evaluated).
+    var more = settings.bvh_node_count != 0u;
     while (more) {
         if (bvh_descend(&walk, ray.origin, inv_dir, ray.tmin, ray.tmax)) {
-            for (var k = 0u; k < walk.node.count; k++) {
-                if (nearer(object_ref(walk.node.left_or_first + k), &ray, inv_dir, &best) && any_hit) {
+            let first = leaf_first(walk);
+            for (var k = 0u; k < leaf_count(walk); k++) {
+                if (nearer(object_ref(first + k), &ray, inv_dir, &best) && any_hit) {
                     return best;
                 }
             }
         }
-        more = bvh_pop(&walk, ray.origin, inv_dir, ray.tmin, ray.tmax);
+        more = bvh_pop(&walk, ray.tmax);
     }
 // #endif
 // #endif

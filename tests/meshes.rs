@@ -368,6 +368,60 @@ fn mesh_scenes_render_on_the_gpu_as_on_the_cpu() {
     }
 }
 
+/// Meshes of one to five triangles, whose bottom-level trees are a single leaf or a root
+/// over two leaves (the GPU's quantized walk gives a one-leaf tree a root of its own and
+/// reads leaf ranges from the parent: accel::quantized), alone and as twelve instances (a
+/// top-level walk over many small trees), on the GPU as on the CPU.
+#[test]
+fn meshes_of_a_few_triangles_render_on_the_gpu_as_on_the_cpu() {
+    let Some(gpu) = gpu_for_tests("meshes_of_a_few_triangles_render_on_the_gpu_as_on_the_cpu") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let fan = |n: usize| {
+        // A fan of n triangles around the origin in the x = 0 plane, facing -x.
+        let mut v = vec![DVec3::ZERO];
+        v.extend((0..=n).map(|k| {
+            let a = k as f64 * std::f64::consts::PI / 3.0;
+            DVec3::new(0.0, a.cos(), a.sin())
+        }));
+        let f: Vec<[u32; 3]> = (0..n as u32).map(|k| [0, k + 1, k + 2]).collect();
+        (v, f)
+    };
+    for n in [1, 2, 3, 5] {
+        let (v, f) = fan(n);
+        std::fs::write(dir.path().join(format!("fan{n}.obj")), obj_text(&v, &f, false)).unwrap();
+    }
+    let renderers = ["Renderer.Flat()", "Renderer.PathTracer(.n 2, .max_depth 3, .roulette_depth 2, .nee 1)"];
+    for renderer in renderers {
+        let mut spawn = String::new();
+        for (k, n) in [1, 2, 3, 5].into_iter().enumerate() {
+            let y = k as f64 * 2.2 - 3.3;
+            spawn += &format!(
+                "Shape.Mesh(.file \"fan{n}.obj\", .material Material(Brdf.Diffuse(<0.7, 0.5, 0.3>)),
+                            .transformation TRANSLATE(5, {y}, 1.2))\n"
+            );
+            for j in 0..3 {
+                let z = -0.6 - 1.1 * j as f64;
+                spawn += &format!(
+                    "Shape.Mesh(.file \"fan{n}.obj\", .material Material(Brdf.Diffuse(<0.3, 0.6, 0.4>)),
+                                .transformation TRANSLATE(5.5, {y}, {z}) * SCALE 0.5)\n"
+                );
+            }
+        }
+        let scene = load(
+            dir.path(),
+            &format!(
+                "SPAWN {spawn}
+                       Shape.Plane(.material Material(Brdf.Diffuse(<0.5, 0.5, 0.5>)), .transformation TRANSLATE(.Z -3))
+                       Light(.position {{0, 0, 4}}, .color <3, 3, 3>)
+                 USING Camera.Perspective(.aspect_ratio 1.5) Image(36, 24) Tracer(.samples_per_side 2) {renderer}
+                       Environment.Uniform(<0.4, 0.5, 0.6>)"
+            ),
+        );
+        println!("{renderer}");
+        gpu_matches_cpu(&gpu, &scene, 0.99);
+    }
+}
+
 /// The closed furnace of a flat emissive mesh sphere, and the tessellated sphere's
 /// silhouette, on the GPU: the same closed forms as the CPU tests above.
 #[test]

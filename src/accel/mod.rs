@@ -1,5 +1,6 @@
 //! Acceleration structure: a binned-SAH BVH over top-level shapes, flattened depth-first
-//! into the 32-byte [`BvhNode`]s that the CPU reference and the GPU both traverse.
+//! into the 32-byte [`BvhNode`]s that the CPU reference traverses, and the GPU in their
+//! [`quantized`] form (the children's boxes held by their parent, on an 8-bit grid).
 //!
 //! ```
 //! use lumen::accel::{Bvh, BvhItem, Visit, MAX_DEPTH, MAX_LEAF_SIZE};
@@ -26,10 +27,12 @@
 
 mod build;
 mod node;
+pub mod quantized;
 mod traverse;
 mod triangle;
 
 pub use build::{Bvh, BvhItem, MAX_DEPTH, MAX_LEAF_SIZE};
 pub use node::BvhNode;
+pub use quantized::QuantizedNode;
 pub use traverse::{RayBox, Visit};
 pub use triangle::{intersect_triangle, ShearedRay, TriangleHit};

@@ -299,7 +299,7 @@ pub mod image_filter_kind {
 /// name tags only through these, so the two sides cannot disagree (a test scans the shaders
 /// for bare tag literals).
 pub fn tags_wgsl() -> String {
-    let groups: [(&str, &[(&str, u32)]); 11] = [
+    let groups: [(&str, &[(&str, u32)]); 12] = [
         (
             "SHAPE",
             &[
@@ -318,6 +318,19 @@ pub fn tags_wgsl() -> String {
                 ("NODE_MASK", mesh_bits::NODE_MASK),
                 ("POSITION_VEC4S", TRI_POSITION_VEC4S),
                 ("SHADING_VEC4S", TRI_SHADING_VEC4S),
+            ],
+        ),
+        (
+            "BVH",
+            &[
+                ("LEFT_LEAF", crate::accel::quantized::LEFT_LEAF),
+                ("RIGHT_LEAF", crate::accel::quantized::RIGHT_LEAF),
+                ("GRID_BITS", crate::accel::quantized::GRID_BITS),
+                ("LEFT_COUNT_SHIFT", crate::accel::quantized::LEFT_COUNT_SHIFT),
+                ("RIGHT_COUNT_SHIFT", crate::accel::quantized::RIGHT_COUNT_SHIFT),
+                ("COUNT_MASK", crate::accel::quantized::COUNT_MASK),
+                ("LEAF_REF", crate::accel::quantized::LEAF_REF),
+                ("REF_COUNT_SHIFT", crate::accel::quantized::REF_COUNT_SHIFT),
             ],
         ),
         (
@@ -485,7 +498,7 @@ mod tests {
                     bvh_node_count,
                 ]
             ),
-            expect!(crate::accel::BvhNode, "BvhNode", [min, left_or_first, max, count]),
+            expect!(crate::accel::QuantizedNode, "QuantizedNode", [corner, scales, grid, link]),
         ]
     }
 

@@ -17,7 +17,7 @@ use glam::DVec3;
 
 use super::features::FeatureSet;
 use super::layout::{self, Affine, NONE};
-use crate::accel::BvhNode;
+use crate::accel::{quantized, QuantizedNode};
 use crate::color::Color;
 use crate::image::HdrImage;
 use crate::optics::compensation::{conductor_ms, dielectric_lobes, plastic_coat};
@@ -38,7 +38,8 @@ pub struct PackedScene {
     pub shapes: Vec<layout::Shape>,
     /// BVH leaf objects, then planes and CSG children (see `Settings`).
     pub indices: Vec<u32>,
-    pub bvh_nodes: Vec<BvhNode>,
+    /// The scene's BVH, then each distinct mesh's, in the GPU's quantized form.
+    pub bvh_nodes: Vec<QuantizedNode>,
     pub csg_trees: Vec<layout::CsgTree>,
     pub materials: Vec<layout::Material>,
     pub pigments: Vec<layout::Pigment>,
@@ -59,14 +60,22 @@ pub struct PackedScene {
     pub origin: DVec3,
 }
 
-/// A bottom-level node moved to index base `to` (its right child moves with it), leaves'
-/// triangle ranges moved by `tri_base`.
-fn rebased(n: BvhNode, to: u32, tri_base: u32) -> BvhNode {
-    if n.count > 0 {
-        BvhNode { left_or_first: n.left_or_first + tri_base, ..n }
-    } else {
-        BvhNode { left_or_first: n.left_or_first + to, ..n }
+/// A bottom-level node moved to index base `to` (an inner right child moves with it), its
+/// leaves' triangle ranges moved by `tri_base` (`link` is a range where the right child is
+/// a leaf: accel::QuantizedNode).
+fn rebased(n: QuantizedNode, to: u32, tri_base: u32) -> QuantizedNode {
+    let by = if n.scales & quantized::RIGHT_LEAF != 0 { tri_base } else { to };
+    QuantizedNode { link: n.link + by, ..n }
+}
+
+/// Whether `count` primitives fit the ranges a GPU walk carries (accel::quantized::LEAF_REF:
+/// 2^28, far beyond what the storage buffers hold).
+fn leaf_range_fits(what: &'static str, count: usize) -> Result<(), PackError> {
+    let limit = quantized::MAX_LEAF_FIRST as usize;
+    if count > limit {
+        return Err(PackError::TooMany { what, count, limit });
     }
+    Ok(())
 }
 
 /// Most CSG pool entries one path may need on the GPU (8 bytes each, so 4 MiB;
@@ -206,7 +215,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         environment: bytemuck::Zeroable::zeroed(),
         shapes: Vec::new(),
         indices: Vec::new(),
-        bvh_nodes: world.bvh.nodes().to_vec(),
+        bvh_nodes: quantized::quantize(world.bvh.nodes()),
         csg_trees: Vec::new(),
         materials: Vec::new(),
         pigments: Vec::new(),
@@ -218,6 +227,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         tri_shading: Vec::new(),
         origin,
     };
+    let top_nodes = p.bvh_nodes.len();
     let mesh_roots = pack_meshes(&shifted, &mut p)?;
 
     // Objects in scene order: a top-level primitive is one shape, a CSG tree one tree
@@ -244,6 +254,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
             Shape::Csg(_) => pack_csg(i, s, &mut p, &mut csg_programs)? | layout::CSG_NODE_BIT,
         };
     }
+    leaf_range_fits("objects in the BVH", world.bvh.prim_indices().len())?;
     p.indices.extend(world.bvh.prim_indices().iter().map(|&i| object_ref[i as usize]));
     let plane_offset = count_u32("indices", p.indices.len())?;
     // The kernels test an unbounded-list entry that is not a CSG tree as a plane (shaders/
@@ -344,7 +355,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         _pad0: 0,
         area_light_count: count_u32("area lights", area_lights.len())?,
         point_light_count: count_u32("point lights", scene.point_lights.len())?,
-        bvh_node_count: count_u32("BVH nodes", world.bvh.nodes().len())?,
+        bvh_node_count: count_u32("BVH nodes", top_nodes)?,
     };
     Ok(p)
 }
@@ -365,14 +376,16 @@ fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, P
         let Some(bvh) = bvhs.get(mesh) else { continue };
         let node_base = count_u32("BVH nodes", p.bvh_nodes.len())?;
         let tri_base = count_u32("triangles", p.tri_positions.len() / layout::TRI_POSITION_VEC4S as usize)?;
-        if (node_base as usize + bvh.nodes().len()) > layout::mesh_bits::NODE_MASK as usize {
+        let nodes = quantized::quantize(bvh.nodes());
+        if (node_base as usize + nodes.len()) > layout::mesh_bits::NODE_MASK as usize {
             return Err(PackError::TooMany {
                 what: "BVH nodes (top level and meshes)",
-                count: node_base as usize + bvh.nodes().len(),
+                count: node_base as usize + nodes.len(),
                 limit: layout::mesh_bits::NODE_MASK as usize,
             });
         }
-        p.bvh_nodes.extend(bvh.nodes().iter().map(|&n| rebased(n, node_base, tri_base)));
+        leaf_range_fits("triangles (all meshes)", tri_base as usize + bvh.prim_indices().len())?;
+        p.bvh_nodes.extend(nodes.iter().map(|&n| rebased(n, node_base, tri_base)));
         let mut leaf_of = vec![0u32; mesh.triangle_count()];
         for (k, &t) in bvh.prim_indices().iter().enumerate() {
             leaf_of[t as usize] = tri_base + k as u32;

@@ -22,7 +22,7 @@
 
 use super::layout;
 use super::pack::PackedScene;
-use crate::accel::BvhNode;
+use crate::accel::QuantizedNode;
 
 /// Bytes of every uniform table buffer: WebGPU's default `max_uniform_buffer_binding_size`.
 /// The WGSL arrays have a fixed length, so the buffer always holds the whole array.
@@ -154,7 +154,7 @@ impl Table {
         match self {
             Table::Shapes => "Shape",
             Table::Indices => "u32",
-            Table::BvhNodes => "BvhNode",
+            Table::BvhNodes => "QuantizedNode",
             Table::CsgTrees => "CsgTree",
             Table::Materials => "Material",
             Table::Pigments => "Pigment",
@@ -231,7 +231,7 @@ impl Table {
         match self {
             Table::Shapes => size_of::<layout::Shape>(),
             Table::Indices | Table::Floats | Table::Rows | Table::TriPositions | Table::TriShading => 16,
-            Table::BvhNodes => size_of::<BvhNode>(),
+            Table::BvhNodes => size_of::<QuantizedNode>(),
             Table::CsgTrees => size_of::<layout::CsgTree>(),
             Table::Materials => size_of::<layout::Material>(),
             Table::Pigments => size_of::<layout::Pigment>(),
@@ -707,12 +707,12 @@ mod tests {
 
     /// The texture accessors rebuild each struct from the words at its members' offsets
     /// (shaders/layout.wgsl, checked against Rust by layout's tests): a BVH node is two
-    /// texels, min in the first three words of the first.
+    /// texels, the corner in the first three words of the first, the grid in the second's.
     #[test]
     fn texture_accessors_read_members_at_their_offsets() {
         let wgsl = tables_wgsl();
         let node = wgsl
-            .split("fn bvh_node_at(k: u32) -> BvhNode {")
+            .split("fn bvh_node_at(k: u32) -> QuantizedNode {")
             .nth(2)
             .expect("texture form")
             .split("\n}")
@@ -721,8 +721,8 @@ mod tests {
         assert!(node.contains("let base = k * 2u;"), "{node}");
         assert!(
             node.contains(
-                "return BvhNode(vec3<f32>(bitcast<f32>(t0.x), bitcast<f32>(t0.y), bitcast<f32>(t0.z)), t0.w, \
-                 vec3<f32>(bitcast<f32>(t1.x), bitcast<f32>(t1.y), bitcast<f32>(t1.z)), t1.w);"
+                "return QuantizedNode(vec3<f32>(bitcast<f32>(t0.x), bitcast<f32>(t0.y), bitcast<f32>(t0.z)), t0.w, \
+                 vec3<u32>(t1.x, t1.y, t1.z), t1.w);"
             ),
             "{node}"
         );
