@@ -44,6 +44,7 @@
 //! ```
 
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 
 use super::BvhNode;
 
@@ -170,41 +171,45 @@ fn at_or_above(corner: f32, q: u32, step: f32, bound: f32) -> bool {
 /// The exponent of the finest grid step whose last point covers `top` from `corner`.
 fn exponent(corner: f32, top: f32) -> i32 {
     let extent = f64::from(top) - f64::from(corner);
-    // A first guess one below the step that ideally fits, then the first that does.
-    let guess = if extent > 0.0 { (extent / f64::from(GRID_MAX)).log2().floor() as i32 - 1 } else { MIN_EXPONENT };
+    // The step that fits in exact arithmetic, then the finest that fits in f32's.
+    let guess = if extent > 0.0 { (extent / f64::from(GRID_MAX)).log2().ceil() as i32 } else { MIN_EXPONENT };
     let mut e = guess.clamp(MIN_EXPONENT, 127);
     while e < 127 && !at_or_above(corner, GRID_MAX, step_of(e), top) {
         e += 1;
     }
+    while e > MIN_EXPONENT && at_or_above(corner, GRID_MAX, step_of(e - 1), top) {
+        e -= 1;
+    }
     e
 }
 
-/// The largest grid coordinate at or below `bound` (0 qualifies: the corner is the minimum).
-fn grid_below(corner: f32, step: f32, bound: f32) -> u32 {
-    let (mut lo, mut hi) = (0, GRID_MAX);
-    while lo < hi {
-        let mid = (lo + hi).div_ceil(2);
-        if at_or_below(corner, mid, step, bound) {
-            lo = mid;
-        } else {
-            hi = mid - 1;
-        }
-    }
-    lo
+/// The grid coordinate nearest below (`up` false) or above `bound`, clamped to the grid:
+/// the first guess, in f64 from the exact difference, is at most one off the f32 decoding.
+fn guess(corner: f32, step: f32, bound: f32, up: bool) -> u32 {
+    let q = (f64::from(bound) - f64::from(corner)) / f64::from(step);
+    let q = if up { q.ceil() } else { q.floor() };
+    // NaN (none arises from finite corners) and infinities clamp like any value.
+    q.clamp(0.0, f64::from(GRID_MAX)) as u32
 }
 
-/// The smallest grid coordinate at or above `bound` (the last one qualifies).
-fn grid_above(corner: f32, step: f32, bound: f32) -> u32 {
-    let (mut lo, mut hi) = (0, GRID_MAX);
-    while lo < hi {
-        let mid = (lo + hi) / 2;
-        if at_or_above(corner, mid, step, bound) {
-            hi = mid;
-        } else {
-            lo = mid + 1;
-        }
+/// A large grid coordinate at or below `bound` (0 qualifies: the corner is the minimum): the
+/// guess, lowered where the f32 decoding rounds above `bound` (tight but for such roundings).
+fn grid_below(corner: f32, step: f32, bound: f32) -> u32 {
+    let mut q = guess(corner, step, bound, false);
+    while q > 0 && !at_or_below(corner, q, step, bound) {
+        q -= 1;
     }
-    lo
+    q
+}
+
+/// A small grid coordinate at or above `bound` (the last one qualifies): the guess, raised
+/// where the f32 decoding rounds below `bound`.
+fn grid_above(corner: f32, step: f32, bound: f32) -> u32 {
+    let mut q = guess(corner, step, bound, true);
+    while q < GRID_MAX && !at_or_above(corner, q, step, bound) {
+        q += 1;
+    }
+    q
 }
 
 /// The grid and flags of the node over children `l` and `r`, leaf counts included; `link`
@@ -247,7 +252,8 @@ fn inner(l: &BvhNode, r: &BvhNode, link: u32) -> QuantizedNode {
 /// The GPU form of a flattened tree (`nodes`, as [`super::Bvh::nodes`] lays them out): its
 /// inner nodes, depth first, an inner child before a leaf sibling. A tree that is a single
 /// leaf gets a root over it and an empty leaf (at the leaf's box), so every tree has a root;
-/// an empty tree stays empty.
+/// an empty tree stays empty. The order is found in one pass, then the nodes' grids, which
+/// are independent, in parallel (a tree of millions of triangles has millions of nodes).
 pub fn quantize(nodes: &[BvhNode]) -> Vec<QuantizedNode> {
     match nodes {
         [] => Vec::new(),
@@ -257,40 +263,46 @@ pub fn quantize(nodes: &[BvhNode]) -> Vec<QuantizedNode> {
             vec![root]
         }
         _ => {
-            let mut out = Vec::with_capacity(nodes.len() / 2);
-            emit(nodes, 0, &mut out);
-            out
+            let mut order = Vec::with_capacity(nodes.len() / 2);
+            arrange(nodes, 0, &mut order);
+            order.par_iter().with_min_len(1 << 12).map(|p| inner(&nodes[p.left], &nodes[p.right], p.link)).collect()
         }
     }
 }
 
-/// Appends inner node `i` of `nodes` and its inner descendants to `out` (depth ≤
-/// `MAX_DEPTH`, so the recursion is shallow).
-fn emit(nodes: &[BvhNode], i: usize, out: &mut Vec<QuantizedNode>) {
+/// Where one GPU node's children are in the flattened tree, and its `link`.
+struct Placed {
+    left: usize,
+    right: usize,
+    link: u32,
+}
+
+/// Appends inner node `i` of `nodes` and its inner descendants to `out` in the GPU's order
+/// (depth ≤ `MAX_DEPTH`, so the recursion is shallow).
+fn arrange(nodes: &[BvhNode], i: usize, out: &mut Vec<Placed>) {
     let n = &nodes[i];
-    let (mut a, mut b) = (i + 1, n.left_or_first as usize);
-    if nodes[a].is_leaf() && !nodes[b].is_leaf() {
-        std::mem::swap(&mut a, &mut b);
+    let (mut left, mut right) = (i + 1, n.left_or_first as usize);
+    if nodes[left].is_leaf() && !nodes[right].is_leaf() {
+        std::mem::swap(&mut left, &mut right);
     }
-    let (left, right) = (&nodes[a], &nodes[b]);
     let at = out.len();
-    out.push(QuantizedNode::zeroed());
-    if !left.is_leaf() {
-        emit(nodes, a, out);
+    out.push(Placed { left, right, link: 0 });
+    if !nodes[left].is_leaf() {
+        arrange(nodes, left, out);
     }
-    let link = if !right.is_leaf() {
+    let (l, r) = (&nodes[left], &nodes[right]);
+    out[at].link = if !r.is_leaf() {
         let k = out.len() as u32;
-        emit(nodes, b, out);
+        arrange(nodes, right, out);
         k
-    } else if left.is_leaf() {
+    } else if l.is_leaf() {
         // Sibling leaves cover adjacent ranges, the left one first: the builder partitions
         // the primitives in place, depth first.
-        assert_eq!(right.left_or_first, left.left_or_first + left.count, "sibling leaves' ranges must be adjacent");
-        left.left_or_first
+        assert_eq!(r.left_or_first, l.left_or_first + l.count, "sibling leaves' ranges must be adjacent");
+        l.left_or_first
     } else {
-        right.left_or_first
+        r.left_or_first
     };
-    out[at] = inner(left, right, link);
 }
 
 #[cfg(test)]
