@@ -1,7 +1,7 @@
 //! scripts/device_check.sh (issue 12, goal 4: the hardware-GPU figures in one run) keeps
 //! working while no hardware GPU is lent: run small (`QUICK=1`, which accepts a software
 //! adapter) with this build's binary, it writes every report it promises, and every step
-//! ends well.
+//! ends well. The same for the other device scripts (the tests' runner, the side by side).
 
 use std::path::Path;
 use std::process::Command;
@@ -75,4 +75,43 @@ fn the_device_tests_script_refuses_what_it_cannot_do() {
         Command::new("bash").arg(root.path().join("scripts/device_tests.sh")).arg("run").arg(&out).output().unwrap();
     assert!(!o.status.success(), "{o:?}");
     assert_eq!(std::fs::read_to_string(out.join("summary.txt")).unwrap(), "");
+}
+
+/// scripts/device_ab.sh (two builds side by side on a lent GPU) run small with this build
+/// as both sides: each report holds a row per build and round, and a missing binary is
+/// refused before anything runs.
+#[test]
+fn the_side_by_side_script_reports_both_builds() {
+    if lumen::gpu::gpu_for_tests("the_side_by_side_script_reports_both_builds").is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/device_ab.sh");
+    let lumen = env!("CARGO_BIN_EXE_lumen");
+    let o = Command::new("bash")
+        .arg(&script)
+        .arg(out.path())
+        .arg("glass")
+        .envs([("QUICK", "1"), ("ROUNDS", "2"), ("LUMEN_A", lumen), ("LUMEN_B", lumen)])
+        .output()
+        .unwrap();
+    let said = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{said}");
+    let read = |name: &str| std::fs::read_to_string(out.path().join(name)).unwrap_or_default();
+    let cornell = read("cornell.txt");
+    assert_eq!(cornell.matches("16 of 16 samples per pixel").count(), 4, "{cornell}");
+    assert_eq!(cornell.matches("wall ").count(), 4, "{cornell}");
+    let bench = read("bench.txt");
+    assert_eq!(bench.matches("| glass.sl | gpu |").count(), 4, "{bench}");
+    let profile = read("profile.txt");
+    assert_eq!(profile.matches("device busy").count(), 2, "{profile}");
+    let o = Command::new("bash")
+        .arg(&script)
+        .arg(out.path())
+        .env("LUMEN_A", "/nonexistent/lumen")
+        .env("LUMEN_B", lumen)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no binary at /nonexistent/lumen"), "{o:?}");
 }
