@@ -174,9 +174,14 @@ pub(crate) struct Runner<'a> {
     host_submit: Duration,
     host_wait: Duration,
     /// Whether a CSG query may give up after its walk budget (kernels without the sweeps,
-    /// a tree with a sweep table): `collect` then checks `control::CSG_OVER`.
+    /// a tree with a sweep table): each batch then copies `control::CSG_OVER` after its
+    /// film in the staging buffer, and `collect` checks it.
     watch_csg: bool,
 }
+
+/// Bytes after a batch's film in its staging buffer that bring back `control::CSG_OVER`
+/// (one film texel's worth, so the read-back stays whole texels) where `Runner::watch_csg`.
+const FLAG_BYTES: u64 = 16;
 
 /// A batch in flight: its film's staging buffer and submission.
 pub(crate) struct Pending {
@@ -242,7 +247,11 @@ impl<'a> Runner<'a> {
         let films = [storage("film 0", StateBuffer::Film)?, storage("film 1", StateBuffer::Film)?];
         let staging_buffer = |label: &str, bytes: u64| gpu.readback_buffer(label, bytes);
         let film_bytes = cap * state_bytes(StateBuffer::Film, shadow_rays, features);
-        let staging = [staging_buffer("film readback 0", film_bytes)?, staging_buffer("film readback 1", film_bytes)?];
+        // Where kernels may give up on a CSG query, its flag comes back after the film.
+        let watch_csg = stages::csg_sweepable(features) && !features.csg_sweeps;
+        let staging_bytes = film_bytes + if watch_csg { FLAG_BYTES } else { 0 };
+        let staging =
+            [staging_buffer("film readback 0", staging_bytes)?, staging_buffer("film readback 1", staging_bytes)?];
         let probe = staging_buffer("control readback", u64::from(control::WORDS) * 4)?;
         let batch = gpu.uniform_buffer("batch", &<BatchUniform as bytemuck::Zeroable>::zeroed())?;
         let control = gpu.scoped(|| {
@@ -314,7 +323,7 @@ impl<'a> Runner<'a> {
             paths: paths.clone(),
             host_submit: Duration::ZERO,
             host_wait: Duration::ZERO,
-            watch_csg: features.csg_sweep_nodes > 0 && !features.csg_sweeps && !stages::csg_pool_private(features),
+            watch_csg,
         })
     }
 
@@ -431,15 +440,6 @@ impl<'a> Runner<'a> {
         Ok(self.read(&self.probe, 4)?[0])
     }
 
-    /// Whether a CSG query gave up after its walk budget (kernels without the sweeps).
-    fn csg_over(&self) -> Result<bool, GpuError> {
-        self.submit_commands(|e| {
-            e.copy_buffer_to_buffer(&self.control, 4 * u64::from(control::CSG_OVER), &self.probe, 0, 4);
-            Ok(())
-        })?;
-        Ok(self.read(&self.probe, 4)?[0] != 0)
-    }
-
     fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u32>, GpuError> {
         map_read(self.gpu, buffer, bytes, None)
     }
@@ -496,15 +496,15 @@ impl BatchRunner for Runner<'_> {
     }
 
     fn collect(&mut self, pending: Pending) -> Result<Vec<[f64; 3]>, GpuError> {
-        let bytes = u64::from(pending.pixels) * 32;
+        let bytes = u64::from(pending.pixels) * 32 + if self.watch_csg { FLAG_BYTES } else { 0 };
         let t0 = Instant::now();
-        let film: Vec<[f32; 4]> =
+        let mut film: Vec<[f32; 4]> =
             map_read(self.gpu, &self.staging[pending.slot], bytes, Some(pending.submission.clone()))?;
         self.host_wait += t0.elapsed();
         if let Some(p) = &self.profiler {
             p.collect(self.gpu, pending.slot, pending.submission)?;
         }
-        if self.watch_csg && self.csg_over()? {
+        if self.watch_csg && film.pop().is_some_and(|flag| flag[0].to_bits() != 0) {
             return Err(GpuError::CsgSweepsNeeded);
         }
         // Each pixel's value and rounding error, summed exactly in f64.
@@ -577,7 +577,12 @@ impl Runner<'_> {
                 }
                 self.direct(&mut pass, Stage::Film, slot, pixels)?;
             }
-            e.copy_buffer_to_buffer(&self.films[slot], 0, &self.staging[slot], 0, u64::from(pixels) * 32);
+            let film_bytes = u64::from(pixels) * 32;
+            e.copy_buffer_to_buffer(&self.films[slot], 0, &self.staging[slot], 0, film_bytes);
+            if self.watch_csg {
+                let flag = 4 * u64::from(control::CSG_OVER);
+                e.copy_buffer_to_buffer(&self.control, flag, &self.staging[slot], film_bytes, 4);
+            }
             if let Some(p) = &self.profiler {
                 p.resolve(e);
             }

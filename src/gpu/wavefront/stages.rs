@@ -356,7 +356,7 @@ impl Stage {
         if names.contains(&"CSG") && csg_pool_private(f) {
             names.push("CSG_POOL_PRIVATE");
         }
-        if names.contains(&"CSG") && !csg_pool_private(f) && f.csg_sweeps && f.csg_sweep_nodes > 0 {
+        if names.contains(&"CSG") && csg_sweepable(f) && f.csg_sweeps {
             names.push("CSG_SWEEPS");
         }
         // The tree records: where trees are evaluated, and where an object list reads
@@ -449,6 +449,13 @@ impl Stage {
 /// storage pool on SIMD software GPUs, and bounded, so kernels still do not grow with a scene.
 pub fn csg_pool_private(f: &FeatureSet) -> bool {
     f.csg && super::contract::csg_pool_entries(f) <= super::contract::CSG_PRIVATE_POOL_MAX
+}
+
+/// Whether a tree has a sweep table and its spans live in the shared pool: then its queries
+/// either give up after their walk budget (kernels without `FeatureSet::csg_sweeps`) or go
+/// on with the sweeps (shaders/csg.wgsl).
+pub fn csg_sweepable(f: &FeatureSet) -> bool {
+    f.csg_sweep_nodes > 0 && !csg_pool_private(f)
 }
 
 /// Whether CSG trees are evaluated in a stage of their own: the scene has CSG and few
