@@ -396,9 +396,14 @@ fn csg_sort_ends(n: u32) {
     }
 }
 
-// Node k's sweep-table words: parent, then operation | FIRST_CHILD | children.
+// Node k's sweep-table words: parent, then its flags (operation | FIRST_CHILD | children).
 fn csg_sweep_node(tree: CsgTree, k: u32) -> vec2<u32> {
-    return vec2<u32>(object_ref(tree.sweep + 2u * k), object_ref(tree.sweep + 2u * k + 1u));
+    return vec2<u32>(object_ref(tree.sweep + 2u * k), csg_sweep_flags(tree, k));
+}
+
+// Node k's flags alone (a parent's operation and child count, without its own parent).
+fn csg_sweep_flags(tree: CsgTree, k: u32) -> u32 {
+    return object_ref(tree.sweep + 2u * k + 1u);
 }
 
 // The node of leaf `leaf` (the table's words after the nodes').
@@ -428,7 +433,7 @@ fn csg_leaf_changed(tree: CsgTree, side: u32, leaf: u32, x: f32) {
         if (node.x == CSG_SWEEP_NO_PARENT) {
             break;
         }
-        let up = object_ref(tree.sweep + 2u * node.x + 1u);
+        let up = csg_sweep_flags(tree, node.x);
         let op = up & CSG_SWEEP_OP_BITS;
         var sp = csg_word(CSG_STATES + node.x, side);
         if (op == CSG_DIFF && (node.y & CSG_SWEEP_FIRST_CHILD) != 0u) {
@@ -467,7 +472,7 @@ fn csg_sweep_classify(tree: CsgTree, leaf: u32, exit: bool) -> u32 {
         if (node.x == CSG_SWEEP_NO_PARENT) {
             break;
         }
-        let up = object_ref(tree.sweep + 2u * node.x + 1u);
+        let up = csg_sweep_flags(tree, node.x);
         let op = up & CSG_SWEEP_OP_BITS;
         let own_is_first = op == CSG_DIFF && (node.y & CSG_SWEEP_FIRST_CHILD) != 0u;
         var others = 0u;

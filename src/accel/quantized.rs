@@ -123,6 +123,14 @@ impl QuantizedNode {
         }
     }
 
+    /// This node moved into a larger table: its inner children's indices by `nodes`, its
+    /// leaves' first primitives by `prims` (`link` is the one or the other, as
+    /// [`QuantizedNode::child`] reads it).
+    pub fn moved(self, nodes: u32, prims: u32) -> Self {
+        let by = if self.scales & RIGHT_LEAF != 0 { prims } else { nodes };
+        QuantizedNode { link: self.link + by, ..self }
+    }
+
     /// The decoded box `(min, max)` of child `side` (0 left, 1 right) of an inner node, as
     /// the GPU computes it (without flushing denormals).
     pub fn child_box(&self, side: usize) -> ([f32; 3], [f32; 3]) {
@@ -433,6 +441,24 @@ mod tests {
             }
         }
         check(nodes);
+    }
+
+    /// A moved tree's children are the original's, shifted: inner ones by the node base,
+    /// leaves by the primitive base.
+    #[test]
+    fn moved_nodes_keep_their_children() {
+        let boxes: Vec<_> = (0..40).map(|i| (DVec3::splat(f64::from(i)), DVec3::splat(f64::from(i) + 0.5))).collect();
+        let q = quantize(tree(&boxes).nodes());
+        for (k, n) in q.iter().enumerate() {
+            let m = n.moved(100, 1000);
+            for side in 0..2 {
+                let want = match n.child(k as u32, side) {
+                    Child::Inner(j) => Child::Inner(j + 100),
+                    Child::Leaf { first, count } => Child::Leaf { first: first + 1000, count },
+                };
+                assert_eq!(m.child(k as u32 + 100, side), want, "node {k} side {side}");
+            }
+        }
     }
 
     #[test]

@@ -60,14 +60,6 @@ pub struct PackedScene {
     pub origin: DVec3,
 }
 
-/// A bottom-level node moved to index base `to` (an inner right child moves with it), its
-/// leaves' triangle ranges moved by `tri_base` (`link` is a range where the right child is
-/// a leaf: accel::QuantizedNode).
-fn rebased(n: QuantizedNode, to: u32, tri_base: u32) -> QuantizedNode {
-    let by = if n.scales & quantized::RIGHT_LEAF != 0 { tri_base } else { to };
-    QuantizedNode { link: n.link + by, ..n }
-}
-
 /// Whether `count` primitives fit the ranges a GPU walk carries (accel::quantized::LEAF_REF:
 /// 2^28, far beyond what the storage buffers hold).
 fn leaf_range_fits(what: &'static str, count: usize) -> Result<(), PackError> {
@@ -385,7 +377,7 @@ fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, P
             });
         }
         leaf_range_fits("triangles (all meshes)", tri_base as usize + bvh.prim_indices().len())?;
-        p.bvh_nodes.extend(nodes.iter().map(|&n| rebased(n, node_base, tri_base)));
+        p.bvh_nodes.extend(nodes.iter().map(|&n| n.moved(node_base, tri_base)));
         let mut leaf_of = vec![0u32; mesh.triangle_count()];
         for (k, &t) in bvh.prim_indices().iter().enumerate() {
             leaf_of[t as usize] = tri_base + k as u32;
