@@ -43,13 +43,20 @@ fn box_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>
     return select(OPEN, enter, enter <= exit);
 }
 
+// Node `n`'s grid step per axis: 2^e from the biased exponents in its `scales`.
+fn grid_step(n: QuantizedNode) -> vec3<f32> {
+    let e = (vec3<u32>(n.scales) >> vec3<u32>(0u, BVH_GRID_BITS, 2u * BVH_GRID_BITS)) & vec3<u32>((1u << BVH_GRID_BITS) - 1u);
+    return bitcast<vec3<f32>>(e << vec3<u32>(23u));
+}
+
+// #if BVH_WALK
 // The entries of the ray into inner node `n`'s left (x) and right (y) child boxes (OPEN
 // where it misses), decoded from the node's grid: corner + q * 2^e, where the product is
 // exact, so the bounds are the ones accel::quantized made to contain the children.
 fn child_entries(n: QuantizedNode, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> vec2<f32> {
     let mask = vec3<u32>((1u << BVH_GRID_BITS) - 1u);
     let bits = vec3<u32>(BVH_GRID_BITS);
-    let step = bitcast<vec3<f32>>(((vec3<u32>(n.scales) >> vec3<u32>(0u, BVH_GRID_BITS, 2u * BVH_GRID_BITS)) & mask) << vec3<u32>(23u));
+    let step = grid_step(n);
     let g = n.grid;
     let left_lo = n.corner + vec3<f32>(g & mask) * step;
     let left_hi = n.corner + vec3<f32>((g >> bits) & mask) * step;
@@ -57,12 +64,18 @@ fn child_entries(n: QuantizedNode, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: 
     let right_hi = n.corner + vec3<f32>(g >> (3u * bits)) * step;
     return vec2<f32>(box_entry(left_lo, left_hi, origin, inv_dir, tmin, tmax), box_entry(right_lo, right_hi, origin, inv_dir, tmin, tmax));
 }
+// #endif
 
 // #if OBJECT_LIST
-// The ray's entry into the whole tree rooted at inner node `root` (OPEN where it misses).
+// The ray's entry into the whole tree rooted at inner node `root` (OPEN where it misses):
+// one box test against the union of its children's decoded boxes, which starts at the
+// node's corner (the least of their minima) and ends at the larger of their maxima.
 fn tree_entry(root: u32, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
-    let t = child_entries(bvh_node_at(root), origin, inv_dir, tmin, tmax);
-    return min(t.x, t.y);
+    let n = bvh_node_at(root);
+    let mask = vec3<u32>((1u << BVH_GRID_BITS) - 1u);
+    let step = grid_step(n);
+    let top = max((n.grid >> vec3<u32>(BVH_GRID_BITS)) & mask, n.grid >> vec3<u32>(3u * BVH_GRID_BITS));
+    return box_entry(n.corner, n.corner + vec3<f32>(top) * step, origin, inv_dir, tmin, tmax);
 }
 // #endif
 // #endif
