@@ -124,6 +124,50 @@ fn images_do_not_depend_on_the_batch_size() {
     }
 }
 
+/// A twin device (llvmpipe: `wavefront::twin`, DESIGN.md "Twin devices") renders its share
+/// of the batches bit for bit as the render's own device would: every renderer, the twin
+/// forced on (`TwinUse::Always`, the host waiting until it is set up) and off, in batches of
+/// 97 slots. Where a twin can run (llvmpipe through Vulkan, two cores or more) it must
+/// have run some of them; elsewhere none.
+#[test]
+fn a_twin_device_renders_the_same_bits() {
+    use lumen::gpu::render::TwinUse;
+    let Some(gpu) = gpu_for_tests("a_twin_device_renders_the_same_bits") else { return };
+    let info = &gpu.adapter_info;
+    let twin_can_run = info.backend == wgpu::Backend::Vulkan
+        && info.name.to_ascii_lowercase().contains("llvmpipe")
+        && std::thread::available_parallelism().map_or(1, |n| n.get()) >= 2;
+    for renderer in [
+        pt(3, 5, true),
+        Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
+        Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) },
+    ] {
+        let scene = mixed_scene(renderer);
+        let name = scene.renderer.name();
+        let with = |twin: TwinUse| {
+            let mut opts = GpuRenderOptions { twin, ..GpuRenderOptions::fixed_passes(Some(8), 4) };
+            opts.passes.batch_paths = 97;
+            let out = render(&gpu, &scene, &opts).unwrap();
+            assert_eq!((out.spp_done, out.non_finite_samples), (8, 0), "{name}");
+            out
+        };
+        let (alone, shared) = (with(TwinUse::Never), with(TwinUse::Always));
+        assert_eq!(alone.twin_batches, 0, "{name}");
+        if twin_can_run {
+            assert!(
+                shared.twin_batches > 0,
+                "{name}: the twin ran {} of {} batches",
+                shared.twin_batches,
+                shared.batches
+            );
+        } else {
+            assert_eq!(shared.twin_batches, 0, "{name}");
+        }
+        assert!(bits(&shared.image) == bits(&alone.image), "{name}: the twin's batches change the image");
+        assert_eq!(shared.rays, alone.rays, "{name}: rays counted on both devices");
+    }
+}
+
 /// The film's compensated sum makes a pixel's value independent of how its samples are
 /// split into rounds (what lets shards merge into the one-render image): 16 samples in one
 /// round, in rounds of 5, 5, 5, 1 and one by one give the same f32 image but for the rare

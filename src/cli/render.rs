@@ -16,7 +16,7 @@ use super::script_args::{SceneOverrides, ScriptArgs, SppArgs};
 use crate::cpu::{self, paths_per_sample, Limits, Progress, RenderOptions};
 pub use crate::device::DeviceChoice;
 use crate::device::{open_device, OpenDevice};
-use crate::gpu::render::{GpuRenderOptions, GpuRenderer};
+use crate::gpu::render::{GpuRenderOptions, GpuRenderer, TwinUse};
 use crate::gpu::{ctrlc_flag, Gpu, GpuError};
 use crate::image::render_metadata::fingerprint;
 use crate::image::{write_image_with, HdrImage, ImageFormat, RenderMetadata, ToneMap};
@@ -257,6 +257,14 @@ fn kernel_note(compiled: usize, seconds: f64) -> String {
     }
 }
 
+/// How many batches a twin device ran (`lumen render --one-device`), if any.
+fn twin_note(twin: u64, batches: u64) -> String {
+    match twin {
+        0 => String::new(),
+        n => format!("; {n} of {batches} batches on a twin device"),
+    }
+}
+
 /// Says why a render stopped early (the same words for both renderers); returns whether it did.
 fn report_stop(stop: StopReason, spp_done: u64) -> bool {
     match stop {
@@ -285,6 +293,7 @@ fn render_on_gpu(
         passes: args.gpu.pass_options(),
         profile: args.profile,
         tables: args.gpu.tables,
+        twin: if args.gpu.one_device { TwinUse::Never } else { TwinUse::Auto },
         ..GpuRenderOptions::default()
     };
     let out = renderer.render(gpu, scene, &opts)?;
@@ -297,7 +306,7 @@ fn render_on_gpu(
     }
     let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
     eprintln!(
-        "{}×{} {} on the GPU ({}): {} of {} samples per pixel, {} samples in {:.2} s ({:.2} Msamples/s; {})",
+        "{}×{} {} on the GPU ({}): {} of {} samples per pixel, {} samples in {:.2} s ({:.2} Msamples/s; {}{})",
         scene.width,
         scene.height,
         scene.renderer.name(),
@@ -307,7 +316,8 @@ fn render_on_gpu(
         samples,
         out.seconds,
         samples as f64 / out.seconds.max(1e-9) / 1e6,
-        kernel_note(out.kernels_compiled, out.kernel_seconds)
+        kernel_note(out.kernels_compiled, out.kernel_seconds),
+        twin_note(out.twin_batches, out.batches)
     );
     let stopped_early = report_stop(out.stop, u64::from(out.spp_done));
     if out.spp_done == 0 {
@@ -491,6 +501,8 @@ mod tests {
         assert_eq!(kernel_note(0, 0.001), "kernels from cache");
         assert_eq!(kernel_note(1, 0.25), "1 kernel created in 0.25 s");
         assert_eq!(kernel_note(9, 1.234), "9 kernels created in 1.23 s");
+        assert_eq!(twin_note(0, 12), "");
+        assert_eq!(twin_note(5, 12), "; 5 of 12 batches on a twin device");
     }
 
     #[test]

@@ -60,7 +60,7 @@ fn switched_off() -> bool {
 /// Whether the device compiles a kernel at its first launch (llvmpipe through Vulkan;
 /// wgpu's OpenGL backend also reaches llvmpipe, but through EGL contexts that a second
 /// device on another thread would have to share with care).
-fn lazy_jit(info: &wgpu::AdapterInfo) -> bool {
+pub(crate) fn lazy_jit(info: &wgpu::AdapterInfo) -> bool {
     info.backend == wgpu::Backend::Vulkan
         && info.device_type == wgpu::DeviceType::Cpu
         && info.name.to_ascii_lowercase().contains("llvmpipe")

@@ -13,7 +13,7 @@ use super::features::{FeatureSet, RendererKind};
 use super::pack::{pack, PackedScene};
 use super::parallel_jit;
 use super::tables::{Table, TableForms, TableLimits, TablePlacement};
-use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
+use super::wavefront::{self, run_rounds, twin, Plan, Stage, StageKernels, StopReason};
 use super::{
     Assembled, BindingKind, BoundResource, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary,
 };
@@ -96,6 +96,23 @@ pub struct GpuRenderOptions {
     /// Which scene tables the kernels read from uniform buffers or textures (`lumen render
     /// --tables`; [`super::tables::TableForms::choose`]). The image is the same.
     pub tables: TablePlacement,
+    /// Whether batches may be shared with a twin device on llvmpipe (`wavefront::twin`;
+    /// `lumen render --one-device` is [`TwinUse::Never`]). The image is the same.
+    pub twin: TwinUse,
+}
+
+/// When a render on llvmpipe shares its batches with a twin device (`wavefront::twin`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum TwinUse {
+    /// Where it pays: renders of a few batches or more, the twin started once a round's
+    /// timing leaves `wavefront::twin::TWIN_MIN_SECONDS` or more to render.
+    #[default]
+    Auto,
+    /// Never: this device renders every batch.
+    Never,
+    /// From the first batch of any render of two batches or more, the host waiting for the
+    /// twin to be set up (for tests of the twin itself).
+    Always,
 }
 
 impl GpuRenderOptions {
@@ -140,6 +157,9 @@ pub struct GpuRenderOutput {
     pub batches: u64,
     /// Path slots per batch.
     pub batch_paths: u32,
+    /// Batches a twin device ran (llvmpipe: [`GpuRenderOptions::twin`]); the rest ran on
+    /// the render's device.
+    pub twin_batches: u64,
     /// Closest-hit and shadow rays traced (the same count as the CPU reference's
     /// `RenderStats::rays` for the same samples).
     pub rays: u64,
@@ -417,14 +437,47 @@ impl GpuRenderer {
             paths_per_sample: n,
             capacity: runner.capacity(),
             shadow_rays,
+            devices: 1,
         };
         let rounds = Instant::now();
         // A time limit covers the attempts dropped before this one.
         let mut passes = opts.passes.clone();
         passes.time_limit = passes.time_limit.map(|limit| limit.saturating_sub(attempts.dropped));
-        let acc = run_rounds(&mut runner, &plan, &passes)?;
+        let mut twin_counters = None;
+        let with_twin = shares_with_twin(gpu, opts, &plan);
+        let plan = Plan { devices: if with_twin { 2 } else { 1 }, ..plan };
+        let acc = if with_twin {
+            // The batches go to this device and a twin, each serving them on a thread of
+            // its own (wavefront::twin); the twin sets itself up meanwhile.
+            let (mut host, feed) = twin::shared();
+            let feed = &feed;
+            let twin_job =
+                TwinJob { features: f, packed, shadow_rays, max_depth: s.max_depth, capacity: plan.capacity };
+            std::thread::scope(|scope| {
+                let this = scope.spawn(|| feed.serve(&mut runner));
+                let twin = scope.spawn(move || twin_job.serve(gpu, feed));
+                if opts.twin == TwinUse::Always {
+                    host.start_twin();
+                    host.wait_for_twin();
+                }
+                let acc = run_rounds(&mut host, &plan, &passes);
+                host.close();
+                let served = this.join();
+                twin_counters = twin.join().ok().flatten();
+                served.map_err(|_| GpuError::Internal("a device serving the batches panicked".into()))?;
+                acc
+            })?
+        } else {
+            run_rounds(&mut runner, &plan, &passes)?
+        };
         let profile = runner.profile(rounds.elapsed().as_secs_f64());
-        let counters = runner.counters()?;
+        let mut counters = runner.counters()?;
+        let mut twin_batches = 0;
+        if let Some((t, served)) = twin_counters {
+            counters.rays += t.rays;
+            counters.non_finite += t.non_finite;
+            twin_batches = served;
+        }
         Ok(GpuRenderOutput {
             image: acc.image,
             spp_done: acc.spp_done,
@@ -438,10 +491,102 @@ impl GpuRenderer {
             tables: f.tables,
             batches: acc.batches,
             batch_paths: runner.capacity(),
+            twin_batches,
             rays: counters.rays,
             profile,
         })
     }
+}
+
+/// Least batches a render takes for a twin device to be ready to share them
+/// (`wavefront::twin`, which starts it only once enough time is left).
+const TWIN_MIN_BATCHES: u64 = 4;
+
+/// Whether a render may share its batches with a twin device (`wavefront::twin`): only on
+/// llvmpipe through Vulkan (where a submission runs on the submitting thread, so the
+/// driver's workers wait between launches), with two cores or more, unprofiled (a profile
+/// times one device's launches), unless [`TwinUse::Never`], and only for renders of at
+/// least [`TWIN_MIN_BATCHES`] batches (two with [`TwinUse::Always`]).
+fn shares_with_twin(gpu: &Gpu, opts: &GpuRenderOptions, plan: &Plan) -> bool {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let paths = u64::from(plan.width)
+        * u64::from(plan.height)
+        * u64::from(plan.total_spp)
+        * u64::from(plan.paths_per_sample.max(1));
+    let least = match opts.twin {
+        TwinUse::Never => return false,
+        TwinUse::Auto => TWIN_MIN_BATCHES,
+        TwinUse::Always => 2,
+    };
+    !opts.profile
+        && cores >= 2
+        && parallel_jit::lazy_jit(&gpu.adapter_info)
+        && paths >= least * u64::from(plan.capacity)
+}
+
+/// What a twin device needs to render a scene's batches as this device does.
+struct TwinJob<'a> {
+    features: FeatureSet,
+    packed: &'a PackedScene,
+    shadow_rays: u32,
+    max_depth: u32,
+    capacity: u32,
+}
+
+impl TwinJob<'_> {
+    /// Once the host starts it, opens a twin of `gpu`, creates the scene's kernels there
+    /// (llvmpipe finds their code in Mesa's shader cache, where this device's compilation
+    /// put it), uploads the scene and serves `feed` with as many path slots as this device
+    /// has. Its counters and the batches it ran; `None` when it was not started or any of
+    /// that failed, which leaves every batch to this device.
+    fn serve(self, gpu: &Gpu, feed: &twin::Feed) -> Option<(wavefront::Counters, u64)> {
+        if !feed.started() {
+            return None;
+        }
+        // The host may be waiting for this answer (TwinUse::Always): give it even on a panic.
+        let set_up = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.set_up(gpu))).ok().flatten();
+        feed.ready(set_up.is_some());
+        let twin = set_up?;
+        let setup = wavefront::RunnerSetup {
+            gpu: &twin.gpu,
+            kernels: &twin.kernels,
+            groups1: &twin.groups,
+            features: self.features,
+            shadow_rays: self.shadow_rays,
+            max_depth: self.max_depth,
+            profile: false,
+        };
+        let mut runner = wavefront::Runner::new(&setup, self.capacity).ok()?;
+        if runner.capacity() != self.capacity {
+            return None;
+        }
+        let served = feed.serve(&mut runner);
+        Some((runner.counters().ok()?, served))
+    }
+
+    /// The twin device with the scene's kernels, buffers and bind groups.
+    fn set_up(&self, gpu: &Gpu) -> Option<TwinDevice> {
+        let twin = gpu.twin()?;
+        let mut kernels = BTreeMap::new();
+        for (stage, assembled) in assemble_stages(&self.features).ok()? {
+            let label = format!("{} stage (twin)", stage.label());
+            let kernel = twin.compute_kernel(&label, &assembled.source, stage.entry().1).ok()?;
+            kernels.insert(stage, std::sync::Arc::new(kernel));
+        }
+        let kernels = StageKernels { kernels, compiled: 0 };
+        let buffers = SceneBuffers::upload(&twin, &kernels, self.packed).ok()?;
+        let groups = buffers.groups(&twin, &kernels).ok()?;
+        Some(TwinDevice { gpu: twin, kernels, _buffers: buffers, groups })
+    }
+}
+
+/// A twin device set up to render a scene ([`TwinJob::set_up`]).
+struct TwinDevice {
+    gpu: Gpu,
+    kernels: StageKernels,
+    /// Kept for as long as the bind groups use them.
+    _buffers: SceneBuffers,
+    groups: BTreeMap<Stage, wgpu::BindGroup>,
 }
 
 /// A render's attempts so far: kernels created (seconds, count) and the time of attempts

@@ -21,6 +21,7 @@ mod contract;
 pub mod profile;
 mod schedule;
 mod stages;
+pub(crate) mod twin;
 
 pub use contract::{queue, wavefront_module, BatchUniform, StateBuffer};
 pub use schedule::{

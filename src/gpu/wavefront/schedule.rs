@@ -94,6 +94,9 @@ pub(crate) trait BatchRunner {
     fn collect(&mut self, pending: Self::Pending) -> Result<Vec<[f64; 3]>, GpuError>;
     /// Waits for everything submitted (before returning early).
     fn drain(&mut self) -> Result<(), GpuError>;
+    /// After each round: about how many seconds of batches are left, at the last round's
+    /// rate (where more devices could join: `wavefront::twin`).
+    fn seconds_left(&mut self, _seconds: f64) {}
 }
 
 /// What one render needs to plan its batches.
@@ -108,6 +111,10 @@ pub(crate) struct Plan {
     pub paths_per_sample: u32,
     pub capacity: u32,
     pub shadow_rays: u32,
+    /// Devices sharing the batches (1, or 2 with a twin: `wavefront::twin`). A round's
+    /// batches come in a multiple of this count, of pixel counts equal to within one, so
+    /// that the devices finish a round together, and the first round fills a batch on each.
+    pub devices: u32,
 }
 
 /// Samples of the next round for a plan, `wanted` at most: no more than the slots hold
@@ -119,16 +126,20 @@ fn round_samples(plan: &Plan, wanted: u32) -> u32 {
     wanted.min(by_slots).min(by_film).max(1)
 }
 
-/// The batches of one round of `samples` camera samples from `j0`.
+/// The batches of one round of `samples` camera samples from `j0`: the fewest that fit the
+/// slots, rounded up to a multiple of the devices (while there are pixels enough), with the
+/// pixels shared evenly among them (counts differing by one at most).
 pub(crate) fn batches(plan: &Plan, j0: u32, samples: u32) -> Vec<BatchUniform> {
     let n = plan.paths_per_sample.max(1);
     let per_pixel = samples * n;
     let pixels = plan.width * plan.height;
-    let per_batch = (plan.capacity / per_pixel).max(1);
-    (0..pixels)
-        .step_by(per_batch as usize)
-        .map(|p0| {
-            let count = per_batch.min(pixels - p0);
+    let fit = (plan.capacity / per_pixel).max(1);
+    let batches = pixels.div_ceil(fit).next_multiple_of(plan.devices.max(1)).min(pixels).max(1);
+    // Batch k starts at pixel ⌊k·pixels / batches⌋: at most ⌈pixels / batches⌉ ≤ fit each.
+    let start = |k: u32| (u64::from(k) * u64::from(pixels) / u64::from(batches)) as u32;
+    (0..batches)
+        .map(|k| {
+            let (p0, count) = (start(k), start(k + 1) - start(k));
             BatchUniform {
                 pixel_begin: p0,
                 pixel_count: count,
@@ -215,6 +226,7 @@ pub(crate) fn run_rounds<R: BatchRunner>(
         done += samples;
         progress.set_message(format!("{done}/{total_spp} spp, {samples} spp/round"));
         let per_sample = t.elapsed().as_secs_f64() / f64::from(samples);
+        runner.seconds_left(per_sample * f64::from(total_spp - done));
         let remaining = match opts.time_limit {
             Some(limit) => {
                 let elapsed = start.elapsed();
@@ -248,11 +260,12 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     })
 }
 
-/// Camera samples per pixel that fill one batch's path slots when the whole image shares
-/// them (at least 1; images with more pixels than slots need several batches per sample).
+/// Camera samples per pixel that fill one batch's path slots on each device when the whole
+/// image shares them (at least 1; images with more pixels than slots need several batches
+/// per sample).
 fn full_batch_samples(plan: &Plan) -> u32 {
     let paths_per_spp = u64::from(plan.width) * u64::from(plan.height) * u64::from(plan.paths_per_sample.max(1));
-    let fill = u64::from(plan.capacity) / paths_per_spp.max(1);
+    let fill = u64::from(plan.capacity) * u64::from(plan.devices.max(1)) / paths_per_spp.max(1);
     round_samples(plan, u32::try_from(fill).unwrap_or(u32::MAX))
 }
 
@@ -350,23 +363,43 @@ mod tests {
     }
 
     fn plan(width: u32, height: u32, n: u32, capacity: u32) -> Plan {
-        Plan { width, height, sample_begin: 0, total_spp: 64, paths_per_sample: n, capacity, shadow_rays: 1 }
+        Plan {
+            width,
+            height,
+            sample_begin: 0,
+            total_spp: 64,
+            paths_per_sample: n,
+            capacity,
+            shadow_rays: 1,
+            devices: 1,
+        }
     }
 
     #[test]
     fn batches_hold_whole_pixels_cover_each_once_and_fit_the_slots() {
         for (w, h, n, cap, samples) in [(1, 1, 1, 1, 1), (7, 5, 3, 64, 4), (300, 200, 1, 65_536, 64), (9, 9, 10, 25, 2)]
         {
-            let p = plan(w, h, n, cap);
-            let s = round_samples(&p, samples);
-            let mut next = 0;
-            for b in batches(&p, 5, s) {
-                assert_eq!(b.pixel_begin, next, "contiguous");
-                assert!(b.path_count <= cap && b.path_count == b.pixel_count * s * n);
-                assert_eq!((b.sample_begin, b.samples, b.capacity), (5, s, cap));
-                next += b.pixel_count;
+            for devices in [1, 2, 3] {
+                let p = Plan { devices, ..plan(w, h, n, cap) };
+                let s = round_samples(&p, samples);
+                let mut next = 0;
+                let all = batches(&p, 5, s);
+                for b in &all {
+                    assert_eq!(b.pixel_begin, next, "contiguous");
+                    assert!(b.path_count <= cap && b.path_count == b.pixel_count * s * n);
+                    assert_eq!((b.sample_begin, b.samples, b.capacity), (5, s, cap));
+                    next += b.pixel_count;
+                }
+                assert_eq!(next, w * h);
+                // The fewest batches that fit, in a multiple of the devices where the
+                // pixels allow, each within one pixel of the others.
+                let fewest = (w * h).div_ceil((cap / (s * n)).max(1));
+                let count = all.len() as u32;
+                assert!(count >= fewest && count < fewest + devices, "{count} batches for {devices} devices");
+                assert!(count % devices == 0 || count == w * h, "{count} batches for {devices} devices");
+                let sizes = all.iter().map(|b| b.pixel_count);
+                assert!(sizes.clone().max().unwrap() - sizes.min().unwrap() <= 1);
             }
-            assert_eq!(next, w * h);
         }
         // Fewer slots than a pixel's paths: the round shrinks to what one pixel fits.
         assert_eq!(round_samples(&plan(4, 4, 10, 25), 8), 2);

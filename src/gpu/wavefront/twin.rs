@@ -1,0 +1,250 @@
+//! A render's batches shared with a *twin*: a second device on the same software adapter.
+//!
+//! On llvmpipe a queue submission runs its launches on the submitting thread before it
+//! returns, one launch after another, and between launches (and in a launch's last few
+//! workgroups, and in the small launches of deep bounces) the driver's worker threads wait.
+//! On the 2-core machine a render left a quarter of the cores idle that way (skybox.sl:
+//! 1.47 cores busy; spheres_10k.sl 1.78). A twin (`Gpu::twin`, a device of its own with
+//! its own queue and workers) fills those gaps with another batch: two processes rendering
+//! half the samples each finished glass.sl 1.35–1.5× sooner than one process rendering
+//! all of them (DESIGN.md "Twin devices", BENCHMARKS.md).
+//!
+//! Each device runs whole batches on a thread of its own, taking them in order from one
+//! list; the host adds each batch's sums into the round as before. Opening the twin and
+//! creating its kernels takes about a quarter of a second of both cores, so the twin is
+//! started only once a round's timing says at least [`TWIN_MIN_SECONDS`] of batches are
+//! left: short renders never pay for it. Batches hold whole
+//! pixels and both devices run the same kernels on the same driver, so a pixel's value does
+//! not depend on which device rendered it: the image is bitwise the one a single device
+//! makes.
+
+use std::collections::HashMap;
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::Mutex;
+
+use super::contract::BatchUniform;
+use super::schedule::BatchRunner;
+use crate::gpu::device::GpuError;
+
+/// A batch to run: its place in submission order, and the batch.
+type Job = (u64, BatchUniform);
+/// A run batch's per-pixel sums, with its place in submission order.
+type Done = (u64, Result<Vec<[f64; 3]>, GpuError>);
+
+/// Seconds of batches that must be left for the twin to start (its start-up costs about
+/// 0.25 s of both cores on the 2-core machine; it then saves up to a third of what is left).
+pub const TWIN_MIN_SECONDS: f64 = 1.5;
+
+/// The list of batches both devices take from, and where they put their sums.
+pub(crate) struct Feed {
+    jobs: Mutex<Receiver<Job>>,
+    done: Sender<Done>,
+    start: Mutex<Receiver<()>>,
+    ready: Sender<bool>,
+}
+
+impl Feed {
+    /// The twin says it is set up (true) or could not be (false).
+    pub fn ready(&self, ok: bool) {
+        let _ = self.ready.send(ok);
+    }
+
+    /// Waits until the host starts the twin (true) or ends the render without it (false).
+    pub fn started(&self) -> bool {
+        self.start.lock().is_ok_and(|start| start.recv().is_ok())
+    }
+
+    /// Runs batches from the list on `runner` (each submitted and collected in turn: the
+    /// submission runs it anyway) until the list is closed or the host stops listening;
+    /// how many it ran.
+    pub fn serve<R: BatchRunner>(&self, runner: &mut R) -> u64 {
+        let mut served = 0;
+        loop {
+            // One device waits on the list, the other on the lock: the same thing.
+            let job = match self.jobs.lock() {
+                Ok(jobs) => jobs.recv(),
+                Err(_) => return served,
+            };
+            let Ok((index, batch)) = job else { return served };
+            let sums = runner.submit(&batch, 0).and_then(|pending| runner.collect(pending));
+            served += 1;
+            if self.done.send((index, sums)).is_err() {
+                return served;
+            }
+        }
+    }
+}
+
+/// The host's side: a [`BatchRunner`] whose batches the serving devices run.
+pub(crate) struct Shared {
+    jobs: Option<Sender<Job>>,
+    /// Starts the twin; `None` once sent or closed.
+    start: Option<Sender<()>>,
+    ready: Receiver<bool>,
+    done: Receiver<Done>,
+    /// Sums that came back before the host asked for them.
+    early: HashMap<u64, Result<Vec<[f64; 3]>, GpuError>>,
+    next: u64,
+    in_flight: usize,
+}
+
+/// A new list of batches: the host's end and the devices' end.
+pub(crate) fn shared() -> (Shared, Feed) {
+    let (jobs_tx, jobs_rx) = channel();
+    let (done_tx, done_rx) = channel();
+    let (start_tx, start_rx) = channel();
+    let (ready_tx, ready_rx) = channel();
+    let host = Shared {
+        jobs: Some(jobs_tx),
+        start: Some(start_tx),
+        ready: ready_rx,
+        done: done_rx,
+        early: HashMap::new(),
+        next: 0,
+        in_flight: 0,
+    };
+    (host, Feed { jobs: Mutex::new(jobs_rx), done: done_tx, start: Mutex::new(start_rx), ready: ready_tx })
+}
+
+impl Shared {
+    /// Ends the list: each device finishes the batch it runs, then returns from `serve`; a
+    /// twin not started by then never starts.
+    pub fn close(&mut self) {
+        self.jobs = None;
+        self.start = None;
+    }
+
+    /// Waits until a started twin is set up or has failed to be (whether it is set up).
+    pub fn wait_for_twin(&self) -> bool {
+        self.ready.recv().unwrap_or(false)
+    }
+
+    /// Starts the twin now (it begins taking batches once set up).
+    pub fn start_twin(&mut self) {
+        if let Some(start) = self.start.take() {
+            let _ = start.send(());
+        }
+    }
+
+    fn lost() -> GpuError {
+        GpuError::Internal("every device serving the render's batches has stopped".into())
+    }
+}
+
+impl BatchRunner for Shared {
+    type Pending = u64;
+
+    fn submit(&mut self, batch: &BatchUniform, _slot: usize) -> Result<u64, GpuError> {
+        let index = self.next;
+        self.jobs.as_ref().ok_or_else(Self::lost)?.send((index, *batch)).map_err(|_| Self::lost())?;
+        self.next += 1;
+        self.in_flight += 1;
+        Ok(index)
+    }
+
+    fn collect(&mut self, index: u64) -> Result<Vec<[f64; 3]>, GpuError> {
+        loop {
+            if let Some(sums) = self.early.remove(&index) {
+                self.in_flight -= 1;
+                return sums;
+            }
+            let (k, sums) = self.done.recv().map_err(|_| Self::lost())?;
+            self.early.insert(k, sums);
+        }
+    }
+
+    fn drain(&mut self) -> Result<(), GpuError> {
+        while self.early.len() < self.in_flight {
+            let (k, sums) = self.done.recv().map_err(|_| Self::lost())?;
+            self.early.insert(k, sums);
+        }
+        Ok(())
+    }
+
+    fn seconds_left(&mut self, seconds: f64) {
+        if seconds >= TWIN_MIN_SECONDS {
+            self.start_twin();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A runner that "renders" a batch as its first pixel index, after a delay that makes
+    /// later batches finish first.
+    struct Fake {
+        delay_ms: u64,
+    }
+
+    impl BatchRunner for Fake {
+        type Pending = BatchUniform;
+        fn submit(&mut self, batch: &BatchUniform, _slot: usize) -> Result<BatchUniform, GpuError> {
+            Ok(*batch)
+        }
+        fn collect(&mut self, b: BatchUniform) -> Result<Vec<[f64; 3]>, GpuError> {
+            std::thread::sleep(std::time::Duration::from_millis(self.delay_ms));
+            Ok(vec![[f64::from(b.pixel_begin); 3]; b.pixel_count as usize])
+        }
+        fn drain(&mut self) -> Result<(), GpuError> {
+            Ok(())
+        }
+    }
+
+    fn batch(p0: u32) -> BatchUniform {
+        BatchUniform { pixel_begin: p0, pixel_count: 2, ..bytemuck::Zeroable::zeroed() }
+    }
+
+    /// Sums come back to the batch they belong to, whichever device ran it and in whatever
+    /// order the devices finish; a closed list ends both devices' service.
+    #[test]
+    fn sums_return_to_their_batch_whichever_device_ran_it() {
+        let (mut host, feed) = shared();
+        std::thread::scope(|s| {
+            let feed = &feed;
+            let slow = s.spawn(move || feed.serve(&mut Fake { delay_ms: 30 }));
+            let twin = s.spawn(move || if feed.started() { feed.serve(&mut Fake { delay_ms: 1 }) } else { 0 });
+            // Not enough left: the twin waits; then enough.
+            host.seconds_left(TWIN_MIN_SECONDS / 2.0);
+            host.seconds_left(TWIN_MIN_SECONDS);
+            let pending: Vec<u64> = (0..6).map(|k| host.submit(&batch(10 * k), 0).unwrap()).collect();
+            // Collected in reverse: the early ones wait in `early`.
+            for (k, p) in pending.into_iter().enumerate().rev() {
+                assert_eq!(host.collect(p).unwrap(), vec![[10.0 * k as f64; 3]; 2]);
+            }
+            let p = host.submit(&batch(70), 0).unwrap();
+            host.drain().unwrap();
+            assert_eq!(host.collect(p).unwrap()[0][0], 70.0);
+            host.close();
+            let (slow, twin) = (slow.join().unwrap(), twin.join().unwrap());
+            assert_eq!(slow + twin, 7);
+            assert!(twin > 0, "the fast twin took none of 7 batches");
+        });
+    }
+
+    /// A twin never started returns when the host closes the list, having run nothing.
+    #[test]
+    fn a_twin_not_started_never_serves() {
+        let (mut host, feed) = shared();
+        std::thread::scope(|s| {
+            let feed = &feed;
+            let this = s.spawn(move || feed.serve(&mut Fake { delay_ms: 1 }));
+            let twin = s.spawn(move || feed.started());
+            host.seconds_left(TWIN_MIN_SECONDS / 2.0);
+            let p = host.submit(&batch(0), 0).unwrap();
+            host.collect(p).unwrap();
+            host.close();
+            assert_eq!((this.join().unwrap(), twin.join().unwrap()), (1, false));
+        });
+    }
+
+    /// With nobody serving, the host gets an error instead of waiting for ever.
+    #[test]
+    fn a_list_nobody_serves_is_an_error() {
+        let (mut host, feed) = shared();
+        drop(feed);
+        let p = host.submit(&batch(0), 0);
+        assert!(p.is_err() || host.collect(p.unwrap()).is_err());
+    }
+}
