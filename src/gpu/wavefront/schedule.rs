@@ -9,8 +9,11 @@
 //!   the round in f64 ([`Accumulator`]). Pixel values do not depend on how pixels are split
 //!   into batches, so batch size is free to follow the device.
 //! - The host keeps the device busy: batch k + 1 is submitted before batch k's sums are
-//!   read back (two film and staging buffers), and nothing else is read back.
+//!   read back (two film and staging buffers), and nothing else is read back. Where
+//!   devices share the batches (`wavefront::twin`), one batch per device is submitted
+//!   ahead, so that whichever device finishes first finds the next one waiting.
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -87,7 +90,8 @@ pub struct Accumulated {
 /// Runs one batch on the device.
 pub(crate) trait BatchRunner {
     type Pending;
-    /// Submits every launch of `batch`, its film going to double-buffer `slot` (0 or 1).
+    /// Submits every launch of `batch`, its film going to double-buffer `slot` (0 or 1;
+    /// with one device at most two batches are in flight, so slot k % 2 is free again).
     fn submit(&mut self, batch: &BatchUniform, slot: usize) -> Result<Self::Pending, GpuError>;
     /// Waits for a submitted batch and returns its per-pixel sums (f64: the film's
     /// compensated f32 sum, value plus error).
@@ -191,19 +195,26 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     let mut spp_per_round = first.clamp(1, max_spp);
     let (mut done, mut rounds, mut batch_count) = (0u32, 0u32, 0u64);
     let mut stop = StopReason::Completed;
+    // Batches submitted ahead of the one collected: one for a device alone (its two film
+    // slots alternate); one per device where several share the batches, so that a device
+    // finishing before the batch the host waits for finds the next one queued.
+    let ahead = plan.devices.max(1) as usize;
 
     'rounds: while done < total_spp {
         let samples = round_samples(plan, spp_per_round.min(total_spp - done));
         let t = Instant::now();
         rounds += 1;
-        let mut pending: Option<(R::Pending, BatchUniform)> = None;
+        let mut pending: VecDeque<(R::Pending, BatchUniform)> = VecDeque::new();
         for (k, batch) in batches(plan, plan.sample_begin + done, samples).iter().enumerate() {
             let submitted = runner.submit(batch, k % 2)?;
             batch_count += 1;
-            if let Some((p, b)) = pending.replace((submitted, *batch)) {
-                let sums = runner.collect(p)?;
-                acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
-                progress.inc(u64::from(b.pixel_count) * u64::from(samples));
+            pending.push_back((submitted, *batch));
+            if pending.len() > ahead {
+                if let Some((p, b)) = pending.pop_front() {
+                    let sums = runner.collect(p)?;
+                    acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
+                    progress.inc(u64::from(b.pixel_count) * u64::from(samples));
+                }
             }
             if cancelled() {
                 runner.drain()?;
@@ -212,7 +223,7 @@ pub(crate) fn run_rounds<R: BatchRunner>(
                 break 'rounds;
             }
         }
-        if let Some((p, b)) = pending.take() {
+        while let Some((p, b)) = pending.pop_front() {
             let sums = runner.collect(p)?;
             acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
             progress.inc(u64::from(b.pixel_count) * u64::from(samples));
@@ -350,13 +361,13 @@ mod tests {
     #[test]
     fn the_first_round_fills_the_slots_without_a_time_limit() {
         // 15 pixels, 2 paths per sample, 64 slots: 2 samples fill a batch (60 paths).
-        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
         let p = Plan { total_spp: 9, ..plan(5, 3, 2, 64) };
         run_rounds(&mut fake, &p, &PassOptions::default()).unwrap();
         assert_eq!((fake.submitted[0].samples, fake.submitted[0].path_count), (2, 60));
         assert!(fake.submitted.iter().all(|b| b.samples >= 1 && b.path_count <= 64));
         // With a time limit the first round is `initial_spp_per_pass`.
-        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
         let opts = PassOptions { time_limit: Some(Duration::from_secs(3600)), ..PassOptions::default() };
         run_rounds(&mut fake, &p, &opts).unwrap();
         assert_eq!(fake.submitted[0].samples, 1);
@@ -411,12 +422,16 @@ mod tests {
     struct Fake {
         submitted: Vec<BatchUniform>,
         cancel_after: Option<(usize, Arc<AtomicBool>)>,
+        /// Batches submitted and not yet collected: now, and the most at once.
+        in_flight: (usize, usize),
     }
 
     impl BatchRunner for Fake {
         type Pending = BatchUniform;
         fn submit(&mut self, batch: &BatchUniform, _slot: usize) -> Result<BatchUniform, GpuError> {
             self.submitted.push(*batch);
+            self.in_flight.0 += 1;
+            self.in_flight.1 = self.in_flight.1.max(self.in_flight.0);
             if let Some((k, flag)) = &self.cancel_after {
                 if self.submitted.len() == *k {
                     flag.store(true, Ordering::SeqCst);
@@ -425,6 +440,7 @@ mod tests {
             Ok(*batch)
         }
         fn collect(&mut self, b: BatchUniform) -> Result<Vec<[f64; 3]>, GpuError> {
+            self.in_flight.0 -= 1;
             // Sample j of pixel p is worth p + j: the round's sum is exact in f32.
             Ok((0..b.pixel_count)
                 .map(|i| {
@@ -441,7 +457,7 @@ mod tests {
 
     #[test]
     fn rounds_give_every_pixel_the_mean_of_its_samples() {
-        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
         let p = Plan { total_spp: 10, ..plan(5, 3, 2, 8) };
         let out =
             run_rounds(&mut fake, &p, &PassOptions { target_pass_seconds: f64::MAX, ..Default::default() }).unwrap();
@@ -451,11 +467,30 @@ mod tests {
         }
     }
 
+    /// Shared by two devices, rounds come in even numbers of batches, one more batch is
+    /// kept in flight (three: one running on each device, one waiting), and the image is
+    /// the same as with one device (two in flight: its two film slots).
+    #[test]
+    fn two_devices_keep_three_batches_in_flight_and_the_same_image() {
+        let opts = PassOptions { target_pass_seconds: f64::MAX, max_spp_per_pass: 3, ..Default::default() };
+        let mut images = Vec::new();
+        for devices in [1, 2] {
+            let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
+            let p = Plan { total_spp: 10, devices, ..plan(5, 3, 2, 8) };
+            let out = run_rounds(&mut fake, &p, &opts).unwrap();
+            assert_eq!((out.spp_done, fake.in_flight), (10, (0, devices as usize + 1)));
+            let per_round = fake.submitted.iter().filter(|b| b.sample_begin == 0).count();
+            assert_eq!(per_round % devices as usize, 0, "{per_round} batches per round");
+            images.push(out.image.pixels().iter().map(|px| px.r).collect::<Vec<_>>());
+        }
+        assert_eq!(images[0], images[1]);
+    }
+
     #[test]
     fn cancel_drops_the_unfinished_round() {
         let flag = Arc::new(AtomicBool::new(false));
         // Batches of 4 pixels at 1 spp: the first round has 4 batches; cancel in round 2.
-        let mut fake = Fake { submitted: vec![], cancel_after: Some((6, flag.clone())) };
+        let mut fake = Fake { submitted: vec![], cancel_after: Some((6, flag.clone())), in_flight: (0, 0) };
         let opts =
             PassOptions { cancel: Some(flag), initial_spp_per_pass: 1, max_spp_per_pass: 1, ..PassOptions::default() };
         let out = run_rounds(&mut fake, &plan(4, 4, 1, 4), &opts).unwrap();
@@ -465,7 +500,7 @@ mod tests {
 
     #[test]
     fn a_time_limit_stops_between_rounds_with_uniform_spp() {
-        let mut fake = Fake { submitted: vec![], cancel_after: None };
+        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
         let opts = PassOptions { time_limit: Some(Duration::ZERO), ..PassOptions::default() };
         let out = run_rounds(&mut fake, &plan(3, 3, 1, 1024), &opts).unwrap();
         assert_eq!((out.spp_done, out.stop), (1, StopReason::TimeLimit));
