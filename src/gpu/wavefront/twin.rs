@@ -66,9 +66,15 @@ impl Feed {
                 Err(_) => return served,
             };
             let Ok((index, batch)) = job else { return served };
-            let sums = runner.submit(&batch, 0).and_then(|pending| runner.collect(pending));
+            // A panic becomes the batch's error: the host waits for every batch it
+            // submitted, so a batch must never go unanswered. The device then stops serving.
+            let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                runner.submit(&batch, 0).and_then(|pending| runner.collect(pending))
+            }));
+            let panicked = run.is_err();
+            let sums = run.unwrap_or_else(|_| Err(GpuError::Internal("a device panicked running a batch".into())));
             served += 1;
-            if self.done.send((index, sums)).is_err() {
+            if self.done.send((index, sums)).is_err() || panicked {
                 return served;
             }
         }
@@ -236,6 +242,34 @@ mod tests {
             host.collect(p).unwrap();
             host.close();
             assert_eq!((this.join().unwrap(), twin.join().unwrap()), (1, false));
+        });
+    }
+
+    /// A device that panics on a batch answers it with an error (the host would otherwise
+    /// wait for it for ever) and stops serving.
+    #[test]
+    fn a_panic_answers_the_batch_with_an_error() {
+        struct Panics;
+        impl BatchRunner for Panics {
+            type Pending = ();
+            fn submit(&mut self, _: &BatchUniform, _: usize) -> Result<(), GpuError> {
+                panic!("injected");
+            }
+            fn collect(&mut self, _: ()) -> Result<Vec<[f64; 3]>, GpuError> {
+                Ok(vec![])
+            }
+            fn drain(&mut self) -> Result<(), GpuError> {
+                Ok(())
+            }
+        }
+        let (mut host, feed) = shared();
+        std::thread::scope(|s| {
+            let feed = &feed;
+            let device = s.spawn(move || feed.serve(&mut Panics));
+            let p = host.submit(&batch(0), 0).unwrap();
+            assert!(host.collect(p).is_err());
+            assert_eq!(device.join().unwrap(), 1);
+            host.close();
         });
     }
 
