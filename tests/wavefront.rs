@@ -127,12 +127,14 @@ fn images_do_not_depend_on_the_batch_size() {
 /// A twin device (llvmpipe: `wavefront::twin`, DESIGN.md "Twin devices") renders its share
 /// of the batches bit for bit as the render's own device would: every renderer, the twin
 /// forced on (`TwinUse::Always`, the host waiting until it is set up) and off, in batches of
-/// 97 slots. Where a twin can run (llvmpipe through Vulkan, two cores or more) it must
-/// have run some of them; elsewhere none.
+/// 97 slots, one renderer keeping its twin from scene to scene. Where a twin can run
+/// (llvmpipe through Vulkan, two cores or more) it must have run some of them; elsewhere
+/// none.
 #[test]
 fn a_twin_device_renders_the_same_bits() {
-    use lumen::gpu::render::TwinUse;
+    use lumen::gpu::render::{GpuRenderer, TwinUse};
     let Some(gpu) = gpu_for_tests("a_twin_device_renders_the_same_bits") else { return };
+    let kept = std::cell::RefCell::new(GpuRenderer::new());
     let info = &gpu.adapter_info;
     let twin_can_run = info.backend == wgpu::Backend::Vulkan
         && info.name.to_ascii_lowercase().contains("llvmpipe")
@@ -147,7 +149,7 @@ fn a_twin_device_renders_the_same_bits() {
         let with = |twin: TwinUse| {
             let mut opts = GpuRenderOptions { twin, ..GpuRenderOptions::fixed_passes(Some(8), 4) };
             opts.passes.batch_paths = 97;
-            let out = render(&gpu, &scene, &opts).unwrap();
+            let out = kept.borrow_mut().render(&gpu, &scene, &opts).unwrap();
             assert_eq!((out.spp_done, out.non_finite_samples), (8, 0), "{name}");
             out
         };

@@ -288,6 +288,16 @@ pub fn render(gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRe
 pub struct GpuRenderer {
     kernels: KernelCache,
     swept: std::collections::HashSet<FeatureSet>,
+    /// The twin device of the last render that started one, with its kernels, kept for the
+    /// next renders (animation frames, benchmarks) on the same adapter.
+    twin: Option<Box<TwinCache>>,
+}
+
+/// A twin device kept across renders ([`GpuRenderer`]) and the kernels created on it.
+#[derive(Debug)]
+struct TwinCache {
+    gpu: Gpu,
+    kernels: KernelCache,
 }
 
 impl GpuRenderer {
@@ -451,8 +461,14 @@ impl GpuRenderer {
             // its own (wavefront::twin); the twin sets itself up meanwhile.
             let (mut host, feed) = twin::shared();
             let feed = &feed;
-            let twin_job =
-                TwinJob { features: f, packed, shadow_rays, max_depth: s.max_depth, capacity: plan.capacity };
+            let twin_job = TwinJob {
+                features: f,
+                packed,
+                shadow_rays,
+                max_depth: s.max_depth,
+                capacity: plan.capacity,
+                cache: &mut self.twin,
+            };
             std::thread::scope(|scope| {
                 let this = scope.spawn(|| feed.serve(&mut runner));
                 let twin = scope.spawn(move || twin_job.serve(gpu, feed));
@@ -531,26 +547,28 @@ struct TwinJob<'a> {
     shadow_rays: u32,
     max_depth: u32,
     capacity: u32,
+    /// The renderer's twin from an earlier render, if any; the one set up here stays there.
+    cache: &'a mut Option<Box<TwinCache>>,
 }
 
 impl TwinJob<'_> {
-    /// Once the host starts it, opens a twin of `gpu`, creates the scene's kernels there
-    /// (llvmpipe finds their code in Mesa's shader cache, where this device's compilation
-    /// put it), uploads the scene and serves `feed` with as many path slots as this device
-    /// has. Its counters and the batches it ran; `None` when it was not started or any of
-    /// that failed, which leaves every batch to this device.
-    fn serve(self, gpu: &Gpu, feed: &twin::Feed) -> Option<(wavefront::Counters, u64)> {
+    /// Once the host starts it, opens a twin of `gpu` (or takes the renderer's), creates the
+    /// scene's kernels there (llvmpipe finds their code in Mesa's shader cache, where this
+    /// device's compilation put it), uploads the scene and serves `feed` with as many path
+    /// slots as this device has. Its counters and the batches it ran; `None` when it was
+    /// not started or any of that failed, which leaves every batch to this device.
+    fn serve(mut self, gpu: &Gpu, feed: &twin::Feed) -> Option<(wavefront::Counters, u64)> {
         if !feed.started() {
             return None;
         }
         // The host may be waiting for this answer (TwinUse::Always): give it even on a panic.
         let set_up = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.set_up(gpu))).ok().flatten();
         feed.ready(set_up.is_some());
-        let twin = set_up?;
+        let scene = set_up?;
         let setup = wavefront::RunnerSetup {
-            gpu: &twin.gpu,
-            kernels: &twin.kernels,
-            groups1: &twin.groups,
+            gpu: &self.cache.as_ref()?.gpu,
+            kernels: &scene.kernels,
+            groups1: &scene.groups,
             features: self.features,
             shadow_rays: self.shadow_rays,
             max_depth: self.max_depth,
@@ -564,25 +582,33 @@ impl TwinJob<'_> {
         Some((runner.counters().ok()?, served))
     }
 
-    /// The twin device with the scene's kernels, buffers and bind groups.
-    fn set_up(&self, gpu: &Gpu) -> Option<TwinDevice> {
-        let twin = gpu.twin()?;
+    /// The scene's kernels, buffers and bind groups on the twin, which is opened here
+    /// unless the renderer kept one of the same adapter.
+    fn set_up(&mut self, gpu: &Gpu) -> Option<TwinScene> {
+        if self.cache.as_ref().is_some_and(|t| t.gpu.adapter_info != gpu.adapter_info) {
+            *self.cache = None;
+        }
+        if self.cache.is_none() {
+            *self.cache = Some(Box::new(TwinCache { gpu: gpu.twin()?, kernels: KernelCache::new() }));
+        }
+        let TwinCache { gpu: twin, kernels: cache } = self.cache.as_deref_mut()?;
         let mut kernels = BTreeMap::new();
         for (stage, assembled) in assemble_stages(&self.features).ok()? {
+            let entry = stage.entry().1;
             let label = format!("{} stage (twin)", stage.label());
-            let kernel = twin.compute_kernel(&label, &assembled.source, stage.entry().1).ok()?;
-            kernels.insert(stage, std::sync::Arc::new(kernel));
+            let kernel =
+                cache.get_or_build(&assembled.source, entry, || twin.compute_kernel(&label, &assembled.source, entry));
+            kernels.insert(stage, kernel.ok()?);
         }
         let kernels = StageKernels { kernels, compiled: 0 };
-        let buffers = SceneBuffers::upload(&twin, &kernels, self.packed).ok()?;
-        let groups = buffers.groups(&twin, &kernels).ok()?;
-        Some(TwinDevice { gpu: twin, kernels, _buffers: buffers, groups })
+        let buffers = SceneBuffers::upload(twin, &kernels, self.packed).ok()?;
+        let groups = buffers.groups(twin, &kernels).ok()?;
+        Some(TwinScene { kernels, _buffers: buffers, groups })
     }
 }
 
-/// A twin device set up to render a scene ([`TwinJob::set_up`]).
-struct TwinDevice {
-    gpu: Gpu,
+/// A scene set up on the twin device ([`TwinJob::set_up`]).
+struct TwinScene {
     kernels: StageKernels,
     /// Kept for as long as the bind groups use them.
     _buffers: SceneBuffers,
