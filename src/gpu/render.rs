@@ -329,49 +329,9 @@ impl GpuRenderer {
         self.render_from(gpu, scene, packed, opts, Instant::now())
     }
 
-    /// The compiled kernels of every stage for `features` (the new ones compiled in
-    /// parallel: pipeline creation dominates start-up on software adapters).
+    /// The compiled kernels of every stage for `features` on `gpu`, kept for later renders.
     pub fn stage_kernels(&mut self, gpu: &Gpu, features: &FeatureSet) -> Result<StageKernels, GpuError> {
-        let mut kernels = BTreeMap::new();
-        let mut missing = Vec::new();
-        for (stage, assembled) in assemble_stages(features)? {
-            let entry = stage.entry().1;
-            match self.kernels.get(&assembled.source, entry) {
-                Some(k) => {
-                    kernels.insert(stage, k);
-                }
-                None => missing.push((stage, assembled)),
-            }
-        }
-        let built: Vec<Result<(Stage, String, ComputeKernel), GpuError>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = missing
-                .into_iter()
-                .map(|(stage, assembled)| {
-                    scope.spawn(move || {
-                        let label = format!("{} stage (assembled)", stage.label());
-                        let k = gpu.compute_kernel(&label, &assembled.source, stage.entry().1)?;
-                        Ok((stage, assembled.source, k))
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().unwrap_or_else(|_| Err(GpuError::Internal("kernel compilation panicked".into()))))
-                .collect()
-        });
-        let built = built.into_iter().collect::<Result<Vec<_>, _>>()?;
-        let compiled = built.len();
-        // llvmpipe compiles a kernel at its first launch, one at a time: compile the new ones
-        // now, in parallel over more devices where that helps (gpu::parallel_jit).
-        let jobs: Vec<parallel_jit::Job> = built
-            .iter()
-            .map(|(stage, source, kernel)| parallel_jit::Job { kernel, source, entry: stage.entry().1 })
-            .collect();
-        parallel_jit::compile_ahead(gpu, &jobs)?;
-        for (stage, source, kernel) in built {
-            kernels.insert(stage, self.kernels.insert(&source, stage.entry().1, kernel));
-        }
-        Ok(StageKernels { kernels, compiled })
+        stage_kernels(&mut self.kernels, gpu, features)
     }
 
     fn render_from(
@@ -514,6 +474,52 @@ impl GpuRenderer {
     }
 }
 
+/// The compiled kernels on `gpu` of every stage for `features`, from `cache` or created
+/// there (the new ones in parallel: pipeline creation dominates start-up on software
+/// adapters; on llvmpipe also JIT-compiled before the first round, `parallel_jit`).
+fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> Result<StageKernels, GpuError> {
+    let mut kernels = BTreeMap::new();
+    let mut missing = Vec::new();
+    for (stage, assembled) in assemble_stages(features)? {
+        let entry = stage.entry().1;
+        match cache.get(&assembled.source, entry) {
+            Some(k) => {
+                kernels.insert(stage, k);
+            }
+            None => missing.push((stage, assembled)),
+        }
+    }
+    let built: Vec<Result<(Stage, String, ComputeKernel), GpuError>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = missing
+            .into_iter()
+            .map(|(stage, assembled)| {
+                scope.spawn(move || {
+                    let label = format!("{} stage (assembled)", stage.label());
+                    let k = gpu.compute_kernel(&label, &assembled.source, stage.entry().1)?;
+                    Ok((stage, assembled.source, k))
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|_| Err(GpuError::Internal("kernel compilation panicked".into()))))
+            .collect()
+    });
+    let built = built.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let compiled = built.len();
+    // llvmpipe compiles a kernel at its first launch, one at a time: compile the new ones
+    // now, in parallel over more devices where that helps (gpu::parallel_jit).
+    let jobs: Vec<parallel_jit::Job> = built
+        .iter()
+        .map(|(stage, source, kernel)| parallel_jit::Job { kernel, source, entry: stage.entry().1 })
+        .collect();
+    parallel_jit::compile_ahead(gpu, &jobs)?;
+    for (stage, source, kernel) in built {
+        kernels.insert(stage, cache.insert(&source, stage.entry().1, kernel));
+    }
+    Ok(StageKernels { kernels, compiled })
+}
+
 /// Least batches a render takes for a twin device to be ready to share them
 /// (`wavefront::twin`, which starts it only once enough time is left).
 const TWIN_MIN_BATCHES: u64 = 4;
@@ -553,8 +559,8 @@ struct TwinJob<'a> {
 
 impl TwinJob<'_> {
     /// Once the host starts it, opens a twin of `gpu` (or takes the renderer's), creates the
-    /// scene's kernels there (llvmpipe finds their code in Mesa's shader cache, where this
-    /// device's compilation put it), uploads the scene and serves `feed` with as many path
+    /// scene's kernels there as this device did (llvmpipe finds their code in Mesa's shader
+    /// cache, where this device's compilation put it), uploads the scene and serves `feed` with as many path
     /// slots as this device has. Its counters and the batches it ran; `None` when it was
     /// not started or any of that failed, which leaves every batch to this device.
     fn serve(mut self, gpu: &Gpu, feed: &twin::Feed) -> Option<(wavefront::Counters, u64)> {
@@ -592,15 +598,7 @@ impl TwinJob<'_> {
             *self.cache = Some(Box::new(TwinCache { gpu: gpu.twin()?, kernels: KernelCache::new() }));
         }
         let TwinCache { gpu: twin, kernels: cache } = self.cache.as_deref_mut()?;
-        let mut kernels = BTreeMap::new();
-        for (stage, assembled) in assemble_stages(&self.features).ok()? {
-            let entry = stage.entry().1;
-            let label = format!("{} stage (twin)", stage.label());
-            let kernel =
-                cache.get_or_build(&assembled.source, entry, || twin.compute_kernel(&label, &assembled.source, entry));
-            kernels.insert(stage, kernel.ok()?);
-        }
-        let kernels = StageKernels { kernels, compiled: 0 };
+        let kernels = stage_kernels(cache, twin, &self.features).ok()?;
         let buffers = SceneBuffers::upload(twin, &kernels, self.packed).ok()?;
         let groups = buffers.groups(twin, &kernels).ok()?;
         Some(TwinScene { kernels, _buffers: buffers, groups })
