@@ -78,7 +78,10 @@ fn stream(seed_state: vec2<u32>, seed_inc: vec2<u32>, pixel: u32, sample: u32, b
     return pcg_new(add_u64(seed_state, vec2<u32>(key_lo, key_hi)), seed_inc);
 }
 
-// A uniform float in [0, 1) with 24 random bits: exactly Pcg32::next_f32.
+// #if CAMERA
+// A uniform float in [0, 1) with 24 random bits: exactly Pcg32::next_f32. (Path vertices
+// take the 24 bits as integers, to stratify them: strata.wgsl.)
 fn pcg_next_f32(rng: ptr<function, Pcg>) -> f32 {
     return f32(pcg_next_u32(rng) >> 8u) * (1.0 / 16777216.0);
 }
+// #endif

@@ -1,4 +1,4 @@
-// #requires mis random pigment brdf offset constants wf_hit
+// #requires mis random strata pigment brdf offset constants wf_hit
 // #if POINT_LIGHTS
 // #requires point_lights
 // #endif
@@ -140,13 +140,15 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     // The hit shape's record, loaded once for the surface and the emission's MIS weight.
     let hs = shape_at(c.shape);
     let hit = shape_surface_hit(hs, ray, c.c, c.flip, c.object);
-    // The seven draws of this vertex, used or not.
+    // The seven draws of this vertex, used or not, each in its sample's stratum.
     let id = path_id(slot);
     var rng = stream(settings.tracer_seed.xy, settings.tracer_seed.zw, id.pixel, id.sample, bounce);
-    var xi: array<f32, 7>;
+    var x: array<u32, 7>;
     for (var k = 0u; k < 7u; k++) {
-        xi[k] = pcg_next_f32(&rng);
+        // The 24 bits of pcg_next_f32.
+        x[k] = pcg_next_u32(&rng) >> 8u;
     }
+    let xi = stratified_draws(x, strata_seed_word(settings.tracer_seed), id.pixel, id.sample, bounce, settings.strata);
     let m = material_at(hit.material);
     let color = pigment_color(m.pigment, hit.uv);
     let beta_pdf = load_beta(slot, bounce);

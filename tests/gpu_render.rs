@@ -6,10 +6,56 @@ mod common;
 
 use common::{agreement, furnace, mean_and_stderr, pt, Tolerance};
 use lumen::gpu::gpu_for_tests;
-use lumen::sampling::{stream, CAMERA_BOUNCE};
+use lumen::sampling::{permute, seed_word, stream, VertexStrata, CAMERA_BOUNCE};
 use lumen::scene::PcgSeed;
 
 const RANDOM_WGSL: &str = include_str!("../shaders/random.wgsl");
+const STRATA_WGSL: &str = include_str!("../shaders/strata.wgsl");
+
+/// The bindings and the start of `main` of the kernels `run_keyed_kernel` runs: invocation
+/// `i` reads its key `k`; the test's body follows, then a closing brace.
+const KEYED_KERNEL_HEAD: &str = "struct Params { seed: vec4<u32>, count: u32 }
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> keys: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read_write> out_u: array<u32>;
+@group(0) @binding(3) var<storage, read_write> out_f: array<f32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if (i >= params.count) { return; }
+    let k = keys[i];";
+
+/// Runs a test kernel over `keys` with the tracer seed `seed` (bindings: params {seed,
+/// count}, keys, out_u, out_f) and reads back `u_per_key` words and `f_per_key` floats per
+/// key.
+fn run_keyed_kernel(
+    gpu: &lumen::gpu::Gpu,
+    kernel: &lumen::gpu::ComputeKernel,
+    seed: PcgSeed,
+    keys: &[[u32; 4]],
+    u_per_key: usize,
+    f_per_key: usize,
+) -> (Vec<u32>, Vec<f32>) {
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Params {
+        seed: [u32; 4],
+        count: u32,
+        _pad: [u32; 3],
+    }
+    let params = Params {
+        seed: [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32],
+        count: keys.len() as u32,
+        _pad: [0; 3],
+    };
+    let ub = gpu.uniform_buffer("params", &params).unwrap();
+    let kb = gpu.storage_buffer("keys", keys).unwrap();
+    let ou = gpu.storage_buffer_zeroed("out_u", (keys.len() * u_per_key * 4) as u64).unwrap();
+    let of = gpu.storage_buffer_zeroed("out_f", (keys.len() * f_per_key * 4) as u64).unwrap();
+    let group = kernel.bind_group(gpu, 0, &[&ub, &kb, &ou, &of]).unwrap();
+    gpu.dispatch(kernel, &[&group], kernel.workgroups_for([keys.len() as u32, 1, 1])).unwrap();
+    (gpu.read_buffer(&ou, keys.len() * u_per_key).unwrap(), gpu.read_buffer(&of, keys.len() * f_per_key).unwrap())
+}
 
 /// Thousands of (pixel, sample, bounce) streams, from two seeds (one with a carry into the
 /// high word), give bitwise the same u32 and f32 sequences on the GPU as on the CPU.
@@ -19,16 +65,7 @@ fn random_streams_match_the_cpu_bit_for_bit() {
     const DRAWS: usize = 9;
     let kernel_src = format!(
         "{RANDOM_WGSL}
-struct Params {{ seed: vec4<u32>, count: u32 }}
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> keys: array<vec4<u32>>;
-@group(0) @binding(2) var<storage, read_write> out_u: array<u32>;
-@group(0) @binding(3) var<storage, read_write> out_f: array<f32>;
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
-    let i = id.x;
-    if (i >= params.count) {{ return; }}
-    let k = keys[i];
+{KEYED_KERNEL_HEAD}
     var rng = stream(params.seed.xy, params.seed.zw, k.x, k.y, k.z);
     for (var j = 0u; j < {DRAWS}u; j++) {{ out_u[i * {DRAWS}u + j] = pcg_next_u32(&rng); }}
     out_f[i] = pcg_next_f32(&rng);
@@ -51,32 +88,64 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
     }
     assert!(keys.len() > 1000);
     for seed in seeds {
-        #[repr(C)]
-        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-        struct Params {
-            seed: [u32; 4],
-            count: u32,
-            _pad: [u32; 3],
-        }
-        let params = Params {
-            seed: [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32],
-            count: keys.len() as u32,
-            _pad: [0; 3],
-        };
-        let ub = gpu.uniform_buffer("params", &params).unwrap();
-        let kb = gpu.storage_buffer("keys", &keys).unwrap();
-        let ou = gpu.storage_buffer_zeroed("out_u", (keys.len() * DRAWS * 4) as u64).unwrap();
-        let of = gpu.storage_buffer_zeroed("out_f", (keys.len() * 4) as u64).unwrap();
-        let group = kernel.bind_group(&gpu, 0, &[&ub, &kb, &ou, &of]).unwrap();
-        gpu.dispatch(&kernel, &[&group], kernel.workgroups_for([keys.len() as u32, 1, 1])).unwrap();
-        let got_u: Vec<u32> = gpu.read_buffer(&ou, keys.len() * DRAWS).unwrap();
-        let got_f: Vec<f32> = gpu.read_buffer(&of, keys.len()).unwrap();
+        let (got_u, got_f) = run_keyed_kernel(&gpu, &kernel, seed, &keys, DRAWS, 1);
         for (i, k) in keys.iter().enumerate() {
             let mut rng = stream(seed, k[0], k[1], k[2]);
             for j in 0..DRAWS {
                 assert_eq!(got_u[i * DRAWS + j], rng.next_u32(), "seed {seed:?} key {k:?} draw {j}");
             }
             assert_eq!(got_f[i].to_bits(), rng.next_f32().to_bits(), "seed {seed:?} key {k:?} float");
+        }
+    }
+}
+
+/// `shaders/strata.wgsl` against `sampling::strata`: the seed word and the permutations
+/// and a vertex's seven stratified draws bit for bit, for square, non-square, one-sample
+/// and many-block strata counts.
+#[test]
+fn stratified_draws_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("stratified_draws_match_the_cpu") else { return };
+    let kernel_src = format!(
+        "{RANDOM_WGSL}
+{STRATA_WGSL}
+{KEYED_KERNEL_HEAD}
+    // k = (pixel, sample, bounce, strata)
+    let word = strata_seed_word(params.seed);
+    out_u[2u * i] = word;
+    out_u[2u * i + 1u] = strata_permute(k.y % max(k.w, 1u), k.w, k.x);
+    var rng = stream(params.seed.xy, params.seed.zw, k.x, k.y, k.z);
+    var x: array<u32, 7>;
+    for (var d = 0u; d < 7u; d++) {{ x[d] = pcg_next_u32(&rng) >> 8u; }}
+    let xi = stratified_draws(x, word, k.x, k.y, k.z, k.w);
+    for (var d = 0u; d < 7u; d++) {{ out_f[7u * i + d] = xi[d]; }}
+}}"
+    );
+    let kernel = gpu.compute_kernel("strata_test.wgsl", &kernel_src, "main").unwrap();
+    let mut keys: Vec<[u32; 4]> = Vec::new();
+    for count in [1u32, 2, 7, 16, 48, 64, 1000, 4096, 65536] {
+        for p in [0u32, 5, 12_345, u32::MAX] {
+            for s in [0u32, 1, count / 2, count - 1, count, 3 * count + 1, u32::MAX] {
+                for b in [0u32, 1, 9] {
+                    keys.push([p, s, b, count]);
+                }
+            }
+        }
+    }
+    for seed in [PcgSeed::default(), PcgSeed { state: 0xFFFF_FFFF_FFFF_FF00, inc: 0xDEAD_BEEF_1234_5678 }] {
+        let (got_u, got_f) = run_keyed_kernel(&gpu, &kernel, seed, &keys, 2, 7);
+        let word = seed_word(seed);
+        for (i, &[p, s, b, count]) in keys.iter().enumerate() {
+            assert_eq!(got_u[2 * i], word, "seed word of {seed:?}");
+            assert_eq!(got_u[2 * i + 1], permute(s % count, count, p), "permute({s} % {count}, {count}, {p})");
+            let mut rng = stream(seed, p, s, b);
+            let x: Vec<u32> = (0..7).map(|_| rng.next_u32() >> 8).collect();
+            let v = VertexStrata::new(word, p, s, b, count);
+            let (lp, dir) = (v.two(1, [x[1], x[2]]), v.two(4, [x[4], x[5]]));
+            let want = [v.one(0, x[0]), lp[0], lp[1], v.one(3, x[3]), dir[0], dir[1], v.one(6, x[6])];
+            for d in 0..7 {
+                let got = f64::from(got_f[7 * i + d]);
+                assert_eq!(got, want[d], "seed {seed:?} key {:?} draw {d}", keys[i]);
+            }
         }
     }
 }
@@ -1079,14 +1148,16 @@ fn example_scenes_match_the_cpu() {
         // spheres_10k.sl's N = 50 checkered floor reaches the horizon: hit points 10³–10⁴
         // units away carry f32 errors of 10⁻⁴–10⁻³, a sizeable part of a 0.02-wide square,
         // so near the horizon the checker colour differs between f32 and f64 (Flat: 1.2 % of
-        // pixels; the path tracer's later bounces add ~5 %).
+        // pixels; the path tracer's later bounces add ~5 %). How many of the thumbnail's 336
+        // pixels that touches is luck: over eight other seeds 90.5–94.9 % agreed (90.2–93.8 %
+        // with the vertex draws unstratified), 91.7 % with the scene's own seed.
         // meshes.sl's checkered floor also reaches the horizon, and its smooth-shaded knot
         // drops samples whose shading and facet normals disagree, a test that f32 and f64
         // directions answer differently near grazing (4 of its 384 thumbnail pixels).
         let min = if path.ends_with("glass.sl") || path.ends_with("meshes.sl") {
             0.98
         } else if path.ends_with("spheres_10k.sl") {
-            0.92
+            0.90
         } else {
             0.99
         };

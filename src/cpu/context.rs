@@ -3,6 +3,8 @@
 
 use glam::DVec3;
 
+use crate::prepare::pixel_samples::PixelSamples;
+use crate::sampling::{seed_word, strata_count};
 use crate::scene::Scene;
 
 use super::lights::Lights;
@@ -14,6 +16,11 @@ pub struct Context<'a> {
     pub scene: &'a Scene,
     pub world: &'a World,
     pub lights: &'a Lights,
+    /// Strata per dimension of a path vertex (`sampling::strata_count` of the pixel's
+    /// samples of the whole render, not of one round or range).
+    pub strata: u32,
+    /// `sampling::seed_word` of the tracer's seed.
+    pub seed_word: u32,
 }
 
 /// Counts accumulated by one thread's share of the work.
@@ -23,7 +30,13 @@ pub struct Counters {
     pub rays: u64,
 }
 
-impl Context<'_> {
+impl<'a> Context<'a> {
+    /// The context of a render whose pixels take `layout`'s camera samples.
+    pub fn new(scene: &'a Scene, world: &'a World, lights: &'a Lights, layout: PixelSamples) -> Self {
+        let samples = layout.count().saturating_mul(super::paths_per_sample(scene));
+        Self { scene, world, lights, strata: strata_count(samples), seed_word: seed_word(scene.tracer.rng) }
+    }
+
     /// Closest hit along `ray`, counted.
     pub fn intersect(&self, ray: &Ray, counters: &mut Counters) -> Option<super::Hit> {
         counters.rays += 1;

@@ -5,7 +5,7 @@
 use glam::DVec3;
 
 use crate::color::Color;
-use crate::sampling::stream;
+use crate::sampling::{stream, VertexStrata};
 use crate::scene::{Brdf, Material, PathTracerSettings};
 
 use super::bsdf::{eval_bsdf, pdf_bsdf, sample_bsdf};
@@ -47,7 +47,8 @@ pub fn path_radiance(
             radiance += beta * escaped(ctx, settings, &prev, ray.dir.normalize());
             break;
         };
-        let xi = VertexDraws::draw(&mut stream(ctx.scene.tracer.rng, pixel, sample, bounce));
+        let strata = VertexStrata::new(ctx.seed_word, pixel, sample, bounce, ctx.strata);
+        let xi = VertexDraws::draw(&mut stream(ctx.scene.tracer.rng, pixel, sample, bounce), &strata);
         let material = ctx.scene.material(hit.material);
         let color = material.brdf.pigment().color_at(hit.uv.x, hit.uv.y);
         radiance += beta * emitted(ctx, settings, &prev, &hit, material);

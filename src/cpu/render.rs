@@ -233,8 +233,8 @@ pub fn render_limited(
     let scene = &*form;
     let world = World::new(scene);
     let lights = Lights::new(scene);
-    let ctx = Context { scene, world: &world, lights: &lights };
     let layout = PixelSamples::new(&scene.tracer, opts.spp);
+    let ctx = Context::new(scene, &world, &lights, layout);
     // Sample indices are u32, as on the GPU (the CLI refuses counts that would wrap).
     let count = u32::try_from(layout.count()).unwrap_or(u32::MAX);
     let range = opts.samples.unwrap_or(SampleRange::all(count));

@@ -1,6 +1,6 @@
 //! The seven uniforms every path vertex draws (DESIGN.md, "Random numbers").
 
-use crate::sampling::Pcg32;
+use crate::sampling::{Pcg32, VertexStrata};
 
 /// The draws of one path vertex, in the contract's order. All seven are drawn up front,
 /// used or not, so the CPU and the GPU consume the same numbers at every vertex.
@@ -22,12 +22,22 @@ pub struct VertexDraws {
 pub const DRAWS_PER_VERTEX: usize = 7;
 
 impl VertexDraws {
-    pub fn draw(rng: &mut Pcg32) -> Self {
-        let mut x = [0.0; DRAWS_PER_VERTEX];
+    /// The vertex's seven stream draws, each moved into its sample's stratum of its
+    /// dimension (`strata`; dimension k is draw k, the light point and the direction
+    /// being 2D points).
+    pub fn draw(rng: &mut Pcg32, strata: &VertexStrata) -> Self {
+        let mut x = [0u32; DRAWS_PER_VERTEX];
         for v in &mut x {
-            *v = rng.next_f64();
+            // The 24 bits of Pcg32::next_f64.
+            *v = rng.next_u32() >> 8;
         }
-        Self { light: x[0], light_point: [x[1], x[2]], lobe: x[3], direction: [x[4], x[5]], roulette: x[6] }
+        Self {
+            light: strata.one(0, x[0]),
+            light_point: strata.two(1, [x[1], x[2]]),
+            lobe: strata.one(3, x[3]),
+            direction: strata.two(4, [x[4], x[5]]),
+            roulette: strata.one(6, x[6]),
+        }
     }
 }
 
@@ -35,16 +45,43 @@ impl VertexDraws {
 mod tests {
     use super::*;
 
+    use crate::sampling::{seed_word, strata_count};
+    use crate::scene::PcgSeed;
+
+    fn flat(d: &VertexDraws) -> [f64; 7] {
+        [d.light, d.light_point[0], d.light_point[1], d.lobe, d.direction[0], d.direction[1], d.roulette]
+    }
+
+    /// With one sample per pixel the draws are the stream's, in order; seven are drawn.
     #[test]
     fn draws_are_the_stream_in_order() {
         let mut a = Pcg32::new(5, 6);
         let mut b = a;
-        let d = VertexDraws::draw(&mut a);
+        let d = VertexDraws::draw(&mut a, &VertexStrata::new(1, 2, 0, 3, strata_count(1)));
         let seq: Vec<f64> = (0..7).map(|_| b.next_f64()).collect();
-        assert_eq!(
-            [d.light, d.light_point[0], d.light_point[1], d.lobe, d.direction[0], d.direction[1], d.roulette],
-            seq[..]
-        );
+        assert_eq!(flat(&d), seq[..]);
         assert_eq!(a, b);
+    }
+
+    /// With 16 samples, draw k of sample i lies in its stratum of 16 (2D: of the 4 × 4
+    /// grid), at the stream's 24-bit draw scaled into it and rounded down to 24 bits.
+    #[test]
+    fn draws_sit_in_their_strata() {
+        let word = seed_word(PcgSeed::default());
+        for i in 0..16 {
+            let strata = VertexStrata::new(word, 9, i, 1, 16);
+            let mut a = Pcg32::new(7, u64::from(i));
+            let x: Vec<u64> = {
+                let mut b = a;
+                (0..7).map(|_| u64::from(b.next_u32() >> 8)).collect()
+            };
+            let d = flat(&VertexDraws::draw(&mut a, &strata));
+            for (k, m) in [(0, 16), (3, 16), (6, 16), (1, 4), (2, 4), (4, 4), (5, 4)] {
+                let bits = (d[k] * 16_777_216.0) as u64;
+                assert_eq!(bits as f64, d[k] * 16_777_216.0, "draw {k} is on the 24-bit grid");
+                let stratum = d[k] * m as f64;
+                assert_eq!(bits, ((stratum.floor() as u64) << 24 | x[k]) / m, "draw {k} of sample {i}");
+            }
+        }
     }
 }

@@ -11,15 +11,19 @@
 //!    `bounce` is the path vertex index (0 = the camera ray's hit). The camera's own jitter
 //!    uses sample `j` and bounce [`CAMERA_BOUNCE`].
 //! 4. Floats are `(next_u32() >> 8) · 2⁻²⁴`: 24 bits, exact in f32 and f64, in [0, 1).
+//! 5. A path vertex moves its draws into its sample's strata ([`VertexStrata`]), so that
+//!    a pixel's samples together cover each dimension evenly.
 //!
 //! Because each stream depends only on these indices, images do not depend on thread
 //! count, tile order or how samples are split into GPU passes.
 
 pub mod distribution;
 mod pcg;
+mod strata;
 
 pub use distribution::{Distribution1D, Distribution2D};
 pub use pcg::Pcg32;
+pub use strata::{in_stratum, permute, seed_word, strata_count, VertexStrata, STRATA_MAX};
 
 use crate::scene::PcgSeed;
 
