@@ -138,8 +138,8 @@ struct Settings {
     // Ranges of `indices` (BVH leaf objects start at 0).
     plane_offset: u32,
     plane_count: u32,
-    // Strata per dimension of a path vertex (sampling::strata_count).
-    strata: u32,
+    // log2 of the strata per dimension of a path vertex (sampling::strata_bits).
+    strata_bits: u32,
     area_light_count: u32,
     point_light_count: u32,
     bvh_node_count: u32,

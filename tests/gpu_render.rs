@@ -100,8 +100,8 @@ fn random_streams_match_the_cpu_bit_for_bit() {
 }
 
 /// `shaders/strata.wgsl` against `sampling::strata`: the seed word and the permutations
-/// and a vertex's seven stratified draws bit for bit, for square, non-square, one-sample
-/// and many-block strata counts.
+/// and a vertex's seven stratified draws bit for bit, for even and odd powers of two (square
+/// and 2:1 grids), one sample, and samples beyond the first block.
 #[test]
 fn stratified_draws_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("stratified_draws_match_the_cpu") else { return };
@@ -112,7 +112,7 @@ fn stratified_draws_match_the_cpu() {
     // k = (pixel, sample, bounce, strata)
     let word = strata_seed_word(params.seed);
     out_u[2u * i] = word;
-    out_u[2u * i + 1u] = strata_permute(k.y % max(k.w, 1u), k.w, k.x);
+    out_u[2u * i + 1u] = strata_permute(k.y & ((1u << k.w) - 1u), k.w, k.x);
     var rng = stream(params.seed.xy, params.seed.zw, k.x, k.y, k.z);
     var x: array<u32, 7>;
     for (var d = 0u; d < 7u; d++) {{ x[d] = pcg_next_u32(&rng) >> 8u; }}
@@ -122,11 +122,12 @@ fn stratified_draws_match_the_cpu() {
     );
     let kernel = gpu.compute_kernel("strata_test.wgsl", &kernel_src, "main").unwrap();
     let mut keys: Vec<[u32; 4]> = Vec::new();
-    for count in [1u32, 2, 7, 16, 48, 64, 1000, 4096, 65536] {
+    for bits in [0u32, 1, 2, 3, 4, 5, 6, 7, 10, 12, 16] {
+        let count = 1u32 << bits;
         for p in [0u32, 5, 12_345, u32::MAX] {
             for s in [0u32, 1, count / 2, count - 1, count, 3 * count + 1, u32::MAX] {
                 for b in [0u32, 1, 9] {
-                    keys.push([p, s, b, count]);
+                    keys.push([p, s, b, bits]);
                 }
             }
         }
@@ -134,12 +135,16 @@ fn stratified_draws_match_the_cpu() {
     for seed in [PcgSeed::default(), PcgSeed { state: 0xFFFF_FFFF_FFFF_FF00, inc: 0xDEAD_BEEF_1234_5678 }] {
         let (got_u, got_f) = run_keyed_kernel(&gpu, &kernel, seed, &keys, 2, 7);
         let word = seed_word(seed);
-        for (i, &[p, s, b, count]) in keys.iter().enumerate() {
+        for (i, &[p, s, b, bits]) in keys.iter().enumerate() {
             assert_eq!(got_u[2 * i], word, "seed word of {seed:?}");
-            assert_eq!(got_u[2 * i + 1], permute(s % count, count, p), "permute({s} % {count}, {count}, {p})");
+            assert_eq!(
+                got_u[2 * i + 1],
+                permute(s & ((1 << bits) - 1), bits, p),
+                "permute of {s} on {bits} bits, key {p}"
+            );
             let mut rng = stream(seed, p, s, b);
             let x: Vec<u32> = (0..7).map(|_| rng.next_u32() >> 8).collect();
-            let v = VertexStrata::new(word, p, s, b, count);
+            let v = VertexStrata::new(word, p, s, b, bits);
             let (lp, dir) = (v.two(1, [x[1], x[2]]), v.two(4, [x[4], x[5]]));
             let want = [v.one(0, x[0]), lp[0], lp[1], v.one(3, x[3]), dir[0], dir[1], v.one(6, x[6])];
             for d in 0..7 {

@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::prepare::pixel_samples::PixelSamples;
-use crate::sampling::{seed_word, strata_count};
+use crate::sampling::{seed_word, strata_bits};
 use crate::scene::Scene;
 
 use super::lights::Lights;
@@ -16,9 +16,9 @@ pub struct Context<'a> {
     pub scene: &'a Scene,
     pub world: &'a World,
     pub lights: &'a Lights,
-    /// Strata per dimension of a path vertex (`sampling::strata_count` of the pixel's
-    /// samples of the whole render, not of one round or range).
-    pub strata: u32,
+    /// log₂ of the strata per dimension of a path vertex (`sampling::strata_bits` of the
+    /// pixel's samples of the whole render, not of one round or range).
+    pub strata_bits: u32,
     /// `sampling::seed_word` of the tracer's seed.
     pub seed_word: u32,
 }
@@ -34,7 +34,7 @@ impl<'a> Context<'a> {
     /// The context of a render whose pixels take `layout`'s camera samples.
     pub fn new(scene: &'a Scene, world: &'a World, lights: &'a Lights, layout: PixelSamples) -> Self {
         let samples = layout.count().saturating_mul(super::paths_per_sample(scene));
-        Self { scene, world, lights, strata: strata_count(samples), seed_word: seed_word(scene.tracer.rng) }
+        Self { scene, world, lights, strata_bits: strata_bits(samples), seed_word: seed_word(scene.tracer.rng) }
     }
 
     /// Closest hit along `ray`, counted.

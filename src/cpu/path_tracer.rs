@@ -47,7 +47,7 @@ pub fn path_radiance(
             radiance += beta * escaped(ctx, settings, &prev, ray.dir.normalize());
             break;
         };
-        let strata = VertexStrata::new(ctx.seed_word, pixel, sample, bounce, ctx.strata);
+        let strata = VertexStrata::new(ctx.seed_word, pixel, sample, bounce, ctx.strata_bits);
         let xi = VertexDraws::draw(&mut stream(ctx.scene.tracer.rng, pixel, sample, bounce), &strata);
         let material = ctx.scene.material(hit.material);
         let color = material.brdf.pigment().color_at(hit.uv.x, hit.uv.y);

@@ -45,7 +45,7 @@ impl VertexDraws {
 mod tests {
     use super::*;
 
-    use crate::sampling::{seed_word, strata_count};
+    use crate::sampling::{seed_word, strata_bits};
     use crate::scene::PcgSeed;
 
     fn flat(d: &VertexDraws) -> [f64; 7] {
@@ -57,7 +57,7 @@ mod tests {
     fn draws_are_the_stream_in_order() {
         let mut a = Pcg32::new(5, 6);
         let mut b = a;
-        let d = VertexDraws::draw(&mut a, &VertexStrata::new(1, 2, 0, 3, strata_count(1)));
+        let d = VertexDraws::draw(&mut a, &VertexStrata::new(1, 2, 0, 3, strata_bits(1)));
         let seq: Vec<f64> = (0..7).map(|_| b.next_f64()).collect();
         assert_eq!(flat(&d), seq[..]);
         assert_eq!(a, b);
@@ -69,7 +69,7 @@ mod tests {
     fn draws_sit_in_their_strata() {
         let word = seed_word(PcgSeed::default());
         for i in 0..16 {
-            let strata = VertexStrata::new(word, 9, i, 1, 16);
+            let strata = VertexStrata::new(word, 9, i, 1, 4);
             let mut a = Pcg32::new(7, u64::from(i));
             let x: Vec<u64> = {
                 let mut b = a;

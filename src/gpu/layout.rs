@@ -430,9 +430,9 @@ pub struct Settings {
     /// Ranges of the `indices` buffer (BVH leaf objects start at 0).
     pub plane_offset: u32,
     pub plane_count: u32,
-    /// Strata per dimension of a path vertex (`sampling::strata_count` of the pixel's
-    /// samples: camera samples times paths per sample).
-    pub strata: u32,
+    /// log₂ of the strata per dimension of a path vertex (`sampling::strata_bits` of the
+    /// pixel's samples: camera samples times paths per sample).
+    pub strata_bits: u32,
     pub area_light_count: u32,
     pub point_light_count: u32,
     pub bvh_node_count: u32,
@@ -494,7 +494,7 @@ mod tests {
                     spp,
                     plane_offset,
                     plane_count,
-                    strata,
+                    strata_bits,
                     area_light_count,
                     point_light_count,
                     bvh_node_count,

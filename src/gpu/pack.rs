@@ -344,7 +344,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         spp,
         plane_offset,
         plane_count,
-        strata: crate::sampling::strata_count(u64::from(spp) * u64::from(paths_per_sample)),
+        strata_bits: crate::sampling::strata_bits(u64::from(spp) * u64::from(paths_per_sample)),
         area_light_count: count_u32("area lights", area_lights.len())?,
         point_light_count: count_u32("point lights", scene.point_lights.len())?,
         bvh_node_count: count_u32("BVH nodes", top_nodes)?,
