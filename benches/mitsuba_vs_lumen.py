@@ -21,8 +21,8 @@ spp, all in one run so every renderer sees the same machine load:
    - Mitsuba: a timed render after an untimed warm-up render of the same size (other
      seed), so the JIT kernel is cached; the cold first render is printed too.
    The goal compares lumen on the GPU with the better of Mitsuba llvm's two samplers
-   (cornell.sl stratifies its camera samples, 8x8 per pixel, so the stratified one is
-   the like-for-like comparison).
+   (lumen stratifies its camera samples, 8x8 per pixel in cornell.sl, and every number a
+   path vertex draws, as Mitsuba's stratified sampler does: the like-for-like comparison).
 
 Usage: benches/mitsuba_vs_lumen.py [--lumen PATH] [--width 128] [--spp 64] [--ref-spp 4096] [--seeds 4]
 Needs numpy and mitsuba (pip), Debian's libllvm19 for the llvm variant.
