@@ -30,9 +30,9 @@ fn strata_seed_word(seed: vec4<u32>) -> u32 {
 
 // sampling::VertexStrata::one and ::two applied to a vertex's seven 24-bit draws:
 // dimensions 0, 3 and 6 alone, (1, 2) and (4, 5) as cells of the 2^ceil(k/2) × 2^floor(k/2)
-// grid; `bits` = k (settings.strata_bits, at most 16). Each result is exact in f32.
-fn stratified_draws(x: array<u32, 7>, seed_word: u32, pixel: u32, sample: u32, bounce: u32, bits: u32) -> array<f32, 7> {
-    let k = min(bits, 16u);
+// grid; `k` = settings.strata_bits (sampling::strata_bits keeps it within STRATA_MAX's
+// 16 bits). Each result is exact in f32.
+fn stratified_draws(x: array<u32, 7>, seed_word: u32, pixel: u32, sample: u32, bounce: u32, k: u32) -> array<f32, 7> {
     let index = sample & ((1u << k) - 1u);
     let base = hash32(hash32(hash32(pixel ^ seed_word) ^ (sample >> k)) ^ bounce);
     let across = (k + 1u) / 2u;

@@ -81,6 +81,18 @@ pub fn seed_word(seed: PcgSeed) -> u32 {
 }
 
 /// The strata of one path vertex: where its sample falls in each dimension's permutation.
+///
+/// ```
+/// use lumen::sampling::{seed_word, strata_bits, VertexStrata};
+/// use lumen::scene::PcgSeed;
+/// // The 16 samples of pixel 7 at bounce 0: each takes a different sixteenth of
+/// // dimension 0, whatever the stream draws inside it (here its middle).
+/// let (word, bits) = (seed_word(PcgSeed::default()), strata_bits(16));
+/// let mut strata: Vec<u32> =
+///     (0..16).map(|i| (VertexStrata::new(word, 7, i, 0, bits).one(0, 1 << 23) * 16.0) as u32).collect();
+/// strata.sort();
+/// assert_eq!(strata, (0..16).collect::<Vec<u32>>());
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct VertexStrata {
     /// k: 2^k strata per dimension.
