@@ -28,18 +28,23 @@ fn strata_seed_word(seed: vec4<u32>) -> u32 {
     return hash32(seed.x ^ hash32(seed.y ^ hash32(seed.z ^ hash32(seed.w))));
 }
 
-// sampling::VertexStrata::one and ::two applied to a vertex's seven 24-bit draws:
-// dimensions 0, 3 and 6 alone, (1, 2) and (4, 5) as cells of the 2^ceil(k/2) × 2^floor(k/2)
-// grid; `k` = settings.strata_bits (sampling::strata_bits keeps it within STRATA_MAX's
-// 16 bits). Each result is exact in f32.
+// sampling::in_stratum: ⌊(c·2²⁴ + x) / 2^n⌋, the 24-bit draw x in stratum c of 2^n.
+fn in_stratum(c: u32, n: u32, x: u32) -> u32 {
+    return (c << (24u - n)) | (x >> n);
+}
+
+// sampling::VertexStrata::draws, line for line: a vertex's seven 24-bit draws moved into
+// the strata of sample `sample` of `pixel` at `bounce`. `k` = settings.strata_bits
+// (sampling::strata_bits keeps it within 16); `seed_word` = settings.strata_seed. Each
+// result is exact in f32.
 fn stratified_draws(x: array<u32, 7>, seed_word: u32, pixel: u32, sample: u32, bounce: u32, k: u32) -> array<f32, 7> {
+    // VertexStrata::new
     let index = sample & ((1u << k) - 1u);
     let base = hash32(hash32(hash32(pixel ^ seed_word) ^ (sample >> k)) ^ bounce);
     let across = (k + 1u) / 2u;
     var xi: array<f32, 7>;
     var cell = 0u;
     for (var d = 0u; d < 7u; d++) {
-        // A grid's second coordinate reuses the cell its first one drew.
         let second = d == 2u || d == 5u;
         if (!second) {
             cell = strata_permute(index, k, hash32(base ^ d));
@@ -53,8 +58,7 @@ fn stratified_draws(x: array<u32, 7>, seed_word: u32, pixel: u32, sample: u32, b
             c = cell >> across;
             n = k - across;
         }
-        // sampling::in_stratum: ⌊(c·2²⁴ + x) / 2^n⌋.
-        xi[d] = f32((c << (24u - n)) | (x[d] >> n)) * (1.0 / 16777216.0);
+        xi[d] = f32(in_stratum(c, n, x[d])) * (1.0 / 16777216.0);
     }
     return xi;
 }

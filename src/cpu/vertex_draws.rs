@@ -23,21 +23,15 @@ pub const DRAWS_PER_VERTEX: usize = 7;
 
 impl VertexDraws {
     /// The vertex's seven stream draws, each moved into its sample's stratum of its
-    /// dimension (`strata`; dimension k is draw k, the light point and the direction
-    /// being 2D points).
+    /// dimension ([`VertexStrata::draws`]; the light point and the direction are 2D).
     pub fn draw(rng: &mut Pcg32, strata: &VertexStrata) -> Self {
         let mut x = [0u32; DRAWS_PER_VERTEX];
         for v in &mut x {
             // The 24 bits of Pcg32::next_f64.
             *v = rng.next_u32() >> 8;
         }
-        Self {
-            light: strata.one(0, x[0]),
-            light_point: strata.two(1, [x[1], x[2]]),
-            lobe: strata.one(3, x[3]),
-            direction: strata.two(4, [x[4], x[5]]),
-            roulette: strata.one(6, x[6]),
-        }
+        let u = strata.draws(x);
+        Self { light: u[0], light_point: [u[1], u[2]], lobe: u[3], direction: [u[4], u[5]], roulette: u[6] }
     }
 }
 

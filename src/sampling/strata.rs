@@ -89,7 +89,7 @@ pub fn seed_word(seed: PcgSeed) -> u32 {
 /// // dimension 0, whatever the stream draws inside it (here its middle).
 /// let (word, bits) = (seed_word(PcgSeed::default()), strata_bits(16));
 /// let mut strata: Vec<u32> =
-///     (0..16).map(|i| (VertexStrata::new(word, 7, i, 0, bits).one(0, 1 << 23) * 16.0) as u32).collect();
+///     (0..16).map(|i| (VertexStrata::new(word, 7, i, 0, bits).draws([1 << 23; 7])[0] * 16.0) as u32).collect();
 /// strata.sort();
 /// assert_eq!(strata, (0..16).collect::<Vec<u32>>());
 /// ```
@@ -117,19 +117,31 @@ impl VertexStrata {
         permute(self.index, self.bits, hash32(self.base ^ dimension))
     }
 
-    /// Dimension `dimension`'s uniform: the stream's 24-bit draw `x` (`next_u32() >> 8`)
-    /// moved into this sample's stratum ([`in_stratum`]).
-    pub fn one(&self, dimension: u32, x: u32) -> f64 {
-        unit(in_stratum(self.stratum(dimension), self.bits, x))
-    }
-
-    /// Dimensions `dimension` and `dimension + 1` as one 2D point in this sample's cell of
-    /// the 2^⌈k/2⌉ × 2^⌊k/2⌋ grid.
-    pub fn two(&self, dimension: u32, x: [u32; 2]) -> [f64; 2] {
-        let cell = self.stratum(dimension);
-        let across = self.bits.div_ceil(2);
-        let (cx, cy) = (cell & ((1 << across) - 1), cell >> across);
-        [unit(in_stratum(cx, across, x[0])), unit(in_stratum(cy, self.bits - across, x[1]))]
+    /// The seven draws of a path vertex: the stream's 24-bit draws `x` (`next_u32() >> 8`)
+    /// moved into this sample's strata ([`in_stratum`]). Dimensions 0, 3 and 6 are 1D;
+    /// (1, 2) and (4, 5) are cells of the 2^⌈k/2⌉ × 2^⌊k/2⌋ grid, whose second coordinate
+    /// reuses the cell its first one drew. `shaders/strata.wgsl`'s `stratified_draws` is
+    /// this loop, line for line.
+    pub fn draws(&self, x: [u32; 7]) -> [f64; 7] {
+        let k = self.bits;
+        let across = k.div_ceil(2);
+        let mut xi = [0.0; 7];
+        let mut cell = 0;
+        for d in 0..7u32 {
+            let second = d == 2 || d == 5;
+            if !second {
+                cell = self.stratum(d);
+            }
+            let (c, n) = if d == 1 || d == 4 {
+                (cell & ((1 << across) - 1), across)
+            } else if second {
+                (cell >> across, k - across)
+            } else {
+                (cell, k)
+            };
+            xi[d as usize] = unit(in_stratum(c, n, x[d as usize]));
+        }
+        xi
     }
 }
 
@@ -197,10 +209,11 @@ mod tests {
             let count = 1u32 << bits;
             let strata: Vec<VertexStrata> =
                 (0..count).map(|i| VertexStrata::new(word, 77, block * count + i, bounce, bits)).collect();
-            for d in 0..7 {
+            let draws: Vec<[f64; 7]> = strata.iter().map(|v| v.draws([1 << 23; 7])).collect();
+            for d in [0, 3, 6] {
                 let mut hit = vec![false; count as usize];
-                for v in &strata {
-                    let cell = (v.one(d, 1 << 23) * f64::from(count)) as usize;
+                for u in &draws {
+                    let cell = (u[d] * f64::from(count)) as usize;
                     assert!(!hit[cell], "bits {bits} dimension {d}: stratum {cell} twice");
                     hit[cell] = true;
                 }
@@ -208,9 +221,8 @@ mod tests {
             let (across, down) = (1usize << bits.div_ceil(2), 1usize << (bits / 2));
             for d in [1, 4] {
                 let mut hit = vec![false; count as usize];
-                for v in &strata {
-                    let p = v.two(d, [1 << 23, 1 << 23]);
-                    let cell = (p[1] * down as f64) as usize * across + (p[0] * across as f64) as usize;
+                for u in &draws {
+                    let cell = (u[d + 1] * down as f64) as usize * across + (u[d] * across as f64) as usize;
                     assert!(!hit[cell], "bits {bits}: cell {cell} twice");
                     hit[cell] = true;
                 }
@@ -251,8 +263,8 @@ mod tests {
     #[test]
     fn one_sample_keeps_the_streams_draws() {
         let v = VertexStrata::new(seed_word(PcgSeed::default()), 3, 0, 0, strata_bits(1));
-        assert_eq!(v.one(0, 6 << 20), 0.375);
-        assert_eq!(v.two(1, [4 << 20, 10 << 20]), [0.25, 0.625]);
+        let x = [6 << 20, 4 << 20, 10 << 20, 1, 0, (1 << 24) - 1, 12 << 20];
+        assert_eq!(v.draws(x), x.map(|x| f64::from(x) / 16_777_216.0));
         assert_eq!([strata_bits(0), strata_bits(1), strata_bits(2), strata_bits(3), strata_bits(64)], [0, 0, 1, 1, 6]);
         assert_eq!(strata_bits(100), 6);
         assert_eq!(strata_bits(u64::MAX), 16);
