@@ -143,6 +143,11 @@ struct Settings {
     area_light_count: u32,
     point_light_count: u32,
     bvh_node_count: u32,
+    // sampling::seed_word of the tracer's seed, for the strata's permutation keys.
+    strata_seed: u32,
+    _pad1: u32,
+    _pad2: u32,
+    _pad3: u32,
 }
 
 // accel::quantized's node (inner nodes only): each child's bounds are corner + q * 2^e,

@@ -23,11 +23,6 @@ fn strata_permute(i: u32, bits: u32, key: u32) -> u32 {
     return (x + hash32(key ^ 0x5851F42Du)) & mask;
 }
 
-// sampling::seed_word of the tracer's seed (state.lo, state.hi, inc.lo, inc.hi).
-fn strata_seed_word(seed: vec4<u32>) -> u32 {
-    return hash32(seed.x ^ hash32(seed.y ^ hash32(seed.z ^ hash32(seed.w))));
-}
-
 // sampling::in_stratum: ⌊(c·2²⁴ + x) / 2^n⌋, the 24-bit draw x in stratum c of 2^n.
 fn in_stratum(c: u32, n: u32, x: u32) -> u32 {
     return (c << (24u - n)) | (x >> n);

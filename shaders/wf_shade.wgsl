@@ -148,7 +148,7 @@ fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         // The 24 bits of pcg_next_f32.
         x[k] = pcg_next_u32(&rng) >> 8u;
     }
-    let xi = stratified_draws(x, strata_seed_word(settings.tracer_seed), id.pixel, id.sample, bounce, settings.strata_bits);
+    let xi = stratified_draws(x, settings.strata_seed, id.pixel, id.sample, bounce, settings.strata_bits);
     let m = material_at(hit.material);
     let color = pigment_color(m.pigment, hit.uv);
     let beta_pdf = load_beta(slot, bounce);

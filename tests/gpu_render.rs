@@ -14,7 +14,7 @@ const STRATA_WGSL: &str = include_str!("../shaders/strata.wgsl");
 
 /// The bindings and the start of `main` of the kernels `run_keyed_kernel` runs: invocation
 /// `i` reads its key `k`; the test's body follows, then a closing brace.
-const KEYED_KERNEL_HEAD: &str = "struct Params { seed: vec4<u32>, count: u32 }
+const KEYED_KERNEL_HEAD: &str = "struct Params { seed: vec4<u32>, count: u32, word: u32 }
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> keys: array<vec4<u32>>;
 @group(0) @binding(2) var<storage, read_write> out_u: array<u32>;
@@ -26,7 +26,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = keys[i];";
 
 /// Runs a test kernel over `keys` with the tracer seed `seed` (bindings: params {seed,
-/// count}, keys, out_u, out_f) and reads back `u_per_key` words and `f_per_key` floats per
+/// count, word = `sampling::seed_word(seed)`, as the packed settings' `strata_seed`}, keys,
+/// out_u, out_f) and reads back `u_per_key` words and `f_per_key` floats per
 /// key.
 fn run_keyed_kernel(
     gpu: &lumen::gpu::Gpu,
@@ -41,12 +42,14 @@ fn run_keyed_kernel(
     struct Params {
         seed: [u32; 4],
         count: u32,
-        _pad: [u32; 3],
+        word: u32,
+        _pad: [u32; 2],
     }
     let params = Params {
         seed: [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32],
         count: keys.len() as u32,
-        _pad: [0; 3],
+        word: seed_word(seed),
+        _pad: [0; 2],
     };
     let ub = gpu.uniform_buffer("params", &params).unwrap();
     let kb = gpu.storage_buffer("keys", keys).unwrap();
@@ -99,8 +102,8 @@ fn random_streams_match_the_cpu_bit_for_bit() {
     }
 }
 
-/// `shaders/strata.wgsl` against `sampling::strata`: the seed word and the permutations
-/// and a vertex's seven stratified draws bit for bit, for even and odd powers of two (square
+/// `shaders/strata.wgsl` against `sampling::strata`: the permutations and a vertex's seven
+/// stratified draws bit for bit, for even and odd powers of two (square
 /// and 2:1 grids), one sample, and samples beyond the first block.
 #[test]
 fn stratified_draws_match_the_cpu() {
@@ -109,14 +112,12 @@ fn stratified_draws_match_the_cpu() {
         "{RANDOM_WGSL}
 {STRATA_WGSL}
 {KEYED_KERNEL_HEAD}
-    // k = (pixel, sample, bounce, strata)
-    let word = strata_seed_word(params.seed);
-    out_u[2u * i] = word;
-    out_u[2u * i + 1u] = strata_permute(k.y & ((1u << k.w) - 1u), k.w, k.x);
+    // k = (pixel, sample, bounce, strata bits)
+    out_u[i] = strata_permute(k.y & ((1u << k.w) - 1u), k.w, k.x);
     var rng = stream(params.seed.xy, params.seed.zw, k.x, k.y, k.z);
     var x: array<u32, 7>;
     for (var d = 0u; d < 7u; d++) {{ x[d] = pcg_next_u32(&rng) >> 8u; }}
-    let xi = stratified_draws(x, word, k.x, k.y, k.z, k.w);
+    let xi = stratified_draws(x, params.word, k.x, k.y, k.z, k.w);
     for (var d = 0u; d < 7u; d++) {{ out_f[7u * i + d] = xi[d]; }}
 }}"
     );
@@ -133,15 +134,10 @@ fn stratified_draws_match_the_cpu() {
         }
     }
     for seed in [PcgSeed::default(), PcgSeed { state: 0xFFFF_FFFF_FFFF_FF00, inc: 0xDEAD_BEEF_1234_5678 }] {
-        let (got_u, got_f) = run_keyed_kernel(&gpu, &kernel, seed, &keys, 2, 7);
+        let (got_u, got_f) = run_keyed_kernel(&gpu, &kernel, seed, &keys, 1, 7);
         let word = seed_word(seed);
         for (i, &[p, s, b, bits]) in keys.iter().enumerate() {
-            assert_eq!(got_u[2 * i], word, "seed word of {seed:?}");
-            assert_eq!(
-                got_u[2 * i + 1],
-                permute(s & ((1 << bits) - 1), bits, p),
-                "permute of {s} on {bits} bits, key {p}"
-            );
+            assert_eq!(got_u[i], permute(s & ((1 << bits) - 1), bits, p), "permute of {s} on {bits} bits, key {p}");
             let mut rng = stream(seed, p, s, b);
             let x: Vec<u32> = (0..7).map(|_| rng.next_u32() >> 8).collect();
             let v = VertexStrata::new(word, p, s, b, bits);

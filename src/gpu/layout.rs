@@ -436,6 +436,11 @@ pub struct Settings {
     pub area_light_count: u32,
     pub point_light_count: u32,
     pub bvh_node_count: u32,
+    /// `sampling::seed_word` of the tracer's seed, for the strata's permutation keys.
+    pub strata_seed: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+    pub _pad3: u32,
 }
 
 #[cfg(test)]
@@ -498,6 +503,10 @@ mod tests {
                     area_light_count,
                     point_light_count,
                     bvh_node_count,
+                    strata_seed,
+                    _pad1,
+                    _pad2,
+                    _pad3,
                 ]
             ),
             expect!(crate::accel::QuantizedNode, "QuantizedNode", [corner, scales, grid, link]),

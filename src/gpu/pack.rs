@@ -348,6 +348,10 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         area_light_count: count_u32("area lights", area_lights.len())?,
         point_light_count: count_u32("point lights", scene.point_lights.len())?,
         bvh_node_count: count_u32("BVH nodes", top_nodes)?,
+        strata_seed: crate::sampling::seed_word(seed),
+        _pad1: 0,
+        _pad2: 0,
+        _pad3: 0,
     };
     Ok(p)
 }
