@@ -48,11 +48,13 @@ fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
     }
 }
 
+// #if INDEXED_SHAPES
 // The span of the ray's whole line through shape `i`.
 fn shape_span(i: u32, ray: Ray) -> Span {
     let s = shape_at(i);
     return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
 }
+// #endif
 // #endif
 
 // #endif
@@ -73,8 +75,10 @@ fn span_first_crossing(sp: Span, ray: Ray) -> Crossing {
 }
 
 // #if BVH
+// #if !OBJECT_LIST
 // The first finite crossing of bounded shape `i` with t in the open range (tmin, tmax);
-// t = OPEN when there is none.
+// t = OPEN when there is none. (A list's shapes are tested by gpu::traversal's generated
+// code, their kinds known.)
 fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
 // #if MESH
     if (shape_at(i).kind == SHAPE_MESH) {
@@ -83,6 +87,7 @@ fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
 // #endif
     return span_first_crossing(shape_span(i, ray), ray);
 }
+// #endif
 // #endif
 
 // #if PLANE

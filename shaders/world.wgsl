@@ -1,4 +1,10 @@
 // #requires shapes constants
+// #if OBJECT_LIST
+// #requires unrolled
+// #endif
+// #if UNROLLED_PLANES
+// #requires unrolled
+// #endif
 // #if CSG
 // #if !CSG_QUEUE
 // #requires csg
@@ -215,8 +221,8 @@ fn csg_nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<fun
 // #endif
 
 // #if BVH
-// Object `r` of the BVH or the list (a bounded shape or CSG tree) along `ray`, as
-// `keep_nearer`.
+// #if !OBJECT_LIST
+// Object `r` of a BVH leaf (a bounded shape or CSG tree) along `ray`, as `keep_nearer`.
 fn nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<function, Candidate>) -> bool {
 // #if CSG
     if ((r & CSG_NODE_BIT) != 0u) {
@@ -225,6 +231,7 @@ fn nearer(r: u32, ray: ptr<function, Ray>, inv_dir: vec3<f32>, best: ptr<functio
 // #endif
     return keep_nearer(Candidate(shape_first_crossing(r, *ray), r, false, r), ray, best);
 }
+// #endif
 // #endif
 
 // #if PLANE
@@ -256,22 +263,28 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     deferred.count = 0u;
 // #endif
 // #if PLANE
+// #if UNROLLED_PLANES
+    // A few planes: each under its constant reference (gpu::traversal::Unrolled).
+    if (unrolled_planes(&ray, inv_dir, &best, any_hit)) {
+        return best;
+    }
+// #else
     for (var i = 0u; i < settings.plane_count; i++) {
         if (nearer_unbounded(object_ref(settings.plane_offset + i), &ray, inv_dir, &best) && any_hit) {
             return best;
         }
     }
 // #endif
+// #endif
 // #if OBJECT_LIST
     // A handful of objects (gpu::traversal chose a list): every one in turn behind the root
-    // box, in index order. The index is the same in every lane, so an object's words are
-    // loaded once for the SIMD group and only its own shape kind's code runs, where a walk
-    // loads lane-divergent nodes and objects per lane (DESIGN.md "Object list").
+    // box, in reference order, each under its constant reference and with its own shape kind's
+    // code only (generated: gpu::traversal::Unrolled), so an object's words are loaded once
+    // for the SIMD group, where a walk loads lane-divergent nodes and objects per lane
+    // (DESIGN.md "Object list").
     if (tree_entry(0u, ray.origin, inv_dir, ray.tmin, ray.tmax) < OPEN) {
-        for (var k = 0u; k < settings.plane_offset; k++) {
-            if (nearer(object_ref(k), &ray, inv_dir, &best) && any_hit) {
-                return best;
-            }
+        if (listed_nearest(&ray, inv_dir, &best, any_hit)) {
+            return best;
         }
     }
 // #else

@@ -71,7 +71,9 @@ fn specialised_and_full_featured_kernels_give_the_same_image() {
             assert!(full.covers(&spec) && full != spec, "{name}");
             let a = run(&gpu, &mut renderer, &scene, None);
             let b = run(&gpu, &mut renderer, &scene, Some(full));
-            assert_eq!((a.features, b.features), (spec, full), "{name}");
+            // The kernels also hold the packed scene's unrolled lists (FeatureSet::listed).
+            let lists = lumen::gpu::pack::pack(&scene, None).unwrap().features;
+            assert_eq!((a.features, b.features), (spec.with_lists_of(&lists), full.with_lists_of(&lists)), "{name}");
             assert_eq!((a.spp_done, b.spp_done), (2, 2), "{name}");
             assert_eq!(a.non_finite_samples, b.non_finite_samples, "{name}");
             let (w, h) = (scene.width as usize, scene.height as usize);
@@ -132,6 +134,7 @@ fn a_kernel_override_that_does_not_cover_the_scene_is_refused() {
 
     for (scene, kernel) in [(&spheres, spheres_only), (&with_csg, spheres_only.full_for())] {
         let opts = GpuRenderOptions { features: Some(kernel), ..GpuRenderOptions::fixed_passes(Some(1), 1) };
-        assert_eq!(render(&gpu, scene, &opts).unwrap().features, kernel);
+        let lists = lumen::gpu::pack::pack(scene, None).unwrap().features;
+        assert_eq!(render(&gpu, scene, &opts).unwrap().features, kernel.with_lists_of(&lists));
     }
 }

@@ -545,7 +545,8 @@ fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> any
     for (name, scene) in &scenes {
         let packed = pack(scene, Some(1)).map_err(|e| anyhow!("{e}"))?;
         let finite = packed.settings.plane_offset;
-        if finite > LIST_MAX_OBJECTS {
+        // Meshes are always walked (FeatureSet::lists_objects).
+        if finite > LIST_MAX_OBJECTS || packed.features.mesh {
             continue;
         }
         eprintln!("{name}: BVH or list ...");

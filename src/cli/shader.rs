@@ -7,7 +7,6 @@ use anyhow::{anyhow, Context as _};
 use clap::Args;
 
 use super::script_args::ScriptArgs;
-use crate::gpu::features::FeatureSet;
 use crate::gpu::pack::pack;
 use crate::gpu::render::assemble_stages;
 use crate::gpu::tables::{TableForms, TableLimits, TablePlacement};
@@ -34,9 +33,10 @@ pub struct ShaderArgs {
 /// Loads the scene, assembles and validates its kernel (naga), and prints it.
 pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     let scene = args.script.load(&args.scene)?;
-    let mut features = FeatureSet::of(&scene);
+    // The packed scene's features: its lists are known only once it is packed.
+    let packed = pack(&scene, None).map_err(|e| anyhow!("cannot pack the scene for the GPU: {e}"))?;
+    let mut features = packed.features;
     if args.tables != TablePlacement::Storage {
-        let packed = pack(&scene, None).map_err(|e| anyhow!("cannot pack the scene for the GPU: {e}"))?;
         let limits = TableLimits::webgpu_default();
         features.tables = TableForms::choose(&packed, args.tables, wgpu::DeviceType::Cpu, limits);
     }

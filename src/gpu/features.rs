@@ -203,6 +203,16 @@ pub struct FeatureSet {
     /// The finite objects are tested in turn, as a list behind the root box, instead of
     /// through a BVH walk ([`super::traversal::prefers_list`] decides).
     pub object_list: bool,
+    /// The finite objects' references in list order, when there are at most
+    /// [`UNROLLED_MAX`](super::traversal::UNROLLED_MAX): what an object list's kernels test,
+    /// unrolled ([`super::traversal::Unrolled`]). Filled by [`super::pack::pack`] (it needs
+    /// the packed tables); [`FeatureSet::of`] leaves it `None`, and without it the objects
+    /// are walked through the BVH whatever `object_list` says.
+    pub listed: Option<super::traversal::Unrolled>,
+    /// The unbounded list (planes and unbounded CSG trees) when it has at most
+    /// `UNROLLED_MAX` entries: tested unrolled (UNROLLED_PLANES), else in a loop. Filled by
+    /// `pack` as `listed` is.
+    pub planes_listed: Option<super::traversal::Unrolled>,
     /// Next-event estimation with MIS (path tracer with some non-delta material only: light
     /// sampling happens at diffuse and microfacet vertices).
     pub nee: bool,
@@ -465,6 +475,8 @@ impl FeatureSet {
             renderer: self.renderer,
             bvh: true,
             object_list: self.object_list,
+            listed: self.listed,
+            planes_listed: self.planes_listed,
             nee: path,
             tables: self.tables,
             shade_use: [KindUse::ALL; BRDF_KINDS],
@@ -481,8 +493,15 @@ impl FeatureSet {
 
     /// What `self` lacks to cover `scene` (see [`Self::covers`]), in words; empty when it covers.
     pub fn missing_for(&self, scene: &FeatureSet) -> Vec<String> {
-        let mut missing: Vec<String> =
-            scene.names().into_iter().filter(|n| !self.names().contains(n)).map(|n| format!("feature {n}")).collect();
+        // How the objects are gone through (a walk, unrolled lists) is not a capability:
+        // every way finds the same hits.
+        let strategy = ["OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK"];
+        let mut missing: Vec<String> = scene
+            .names()
+            .into_iter()
+            .filter(|n| !self.names().contains(n) && !strategy.contains(n))
+            .map(|n| format!("feature {n}"))
+            .collect();
         if self.renderer != scene.renderer {
             missing.push(format!("renderer {:?} (kernel: {:?})", scene.renderer, self.renderer));
         }
@@ -537,7 +556,7 @@ impl FeatureSet {
 
     /// Every feature name a shader may test that the scene decides (see [`Self::names`]; the
     /// table placements' names are [`super::tables::Table::feature`]).
-    pub const ALL_NAMES: [&'static str; 38] = [
+    pub const ALL_NAMES: [&'static str; 39] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -549,6 +568,7 @@ impl FeatureSet {
         "CSG",
         "BVH",
         "OBJECT_LIST",
+        "UNROLLED_PLANES",
         "BVH_WALK",
         "SHADING",
         "PIGMENT_UNIFORM",
@@ -591,9 +611,10 @@ impl FeatureSet {
             (self.mesh, "MESH"),
             (self.csg, "CSG"),
             (self.bvh, "BVH"),
-            (self.bvh && self.object_list, "OBJECT_LIST"),
+            (self.lists_objects(), "OBJECT_LIST"),
+            (self.unrolls_planes(), "UNROLLED_PLANES"),
             // Meshes walk their bottom-level BVHs whatever the top level does.
-            ((self.bvh && !self.object_list) || self.mesh, "BVH_WALK"),
+            ((self.bvh && !self.lists_objects()) || self.mesh, "BVH_WALK"),
             (self.shading(), "SHADING"),
             (self.pigment_uniform, "PIGMENT_UNIFORM"),
             (self.pigment_checkered, "PIGMENT_CHECKERED"),
@@ -632,6 +653,25 @@ impl FeatureSet {
         let mut names: Vec<&'static str> = flags.iter().filter(|(on, _)| *on).map(|(_, n)| *n).collect();
         names.extend(self.tables.names());
         names
+    }
+
+    /// Whether the kernels test the finite objects as an unrolled list: `object_list`, the
+    /// list known (`listed`) and no mesh (a mesh instance's test is a walk of its own BVH,
+    /// which the top-level walk skips wherever the ray misses its box; a list forced on a
+    /// scene with meshes is walked).
+    pub fn lists_objects(&self) -> bool {
+        self.bvh && self.object_list && self.listed.is_some() && !self.mesh
+    }
+
+    /// Whether the kernels test the planes' list unrolled (`planes_listed` known).
+    pub fn unrolls_planes(&self) -> bool {
+        self.plane && self.planes_listed.is_some()
+    }
+
+    /// `self` with the unrolled lists of `packed` (a packed scene's features): what a kernel
+    /// override ([`super::render::GpuRenderOptions::features`]) cannot know beforehand.
+    pub fn with_lists_of(self, packed: &FeatureSet) -> FeatureSet {
+        FeatureSet { listed: packed.listed, planes_listed: packed.planes_listed, ..self }
     }
 
     /// The set in the form the shader assembler takes.

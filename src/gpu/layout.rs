@@ -295,21 +295,32 @@ pub mod image_filter_kind {
     pub const BILINEAR: u32 = 1;
 }
 
+/// The shape kinds by their names in WGSL (`SHAPE_` + name).
+const SHAPE_KIND_NAMES: [(&str, u32); 5] = [
+    ("SPHERE", shape_kind::SPHERE),
+    ("PLANE", shape_kind::PLANE),
+    ("CUBE", shape_kind::CUBE),
+    ("CYLINDER", shape_kind::CYLINDER),
+    ("MESH", shape_kind::MESH),
+];
+
+/// The WGSL constant naming shape kind `kind` (`SHAPE_CUBE`, ...), for generated code.
+///
+/// ```
+/// use lumen::gpu::layout::{shape_kind, shape_kind_wgsl};
+/// assert_eq!(shape_kind_wgsl(shape_kind::CUBE), "SHAPE_CUBE");
+/// ```
+pub fn shape_kind_wgsl(kind: u32) -> String {
+    let name = SHAPE_KIND_NAMES.iter().find(|(_, k)| *k == kind).map_or("UNKNOWN", |(n, _)| n);
+    format!("SHAPE_{name}")
+}
+
 /// Every tag above as WGSL constants (`SHAPE_SPHERE`, `BRDF_DIELECTRIC`, ...): the shaders
 /// name tags only through these, so the two sides cannot disagree (a test scans the shaders
 /// for bare tag literals).
 pub fn tags_wgsl() -> String {
     let groups: [(&str, &[(&str, u32)]); 12] = [
-        (
-            "SHAPE",
-            &[
-                ("SPHERE", shape_kind::SPHERE),
-                ("PLANE", shape_kind::PLANE),
-                ("CUBE", shape_kind::CUBE),
-                ("CYLINDER", shape_kind::CYLINDER),
-                ("MESH", shape_kind::MESH),
-            ],
-        ),
+        ("SHAPE", &SHAPE_KIND_NAMES),
         (
             "MESH",
             &[

@@ -17,6 +17,7 @@ use glam::DVec3;
 
 use super::features::FeatureSet;
 use super::layout::{self, Affine, NONE};
+use super::traversal::Unrolled;
 use crate::accel::{quantized, QuantizedNode};
 use crate::color::Color;
 use crate::image::HdrImage;
@@ -264,6 +265,9 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
     }
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
+    // The lists the kernels may test unrolled, each entry under a constant reference.
+    p.features.listed = Unrolled::of(&p.indices[..plane_offset as usize], &p.shapes);
+    p.features.planes_listed = Unrolled::of(&p.indices[plane_offset as usize..], &p.shapes);
     for CsgProgram { tree, words, sweep } in csg_programs {
         p.csg_trees[tree].program = count_u32("indices", p.indices.len())?;
         p.indices.extend(words);

@@ -216,6 +216,7 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
         ("<generated constants>", constants_module(features)),
         ("<generated scene tables>", super::tables::tables_wgsl().to_string()),
         ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features), stage.shade_queue())),
+        ("<generated unrolled lists>", super::traversal::unrolled_wgsl(features)),
     ];
     for (name, text) in &generated {
         lib.add(name, text).map_err(|e| GpuError::Validation(e.to_string()))?;
@@ -248,7 +249,8 @@ pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>,
 /// ```
 pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
     let mut out = String::new();
-    for (stage, a) in assemble_stages(&FeatureSet::of(scene))? {
+    let packed = super::pack::pack(scene, None).map_err(pack_error)?;
+    for (stage, a) in assemble_stages(&packed.features)? {
         let (_, entry) = stage.entry();
         out.push_str(&format!("// ===== stage {} (entry point {entry}) =====\n", stage.label()));
         out.push_str(&a.source);
@@ -343,7 +345,7 @@ impl GpuRenderer {
         opts: &GpuRenderOptions,
         start: Instant,
     ) -> Result<GpuRenderOutput, GpuError> {
-        let mut f = kernel_features(&packed.features, opts.features)?;
+        let mut f = kernel_features(&packed.features, opts.features.map(|k| k.with_lists_of(&packed.features)))?;
         f.tables = TableForms::choose(packed, opts.tables, gpu.adapter_info.device_type, TableLimits::of(&gpu.limits));
         let job = RenderJob { scene, packed, opts, start };
         let mut attempts = Attempts::default();
@@ -847,6 +849,45 @@ mod tests {
         f.sphere_lights = f.area_lights && rng.next_u32() % 2 == 0;
         f.cube_lights = f.area_lights && rng.next_u32() % 2 == 0;
         f.mesh_lights = f.area_lights && f.mesh && rng.next_u32() % 2 == 0;
+        with_random_lists(rng, f)
+    }
+
+    /// `f` with unrolled lists as `pack` would give a scene of its features, or none (where
+    /// a list would be too long): an object list holds one shape of each finite kind (never
+    /// a mesh: FeatureSet::lists_objects), a
+    /// plane list one plane, and one of the two a CSG tree when the scene has some.
+    fn with_random_lists(rng: &mut Pcg32, mut f: FeatureSet) -> FeatureSet {
+        use crate::gpu::layout::{shape_kind, Shape, CSG_NODE_BIT};
+        use crate::gpu::traversal::Unrolled;
+        let mut shapes: Vec<Shape> = Vec::new();
+        let mut push = |kind: u32| {
+            let mut s: Shape = bytemuck::Zeroable::zeroed();
+            s.kind = kind;
+            shapes.push(s);
+            shapes.len() as u32 - 1
+        };
+        let finite: Vec<u32> =
+            [(f.sphere, shape_kind::SPHERE), (f.cube, shape_kind::CUBE), (f.cylinder, shape_kind::CYLINDER)]
+                .into_iter()
+                .filter(|(on, _)| *on)
+                .map(|(_, k)| push(k))
+                .collect();
+        let planes: Vec<u32> = if f.plane { vec![push(shape_kind::PLANE)] } else { vec![] };
+        let tree_in_list = rng.next_u32() % 2 == 0 || !f.plane;
+        let with_tree = |mut refs: Vec<u32>, here: bool| {
+            if f.csg && here {
+                refs.push(CSG_NODE_BIT); // tree 0
+            }
+            refs
+        };
+        let list = with_tree(finite, tree_in_list);
+        let planes = with_tree(planes, !tree_in_list);
+        if rng.next_u32() % 2 == 0 && !list.is_empty() {
+            f.listed = Unrolled::of(&list, &shapes);
+        }
+        if rng.next_u32() % 2 == 0 && !planes.is_empty() {
+            f.planes_listed = Unrolled::of(&planes, &shapes);
+        }
         f
     }
 
@@ -860,6 +901,7 @@ mod tests {
                 let mut all = random_features(&mut rng, renderer, environment);
                 (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) =
                     (true, true, true, true, true, true);
+                all = with_random_lists(&mut rng, all);
                 all.csg_max_leaves = 4;
                 all.csg_max_depth = 3;
                 // Both packed forms, each with every table.
@@ -881,6 +923,26 @@ mod tests {
             }
         }
         assert_eq!(count, 96);
+    }
+
+    /// The unrolled lists hold the objects' references and kinds, not their records, in
+    /// reference order (not the BVH's, which moves with the objects): a scene whose objects
+    /// move keeps its kernels (an animation's frames compile once), and one whose objects
+    /// change kind or number gets its own.
+    #[test]
+    fn moving_listed_objects_keeps_the_kernels() {
+        use crate::scene::{ShapeKind, Transform};
+        let room = |x: f64, kind: ShapeKind| {
+            let mut b = crate::scene::SceneBuilder::new(4, 4);
+            let m = b.diffuse(crate::color::Color::gray(0.5));
+            b.shape(crate::scene::Shape::primitive(kind, Transform::translation(glam::DVec3::new(x, 0.0, 0.0)), m));
+            b.sphere(Transform::translation(glam::DVec3::new(3.0, 1.0, 0.0)), m).plane(Transform::IDENTITY, m);
+            b.build().unwrap()
+        };
+        let here = shader_source(&room(2.0, ShapeKind::Cube)).unwrap();
+        assert!(here.contains("fn listed_nearest") && here.contains("fn unrolled_planes"));
+        assert_eq!(here, shader_source(&room(5.0, ShapeKind::Cube)).unwrap());
+        assert_ne!(here, shader_source(&room(2.0, ShapeKind::Cylinder)).unwrap());
     }
 
     /// Mesa inlines every call, so each call site of the world query compiles the

@@ -169,7 +169,7 @@ impl Table {
     fn declared_when(self) -> &'static [&'static str] {
         match self {
             Table::Shapes => &["GEOMETRY"],
-            Table::Indices => &["SPANS"],
+            Table::Indices => &["OBJECT_REFS"],
             Table::BvhNodes => &["BVH"],
             // Where trees are evaluated, and object lists (their bounds).
             Table::CsgTrees => &["CSG_TREES"],

@@ -168,7 +168,9 @@ impl Stage {
                 n
             }
             Stage::Intersect => {
-                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "BVH_WALK", "MATERIALS"]].concat());
+                let mut n = keep(
+                    &[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK", "MATERIALS"]].concat(),
+                );
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED"]);
@@ -279,7 +281,8 @@ impl Stage {
                 n
             }
             Stage::Shadow => {
-                let mut n = keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "BVH_WALK"]].concat());
+                let mut n =
+                    keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK"]].concat());
                 n.extend(["SHADOWS", "WF_QUEUED", "WF_COUNT", "TRAVERSE", "SPANS"]);
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED", "WF_PUSH"]);
@@ -322,10 +325,14 @@ impl Stage {
         {
             names.push("AFFINE");
         }
+        // How the traversing stages go through the scene: a walk of the BVH, a loop over the
+        // planes (both bounded by settings), or unrolled lists only.
+        let walks = names.contains(&"BVH") && !names.contains(&"OBJECT_LIST");
+        let plane_loop = names.contains(&"PLANE") && !names.contains(&"UNROLLED_PLANES");
         // The settings uniform, for the stages that read it.
         let settings = match self {
             Stage::Camera | Stage::FirstHit | Stage::Shade(_) => true,
-            Stage::Intersect | Stage::Shadow => geometry,
+            Stage::Intersect | Stage::Shadow => geometry && (walks || plane_loop),
             Stage::Escape => names.contains(&"NEE"),
             _ => false,
         };
@@ -364,6 +371,16 @@ impl Stage {
         if names.contains(&"CSG") && (!names.contains(&"CSG_QUEUE") || names.contains(&"OBJECT_LIST")) {
             names.push("CSG_TREES");
         }
+        // The object references (`indices`): read by the BVH walk, the planes' loop and CSG
+        // evaluation; unrolled lists hold theirs as constants.
+        let evaluates_csg = names.contains(&"CSG") && !names.contains(&"CSG_QUEUE");
+        if names.contains(&"SPANS") && (walks || plane_loop || evaluates_csg) {
+            names.push("OBJECT_REFS");
+        }
+        // Spans of shapes known only by an index at run time (walks' leaves, CSG leaves).
+        if names.contains(&"SHAPE_SPANS") && (walks || evaluates_csg) {
+            names.push("INDEXED_SHAPES");
+        }
         names.sort();
         names.dedup();
         names
@@ -384,7 +401,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 40] = [
+    pub const NAMES: [&'static str; 42] = [
         "MICROFACET",
         "CSG_SWEEPS",
         "EMISSION",
@@ -405,6 +422,8 @@ impl Stage {
         "TRAVERSE",
         "SPANS",
         "SHAPE_SPANS",
+        "OBJECT_REFS",
+        "INDEXED_SHAPES",
         "CSG_QUEUE",
         "WF_QUEUED",
         "WF_PUSH",
