@@ -10,33 +10,33 @@ const CUBE_FACE_AXIS_V = array<u32, 6>(1u, 1u, 2u, 2u, 1u, 1u);
 const CUBE_FACE_SIGN_V = array<f32, 6>(1.0, 1.0, -1.0, 1.0, 1.0, 1.0);
 
 // #if SPANS
+// The slab test of src/cpu/shapes/cube.rs in straight-line vector code (the same divisions
+// and comparisons, in the same axis order, so the same crossings): a per-axis loop with an
+// early return stays a loop on llvmpipe, run masked around each listed cube.
 fn cube_span(o: vec3<f32>, d: vec3<f32>) -> Span {
+    // An axis the line runs parallel to bounds nothing if the origin is inside its slab,
+    // and leaves no span otherwise.
+    let parallel = d == vec3<f32>(0.0);
+    if (any(parallel & (abs(o) > vec3<f32>(0.5)))) {
+        return no_span();
+    }
+    let dd = select(d, vec3<f32>(1.0), parallel);
+    let t_lo = (vec3<f32>(-0.5) - o) / dd;
+    let t_hi = (vec3<f32>(0.5) - o) / dd;
+    let up = d > vec3<f32>(0.0);
+    let near = select(select(t_hi, t_lo, up), vec3<f32>(-OPEN), parallel);
+    let far = select(select(t_lo, t_hi, up), vec3<f32>(OPEN), parallel);
+    // Face 2·axis + 1 on the + side: a line going up enters on the − side.
+    let near_face = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(1u), vec3<u32>(0u), up);
+    let far_face = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), up);
+    // The latest entry and earliest exit, an earlier axis winning ties (as the loop).
     var enter = Crossing(-OPEN, 0u);
     var exit = Crossing(OPEN, 0u);
     for (var axis = 0u; axis < 3u; axis++) {
-        let oi = o[axis];
-        let di = d[axis];
-        if (di == 0.0) {
-            if (abs(oi) > 0.5) {
-                return no_span();
-            }
-            continue;
-        }
-        let t_lo = (-0.5 - oi) / di;
-        let t_hi = (0.5 - oi) / di;
-        let face = 2u * axis;
-        var near = Crossing(t_hi, face + 1u);
-        var far = Crossing(t_lo, face);
-        if (di > 0.0) {
-            near = Crossing(t_lo, face);
-            far = Crossing(t_hi, face + 1u);
-        }
-        if (near.t > enter.t) {
-            enter = near;
-        }
-        if (far.t < exit.t) {
-            exit = far;
-        }
+        let later = near[axis] > enter.t;
+        enter = Crossing(select(enter.t, near[axis], later), select(enter.face, near_face[axis], later));
+        let sooner = far[axis] < exit.t;
+        exit = Crossing(select(exit.t, far[axis], sooner), select(exit.face, far_face[axis], sooner));
     }
     if (enter.t <= exit.t) {
         return Span(enter, exit, true);
