@@ -854,8 +854,8 @@ mod tests {
 
     /// `f` with unrolled lists as `pack` would give a scene of its features, or none (where
     /// a list would be too long): an object list holds one shape of each finite kind (never
-    /// a mesh: FeatureSet::lists_objects), a
-    /// plane list one plane, and one of the two a CSG tree when the scene has some.
+    /// a mesh: FeatureSet::lists_objects), a plane list one plane, and one of the two a CSG
+    /// tree when the scene has some.
     fn with_random_lists(rng: &mut Pcg32, mut f: FeatureSet) -> FeatureSet {
         use crate::gpu::layout::{shape_kind, Shape, CSG_NODE_BIT};
         use crate::gpu::traversal::Unrolled;

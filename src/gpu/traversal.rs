@@ -110,7 +110,7 @@ impl Unrolled {
         Some(u)
     }
 
-    /// The entries in list order.
+    /// The entries, in ascending reference order (the order the kernels test them).
     pub fn entries(&self) -> impl Iterator<Item = UnrolledEntry> + '_ {
         (0..usize::from(self.len)).map(|k| {
             let r = self.refs[k];
