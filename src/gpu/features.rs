@@ -203,7 +203,7 @@ pub struct FeatureSet {
     /// The finite objects are tested in turn, as a list behind the root box, instead of
     /// through a BVH walk ([`super::traversal::prefers_list`] decides).
     pub object_list: bool,
-    /// The finite objects' references in list order, when there are at most
+    /// The finite objects' references (in reference order), when there are at most
     /// [`UNROLLED_MAX`](super::traversal::UNROLLED_MAX): what an object list's kernels test,
     /// unrolled ([`super::traversal::Unrolled`]). Filled by [`super::pack::pack`] (it needs
     /// the packed tables); [`FeatureSet::of`] leaves it `None`, and without it the objects
