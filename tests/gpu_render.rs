@@ -45,12 +45,7 @@ fn run_keyed_kernel(
         word: u32,
         _pad: [u32; 2],
     }
-    let params = Params {
-        seed: [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32],
-        count: keys.len() as u32,
-        word: seed_word(seed),
-        _pad: [0; 2],
-    };
+    let params = Params { seed: seed.words(), count: keys.len() as u32, word: seed_word(seed), _pad: [0; 2] };
     let ub = gpu.uniform_buffer("params", &params).unwrap();
     let kb = gpu.storage_buffer("keys", keys).unwrap();
     let ou = gpu.storage_buffer_zeroed("out_u", (keys.len() * u_per_key * 4) as u64).unwrap();

@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::prepare::pixel_samples::PixelSamples;
-use crate::sampling::{seed_word, strata_bits};
+use crate::sampling::seed_word;
 use crate::scene::Scene;
 
 use super::lights::Lights;
@@ -33,8 +33,8 @@ pub struct Counters {
 impl<'a> Context<'a> {
     /// The context of a render whose pixels take `layout`'s camera samples.
     pub fn new(scene: &'a Scene, world: &'a World, lights: &'a Lights, layout: PixelSamples) -> Self {
-        let samples = layout.count().saturating_mul(super::paths_per_sample(scene));
-        Self { scene, world, lights, strata_bits: strata_bits(samples), seed_word: seed_word(scene.tracer.rng) }
+        let strata_bits = layout.strata_bits(super::paths_per_sample(scene));
+        Self { scene, world, lights, strata_bits, seed_word: seed_word(scene.tracer.rng) }
     }
 
     /// Closest hit along `ray`, counted.

@@ -335,7 +335,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
     p.settings = layout::Settings {
         color0: rgba(color0),
         color1: rgba(color1),
-        tracer_seed: [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32],
+        tracer_seed: seed.words(),
         width: scene.width,
         height: scene.height,
         renderer,
@@ -348,7 +348,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         spp,
         plane_offset,
         plane_count,
-        strata_bits: crate::sampling::strata_bits(u64::from(spp) * u64::from(paths_per_sample)),
+        strata_bits: ps.strata_bits(u64::from(paths_per_sample)),
         area_light_count: count_u32("area lights", area_lights.len())?,
         point_light_count: count_u32("point lights", scene.point_lights.len())?,
         bvh_node_count: count_u32("BVH nodes", top_nodes)?,

@@ -121,16 +121,6 @@ impl Unrolled {
             }
         })
     }
-
-    /// The number of entries.
-    pub fn len(&self) -> usize {
-        usize::from(self.len)
-    }
-
-    /// Whether the list has no entry.
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
 }
 
 /// The generated WGSL module `unrolled` (`// #provides unrolled`): for a scene with `f`,

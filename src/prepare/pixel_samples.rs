@@ -32,6 +32,13 @@ impl PixelSamples {
         }
     }
 
+    /// log₂ of the strata per dimension of a path vertex ([`crate::sampling::strata_bits`])
+    /// for pixels of these camera samples with `paths` paths each: what the CPU reference
+    /// and the packed GPU settings both stratify by.
+    pub fn strata_bits(&self, paths: u64) -> u32 {
+        crate::sampling::strata_bits(self.count().saturating_mul(paths))
+    }
+
     /// Camera samples per pixel.
     pub fn count(&self) -> u64 {
         match *self {

@@ -22,7 +22,7 @@ mod pcg;
 mod strata;
 
 pub use distribution::{Distribution1D, Distribution2D};
-pub use pcg::Pcg32;
+pub use pcg::{unit24, Pcg32};
 pub use strata::{in_stratum, permute, seed_word, strata_bits, VertexStrata, STRATA_MAX};
 
 use crate::scene::PcgSeed;

@@ -29,13 +29,18 @@ impl Pcg32 {
 
     /// A uniform float in [0, 1) with 24 random bits (identical on CPU and GPU).
     pub fn next_f64(&mut self) -> f64 {
-        f64::from(self.next_u32() >> 8) * (1.0 / 16_777_216.0)
+        unit24(self.next_u32() >> 8)
     }
 
     /// The same value as [`Self::next_f64`], in f32 (exact).
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
     }
+}
+
+/// A 24-bit draw (`next_u32() >> 8`) as a float in [0, 1): `x · 2⁻²⁴`, exact in f32 and f64.
+pub fn unit24(x: u32) -> f64 {
+    f64::from(x) * (1.0 / 16_777_216.0)
 }
 
 #[cfg(test)]

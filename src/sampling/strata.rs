@@ -20,7 +20,7 @@
 //! divisions and a cycle-walking loop, which llvmpipe scalarises lane by lane: it made
 //! whole GPU renders 40–50 % slower (BENCHMARKS.md, "Stratified vertex draws").
 
-use super::hash32;
+use super::{hash32, unit24};
 use crate::scene::PcgSeed;
 
 /// Most strata per dimension: a pixel with more samples stratifies each block of
@@ -76,7 +76,7 @@ pub fn in_stratum(c: u32, bits: u32, x: u32) -> u32 {
 
 /// One word from the tracer's whole seed, for the permutation keys.
 pub fn seed_word(seed: PcgSeed) -> u32 {
-    let s = [seed.state as u32, (seed.state >> 32) as u32, seed.inc as u32, (seed.inc >> 32) as u32];
+    let s = seed.words();
     hash32(s[0] ^ hash32(s[1] ^ hash32(s[2] ^ hash32(s[3]))))
 }
 
@@ -139,15 +139,10 @@ impl VertexStrata {
             } else {
                 (cell, k)
             };
-            xi[d as usize] = unit(in_stratum(c, n, x[d as usize]));
+            xi[d as usize] = unit24(in_stratum(c, n, x[d as usize]));
         }
         xi
     }
-}
-
-/// A 24-bit draw as a float in [0, 1): exact in f32 and f64.
-fn unit(u: u32) -> f64 {
-    f64::from(u) * (1.0 / 16_777_216.0)
 }
 
 #[cfg(test)]

@@ -10,6 +10,19 @@ pub struct PcgSeed {
     pub inc: u64,
 }
 
+impl PcgSeed {
+    /// The seed as four u32 words (state low, state high, inc low, inc high): how the GPU
+    /// receives it (WGSL has no 64-bit integers) and what the strata's seed word hashes.
+    ///
+    /// ```
+    /// use lumen::scene::PcgSeed;
+    /// assert_eq!(PcgSeed { state: 1 << 32 | 2, inc: 3 }.words(), [2, 1, 3, 0]);
+    /// ```
+    pub fn words(&self) -> [u32; 4] {
+        [self.state as u32, (self.state >> 32) as u32, self.inc as u32, (self.inc >> 32) as u32]
+    }
+}
+
 impl Default for PcgSeed {
     fn default() -> Self {
         Self { state: 42, inc: 54 }
