@@ -96,8 +96,25 @@ struct EnvSample {
 fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> EnvSample {
 // #if ENV_IMAGE
     if (environment.kind == ENV_IMAGE) {
-        let v = dist1d_sample(environment.dist_offset, environment.tex_height, xi1);
-        let u = dist1d_sample(env_row_base(u32(v.z)), environment.tex_width, xi0);
+        // The row by the marginal distribution, then the column by that row's conditional
+        // one, through one call site of dist1d_sample: llvmpipe inlines every call, and each
+        // site compiles its binary search and per-lane loads again. NIR cannot prove this
+        // loop's trip count (two: a first draw is never negative), so it stays rolled.
+        var v = vec3<f32>(-1.0);
+        var u = vec3<f32>(0.0);
+        var base = environment.dist_offset;
+        var n = environment.tex_height;
+        var xi = xi1;
+        loop {
+            u = dist1d_sample(base, n, xi);
+            if (v.x >= 0.0) {
+                break;
+            }
+            v = u;
+            base = env_row_base(u32(v.z));
+            n = environment.tex_width;
+            xi = xi0;
+        }
         let dir = equirect_dir(u.x, v.x, environment.rotation_rad);
         return EnvSample(dir, env_image_pdf(u.y * v.y, v.x), env_texel_radiance(u32(u.z), u32(v.z)));
     }
