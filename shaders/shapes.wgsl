@@ -48,11 +48,17 @@ fn primitive_span(kind: u32, o: vec3<f32>, d: vec3<f32>) -> Span {
     }
 }
 
+// The span of the ray's whole line through the shape of record `s`, of kind `kind`
+// (`s.kind`, or the same kind as a constant where gpu::traversal's unrolled lists know it).
+fn record_span(s: Shape, kind: u32, ray: Ray) -> Span {
+    return primitive_span(kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
+}
+
 // #if INDEXED_SHAPES
 // The span of the ray's whole line through shape `i`.
 fn shape_span(i: u32, ray: Ray) -> Span {
     let s = shape_at(i);
-    return primitive_span(s.kind, affine_point(s.to_object, ray.origin), affine_vector(s.to_object, ray.dir));
+    return record_span(s, s.kind, ray);
 }
 // #endif
 // #endif

@@ -158,8 +158,7 @@ pub fn unrolled_wgsl(f: &FeatureSet) -> String {
             out.push_str(
                 "\n// Listed shape `i` of kind `kind` (both constants) along the ray, as keep_nearer.\n\
                  fn listed_shape(i: u32, kind: u32, ray: ptr<function, Ray>, best: ptr<function, Candidate>) -> bool {\n\
-                 \x20   let s = shape_at(i);\n\
-                 \x20   let sp = primitive_span(kind, affine_point(s.to_object, (*ray).origin), affine_vector(s.to_object, (*ray).dir));\n\
+                 \x20   let sp = record_span(shape_at(i), kind, *ray);\n\
                  \x20   return keep_nearer(Candidate(span_first_crossing(sp, *ray), i, false, i), ray, best);\n\
                  }\n",
             );
