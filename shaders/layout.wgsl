@@ -78,13 +78,14 @@ struct AreaLight {
     sphere: vec4<f32>,
     shape: u32,
     det: f32,
-    face_cdf: vec2<f32>,
     area: f32,
     // Meshes: the offset in `floats` of the triangle CDF (then each triangle's index in
-    // tri_positions, as bits), and the triangle count (0: not a mesh).
+    // tri_positions, as bits).
     mesh_cdf: u32,
+    // Cubes: the world area of one face of each pair (x, y, z).
+    face_areas: vec3<f32>,
+    // Meshes: the triangle count (0: not a mesh).
     mesh_triangles: u32,
-    _pad2: u32,
 }
 
 // position.w = linear_radius.

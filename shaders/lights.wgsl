@@ -141,43 +141,84 @@ fn light_object_normal(kind: u32, p: vec3<f32>) -> vec3<f32> {
 }
 // #endif
 
-// AreaLight::area_pdf_solid_angle.
-fn light_area_pdf(light: AreaLight, s: Shape, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>) -> f32 {
+// AreaLight::area_pdf_solid_angle: the area density 1 / area at y (outward object normal
+// n_obj) as a solid-angle density at x.
+fn light_area_pdf(s: Shape, x: vec3<f32>, y: vec3<f32>, n_obj: vec3<f32>, area: f32) -> f32 {
     let n_world = affine_normal(s.to_object, n_obj);
-    let jacobian = light.det * length(n_world);
-    let area = select(light.area, 2.0 * TAU * jacobian, s.kind == SHAPE_SPHERE);
     let to_light = y - x;
     let dist2 = dot(to_light, to_light);
     let cos_light = abs(dot(normalize_or(n_world, vec3<f32>(0.0)), to_light)) / sqrt(dist2);
-    if (!(cos_light > 0.0) || !(dist2 > 0.0)) {
+    if (!(cos_light > 0.0) || !(dist2 > 0.0) || !(area > 0.0)) {
         return 0.0;
     }
     return dist2 / (cos_light * area);
 }
 
+// #if SPHERE_LIGHTS
+// AreaLight::sphere_area: the world area of the light's unit sphere by Nanson's formula
+// at n_obj.
+fn light_sphere_area(light: AreaLight, s: Shape, n_obj: vec3<f32>) -> f32 {
+    return 2.0 * TAU * light.det * length(affine_normal(s.to_object, n_obj));
+}
+// #endif
+
+// #if CUBE_LIGHTS
+// AreaLight::cube_faces: the faces NEE samples from x (on object x_object), per axis the
+// world area sampled there (one face's, both faces', or 0) and the side (±1: only the
+// face x is in front of; 0: both). cpu::area_light's module documentation says why.
+struct CubeFaces {
+    weight: vec3<f32>,
+    side: vec3<f32>,
+}
+
+fn cube_faces(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32) -> CubeFaces {
+    if (x_object != light.shape) {
+        let p = affine_point(s.to_object, x);
+        let front = abs(p) > vec3<f32>(CUBE_FACE_REACH);
+        let w = select(vec3<f32>(0.0), light.face_areas, front);
+        if (w.x + w.y + w.z > 0.0) {
+            return CubeFaces(w, select(vec3<f32>(0.0), sign(p), front));
+        }
+    }
+    return CubeFaces(2.0 * light.face_areas, vec3<f32>(0.0));
+}
+
+// CubeFaces::area.
+fn cube_faces_area(f: CubeFaces) -> f32 {
+    return f.weight.x + f.weight.y + f.weight.z;
+}
+// #endif
+
 // #endif
 
 // #if SHADOWS
 // #if CUBE_LIGHTS
-// area_light::sample_cube_surface: the face pair by its world-area share, then uniform.
-fn sample_cube_surface(cdf: vec2<f32>, xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
+// area_light::sample_cube_surface: the axis by ξ0 against the faces' weights, the side
+// (where both are sampled) and one coordinate from the rest of ξ0, the other from ξ1.
+fn sample_cube_surface(f: CubeFaces, xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
+    let w = f.weight;
+    let u = xi0 * cube_faces_area(f);
+    // An axis of weight 0 is never chosen, even where rounding puts u at the end.
     var axis = 2u;
-    var lo = cdf.y;
-    var hi = 1.0;
-    if (xi0 < cdf.x) {
+    var lo = w.x + w.y;
+    if (u < w.x || (w.y == 0.0 && w.z == 0.0)) {
         axis = 0u;
         lo = 0.0;
-        hi = cdf.x;
-    } else if (xi0 < cdf.y) {
+    } else if (u < w.x + w.y || w.z == 0.0) {
         axis = 1u;
-        lo = cdf.x;
-        hi = cdf.y;
+        lo = w.x;
     }
-    let v = clamp(2.0 * (xi0 - lo) / (hi - lo), 0.0, 1.9999999);
-    let side = floor(v);
-    let a = v - side - 0.5;
+    let v = clamp((u - lo) / w[axis], 0.0, 0.99999994);
+    var s = 0.5 * f.side[axis];
+    var a = v - 0.5;
+    if (f.side[axis] == 0.0) {
+        // Both faces: v rescaled to [0, 2) gives the side (0: +, 1: −), then a coordinate.
+        let v2 = 2.0 * v;
+        let side = floor(v2);
+        s = select(-0.5, 0.5, side == 0.0);
+        a = v2 - side - 0.5;
+    }
     let b = xi1 - 0.5;
-    let s = select(-0.5, 0.5, side == 0.0);
     switch axis {
         case 0u: {
             return array<vec3<f32>, 2>(vec3<f32>(s, a, b), vec3<f32>(2.0 * s, 0.0, 0.0));
@@ -250,21 +291,25 @@ fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f3
 // #if PRIMITIVE_LIGHTS
     var p_obj: vec3<f32>;
     var n_obj: vec3<f32>;
+    var area: f32;
 // #if SPHERE_LIGHTS
     if (s.kind == SHAPE_SPHERE) {
         p_obj = uniform_sphere(xi0, azimuth);
         n_obj = p_obj;
+        area = light_sphere_area(light, s, n_obj);
     }
 // #endif
 // #if CUBE_LIGHTS
     if (s.kind == SHAPE_CUBE) {
-        let pn = sample_cube_surface(light.face_cdf, xi0, xi1);
+        let f = cube_faces(light, s, x, x_object);
+        let pn = sample_cube_surface(f, xi0, xi1);
         p_obj = pn[0];
         n_obj = pn[1];
+        area = cube_faces_area(f);
     }
 // #endif
     let y = affine_point(s.to_world, p_obj);
-    let pdf = light_area_pdf(light, s, x, y, n_obj);
+    let pdf = light_area_pdf(s, x, y, n_obj, area);
     let scale = affine_error_scale(s.to_world, p_obj);
     let n_world = normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0));
     return LightPoint(y, scale, n_world, p_obj, pdf, vec2<f32>(0.0));
@@ -291,8 +336,25 @@ fn light_pdf(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, y: vec3<f3
 // #endif
 // #endif
 // #if PRIMITIVE_LIGHTS
-    let p_obj = affine_point(s.to_object, y);
-    return light_area_pdf(light, s, x, y, light_object_normal(s.kind, p_obj));
+    let n_obj = light_object_normal(s.kind, affine_point(s.to_object, y));
+// #if CUBE_LIGHTS
+    if (s.kind == SHAPE_CUBE) {
+        // CubeFaces::samples: 0 on a face the sampling skips from x. n_obj is ±1 on one
+        // axis and 0 on the others, so dot products pick that axis's entries exactly.
+        let f = cube_faces(light, s, x, x_object);
+        let axis = abs(n_obj);
+        let side = dot(f.side, axis);
+        if (!(dot(f.weight, axis) > 0.0) || (side != 0.0 && side != dot(n_obj, vec3<f32>(1.0)))) {
+            return 0.0;
+        }
+        return light_area_pdf(s, x, y, n_obj, cube_faces_area(f));
+    }
+// #endif
+// #if SPHERE_LIGHTS
+    return light_area_pdf(s, x, y, n_obj, light_sphere_area(light, s, n_obj));
+// #else
+    return 0.0;
+// #endif
 // #endif
 }
 // #endif

@@ -1130,6 +1130,19 @@ fn far_from_the_origin_the_gpu_still_matches_the_cpu() {
     assert_matches_cpu(&gpu, &pt_scene, None, 0.99);
 }
 
+/// The GPU's cube-light sampling against a closed form (`common::cube_lamp_over_a_floor`: a
+/// sheared, rotated lamp beside the view of a diffuse floor, direct light only, Lambert's
+/// formula per pixel), not only against the CPU: NEE samples the faces a point is in front
+/// of, in f32 (shaders/lights.wgsl `cube_faces`).
+#[test]
+fn a_cube_lamp_lights_a_diffuse_floor_as_lamberts_formula_says() {
+    let Some(gpu) = gpu_for_tests("a_cube_lamp_lights_a_diffuse_floor_as_lamberts_formula_says") else { return };
+    let (scene, want) = common::cube_lamp_over_a_floor();
+    let g = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap();
+    assert_eq!(g.non_finite_samples, 0);
+    common::assert_close_to_closed_form(&g.image, &want, 0.05, 0.005);
+}
+
 /// Every example scene in scenes/, shrunk to a thumbnail with few samples, on both renderers.
 #[test]
 fn example_scenes_match_the_cpu() {
@@ -1149,7 +1162,13 @@ fn example_scenes_match_the_cpu() {
         // meshes.sl's checkered floor also reaches the horizon, and its smooth-shaded knot
         // drops samples whose shading and facet normals disagree, a test that f32 and f64
         // directions answer differently near grazing (4 of its 384 thumbnail pixels).
-        let min = if path.ends_with("glass.sl") || path.ends_with("meshes.sl") {
+        // cornell.sl's NEE samples only the lamp faces a point is in front of (cpu::area_light),
+        // so its shadow rays reach the lamp instead of ending on it, the ceiling's all
+        // along its plane to the lamp's thin sides; an f32 and an f64 shadow ray that
+        // graze something decide differently now and then, in proportion (48 px, 4 spp,
+        // four seeds: 0.2-0.3 % of pixels when every face was sampled, 0.5 % when only the
+        // bottom face was restricted, 0.9-1.0 % now; 6 of this thumbnail's 576 pixels).
+        let min = if path.ends_with("glass.sl") || path.ends_with("meshes.sl") || path.ends_with("cornell.sl") {
             0.98
         } else if path.ends_with("spheres_10k.sl") {
             0.90

@@ -8,10 +8,19 @@
 //!   it subtends (pdf 1 / (2π(1 − cos θmax))).
 //! - **area**: otherwise (cubes, ellipsoids, points inside or on the light). Spheres: a
 //!   point uniform in object space on the unit sphere, mapped to the world; Nanson's formula
-//!   gives the world area density `1 / (4π · |det M| · |M⁻ᵀ n_obj|)`. Cubes: a face pair
-//!   chosen by world area, a point uniform on it, so the density is `1 / A_world` (uniform
-//!   over the world surface: a flat panel's broad faces get nearly every sample). Either is
-//!   converted to solid angle by `d² / |cos θ_light|`.
+//!   gives the world area density `1 / (4π · |det M| · |M⁻ᵀ n_obj|)`. Cubes: see below.
+//!   Either is converted to solid angle by `d² / |cos θ_light|`.
+//!
+//! **Cubes sample the faces the shading point is in front of** ([`CubeFaces`]): a point
+//! outside the (parallelepiped) light sees at most one face of each pair, the one on its
+//! side of the pair's two planes, and a closed convex light hides every other face behind
+//! itself. So a face is chosen among those by world area and a point drawn uniformly on it
+//! (density `1 / Σ visible areas`). Uniform sampling over the whole surface wasted about
+//! half its samples on hidden faces: on `scenes/cornell.sl`'s flat lamp, the top face
+//! against the ceiling, whose shadow rays all ended on the lamp itself. A point inside the
+//! light, on it, or within [`CUBE_FACE_MARGIN`] of every pair's planes samples the whole
+//! surface uniformly, as before. The density for MIS (`pdf`) applies the same rule from the
+//! same point, so it is 0 on the faces sampling skips and the estimate stays unbiased.
 
 use std::f64::consts::PI;
 
@@ -24,7 +33,7 @@ use super::normalize_scaled;
 use super::offset::error_scale;
 use super::warp::{cone_one_minus_cos, uniform_cone, uniform_cone_pdf, uniform_sphere};
 
-pub use crate::prepare::AreaLight;
+pub use crate::prepare::{AreaLight, CUBE_FACE_MARGIN};
 
 /// A point sampled on a light, seen from the shading point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -64,7 +73,7 @@ impl AreaLight {
                 LightPoint { point, scale, normal, object_point: self.transform.inverse().point(point), pdf, uv: None }
             }
             None if self.mesh.is_some() => self.sample_mesh(x, xi0, xi1),
-            None => self.sample_area(x, xi0, xi1),
+            None => self.sample_area(x, x_shape, xi0, xi1),
         }
     }
 
@@ -80,7 +89,39 @@ impl AreaLight {
         }
         let p_obj = self.transform.inverse().point(y);
         let n_obj = object_normal(self.kind, p_obj);
-        self.area_pdf_solid_angle(x, y, n_obj)
+        if self.kind == ShapeKind::Sphere {
+            return self.area_pdf_solid_angle(x, y, n_obj, self.sphere_area(n_obj));
+        }
+        let faces = self.cube_faces(x, x_shape);
+        if !faces.samples(n_obj) {
+            return 0.0;
+        }
+        self.area_pdf_solid_angle(x, y, n_obj, faces.area())
+    }
+
+    /// The cube faces NEE samples from shading point `x` on shape `x_shape` (module
+    /// documentation): the ones `x` is in front of, else all.
+    pub fn cube_faces(&self, x: DVec3, x_shape: u32) -> CubeFaces {
+        if x_shape != self.shape {
+            let p = self.transform.inverse().point(x);
+            let mut faces = CubeFaces { weight: [0.0; 3], side: [0.0; 3] };
+            for axis in 0..3 {
+                if p[axis].abs() > 0.5 + CUBE_FACE_MARGIN {
+                    faces.weight[axis] = self.face_areas[axis];
+                    faces.side[axis] = p[axis].signum();
+                }
+            }
+            if faces.area() > 0.0 {
+                return faces;
+            }
+        }
+        CubeFaces { weight: self.face_areas.map(|a| 2.0 * a), side: [0.0; 3] }
+    }
+
+    /// World area of the unit sphere under the transform, by Nanson's formula at `n_obj`
+    /// (the density of object-uniform points there is its inverse).
+    fn sphere_area(&self, n_obj: DVec3) -> f64 {
+        4.0 * PI * self.det * self.transform.normal(n_obj).length()
     }
 
     /// Radiance the light's material emits at the sampled point (its pigment read at the
@@ -142,16 +183,20 @@ impl AreaLight {
         dist2 / (cos_light * self.area)
     }
 
-    fn sample_area(&self, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
-        let (p_obj, n_obj) = match self.kind {
+    fn sample_area(&self, x: DVec3, x_shape: u32, xi0: f64, xi1: f64) -> LightPoint {
+        let (p_obj, n_obj, area) = match self.kind {
             ShapeKind::Sphere => {
                 let p = uniform_sphere(xi0, xi1);
-                (p, p)
+                (p, p, self.sphere_area(p))
             }
-            _ => sample_cube_surface(self.face_cdf, xi0, xi1),
+            _ => {
+                let faces = self.cube_faces(x, x_shape);
+                let (p, n) = sample_cube_surface(&faces, xi0, xi1);
+                (p, n, faces.area())
+            }
         };
         let y = self.transform.point(p_obj);
-        let pdf = self.area_pdf_solid_angle(x, y, n_obj);
+        let pdf = self.area_pdf_solid_angle(x, y, n_obj, area);
         LightPoint {
             point: y,
             scale: error_scale(&self.transform.matrix(), p_obj),
@@ -162,18 +207,40 @@ impl AreaLight {
         }
     }
 
-    /// Area density (object-uniform, mapped by the transform) converted to solid angle at x.
-    fn area_pdf_solid_angle(&self, x: DVec3, y: DVec3, n_obj: DVec3) -> f64 {
+    /// The area density `1 / area` at y (outward object normal `n_obj`) converted to solid
+    /// angle at x.
+    fn area_pdf_solid_angle(&self, x: DVec3, y: DVec3, n_obj: DVec3, area: f64) -> f64 {
         let n_world = self.transform.normal(n_obj);
-        let jacobian = self.det * n_world.length();
-        let area = if self.kind == ShapeKind::Sphere { 4.0 * PI * jacobian } else { self.area };
         let to_light = y - x;
         let dist2 = to_light.length_squared();
         let cos_light = normalize_scaled(n_world).dot(to_light).abs() / dist2.sqrt();
-        if cos_light <= 0.0 || dist2 <= 0.0 {
+        if !(cos_light > 0.0 && dist2 > 0.0 && area > 0.0) {
             return 0.0;
         }
         dist2 / (cos_light * area)
+    }
+}
+
+/// The faces of a cube light that NEE samples from one shading point
+/// ([`AreaLight::cube_faces`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CubeFaces {
+    /// Per axis, the world area sampled there: one face's, both faces', or 0.
+    pub weight: [f64; 3],
+    /// Per axis, +1 or −1 where only that side's face is sampled; 0 where both are.
+    pub side: [f64; 3],
+}
+
+impl CubeFaces {
+    /// The world area sampled (the sampling density is its inverse).
+    pub fn area(&self) -> f64 {
+        self.weight.iter().sum()
+    }
+
+    /// Whether the face with outward object normal `n_obj` (a unit axis vector) is sampled.
+    pub fn samples(&self, n_obj: DVec3) -> bool {
+        let axis = n_obj.abs().max_position();
+        self.weight[axis] > 0.0 && (self.side[axis] == 0.0 || self.side[axis] == n_obj[axis].signum())
     }
 }
 
@@ -194,23 +261,31 @@ pub fn object_normal(kind: ShapeKind, p: DVec3) -> DVec3 {
     }
 }
 
-/// A point on the surface of the cube [−0.5, 0.5]³: the face pair ±x, ±y or ±z by ξ0
-/// against `cdf` (their world-area shares), the side and one coordinate from the rest of
-/// ξ0, the other from ξ1; uniform on each face. Returns (point, outward normal).
-fn sample_cube_surface(cdf: [f64; 2], xi0: f64, xi1: f64) -> (DVec3, DVec3) {
-    let (axis, lo, hi) = if xi0 < cdf[0] {
-        (0, 0.0, cdf[0])
-    } else if xi0 < cdf[1] {
-        (1, cdf[0], cdf[1])
+/// A point on the sampled faces of the cube [−0.5, 0.5]³: the axis by ξ0 against the
+/// faces' weights, the side (where both are sampled) and one coordinate from the rest of
+/// ξ0, the other from ξ1; uniform over the sampled area. Returns (point, outward normal).
+fn sample_cube_surface(faces: &CubeFaces, xi0: f64, xi1: f64) -> (DVec3, DVec3) {
+    let w = faces.weight;
+    let u = xi0 * faces.area();
+    // An axis of weight 0 is never chosen, even where rounding puts u at the end.
+    let axis = if u < w[0] || (w[1] == 0.0 && w[2] == 0.0) {
+        0
+    } else if u < w[0] + w[1] || w[2] == 0.0 {
+        1
     } else {
-        (2, cdf[1], 1.0)
+        2
     };
-    // ξ0 rescaled to [0, 2): the side (0: +, 1: −), then a coordinate on the face.
-    let v = (2.0 * (xi0 - lo) / (hi - lo)).clamp(0.0, 2.0 - f64::EPSILON);
-    let side = v.floor();
-    let a = v - side - 0.5;
+    let lo: f64 = w[..axis].iter().sum();
+    let v = ((u - lo) / w[axis]).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
+    let (s, a) = if faces.side[axis] == 0.0 {
+        // Both faces: v rescaled to [0, 2) gives the side (0: +, 1: −), then a coordinate.
+        let v2 = 2.0 * v;
+        let side = v2.floor();
+        (if side == 0.0 { 0.5 } else { -0.5 }, v2 - side - 0.5)
+    } else {
+        (0.5 * faces.side[axis], v - 0.5)
+    };
     let b = xi1 - 0.5;
-    let s = if side == 0.0 { 0.5 } else { -0.5 };
     match axis {
         0 => (DVec3::new(s, a, b), DVec3::new(2.0 * s, 0.0, 0.0)),
         1 => (DVec3::new(b, s, a), DVec3::new(0.0, 2.0 * s, 0.0)),
@@ -265,7 +340,7 @@ mod tests {
         let mut sum = 0.0;
         for _ in 0..n {
             let (a, b) = (rng.next_f64(), rng.next_f64());
-            let s = if force_area { light.sample_area(x, a, b) } else { light.sample(x, u32::MAX, a, b) };
+            let s = if force_area { light.sample_area(x, u32::MAX, a, b) } else { light.sample(x, u32::MAX, a, b) };
             if s.pdf <= 0.0 {
                 continue;
             }
@@ -373,26 +448,37 @@ mod tests {
         assert!((est / omega - 1.0).abs() < 0.02, "{est} vs {omega}");
     }
 
-    /// Cube samples are uniform over the world surface: each face gets its area's share (a
-    /// flat 1 × 1 × 0.02 panel: the two broad faces 1/1.04 of them), and the density is
-    /// 1 / area on every face.
+    /// From inside the light (or on it), cube samples are uniform over the world surface:
+    /// each face gets its area's share (a flat 1 × 1 × 0.02 panel: the two broad faces
+    /// 1/1.04 of them), and the density is 1 / area on every face.
     #[test]
     fn cube_faces_are_chosen_by_world_area() {
         let t = Transform::rotation_z(30.0) * Transform::scaling(DVec3::new(1.0, 1.0, 0.02));
         let scene = scene_with(ShapeKind::Cube, t);
         let light = AreaLight::new(&scene, 0).unwrap();
         assert!((light.area - 2.08).abs() < 1e-12, "{}", light.area);
+        let inside = light.transform.point(DVec3::new(0.1, -0.2, 0.3));
+        let on = light.transform.point(DVec3::new(0.1, -0.2, 0.5));
+        for (x, x_shape) in [(inside, u32::MAX), (on, light.shape)] {
+            let faces = light.cube_faces(x, x_shape);
+            assert_eq!(faces.side, [0.0; 3]);
+            assert!((faces.area() - light.area).abs() < 1e-12);
+        }
+        let faces = light.cube_faces(inside, u32::MAX);
         let mut rng = Pcg32::new(1, 2);
-        let (n, mut broad) = (100_000, 0);
+        let (n, mut broad, mut top) = (100_000, 0, 0);
         for _ in 0..n {
-            let (p_obj, n_obj) = sample_cube_surface(light.face_cdf, rng.next_f64(), rng.next_f64());
+            let (p_obj, n_obj) = sample_cube_surface(&faces, rng.next_f64(), rng.next_f64());
             assert!(p_obj.abs().max_element() <= 0.5 + 1e-15 && (p_obj.abs().max_element() - 0.5).abs() < 1e-15);
             assert_eq!(object_normal(ShapeKind::Cube, p_obj), n_obj.normalize());
             broad += usize::from(n_obj.z != 0.0);
+            top += usize::from(n_obj.z > 0.0);
         }
         let share = broad as f64 / f64::from(n);
         let expected = 2.0 / 2.08;
         assert!((share - expected).abs() < 5.0 * (expected * (1.0 - expected) / f64::from(n)).sqrt(), "{share}");
+        let half = top as f64 / broad as f64;
+        assert!((half - 0.5).abs() < 5.0 * (0.25 / broad as f64).sqrt(), "{half}");
         // The density at x of a point y, times d²/cos, is 1/area whichever face y is on.
         let x = DVec3::new(0.3, -2.0, 1.5);
         for (p_obj, n_obj) in [(DVec3::new(0.1, 0.2, 0.5), DVec3::Z), (DVec3::new(-0.5, 0.1, 0.0), DVec3::NEG_X)] {
@@ -400,8 +486,84 @@ mod tests {
             let nw = light.transform.normal(n_obj).normalize();
             let d = y - x;
             let expect = d.length_squared() / (nw.dot(d).abs() / d.length() * light.area);
-            assert!((light.area_pdf_solid_angle(x, y, n_obj) / expect - 1.0).abs() < 1e-12);
+            assert!((light.area_pdf_solid_angle(x, y, n_obj, light.area) / expect - 1.0).abs() < 1e-12);
         }
+    }
+
+    /// From outside, only the faces the point is in front of are sampled (the panel lamp
+    /// of scenes/cornell.sl seen from below: its bottom face, and a side face where the
+    /// point lies beyond that side), each by world area; the density is 1 / (their area)
+    /// there and 0 on the other faces, read back by `pdf` for every sample.
+    #[test]
+    fn cube_lights_sample_only_the_faces_in_front_of_the_point() {
+        let t = Transform::translation(DVec3::new(1.0, 0.0, 1.99))
+            * Transform::rotation_z(10.0)
+            * Transform::scaling(DVec3::new(0.5, 0.4, 0.02));
+        let scene = scene_with(ShapeKind::Cube, t);
+        let light = AreaLight::new(&scene, 0).unwrap();
+        let to_object = light.transform.inverse();
+        // Below the lamp's middle: the bottom face only.
+        let below = DVec3::new(1.02, 0.05, 0.3);
+        let faces = light.cube_faces(below, u32::MAX);
+        assert_eq!(faces.side, [0.0, 0.0, -1.0]);
+        assert!((faces.area() - light.face_areas[2]).abs() < 1e-15);
+        assert!((light.face_areas[2] - 0.2).abs() < 1e-12);
+        // Below and to the side: the bottom face and the side facing the point.
+        let aside = DVec3::new(1.8, -0.9, 0.5);
+        let faces = light.cube_faces(aside, u32::MAX);
+        let p = to_object.point(aside);
+        assert_eq!(faces.side, [p.x.signum(), p.y.signum(), -1.0]);
+        for x in [below, aside] {
+            let faces = light.cube_faces(x, u32::MAX);
+            let mut rng = Pcg32::new(5, 6);
+            for _ in 0..2000 {
+                let s = light.sample(x, u32::MAX, rng.next_f64(), rng.next_f64());
+                assert!(s.pdf > 0.0);
+                // The sampled face faces x: x lies on the outer side of its plane.
+                assert!((x - s.point).dot(s.normal) > 0.0, "{x} {}", s.point);
+                assert!(faces.samples(object_normal(ShapeKind::Cube, s.object_point)));
+                let d = s.point - x;
+                let expect = d.length_squared() / (s.normal.dot(d).abs() / d.length() * faces.area());
+                assert!((s.pdf / expect - 1.0).abs() < 1e-9);
+                assert!((light.pdf(x, u32::MAX, s.point, s.normal) / s.pdf - 1.0).abs() < 1e-12);
+            }
+            // The top face is never sampled from below, so its density is 0.
+            let top = light.transform.point(DVec3::new(0.1, 0.1, 0.5));
+            assert_eq!(light.pdf(x, u32::MAX, top, light.transform.normal(DVec3::Z)), 0.0);
+        }
+        // A point on the plane of the top face (the ceiling the lamp touches), within the
+        // margin, is in front of no face of the z pair: rounding cannot pick the top face.
+        let ceiling = light.transform.point(DVec3::new(3.0, 0.2, 0.5 + CUBE_FACE_MARGIN / 2.0));
+        let faces = light.cube_faces(ceiling, u32::MAX);
+        assert_eq!((faces.weight[2], faces.side[0]), (0.0, 1.0));
+    }
+
+    /// Sampling only the visible faces measures the same solid angle as sampling the whole
+    /// surface (the estimate of the visible solid angle Σ 1/pdf is unbiased either way).
+    #[test]
+    fn cube_visible_face_sampling_measures_the_visible_solid_angle() {
+        let t =
+            Transform::rotation_z(25.0) * Transform::rotation_x(15.0) * Transform::scaling(DVec3::new(1.0, 0.6, 0.3));
+        let scene = scene_with(ShapeKind::Cube, t);
+        let light = AreaLight::new(&scene, 0).unwrap();
+        let x = DVec3::new(1.3, -1.1, 0.9);
+        assert!(light.cube_faces(x, u32::MAX).side.iter().all(|&s| s != 0.0));
+        let visible = solid_angle_estimate(&light, x, false, 200_000);
+        // The whole surface, uniformly: the estimator of before, from a point inside.
+        let mut rng = Pcg32::new(8, 9);
+        let everything = light.cube_faces(DVec3::ZERO, u32::MAX);
+        let n = 400_000;
+        let mut sum = 0.0;
+        for _ in 0..n {
+            let (p_obj, n_obj) = sample_cube_surface(&everything, rng.next_f64(), rng.next_f64());
+            let y = light.transform.point(p_obj);
+            let normal = light.transform.normal(n_obj).normalize();
+            if (y - x).dot(normal) < 0.0 {
+                sum += 1.0 / light.area_pdf_solid_angle(x, y, n_obj, everything.area());
+            }
+        }
+        let uniform = sum / f64::from(n);
+        assert!((visible / uniform - 1.0).abs() < 0.01, "{visible} vs {uniform}");
     }
 
     #[test]

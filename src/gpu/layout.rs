@@ -238,16 +238,15 @@ pub struct AreaLight {
     pub sphere: [f32; 4],
     pub shape: u32,
     pub det: f32,
-    /// Cubes: `prepare::AreaLight::face_cdf` (the face pairs' world-area shares, summed).
-    pub face_cdf: [f32; 2],
     /// Cubes and meshes: the world surface area.
     pub area: f32,
     /// Meshes: offset in `floats` of the triangle CDF (file order; then each triangle's
     /// index in `tri_positions`, as bits).
     pub mesh_cdf: u32,
+    /// Cubes: `prepare::AreaLight::face_areas` (one face of each pair, world area).
+    pub face_areas: [f32; 3],
     /// Meshes: the triangle count; 0 for spheres and cubes.
     pub mesh_triangles: u32,
-    pub _pad2: u32,
 }
 
 #[repr(C)]
@@ -417,6 +416,10 @@ pub fn tags_wgsl() -> String {
             out.push_str(&format!("const {prefix}_{name}: u32 = {value}u;\n"));
         }
     }
+    // Not a tag, but a threshold both renderers must share exactly (an f32 too).
+    let reach = 0.5 + crate::prepare::CUBE_FACE_MARGIN;
+    assert_eq!(f64::from(reach as f32), reach);
+    out.push_str(&format!("const CUBE_FACE_REACH: f32 = {reach:?};\n"));
     out
 }
 
@@ -484,7 +487,7 @@ mod tests {
             ),
             expect!(Pigment, "Pigment", [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]),
             expect!(PointLight, "PointLight", [position, color]),
-            expect!(AreaLight, "AreaLight", [sphere, shape, det, face_cdf, area, mesh_cdf, mesh_triangles, _pad2]),
+            expect!(AreaLight, "AreaLight", [sphere, shape, det, area, mesh_cdf, face_areas, mesh_triangles]),
             expect!(
                 Environment,
                 "Environment",

@@ -510,11 +510,10 @@ fn packed_area_light(
         sphere,
         shape: shape_ref,
         det: light.det as f32,
-        face_cdf: light.face_cdf.map(|c| c as f32),
         area: light.area as f32,
         mesh_cdf,
+        face_areas: light.face_areas.map(|a| a as f32),
         mesh_triangles,
-        _pad2: 0,
     })
 }
 

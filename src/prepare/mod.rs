@@ -79,6 +79,14 @@ impl SceneBvh {
     }
 }
 
+/// How far beyond a unit-cube face's plane (object space, where the cube is [−0.5, 0.5]³) a
+/// shading point must lie for NEE to count it as in front of that face: 2⁻¹⁰, exact in f32
+/// and f64. Points closer than that (a ceiling touching a lamp's top face, or rounding)
+/// sample the face as if it were hidden; both renderers apply the same rule to the same
+/// threshold, so f32 and f64 rounding of a point lying on the plane cannot choose
+/// differently, and the choice is unbiased either way (MIS uses the same rule's density).
+pub const CUBE_FACE_MARGIN: f64 = 1.0 / 1024.0;
+
 /// One area light, with what sampling needs precomputed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AreaLight {
@@ -91,10 +99,10 @@ pub struct AreaLight {
     pub det: f64,
     /// World centre and radius when the shape is a sphere under a similarity transform.
     pub sphere: Option<(DVec3, f64)>,
-    /// Cubes: the cumulative probabilities of choosing a face pair (±x, then ±y; ±z takes
-    /// the rest), proportional to their world areas, so that area sampling is uniform over
-    /// the world surface (a flat panel's broad faces get nearly all the samples).
-    pub face_cdf: [f64; 2],
+    /// Cubes: the world area of one face of each pair (±x, ±y, ±z; both faces of a pair
+    /// have the same). NEE chooses among the faces a shading point is in front of by these
+    /// (`cpu::area_light`, "visible faces").
+    pub face_areas: [f64; 3],
     /// Cubes and meshes: the world surface area (sampling density 1 / area).
     pub area: f64,
     /// Meshes: the triangles and what sampling them needs.
@@ -147,7 +155,7 @@ impl AreaLight {
                 material: m.material,
                 det: lin.determinant().abs(),
                 sphere: None,
-                face_cdf: [1.0 / 3.0, 2.0 / 3.0],
+                face_areas: [0.0; 3],
                 area: sum,
                 mesh: Some(MeshLight { mesh: m.mesh.clone(), cdf }),
             });
@@ -161,9 +169,6 @@ impl AreaLight {
         // World area of one unit face per axis (Nanson: |det M| · |M⁻ᵀ e_i|).
         let det = lin.determinant().abs();
         let faces = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| det * p.transform.normal(e).length());
-        let total: f64 = faces.iter().sum();
-        let face_cdf =
-            if total > 0.0 { [faces[0] / total, (faces[0] + faces[1]) / total] } else { [1.0 / 3.0, 2.0 / 3.0] };
         Some(Self {
             shape: shape as u32,
             kind: p.kind,
@@ -171,7 +176,7 @@ impl AreaLight {
             material: p.material,
             det: lin.determinant().abs(),
             sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
-            face_cdf,
+            face_areas: faces,
             area: 2.0 * faces.iter().sum::<f64>(),
             mesh: None,
         })

@@ -8,8 +8,8 @@ use glam::DVec3;
 use lumen::color::Color;
 use lumen::image::HdrImage;
 use lumen::scene::{
-    Brdf, Material, MaterialId, PathTracerSettings, Pigment, PointLight, Renderer, Scene, SceneBuilder, Transform,
-    DEFAULT_THRESHOLD_ANGLE_RAD,
+    Brdf, Camera, Material, MaterialId, PathTracerSettings, PcgSeed, Pigment, PointLight, Projection, Renderer, Scene,
+    SceneBuilder, Tracer, Transform, DEFAULT_THRESHOLD_ANGLE_RAD,
 };
 
 /// A small path-traced scene (sky sphere, checkered floor, red ball; 32×24, 1 spp) that
@@ -324,4 +324,104 @@ pub fn test_image(w: usize, h: usize) -> std::sync::Arc<HdrImage> {
     }
     img.set(w / 3, h / 4, lumen::color::Rgb32::new(40.0, 30.0, 20.0));
     std::sync::Arc::new(img)
+}
+
+/// Lambert's projected solid angle ∫ cos θ dω of a planar polygon (world vertices in order
+/// around it) seen from `x` with unit normal `n`, the polygon lying wholly above x's
+/// tangent plane: ½ |Σ over edges of θ_e · n · (r_i × r_j)/|r_i × r_j||, r the unit
+/// directions to the vertices and θ_e the angle between an edge's two.
+pub fn lambert_polygon(x: DVec3, n: DVec3, vertices: &[DVec3]) -> f64 {
+    let r: Vec<DVec3> = vertices.iter().map(|v| (*v - x).normalize()).collect();
+    let mut sum = 0.0;
+    for i in 0..r.len() {
+        let (a, b) = (r[i], r[(i + 1) % r.len()]);
+        sum += a.dot(b).clamp(-1.0, 1.0).acos() * n.dot(a.cross(b).normalize());
+    }
+    0.5 * sum.abs()
+}
+
+/// A parallelepiped lamp (a sheared, rotated, stretched cube emitting Le from every face)
+/// beside the view of a diffuse floor, seen from straight above through pixel centres;
+/// direct light only (max_depth 1: NEE on the lamp, MIS-weighted against BSDF sampling,
+/// 2048 paths per pixel). Returns the scene and each pixel's closed form, row by row:
+/// ρ/π · Le · Σ, over the lamp faces the floor point is in front of (which together make
+/// up the lamp's silhouette), of Lambert's projected solid angle of the face.
+pub fn cube_lamp_over_a_floor() -> (Scene, Vec<Color>) {
+    let (w, h) = (12u32, 10u32);
+    let rho = Color::new(0.8, 0.5, 0.2);
+    let le = Color::new(3.0, 2.0, 1.0);
+    let shear = Transform::from_matrix(glam::DMat4::from_cols(
+        glam::DVec4::X,
+        glam::DVec4::Y,
+        glam::DVec4::new(0.3, 0.1, 1.0, 0.0),
+        glam::DVec4::W,
+    ))
+    .unwrap();
+    let lamp_t = Transform::translation(DVec3::new(4.5, 0.5, 1.3))
+        * Transform::rotation_z(25.0)
+        * Transform::rotation_x(10.0)
+        * shear
+        * Transform::scaling(DVec3::new(1.0, 0.6, 0.2));
+    let mut b = SceneBuilder::new(w, h);
+    let floor = b.diffuse(rho);
+    let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(le)));
+    b.plane(Transform::IDENTITY, floor)
+        .cube(lamp_t, lamp)
+        .camera(Camera {
+            projection: Projection::Perspective { screen_distance: 1.0 },
+            aspect_ratio: 1.2,
+            transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
+        })
+        .tracer(Tracer { samples_per_side: 0, rng: PcgSeed { state: 5, inc: 8 } })
+        .renderer(pt(2048, 1, 10, true));
+    let scene = b.build().unwrap();
+    // The lamp's faces in world space, each with its outward normal.
+    let faces: Vec<(Vec<DVec3>, DVec3)> = (0..6)
+        .map(|f| {
+            let (axis, s) = (f / 2, if f % 2 == 0 { 0.5 } else { -0.5 });
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let corner = |a: f64, b: f64| {
+                let mut p = DVec3::ZERO;
+                p[axis] = s;
+                p[u] = a;
+                p[v] = b;
+                lamp_t.point(p)
+            };
+            let quad = vec![corner(-0.5, -0.5), corner(0.5, -0.5), corner(0.5, 0.5), corner(-0.5, 0.5)];
+            let mut n = DVec3::ZERO;
+            n[axis] = s;
+            (quad, lamp_t.normal(n).normalize())
+        })
+        .collect();
+    let mut want = Vec::new();
+    for row in 0..h {
+        for col in 0..w {
+            let r =
+                scene.camera.ray((f64::from(col) + 0.5) / f64::from(w), 1.0 - (f64::from(row) + 0.5) / f64::from(h));
+            let p = r.origin - r.dir * (r.origin.z / r.dir.z);
+            let seen: f64 = faces
+                .iter()
+                .filter(|(quad, n)| (p - quad[0]).dot(*n) > 0.0)
+                .map(|(quad, _)| lambert_polygon(p, DVec3::Z, quad))
+                .sum();
+            want.push(rho * le * (seen / std::f64::consts::PI));
+        }
+    }
+    (scene, want)
+}
+
+/// `img` against a closed-form image (row by row): every channel of every pixel within
+/// `pixel` (relative), and the green channel's image total within `total`.
+pub fn assert_close_to_closed_form(img: &HdrImage, want: &[Color], pixel: f64, total: f64) {
+    let (mut sum_got, mut sum_want) = (0.0, 0.0);
+    for (i, w) in want.iter().enumerate() {
+        let (col, row) = (i % img.width(), i / img.width());
+        let got: Color = img.get(col, row).into();
+        for (g, e) in got.to_array().into_iter().zip(w.to_array()) {
+            assert!((g / e - 1.0).abs() < pixel, "({col},{row}): {got:?} vs {w:?}");
+        }
+        sum_got += got.g;
+        sum_want += w.g;
+    }
+    assert!((sum_got / sum_want - 1.0).abs() < total, "image total {sum_got} vs {sum_want}");
 }
