@@ -1,4 +1,4 @@
-// #requires bindings random ray
+// #requires bindings random permute ray
 // Camera rays: mirrors scene::Camera::ray and cpu::pixel_samples (DESIGN.md "Random
 // numbers"). camera.to_world places the camera relative to its own position.
 
@@ -18,7 +18,7 @@ fn camera_ray(u: f32, v: f32) -> Ray {
 }
 
 // Position (u_px, v_px) of camera sample j in pixel `pixel`, from its top-left corner:
-// PixelSamples::position.
+// PixelSamples::position (multi-jittered s × s strata).
 fn pixel_sample_position(pixel: u32, j: u32) -> vec2<f32> {
     if (settings.jitter == JITTER_CENTRE) {
         return vec2<f32>(0.5, 0.5);
@@ -27,8 +27,15 @@ fn pixel_sample_position(pixel: u32, j: u32) -> vec2<f32> {
     let xi0 = pcg_next_f32(&rng);
     let xi1 = pcg_next_f32(&rng);
     if (settings.jitter == JITTER_STRATIFIED) {
+        // Multi-jittered: cell (c, r), sub-column π_x(r), sub-row π_y(c).
         let s = settings.samples_per_side;
-        return vec2<f32>((f32(j % s) + xi0) / f32(s), (f32(j / s) + xi1) / f32(s));
+        let c = j % s;
+        let r = j / s;
+        let key = hash32(hash32(pixel ^ settings.strata_seed) ^ CAMERA_STRATA_SALT);
+        let sub_col = permute_below(r, s, key);
+        let sub_row = permute_below(c, s, hash32(key));
+        let n = f32(s) * f32(s);
+        return vec2<f32>((f32(c * s + sub_col) + xi0) / n, (f32(r * s + sub_row) + xi1) / n);
     }
     return vec2<f32>(xi0, xi1);
 }

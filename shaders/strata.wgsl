@@ -1,27 +1,6 @@
-// #requires random
+// #requires random permute
 // Stratified vertex draws: sampling::strata (src/sampling/strata.rs) in the same u32
 // steps (masks and shifts only), so every draw is the CPU's bit for bit.
-
-// sampling::permute: the stratum of element i under the permutation of 0..2^bits that
-// `key` picks (a four-round Feistel network, then a keyed rotation).
-fn strata_permute(i: u32, bits: u32, key: u32) -> u32 {
-    if (bits == 0u) {
-        return 0u;
-    }
-    let mask = 0xFFFFFFFFu >> (32u - bits);
-    let a = bits / 2u;
-    let b = bits - a;
-    var x = i & mask;
-    for (var round = 0u; round < 4u; round++) {
-        let low = select(b, a, round % 2u == 0u);
-        let high = bits - low;
-        let lo = x & ((1u << low) - 1u);
-        let hi = x >> low;
-        let f = hash32(lo ^ (key + round * 0x9E3779B9u));
-        x = (lo << high) | ((hi ^ f) & ((1u << high) - 1u));
-    }
-    return (x + hash32(key ^ 0x5851F42Du)) & mask;
-}
 
 // sampling::in_stratum: ⌊(c·2²⁴ + x) / 2^n⌋, the 24-bit draw x in stratum c of 2^n.
 fn in_stratum(c: u32, n: u32, x: u32) -> u32 {
@@ -42,7 +21,7 @@ fn stratified_draws(x: array<u32, 7>, seed_word: u32, pixel: u32, sample: u32, b
     for (var d = 0u; d < 7u; d++) {
         let second = d == 2u || d == 5u;
         if (!second) {
-            cell = strata_permute(index, k, hash32(base ^ d));
+            cell = permute(index, k, hash32(base ^ d));
         }
         var c = cell;
         var n = k;

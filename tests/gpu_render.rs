@@ -6,10 +6,11 @@ mod common;
 
 use common::{agreement, furnace, mean_and_stderr, pt, Tolerance};
 use lumen::gpu::gpu_for_tests;
-use lumen::sampling::{permute, seed_word, stream, VertexStrata, CAMERA_BOUNCE};
+use lumen::sampling::{permute, permute_below, seed_word, stream, VertexStrata, CAMERA_BOUNCE};
 use lumen::scene::PcgSeed;
 
 const RANDOM_WGSL: &str = include_str!("../shaders/random.wgsl");
+const PERMUTE_WGSL: &str = include_str!("../shaders/permute.wgsl");
 const STRATA_WGSL: &str = include_str!("../shaders/strata.wgsl");
 
 /// The bindings and the start of `main` of the kernels `run_keyed_kernel` runs: invocation
@@ -97,18 +98,24 @@ fn random_streams_match_the_cpu_bit_for_bit() {
     }
 }
 
-/// `shaders/strata.wgsl` against `sampling::strata`: the permutations and a vertex's seven
-/// stratified draws bit for bit, for even and odd powers of two (square
-/// and 2:1 grids), one sample, and samples beyond the first block.
+/// `shaders/strata.wgsl` and `shaders/permute.wgsl` against `sampling::strata`: the
+/// permutations (of powers of two, and of any count by cycle walking, as the camera's
+/// multi-jittered strata use) and a vertex's seven stratified draws bit for bit, for even
+/// and odd powers of two (square and 2:1 grids), one sample, and samples beyond the first
+/// block.
 #[test]
 fn stratified_draws_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("stratified_draws_match_the_cpu") else { return };
     let kernel_src = format!(
         "{RANDOM_WGSL}
+{PERMUTE_WGSL}
 {STRATA_WGSL}
 {KEYED_KERNEL_HEAD}
     // k = (pixel, sample, bounce, strata bits)
-    out_u[i] = strata_permute(k.y & ((1u << k.w) - 1u), k.w, k.x);
+    out_u[2u * i] = permute(k.y & ((1u << k.w) - 1u), k.w, k.x);
+    // The same key permuting 0..n, n = k.z + 1 (below 2^17).
+    let n = (k.z & 0xFFFFu) + 1u;
+    out_u[2u * i + 1u] = permute_below(k.y % n, n, k.x);
     var rng = stream(params.seed.xy, params.seed.zw, k.x, k.y, k.z);
     var x: array<u32, 7>;
     for (var d = 0u; d < 7u; d++) {{ x[d] = pcg_next_u32(&rng) >> 8u; }}
@@ -122,17 +129,19 @@ fn stratified_draws_match_the_cpu() {
         let count = 1u32 << bits;
         for p in [0u32, 5, 12_345, u32::MAX] {
             for s in [0u32, 1, count / 2, count - 1, count, 3 * count + 1, u32::MAX] {
-                for b in [0u32, 1, 9] {
+                for b in [0u32, 1, 2, 9, 12, 1022] {
                     keys.push([p, s, b, bits]);
                 }
             }
         }
     }
     for seed in [PcgSeed::default(), PcgSeed { state: 0xFFFF_FFFF_FFFF_FF00, inc: 0xDEAD_BEEF_1234_5678 }] {
-        let (got_u, got_f) = run_keyed_kernel(&gpu, &kernel, seed, &keys, 1, 7);
+        let (got_u, got_f) = run_keyed_kernel(&gpu, &kernel, seed, &keys, 2, 7);
         let word = seed_word(seed);
         for (i, &[p, s, b, bits]) in keys.iter().enumerate() {
-            assert_eq!(got_u[i], permute(s & ((1 << bits) - 1), bits, p), "permute of {s} on {bits} bits, key {p}");
+            assert_eq!(got_u[2 * i], permute(s & ((1 << bits) - 1), bits, p), "permute of {s} on {bits} bits, key {p}");
+            let n = (b & 0xFFFF) + 1;
+            assert_eq!(got_u[2 * i + 1], permute_below(s % n, n, p), "permute_below of {s} below {n}, key {p}");
             let mut rng = stream(seed, p, s, b);
             let x: Vec<u32> = (0..7).map(|_| rng.next_u32() >> 8).collect();
             let v = VertexStrata::new(word, p, s, b, bits);

@@ -416,6 +416,7 @@ pub fn tags_wgsl() -> String {
             out.push_str(&format!("const {prefix}_{name}: u32 = {value}u;\n"));
         }
     }
+    out.push_str(&format!("const CAMERA_STRATA_SALT: u32 = {}u;\n", crate::prepare::CAMERA_STRATA_SALT));
     // Not a tag, but a threshold both renderers must share exactly (an f32 too).
     let reach = 0.5 + crate::prepare::CUBE_FACE_MARGIN;
     assert_eq!(f64::from(reach as f32), reach);

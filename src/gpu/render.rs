@@ -22,11 +22,12 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 50] = [
+const MODULES: [(&str, &str); 51] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
     ("shaders/random.wgsl", include_str!("../../shaders/random.wgsl")),
+    ("shaders/permute.wgsl", include_str!("../../shaders/permute.wgsl")),
     ("shaders/strata.wgsl", include_str!("../../shaders/strata.wgsl")),
     ("shaders/ray.wgsl", include_str!("../../shaders/ray.wgsl")),
     ("shaders/quadratic.wgsl", include_str!("../../shaders/quadratic.wgsl")),

@@ -17,7 +17,7 @@ use crate::sampling::Distribution2D;
 use crate::scene::{Aabb, Environment, MaterialId, Scene, Shape, ShapeKind, Transform};
 
 pub use mesh_bvh::{mesh_bvh, MeshBvhs};
-pub use pixel_samples::PixelSamples;
+pub use pixel_samples::{camera_strata_key, PixelSamples, CAMERA_STRATA_SALT};
 pub use render_form::{render_form, source_shape};
 pub use sample_range::{SampleRange, SampleRangeError};
 

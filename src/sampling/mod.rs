@@ -23,7 +23,7 @@ mod strata;
 
 pub use distribution::{Distribution1D, Distribution2D};
 pub use pcg::{unit24, Pcg32};
-pub use strata::{in_stratum, permute, seed_word, strata_bits, VertexStrata, STRATA_MAX};
+pub use strata::{in_stratum, permute, permute_below, seed_word, strata_bits, VertexStrata, STRATA_MAX};
 
 use crate::scene::PcgSeed;
 

@@ -68,6 +68,33 @@ pub fn permute(i: u32, bits: u32, key: u32) -> u32 {
     x.wrapping_add(hash32(key ^ 0x5851_F42D)) & mask
 }
 
+/// Element `i` (< `n`) under the permutation of `0..n` that `key` picks, for any `n` ≥ 1:
+/// [`permute`] on the smallest power of two ≥ n, applied again until the result falls below
+/// n (cycle walking: the cycle through i comes back below n, so this ends, after fewer
+/// than two steps on average). For the camera's multi-jittered samples
+/// (`prepare::PixelSamples`), once per camera sample: the per-vertex draws keep powers of
+/// two, whose permutations need no loop.
+///
+/// ```
+/// use lumen::sampling::permute_below;
+/// let mut seen: Vec<u32> = (0..11).map(|i| permute_below(i, 11, 0xBEEF)).collect();
+/// seen.sort();
+/// assert_eq!(seen, (0..11).collect::<Vec<_>>());
+/// ```
+pub fn permute_below(i: u32, n: u32, key: u32) -> u32 {
+    if n <= 1 {
+        return 0;
+    }
+    let bits = 32 - (n - 1).leading_zeros();
+    let mut x = i;
+    loop {
+        x = permute(x, bits, key);
+        if x < n {
+            return x;
+        }
+    }
+}
+
 /// ⌊(c·2²⁴ + x) / 2^bits⌋: the 24-bit draw `x` placed in stratum `c` of 2^bits, on the
 /// stream's grid of 2⁻²⁴ steps (so exact in f32 and f64).
 pub fn in_stratum(c: u32, bits: u32, x: u32) -> u32 {
