@@ -113,7 +113,8 @@ pub enum TwinUse {
     /// Never: this device renders every batch.
     Never,
     /// From the first batch of any render of two batches or more, the host waiting for the
-    /// twin to be set up (for tests of the twin itself).
+    /// twin to be set up and this device leaving the first batch to it, so that the twin
+    /// runs some batches however the threads are scheduled (for tests of the twin itself).
     Always,
 }
 
@@ -433,8 +434,14 @@ impl GpuRenderer {
                 capacity: plan.capacity,
                 cache: &mut self.twin,
             };
+            let twin_first = opts.twin == TwinUse::Always;
             std::thread::scope(|scope| {
-                let this = scope.spawn(|| feed.serve(&mut runner));
+                let this = scope.spawn(|| {
+                    if twin_first {
+                        feed.wait_until_twin_serves();
+                    }
+                    feed.serve(&mut runner)
+                });
                 let twin = scope.spawn(move || twin_job.serve(gpu, feed));
                 if opts.twin == TwinUse::Always {
                     host.start_twin();
@@ -571,12 +578,15 @@ impl TwinJob<'_> {
         if !feed.started() {
             return None;
         }
-        // The host may be waiting for this answer (TwinUse::Always): give it even on a panic.
+        // The host may be waiting for this answer (TwinUse::Always), and with it this device:
+        // give it even on a panic, once the twin is about to take batches.
         let set_up = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.set_up(gpu))).ok().flatten();
-        feed.ready(set_up.is_some());
-        let scene = set_up?;
+        let (Some(scene), Some(twin)) = (set_up, self.cache.as_ref()) else {
+            feed.ready(false);
+            return None;
+        };
         let setup = wavefront::RunnerSetup {
-            gpu: &self.cache.as_ref()?.gpu,
+            gpu: &twin.gpu,
             kernels: &scene.kernels,
             groups1: &scene.groups,
             features: self.features,
@@ -584,11 +594,15 @@ impl TwinJob<'_> {
             max_depth: self.max_depth,
             profile: false,
         };
-        let mut runner = wavefront::Runner::new(&setup, self.capacity).ok()?;
-        if runner.capacity() != self.capacity {
-            return None;
-        }
-        let served = feed.serve(&mut runner);
+        let capacity = self.capacity;
+        let runner =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| wavefront::Runner::new(&setup, capacity)))
+                .ok()
+                .and_then(Result::ok)
+                .filter(|r| r.capacity() == capacity);
+        feed.ready(runner.is_some());
+        let mut runner = runner?;
+        let served = feed.serve_as_twin(&mut runner);
         Some((runner.counters().ok()?, served))
     }
 

@@ -41,12 +41,30 @@ pub(crate) struct Feed {
     done: Sender<Done>,
     start: Mutex<Receiver<()>>,
     ready: Sender<bool>,
+    /// Told when the twin takes its first batch, or cannot take any.
+    twin_took: Sender<()>,
+    twin_took_rx: Mutex<Receiver<()>>,
 }
 
 impl Feed {
     /// The twin says it is set up (true) or could not be (false).
+    /// The twin says it is set up and about to take batches (true) or could not be set up
+    /// (false).
     pub fn ready(&self, ok: bool) {
+        if !ok {
+            let _ = self.twin_took.send(());
+        }
         let _ = self.ready.send(ok);
+    }
+
+    /// Waits until the twin has taken its first batch (or cannot take any): a device that
+    /// serves only after this leaves the first batch to the twin, so that a short render
+    /// with `TwinUse::Always` (the twin's tests) always gives the twin some batches, however
+    /// the threads are scheduled.
+    pub fn wait_until_twin_serves(&self) {
+        if let Ok(took) = self.twin_took_rx.lock() {
+            let _ = took.recv();
+        }
     }
 
     /// Waits until the host starts the twin (true) or ends the render without it (false).
@@ -58,6 +76,25 @@ impl Feed {
     /// submission runs it anyway) until the list is closed or the host stops listening;
     /// how many it ran.
     pub fn serve<R: BatchRunner>(&self, runner: &mut R) -> u64 {
+        self.serve_as(runner, false)
+    }
+
+    /// [`Self::serve`] for the twin, which says when it takes its first batch
+    /// ([`Self::wait_until_twin_serves`]).
+    pub fn serve_as_twin<R: BatchRunner>(&self, runner: &mut R) -> u64 {
+        self.serve_as(runner, true)
+    }
+
+    fn serve_as<R: BatchRunner>(&self, runner: &mut R, twin: bool) -> u64 {
+        let served = self.serve_loop(runner, twin);
+        if twin && served == 0 {
+            // The list closed before the twin took anything: nobody waits for it any more.
+            let _ = self.twin_took.send(());
+        }
+        served
+    }
+
+    fn serve_loop<R: BatchRunner>(&self, runner: &mut R, twin: bool) -> u64 {
         let mut served = 0;
         loop {
             // One device waits on the list, the other on the lock: the same thing.
@@ -66,6 +103,9 @@ impl Feed {
                 Err(_) => return served,
             };
             let Ok((index, batch)) = job else { return served };
+            if twin && served == 0 {
+                let _ = self.twin_took.send(());
+            }
             // A panic becomes the batch's error: the host waits for every batch it
             // submitted, so a batch must never go unanswered. The device then stops serving.
             let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -100,6 +140,7 @@ pub(crate) fn shared() -> (Shared, Feed) {
     let (done_tx, done_rx) = channel();
     let (start_tx, start_rx) = channel();
     let (ready_tx, ready_rx) = channel();
+    let (took_tx, took_rx) = channel();
     let host = Shared {
         jobs: Some(jobs_tx),
         start: Some(start_tx),
@@ -109,7 +150,15 @@ pub(crate) fn shared() -> (Shared, Feed) {
         next: 0,
         in_flight: 0,
     };
-    (host, Feed { jobs: Mutex::new(jobs_rx), done: done_tx, start: Mutex::new(start_rx), ready: ready_tx })
+    let feed = Feed {
+        jobs: Mutex::new(jobs_rx),
+        done: done_tx,
+        start: Mutex::new(start_rx),
+        ready: ready_tx,
+        twin_took: took_tx,
+        twin_took_rx: Mutex::new(took_rx),
+    };
+    (host, feed)
 }
 
 impl Shared {
@@ -227,6 +276,39 @@ mod tests {
             assert_eq!(slow + twin, 7);
             assert!(twin > 0, "the fast twin took none of 7 batches");
         });
+    }
+
+    /// A device that waits until the twin serves leaves it the first batch, however late
+    /// the twin comes; one whose twin could not be set up serves everything.
+    #[test]
+    fn waiting_for_the_twin_gives_it_the_first_batch() {
+        for twin_ok in [true, false] {
+            let (mut host, feed) = shared();
+            std::thread::scope(|s| {
+                let feed = &feed;
+                let this = s.spawn(move || {
+                    feed.wait_until_twin_serves();
+                    feed.serve(&mut Fake { delay_ms: 0 })
+                });
+                let twin = s.spawn(move || {
+                    std::thread::sleep(std::time::Duration::from_millis(50));
+                    feed.ready(twin_ok);
+                    if twin_ok {
+                        feed.serve_as_twin(&mut Fake { delay_ms: 0 })
+                    } else {
+                        0
+                    }
+                });
+                let pending: Vec<u64> = (0..5).map(|k| host.submit(&batch(k), 0).unwrap()).collect();
+                for p in pending {
+                    host.collect(p).unwrap();
+                }
+                host.close();
+                let (this, twin) = (this.join().unwrap(), twin.join().unwrap());
+                assert_eq!(this + twin, 5);
+                assert_eq!(twin > 0, twin_ok, "{this} {twin}");
+            });
+        }
     }
 
     /// A twin never started returns when the host closes the list, having run nothing.
