@@ -17,6 +17,12 @@ fn camera_ray(u: f32, v: f32) -> Ray {
     return Ray(affine_point(camera.to_world, o), affine_vector(camera.to_world, d), 1.0, OPEN);
 }
 
+// prepare::camera_strata_key: the key of pixel `pixel`'s sub-column permutation (its
+// sub-row permutation's is this hashed once more).
+fn camera_strata_key(seed_word: u32, pixel: u32) -> u32 {
+    return hash32(hash32(pixel ^ seed_word) ^ CAMERA_STRATA_SALT);
+}
+
 // Position (u_px, v_px) of camera sample j in pixel `pixel`, from its top-left corner:
 // PixelSamples::position (multi-jittered s × s strata).
 fn pixel_sample_position(pixel: u32, j: u32) -> vec2<f32> {
@@ -31,7 +37,7 @@ fn pixel_sample_position(pixel: u32, j: u32) -> vec2<f32> {
         let s = settings.samples_per_side;
         let c = j % s;
         let r = j / s;
-        let key = hash32(hash32(pixel ^ settings.strata_seed) ^ CAMERA_STRATA_SALT);
+        let key = camera_strata_key(settings.strata_seed, pixel);
         let sub_col = permute_below(r, s, key);
         let sub_row = permute_below(c, s, hash32(key));
         let n = f32(s) * f32(s);

@@ -237,10 +237,13 @@ impl CubeFaces {
         self.weight.iter().sum()
     }
 
-    /// Whether the face with outward object normal `n_obj` (a unit axis vector) is sampled.
+    /// Whether the face with outward object normal `n_obj` is sampled. n_obj is ±1 on one
+    /// axis and 0 on the others, so dot products pick that axis's entries exactly (as
+    /// shaders/lights.wgsl `light_pdf` does).
     pub fn samples(&self, n_obj: DVec3) -> bool {
-        let axis = n_obj.abs().max_position();
-        self.weight[axis] > 0.0 && (self.side[axis] == 0.0 || self.side[axis] == n_obj[axis].signum())
+        let axis = n_obj.abs();
+        let side = DVec3::from(self.side).dot(axis);
+        DVec3::from(self.weight).dot(axis) > 0.0 && (side == 0.0 || side == n_obj.element_sum())
     }
 }
 

@@ -443,7 +443,7 @@ impl GpuRenderer {
                     feed.serve(&mut runner)
                 });
                 let twin = scope.spawn(move || twin_job.serve(gpu, feed));
-                if opts.twin == TwinUse::Always {
+                if twin_first {
                     host.start_twin();
                     host.wait_for_twin();
                 }

@@ -86,13 +86,11 @@ pub fn permute_below(i: u32, n: u32, key: u32) -> u32 {
         return 0;
     }
     let bits = 32 - (n - 1).leading_zeros();
-    let mut x = i;
-    loop {
+    let mut x = permute(i, bits, key);
+    while x >= n {
         x = permute(x, bits, key);
-        if x < n {
-            return x;
-        }
     }
+    x
 }
 
 /// ⌊(c·2²⁴ + x) / 2^bits⌋: the 24-bit draw `x` placed in stratum `c` of 2^bits, on the
