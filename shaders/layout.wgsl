@@ -86,6 +86,12 @@ struct AreaLight {
     face_areas: vec3<f32>,
     // Meshes: the triangle count (0: not a mesh).
     mesh_triangles: u32,
+    // Cubes: bit `axis` set where that pair's faces are rectangles (NEE may sample them by
+    // solid angle).
+    rectangular_faces: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // position.w = linear_radius.

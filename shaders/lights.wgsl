@@ -5,6 +5,9 @@
 // #if SHADOWS
 // #requires onb pigment
 // #endif
+// #if CUBE_LIGHTS
+// #requires spherical_rectangle
+// #endif
 // Area lights for next-event estimation: mirrors cpu::area_light and cpu::warp (cone and
 // sphere warps). Positions are in the camera frame.
 
@@ -187,15 +190,45 @@ fn cube_faces(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32) -> CubeFa
 fn cube_faces_area(f: CubeFaces) -> f32 {
     return f.weight.x + f.weight.y + f.weight.z;
 }
+
+// AreaLight::solid_angle_face: the face of `axis` that f samples, seen from x, where NEE
+// samples it by solid angle; solid_angle 0 where it samples that face by area (a sheared
+// cube's parallelogram, both faces of the pair sampled, or Ω outside [SOLID_ANGLE_MIN,
+// SOLID_ANGLE_MAX]).
+fn solid_angle_face(light: AreaLight, s: Shape, x: vec3<f32>, f: CubeFaces, axis: u32) -> SphericalRectangle {
+    var r: SphericalRectangle;
+    let side = f.side[axis];
+    if (side != 0.0 && (light.rectangular_faces & (1u << axis)) != 0u) {
+        // The face's corner (−0.5 on its own two axes) and edges, in the world.
+        let along = vec3<u32>(axis) == vec3<u32>(0u, 1u, 2u);
+        let corner = select(vec3<f32>(-0.5), vec3<f32>(0.5 * side), along);
+        let ea = select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>((axis + 1u) % 3u) == vec3<u32>(0u, 1u, 2u));
+        let eb = select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>((axis + 2u) % 3u) == vec3<u32>(0u, 1u, 2u));
+        r = spherical_rectangle(x, affine_point(s.to_world, corner), affine_vector(s.to_world, ea), affine_vector(s.to_world, eb));
+        if (!(r.solid_angle >= SOLID_ANGLE_MIN && r.solid_angle <= SOLID_ANGLE_MAX)) {
+            r.solid_angle = 0.0;
+        }
+    }
+    return r;
+}
 // #endif
 
 // #endif
 
 // #if SHADOWS
 // #if CUBE_LIGHTS
-// area_light::sample_cube_surface: the axis by ξ0 against the faces' weights, the side
-// (where both are sampled) and one coordinate from the rest of ξ0, the other from ξ1.
-fn sample_cube_surface(f: CubeFaces, xi0: f32, xi1: f32) -> array<vec3<f32>, 2> {
+// area_light::CubeFace: the face NEE samples, picked from ξ0.
+struct CubeFace {
+    axis: u32,
+    // +1 or −1: which face of the pair.
+    side: f32,
+    // The rest of ξ0, uniform in [0, 1) within the face: its first coordinate.
+    u: f32,
+}
+
+// CubeFace::pick: the axis by ξ0 against the faces' weights, then the side (where both
+// are sampled) and the face's first coordinate from the rest of ξ0.
+fn pick_cube_face(f: CubeFaces, xi0: f32) -> CubeFace {
     let w = f.weight;
     let u = xi0 * cube_faces_area(f);
     // An axis of weight 0 is never chosen, even where rounding puts u at the end.
@@ -209,25 +242,30 @@ fn sample_cube_surface(f: CubeFaces, xi0: f32, xi1: f32) -> array<vec3<f32>, 2> 
         lo = w.x;
     }
     let v = clamp((u - lo) / w[axis], 0.0, 0.99999994);
-    var s = 0.5 * f.side[axis];
-    var a = v - 0.5;
     if (f.side[axis] == 0.0) {
         // Both faces: v rescaled to [0, 2) gives the side (0: +, 1: −), then a coordinate.
         let v2 = 2.0 * v;
         let side = floor(v2);
-        s = select(-0.5, 0.5, side == 0.0);
-        a = v2 - side - 0.5;
+        return CubeFace(axis, select(-1.0, 1.0, side == 0.0), v2 - side);
     }
-    let b = xi1 - 0.5;
-    switch axis {
+    return CubeFace(axis, f.side[axis], v);
+}
+
+// CubeFace::point: the object point at fractions st of the face (s along the next axis,
+// t along the one after), and the outward normal.
+fn cube_face_point(face: CubeFace, st: vec2<f32>) -> array<vec3<f32>, 2> {
+    let s = 0.5 * face.side;
+    let a = st.x - 0.5;
+    let b = st.y - 0.5;
+    switch face.axis {
         case 0u: {
-            return array<vec3<f32>, 2>(vec3<f32>(s, a, b), vec3<f32>(2.0 * s, 0.0, 0.0));
+            return array<vec3<f32>, 2>(vec3<f32>(s, a, b), vec3<f32>(face.side, 0.0, 0.0));
         }
         case 1u: {
-            return array<vec3<f32>, 2>(vec3<f32>(b, s, a), vec3<f32>(0.0, 2.0 * s, 0.0));
+            return array<vec3<f32>, 2>(vec3<f32>(b, s, a), vec3<f32>(0.0, face.side, 0.0));
         }
         default: {
-            return array<vec3<f32>, 2>(vec3<f32>(a, b, s), vec3<f32>(0.0, 0.0, 2.0 * s));
+            return array<vec3<f32>, 2>(vec3<f32>(a, b, s), vec3<f32>(0.0, 0.0, face.side));
         }
     }
 }
@@ -292,6 +330,8 @@ fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f3
     var p_obj: vec3<f32>;
     var n_obj: vec3<f32>;
     var area: f32;
+    // A density in solid angle already known (a cube face sampled by solid angle), else 0.
+    var solid_pdf = 0.0;
 // #if SPHERE_LIGHTS
     if (s.kind == SHAPE_SPHERE) {
         p_obj = uniform_sphere(xi0, azimuth);
@@ -301,15 +341,27 @@ fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f3
 // #endif
 // #if CUBE_LIGHTS
     if (s.kind == SHAPE_CUBE) {
+        // A face by ξ0, then a point on it from the rest of ξ0 and ξ1, by solid angle or
+        // by area (cpu::area_light's module documentation).
         let f = cube_faces(light, s, x, x_object);
-        let pn = sample_cube_surface(f, xi0, xi1);
+        let face = pick_cube_face(f, xi0);
+        let r = solid_angle_face(light, s, x, f, face.axis);
+        area = cube_faces_area(f);
+        var st = vec2<f32>(face.u, xi1);
+        if (r.solid_angle > 0.0) {
+            st = spherical_rectangle_sample(r, face.u, xi1);
+            solid_pdf = f.weight[face.axis] / (area * r.solid_angle);
+        }
+        let pn = cube_face_point(face, st);
         p_obj = pn[0];
         n_obj = pn[1];
-        area = cube_faces_area(f);
     }
 // #endif
     let y = affine_point(s.to_world, p_obj);
-    let pdf = light_area_pdf(s, x, y, n_obj, area);
+    var pdf = solid_pdf;
+    if (!(solid_pdf > 0.0)) {
+        pdf = light_area_pdf(s, x, y, n_obj, area);
+    }
     let scale = affine_error_scale(s.to_world, p_obj);
     let n_world = normalize_or(affine_normal(s.to_object, n_obj), vec3<f32>(0.0));
     return LightPoint(y, scale, n_world, p_obj, pdf, vec2<f32>(0.0));
@@ -346,6 +398,10 @@ fn light_pdf(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, y: vec3<f3
         let side = dot(f.side, axis);
         if (!(dot(f.weight, axis) > 0.0) || (side != 0.0 && side != dot(n_obj, vec3<f32>(1.0)))) {
             return 0.0;
+        }
+        let r = solid_angle_face(light, s, x, f, u32(dot(axis, vec3<f32>(0.0, 1.0, 2.0))));
+        if (r.solid_angle > 0.0) {
+            return dot(f.weight, axis) / (cube_faces_area(f) * r.solid_angle);
         }
         return light_area_pdf(s, x, y, n_obj, cube_faces_area(f));
     }

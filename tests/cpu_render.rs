@@ -810,13 +810,16 @@ USING
     assert!(ratio < 0.25, "64 stratified samples: {ratio:.3} of the independent variance");
 }
 
-/// A parallelepiped lamp beside the view lights a diffuse floor, direct light only
+/// A cube lamp beside the view lights a diffuse floor, direct light only
 /// (`common::cube_lamp_over_a_floor`): the image is Lambert's closed form. NEE samples only
-/// the lamp faces a point is in front of (cpu::area_light): a face skipped where it shows,
-/// or a density that disagrees with the sampling, would bias it.
+/// the lamp faces a point is in front of (cpu::area_light), by area on a parallelepiped and
+/// by solid angle on a box's faces seen close by: a face skipped where it shows, or a
+/// density that disagrees with the sampling (in NEE or in MIS), would bias it.
 #[test]
 fn a_cube_lamp_lights_a_diffuse_floor_as_lamberts_formula_says() {
-    let (scene, want) = common::cube_lamp_over_a_floor();
-    let img = run(&scene, None).image;
-    common::assert_close_to_closed_form(&img, &want, 0.05, 0.005);
+    for sheared in [true, false] {
+        let (scene, want) = common::cube_lamp_over_a_floor(sheared);
+        let img = run(&scene, None).image;
+        common::assert_close_to_closed_form(&img, &want, 0.05, 0.005);
+    }
 }

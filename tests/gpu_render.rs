@@ -154,6 +154,69 @@ fn stratified_draws_match_the_cpu() {
     }
 }
 
+/// `shaders/spherical_rectangle.wgsl` against `cpu::spherical_rectangle` (f64) on the same
+/// f32 inputs: random rectangles seen from random points, kept where NEE samples by solid
+/// angle (Ω within the thresholds): the solid angle to a relative 1e-4 (precise corner
+/// terms; lavapipe's own atan2 would miss by ~1e-4 absolute) and each sample's fractions
+/// on the face to 1e-3 (lavapipe: up to 3.4e-4 where Ω is near its minimum, the column's
+/// inversion cancelling in f32).
+#[test]
+fn spherical_rectangles_match_the_cpu() {
+    use glam::DVec3;
+    use lumen::cpu::spherical_rectangle::SphericalRectangle;
+    use lumen::prepare::{SOLID_ANGLE_MAX, SOLID_ANGLE_MIN};
+    let Some(gpu) = gpu_for_tests("spherical_rectangles_match_the_cpu") else { return };
+    const PRELUDE: &str = "const PI: f32 = 3.14159265358979;\n";
+    let angles = include_str!("../shaders/angles.wgsl");
+    let rect = include_str!("../shaders/spherical_rectangle.wgsl");
+    let kernel_src = format!(
+        "{PRELUDE}{angles}
+{rect}
+{KEYED_KERNEL_HEAD}
+    // Four keys per case: (o, u), (corner, v), (ea, 0), (eb, 0), as f32 bits.
+    if (i % 4u != 0u || i + 3u >= params.count) {{ return; }}
+    let a = bitcast<vec4<f32>>(keys[i]);
+    let b = bitcast<vec4<f32>>(keys[i + 1u]);
+    let r = spherical_rectangle(a.xyz, b.xyz, bitcast<vec4<f32>>(keys[i + 2u]).xyz, bitcast<vec4<f32>>(keys[i + 3u]).xyz);
+    let st = spherical_rectangle_sample(r, a.w, b.w);
+    out_f[3u * i] = r.solid_angle;
+    out_f[3u * i + 1u] = st.x;
+    out_f[3u * i + 2u] = st.y;
+}}"
+    );
+    let kernel = gpu.compute_kernel("spherical_rectangle_test.wgsl", &kernel_src, "main").unwrap();
+    let mut rng = lumen::sampling::Pcg32::new(17, 29);
+    let mut unit = || rng.next_f64();
+    let f32_vec = |v: DVec3| v.as_vec3().as_dvec3();
+    let mut cases = Vec::new();
+    while cases.len() < 4000 {
+        let mut next = || DVec3::new(unit(), unit(), unit()) * 2.0 - 1.0;
+        let (o, corner, ea, dir) = (next() * 3.0, next(), next(), next());
+        let eb = dir.reject_from(ea).normalize() * (0.05 + dir.length());
+        let (o, corner, ea, eb) = (f32_vec(o), f32_vec(corner), f32_vec(ea), f32_vec(eb));
+        let r = SphericalRectangle::new(o, corner, ea, eb);
+        // Orthogonal to f32 precision only: the GPU computes the same frame from them.
+        if (SOLID_ANGLE_MIN..=SOLID_ANGLE_MAX).contains(&r.solid_angle()) {
+            cases.push((o, corner, ea, eb, f64::from(unit() as f32), f64::from(unit() as f32)));
+        }
+    }
+    let bits = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32].map(f32::to_bits);
+    let keys: Vec<[u32; 4]> =
+        cases.iter().flat_map(|&(o, c, ea, eb, u, v)| [bits(o, u), bits(c, v), bits(ea, 0.0), bits(eb, 0.0)]).collect();
+    let (_, got) = run_keyed_kernel(&gpu, &kernel, PcgSeed::default(), &keys, 0, 3);
+    let (mut worst_omega, mut worst_st) = (0.0f64, 0.0f64);
+    for (i, &(o, corner, ea, eb, u, v)) in cases.iter().enumerate() {
+        let r = SphericalRectangle::new(o, corner, ea, eb);
+        let (s, t) = r.sample(u, v);
+        let g = &got[12 * i..12 * i + 3];
+        worst_omega = worst_omega.max((f64::from(g[0]) / r.solid_angle() - 1.0).abs());
+        worst_st = worst_st.max((f64::from(g[1]) - s).abs()).max((f64::from(g[2]) - t).abs());
+        assert!(worst_omega < 1e-4, "case {i}: Ω {} against {}", g[0], r.solid_angle());
+        assert!(worst_st < 1e-3, "case {i}: ({}, {}) against ({s}, {t})", g[1], g[2]);
+    }
+    println!("worst relative Ω error {worst_omega:.2e}, worst fraction error {worst_st:.2e}");
+}
+
 /// `shaders/offset.wgsl` is scale-aware like `cpu::offset_origin`: a surface point of a
 /// scene scaled by 2⁻¹³ (≈ 1.2e-4), with its error scale, moves by exactly 2⁻¹³ times the
 /// unit point's offset in every coordinate, near zero or not; a near-zero coordinate moves
@@ -1140,16 +1203,19 @@ fn far_from_the_origin_the_gpu_still_matches_the_cpu() {
 }
 
 /// The GPU's cube-light sampling against a closed form (`common::cube_lamp_over_a_floor`: a
-/// sheared, rotated lamp beside the view of a diffuse floor, direct light only, Lambert's
-/// formula per pixel), not only against the CPU: NEE samples the faces a point is in front
-/// of, in f32 (shaders/lights.wgsl `cube_faces`).
+/// sheared lamp, and a box lying low, beside the view of a diffuse floor, direct light only,
+/// Lambert's formula per pixel), not only against the CPU: NEE samples the faces a point
+/// is in front of, by area or by solid angle, in f32 (shaders/lights.wgsl `cube_faces`,
+/// `solid_angle_face`).
 #[test]
 fn a_cube_lamp_lights_a_diffuse_floor_as_lamberts_formula_says() {
     let Some(gpu) = gpu_for_tests("a_cube_lamp_lights_a_diffuse_floor_as_lamberts_formula_says") else { return };
-    let (scene, want) = common::cube_lamp_over_a_floor();
-    let g = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap();
-    assert_eq!(g.non_finite_samples, 0);
-    common::assert_close_to_closed_form(&g.image, &want, 0.05, 0.005);
+    for sheared in [true, false] {
+        let (scene, want) = common::cube_lamp_over_a_floor(sheared);
+        let g = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(None, 4)).unwrap();
+        assert_eq!(g.non_finite_samples, 0);
+        common::assert_close_to_closed_form(&g.image, &want, 0.05, 0.005);
+    }
 }
 
 /// Every example scene in scenes/, shrunk to a thumbnail with few samples, on both renderers.

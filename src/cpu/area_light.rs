@@ -21,6 +21,17 @@
 //! light, on it, or within [`CUBE_FACE_MARGIN`] of every pair's planes samples the whole
 //! surface uniformly, as before. The density for MIS (`pdf`) applies the same rule from the
 //! same point, so it is 0 on the faces sampling skips and the estimate stays unbiased.
+//!
+//! **Within the chosen face, a rectangular face is sampled by solid angle**
+//! ([`AreaLight::solid_angle_face`], [`super::spherical_rectangle`]) when it subtends
+//! between [`SOLID_ANGLE_MIN`] and [`SOLID_ANGLE_MAX`] from the point: uniform area
+//! sampling's weight d²/(A cos θ) swings by orders of magnitude across a face seen from
+//! close by (the ceiling beside `scenes/cornell.sl`'s lamp, lit by its thin side faces, held
+//! about 40 % of that image's variance), while drawn by solid angle each sample weighs the
+//! face's Ω. The face choice stays by area, so the density of a point y on face k is
+//! P(k) / Ω_k there, and P(k)·d²/(A_k cos θ) = d²/(Σ A cos θ) on faces sampled by area.
+//! Sheared cubes (parallelogram faces), points sampling both faces of a pair, and faces
+//! outside that range of Ω keep area sampling.
 
 use std::f64::consts::PI;
 
@@ -31,9 +42,10 @@ use crate::scene::{Pigment, Scene, ShapeKind};
 
 use super::normalize_scaled;
 use super::offset::error_scale;
+use super::spherical_rectangle::SphericalRectangle;
 use super::warp::{cone_one_minus_cos, uniform_cone, uniform_cone_pdf, uniform_sphere};
 
-pub use crate::prepare::{AreaLight, CUBE_FACE_MARGIN};
+pub use crate::prepare::{AreaLight, CUBE_FACE_MARGIN, SOLID_ANGLE_MAX, SOLID_ANGLE_MIN};
 
 /// A point sampled on a light, seen from the shading point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,7 +108,28 @@ impl AreaLight {
         if !faces.samples(n_obj) {
             return 0.0;
         }
-        self.area_pdf_solid_angle(x, y, n_obj, faces.area())
+        let axis = n_obj.abs().max_position();
+        match self.solid_angle_face(x, &faces, axis) {
+            Some(rect) => faces.weight[axis] / (faces.area() * rect.solid_angle()),
+            None => self.area_pdf_solid_angle(x, y, n_obj, faces.area()),
+        }
+    }
+
+    /// The face of `axis` that `faces` samples, seen from `x` as a spherical rectangle,
+    /// where NEE samples it by solid angle (module documentation): a rectangular face, the
+    /// only one of its pair sampled, subtending between [`SOLID_ANGLE_MIN`] and
+    /// [`SOLID_ANGLE_MAX`]. `None`: sampled by area.
+    pub fn solid_angle_face(&self, x: DVec3, faces: &CubeFaces, axis: usize) -> Option<SphericalRectangle> {
+        let side = faces.side[axis];
+        if side == 0.0 || !self.rectangular_faces[axis] {
+            return None;
+        }
+        let (u, v) = face_axes(axis);
+        let mut corner = DVec3::splat(-0.5);
+        corner[axis] = 0.5 * side;
+        let t = &self.transform;
+        let rect = SphericalRectangle::new(x, t.point(corner), t.vector(DVec3::AXES[u]), t.vector(DVec3::AXES[v]));
+        (SOLID_ANGLE_MIN..=SOLID_ANGLE_MAX).contains(&rect.solid_angle()).then_some(rect)
     }
 
     /// The cube faces NEE samples from shading point `x` on shape `x_shape` (module
@@ -184,19 +217,28 @@ impl AreaLight {
     }
 
     fn sample_area(&self, x: DVec3, x_shape: u32, xi0: f64, xi1: f64) -> LightPoint {
-        let (p_obj, n_obj, area) = match self.kind {
+        let (p_obj, n_obj, y, pdf) = match self.kind {
             ShapeKind::Sphere => {
                 let p = uniform_sphere(xi0, xi1);
-                (p, p, self.sphere_area(p))
+                let y = self.transform.point(p);
+                (p, p, y, self.area_pdf_solid_angle(x, y, p, self.sphere_area(p)))
             }
             _ => {
+                // A face by ξ0, then a point on it from the rest of ξ0 and ξ1: by solid
+                // angle or by area (module documentation).
                 let faces = self.cube_faces(x, x_shape);
-                let (p, n) = sample_cube_surface(&faces, xi0, xi1);
-                (p, n, faces.area())
+                let face = CubeFace::pick(&faces, xi0);
+                let rect = self.solid_angle_face(x, &faces, face.axis);
+                let (s, t) = rect.map_or((face.u, xi1), |r| r.sample(face.u, xi1));
+                let (p, n) = face.point(s, t);
+                let y = self.transform.point(p);
+                let pdf = match rect {
+                    Some(r) => faces.weight[face.axis] / (faces.area() * r.solid_angle()),
+                    None => self.area_pdf_solid_angle(x, y, n, faces.area()),
+                };
+                (p, n, y, pdf)
             }
         };
-        let y = self.transform.point(p_obj);
-        let pdf = self.area_pdf_solid_angle(x, y, n_obj, area);
         LightPoint {
             point: y,
             scale: error_scale(&self.transform.matrix(), p_obj),
@@ -264,36 +306,69 @@ pub fn object_normal(kind: ShapeKind, p: DVec3) -> DVec3 {
     }
 }
 
-/// A point on the sampled faces of the cube [−0.5, 0.5]³: the axis by ξ0 against the
-/// faces' weights, the side (where both are sampled) and one coordinate from the rest of
-/// ξ0, the other from ξ1; uniform over the sampled area. Returns (point, outward normal).
-fn sample_cube_surface(faces: &CubeFaces, xi0: f64, xi1: f64) -> (DVec3, DVec3) {
-    let w = faces.weight;
-    let u = xi0 * faces.area();
-    // An axis of weight 0 is never chosen, even where rounding puts u at the end.
-    let axis = if u < w[0] || (w[1] == 0.0 && w[2] == 0.0) {
-        0
-    } else if u < w[0] + w[1] || w[2] == 0.0 {
-        1
-    } else {
-        2
-    };
-    let lo: f64 = w[..axis].iter().sum();
-    let v = ((u - lo) / w[axis]).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
-    let (s, a) = if faces.side[axis] == 0.0 {
-        // Both faces: v rescaled to [0, 2) gives the side (0: +, 1: −), then a coordinate.
-        let v2 = 2.0 * v;
-        let side = v2.floor();
-        (if side == 0.0 { 0.5 } else { -0.5 }, v2 - side - 0.5)
-    } else {
-        (0.5 * faces.side[axis], v - 0.5)
-    };
-    let b = xi1 - 0.5;
-    match axis {
-        0 => (DVec3::new(s, a, b), DVec3::new(2.0 * s, 0.0, 0.0)),
-        1 => (DVec3::new(b, s, a), DVec3::new(0.0, 2.0 * s, 0.0)),
-        _ => (DVec3::new(a, b, s), DVec3::new(0.0, 0.0, 2.0 * s)),
+/// The (u, v) axes of a face of `axis`: its point is (s − 0.5, t − 0.5) on them, s along
+/// the next axis and t along the one after (x: (y, z), y: (z, x), z: (x, y)).
+fn face_axes(axis: usize) -> (usize, usize) {
+    ((axis + 1) % 3, (axis + 2) % 3)
+}
+
+/// The face of the unit cube [−0.5, 0.5]³ that NEE samples, picked from ξ0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct CubeFace {
+    axis: usize,
+    /// +1 or −1: which face of the pair.
+    side: f64,
+    /// The rest of ξ0, uniform in [0, 1) within the face: its first coordinate.
+    u: f64,
+}
+
+impl CubeFace {
+    /// The axis by ξ0 against the faces' weights, then the side (where both are sampled)
+    /// and the face's first coordinate from the rest of ξ0: uniform over the sampled area
+    /// when the second coordinate is uniform too.
+    fn pick(faces: &CubeFaces, xi0: f64) -> Self {
+        let w = faces.weight;
+        let u = xi0 * faces.area();
+        // An axis of weight 0 is never chosen, even where rounding puts u at the end.
+        let axis = if u < w[0] || (w[1] == 0.0 && w[2] == 0.0) {
+            0
+        } else if u < w[0] + w[1] || w[2] == 0.0 {
+            1
+        } else {
+            2
+        };
+        let lo: f64 = w[..axis].iter().sum();
+        let v = ((u - lo) / w[axis]).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
+        if faces.side[axis] == 0.0 {
+            // Both faces: v rescaled to [0, 2) gives the side (0: +, 1: −), then a coordinate.
+            let v2 = 2.0 * v;
+            let side = v2.floor();
+            Self { axis, side: if side == 0.0 { 1.0 } else { -1.0 }, u: v2 - side }
+        } else {
+            Self { axis, side: faces.side[axis], u: v }
+        }
     }
+
+    /// The object point at fractions (s, t) of the face (`face_axes`), and the outward
+    /// normal (unnormalised).
+    fn point(&self, s: f64, t: f64) -> (DVec3, DVec3) {
+        let (u, v) = face_axes(self.axis);
+        let (mut p, mut n) = (DVec3::ZERO, DVec3::ZERO);
+        p[self.axis] = 0.5 * self.side;
+        p[u] = s - 0.5;
+        p[v] = t - 0.5;
+        n[self.axis] = self.side;
+        (p, n)
+    }
+}
+
+/// A point uniform over the sampled faces of the cube (the area sampling of
+/// [`AreaLight::sample`] when no face is sampled by solid angle). Returns (point, outward
+/// normal).
+#[cfg(test)]
+fn sample_cube_surface(faces: &CubeFaces, xi0: f64, xi1: f64) -> (DVec3, DVec3) {
+    let face = CubeFace::pick(faces, xi0);
+    face.point(face.u, xi1)
 }
 
 /// Cone sampling of the sphere (centre c, radius r, at distance d > r from x): a direction
@@ -516,6 +591,7 @@ mod tests {
         let faces = light.cube_faces(aside, u32::MAX);
         let p = to_object.point(aside);
         assert_eq!(faces.side, [p.x.signum(), p.y.signum(), -1.0]);
+        let mut by_solid_angle = [0, 0];
         for x in [below, aside] {
             let faces = light.cube_faces(x, u32::MAX);
             let mut rng = Pcg32::new(5, 6);
@@ -524,9 +600,18 @@ mod tests {
                 assert!(s.pdf > 0.0);
                 // The sampled face faces x: x lies on the outer side of its plane.
                 assert!((x - s.point).dot(s.normal) > 0.0, "{x} {}", s.point);
-                assert!(faces.samples(object_normal(ShapeKind::Cube, s.object_point)));
+                let n_obj = object_normal(ShapeKind::Cube, s.object_point);
+                assert!(faces.samples(n_obj));
+                // The face's share of the area, then 1/Ω on it or 1/area there.
+                let axis = n_obj.abs().max_position();
                 let d = s.point - x;
-                let expect = d.length_squared() / (s.normal.dot(d).abs() / d.length() * faces.area());
+                let expect = match light.solid_angle_face(x, &faces, axis) {
+                    Some(r) => {
+                        by_solid_angle[usize::from(axis != 2)] += 1;
+                        faces.weight[axis] / faces.area() / r.solid_angle()
+                    }
+                    None => d.length_squared() / (s.normal.dot(d).abs() / d.length() * faces.area()),
+                };
                 assert!((s.pdf / expect - 1.0).abs() < 1e-9);
                 assert!((light.pdf(x, u32::MAX, s.point, s.normal) / s.pdf - 1.0).abs() < 1e-12);
             }
@@ -534,6 +619,10 @@ mod tests {
             let top = light.transform.point(DVec3::new(0.1, 0.1, 0.5));
             assert_eq!(light.pdf(x, u32::MAX, top, light.transform.normal(DVec3::Z)), 0.0);
         }
+        // The broad bottom face (Ω ≈ 0.07 from below) is sampled by solid angle; the thin
+        // sides, seen edge-on from afar (Ω < SOLID_ANGLE_MIN), by area.
+        assert!(by_solid_angle[0] > 2000, "{by_solid_angle:?}");
+        assert_eq!(by_solid_angle[1], 0);
         // A point on the plane of the top face (the ceiling the lamp touches), within the
         // margin, is in front of no face of the z pair: rounding cannot pick the top face.
         let ceiling = light.transform.point(DVec3::new(3.0, 0.2, 0.5 + CUBE_FACE_MARGIN / 2.0));

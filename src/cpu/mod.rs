@@ -38,6 +38,7 @@ pub mod path_tracer;
 pub mod point_lights;
 mod render;
 pub mod simple_renderers;
+pub mod spherical_rectangle;
 pub mod vertex_draws;
 pub mod warp;
 

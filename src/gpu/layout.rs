@@ -247,6 +247,11 @@ pub struct AreaLight {
     pub face_areas: [f32; 3],
     /// Meshes: the triangle count; 0 for spheres and cubes.
     pub mesh_triangles: u32,
+    /// Cubes: bit `axis` set where `prepare::AreaLight::rectangular_faces[axis]`.
+    pub rectangular_faces: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 #[repr(C)]
@@ -421,6 +426,12 @@ pub fn tags_wgsl() -> String {
     let reach = 0.5 + crate::prepare::CUBE_FACE_MARGIN;
     assert_eq!(f64::from(reach as f32), reach);
     out.push_str(&format!("const CUBE_FACE_REACH: f32 = {reach:?};\n"));
+    for (name, value) in
+        [("SOLID_ANGLE_MIN", crate::prepare::SOLID_ANGLE_MIN), ("SOLID_ANGLE_MAX", crate::prepare::SOLID_ANGLE_MAX)]
+    {
+        assert_eq!(f64::from(value as f32), value);
+        out.push_str(&format!("const {name}: f32 = {value:?};\n"));
+    }
     out
 }
 
@@ -488,7 +499,23 @@ mod tests {
             ),
             expect!(Pigment, "Pigment", [a, b, kind, n, image_filter, tex_offset, tex_width, tex_height, _pad0, _pad1]),
             expect!(PointLight, "PointLight", [position, color]),
-            expect!(AreaLight, "AreaLight", [sphere, shape, det, area, mesh_cdf, face_areas, mesh_triangles]),
+            expect!(
+                AreaLight,
+                "AreaLight",
+                [
+                    sphere,
+                    shape,
+                    det,
+                    area,
+                    mesh_cdf,
+                    face_areas,
+                    mesh_triangles,
+                    rectangular_faces,
+                    _pad0,
+                    _pad1,
+                    _pad2
+                ]
+            ),
             expect!(
                 Environment,
                 "Environment",

@@ -514,6 +514,10 @@ fn packed_area_light(
         mesh_cdf,
         face_areas: light.face_areas.map(|a| a as f32),
         mesh_triangles,
+        rectangular_faces: (0..3).filter(|&axis| light.rectangular_faces[axis]).map(|axis| 1 << axis).sum(),
+        _pad0: 0,
+        _pad1: 0,
+        _pad2: 0,
     })
 }
 

@@ -22,7 +22,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 51] = [
+const MODULES: [(&str, &str); 52] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -57,6 +57,7 @@ const MODULES: [(&str, &str); 51] = [
     ("shaders/brdf.wgsl", include_str!("../../shaders/brdf.wgsl")),
     ("shaders/integrators.wgsl", include_str!("../../shaders/integrators.wgsl")),
     ("shaders/point_lights.wgsl", include_str!("../../shaders/point_lights.wgsl")),
+    ("shaders/spherical_rectangle.wgsl", include_str!("../../shaders/spherical_rectangle.wgsl")),
     ("shaders/lights.wgsl", include_str!("../../shaders/lights.wgsl")),
     ("shaders/env_light.wgsl", include_str!("../../shaders/env_light.wgsl")),
     ("shaders/mis.wgsl", include_str!("../../shaders/mis.wgsl")),

@@ -87,6 +87,16 @@ impl SceneBvh {
 /// differently, and the choice is unbiased either way (MIS uses the same rule's density).
 pub const CUBE_FACE_MARGIN: f64 = 1.0 / 1024.0;
 
+/// The solid angles (steradians) between which NEE samples a rectangular cube face by the
+/// solid angle it subtends (`cpu::spherical_rectangle`) instead of by area: below, the face
+/// is far enough for area sampling to be nearly as good, and its f32 solid angle on the GPU
+/// would lose digits (the corner terms cancel); above, the point nearly touches the face.
+/// Powers of two and small integers, exact in f32 and f64, so both renderers compare their
+/// own Ω with the same numbers; the rule is deterministic per (point, face), so it is
+/// unbiased wherever it falls, and MIS applies it too.
+pub const SOLID_ANGLE_MIN: f64 = 1.0 / 128.0;
+pub const SOLID_ANGLE_MAX: f64 = 6.0;
+
 /// One area light, with what sampling needs precomputed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AreaLight {
@@ -103,6 +113,9 @@ pub struct AreaLight {
     /// have the same). NEE chooses among the faces a shading point is in front of by these
     /// (`cpu::area_light`, "visible faces").
     pub face_areas: [f64; 3],
+    /// Cubes: per axis, whether that pair's faces are rectangles (the transform keeps the
+    /// two edges orthogonal), which NEE may sample by solid angle.
+    pub rectangular_faces: [bool; 3],
     /// Cubes and meshes: the world surface area (sampling density 1 / area).
     pub area: f64,
     /// Meshes: the triangles and what sampling them needs.
@@ -156,6 +169,7 @@ impl AreaLight {
                 det: lin.determinant().abs(),
                 sphere: None,
                 face_areas: [0.0; 3],
+                rectangular_faces: [false; 3],
                 area: sum,
                 mesh: Some(MeshLight { mesh: m.mesh.clone(), cdf }),
             });
@@ -177,6 +191,10 @@ impl AreaLight {
             det: lin.determinant().abs(),
             sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
             face_areas: faces,
+            rectangular_faces: [0, 1, 2].map(|axis| {
+                let (a, b) = (lin.col((axis + 1) % 3), lin.col((axis + 2) % 3));
+                a.dot(b).abs() <= 1e-9 * a.length() * b.length()
+            }),
             area: 2.0 * faces.iter().sum::<f64>(),
             mesh: None,
         })

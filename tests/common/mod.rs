@@ -340,13 +340,16 @@ pub fn lambert_polygon(x: DVec3, n: DVec3, vertices: &[DVec3]) -> f64 {
     0.5 * sum.abs()
 }
 
-/// A parallelepiped lamp (a sheared, rotated, stretched cube emitting Le from every face)
-/// beside the view of a diffuse floor, seen from straight above through pixel centres;
-/// direct light only (max_depth 1: NEE on the lamp, MIS-weighted against BSDF sampling,
-/// 2048 paths per pixel). Returns the scene and each pixel's closed form, row by row:
-/// ρ/π · Le · Σ, over the lamp faces the floor point is in front of (which together make
-/// up the lamp's silhouette), of Lambert's projected solid angle of the face.
-pub fn cube_lamp_over_a_floor() -> (Scene, Vec<Color>) {
+/// A cube lamp emitting Le from every face beside the view of a diffuse floor, seen from
+/// straight above through pixel centres; direct light only (max_depth 1: NEE on the lamp,
+/// MIS-weighted against BSDF sampling, 2048 paths per pixel). `sheared`: a parallelepiped
+/// (sheared, rotated, stretched) some way off, whose faces NEE samples by area; otherwise a
+/// rotated box lying low beside the view, whose rectangular faces the floor's nearer points
+/// see large enough to be sampled by solid angle (the farther ones still by area). Returns
+/// the scene and each pixel's closed form, row by row: ρ/π · Le · Σ, over the lamp faces
+/// the floor point is in front of (which together make up the lamp's silhouette), of
+/// Lambert's projected solid angle of the face.
+pub fn cube_lamp_over_a_floor(sheared: bool) -> (Scene, Vec<Color>) {
     let (w, h) = (12u32, 10u32);
     let rho = Color::new(0.8, 0.5, 0.2);
     let le = Color::new(3.0, 2.0, 1.0);
@@ -357,11 +360,20 @@ pub fn cube_lamp_over_a_floor() -> (Scene, Vec<Color>) {
         glam::DVec4::W,
     ))
     .unwrap();
-    let lamp_t = Transform::translation(DVec3::new(4.5, 0.5, 1.3))
-        * Transform::rotation_z(25.0)
-        * Transform::rotation_x(10.0)
-        * shear
-        * Transform::scaling(DVec3::new(1.0, 0.6, 0.2));
+    let (lamp_t, camera_height) = if sheared {
+        let t = Transform::translation(DVec3::new(4.5, 0.5, 1.3))
+            * Transform::rotation_z(25.0)
+            * Transform::rotation_x(10.0)
+            * shear
+            * Transform::scaling(DVec3::new(1.0, 0.6, 0.2));
+        (t, 3.0)
+    } else {
+        let t = Transform::translation(DVec3::new(2.6, 0.3, 0.45))
+            * Transform::rotation_z(25.0)
+            * Transform::rotation_x(10.0)
+            * Transform::scaling(DVec3::new(1.0, 0.6, 0.2));
+        (t, 1.2)
+    };
     let mut b = SceneBuilder::new(w, h);
     let floor = b.diffuse(rho);
     let lamp = b.material(Material::new(Brdf::default(), Pigment::Uniform(le)));
@@ -370,7 +382,7 @@ pub fn cube_lamp_over_a_floor() -> (Scene, Vec<Color>) {
         .camera(Camera {
             projection: Projection::Perspective { screen_distance: 1.0 },
             aspect_ratio: 1.2,
-            transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
+            transform: Transform::translation(DVec3::new(0.3, -0.2, camera_height)) * Transform::rotation_y(90.0),
         })
         .tracer(Tracer { samples_per_side: 0, rng: PcgSeed { state: 5, inc: 8 } })
         .renderer(pt(2048, 1, 10, true));
