@@ -39,6 +39,18 @@ pub struct SphericalRectangle {
 
 impl SphericalRectangle {
     /// The rectangle `corner + s·ea + t·eb` (s, t ∈ [0, 1], `ea` ⟂ `eb`) seen from `o`.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use lumen::cpu::spherical_rectangle::SphericalRectangle;
+    ///
+    /// // A 2 × 2 square one unit below the point, centred under it: 4·atan(1/√3) = 2π/3.
+    /// let r = SphericalRectangle::new(DVec3::ZERO, DVec3::new(-1.0, -1.0, -1.0), 2.0 * DVec3::X, 2.0 * DVec3::Y);
+    /// assert!((r.solid_angle() - 2.0 * std::f64::consts::PI / 3.0).abs() < 1e-12);
+    /// // The middle of the unit square maps to the middle of the square (by symmetry).
+    /// let (s, t) = r.sample(0.5, 0.5);
+    /// assert!((s - 0.5).abs() < 1e-12 && (t - 0.5).abs() < 1e-12);
+    /// ```
     pub fn new(o: DVec3, corner: DVec3, ea: DVec3, eb: DVec3) -> Self {
         let (la, lb) = (ea.length(), eb.length());
         let (ex, ey) = (ea / la, eb / lb);
