@@ -204,9 +204,14 @@ fn solid_angle_face(light: AreaLight, s: Shape, x: vec3<f32>, f: CubeFaces, axis
         let corner = select(vec3<f32>(-0.5), vec3<f32>(0.5 * side), along);
         let ea = select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>((axis + 1u) % 3u) == vec3<u32>(0u, 1u, 2u));
         let eb = select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>((axis + 2u) % 3u) == vec3<u32>(0u, 1u, 2u));
-        r = spherical_rectangle(x, affine_point(s.to_world, corner), affine_vector(s.to_world, ea), affine_vector(s.to_world, eb));
-        if (!(r.solid_angle >= SOLID_ANGLE_MIN && r.solid_angle <= SOLID_ANGLE_MAX)) {
-            r.solid_angle = 0.0;
+        let c = affine_point(s.to_world, corner);
+        let a = affine_vector(s.to_world, ea);
+        let b = affine_vector(s.to_world, eb);
+        if (may_subtend(x, c, a, b, SOLID_ANGLE_MIN)) {
+            r = spherical_rectangle(x, c, a, b);
+            if (!(r.solid_angle >= SOLID_ANGLE_MIN && r.solid_angle <= SOLID_ANGLE_MAX)) {
+                r.solid_angle = 0.0;
+            }
         }
     }
     return r;

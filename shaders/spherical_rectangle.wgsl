@@ -55,6 +55,15 @@ fn spherical_rectangle(o: vec3<f32>, corner: vec3<f32>, ea: vec3<f32>, eb: vec3<
     );
 }
 
+// spherical_rectangle::may_subtend: whether the rectangle may subtend omega or more from
+// o (Ω ≤ A/z², tested as A³ ≥ ω·(d·(ea × eb))²), before any corner term.
+fn may_subtend(o: vec3<f32>, corner: vec3<f32>, ea: vec3<f32>, eb: vec3<f32>, omega: f32) -> bool {
+    let c = cross(ea, eb);
+    let a2 = dot(c, c);
+    let za = dot(corner - o, c);
+    return a2 * sqrt(a2) >= omega * za * za;
+}
+
 // #if SHADOWS
 // SphericalRectangle::sample: the fractions (s, t) along ea and eb of the point that (u, v)
 // maps to, uniform in solid angle.

@@ -157,9 +157,9 @@ fn stratified_draws_match_the_cpu() {
 /// `shaders/spherical_rectangle.wgsl` against `cpu::spherical_rectangle` (f64) on the same
 /// f32 inputs: random rectangles seen from random points, kept where NEE samples by solid
 /// angle (Ω within the thresholds): the solid angle to a relative 1e-4 (precise corner
-/// terms; lavapipe's own atan2 would miss by ~1e-4 absolute) and each sample's fractions
-/// on the face to 1e-3 (lavapipe: up to 3.4e-4 where Ω is near its minimum, the column's
-/// inversion cancelling in f32).
+/// terms; lavapipe's own atan2 would miss by ~1e-4 absolute; lavapipe: 3.5e-5) and each
+/// sample's fractions on the face to 1e-3 (lavapipe: 3.4e-5; a minimum of 2⁻⁷ instead of
+/// 1/16 gave 3.4e-4 there, the column's inversion cancelling in f32).
 #[test]
 fn spherical_rectangles_match_the_cpu() {
     use glam::DVec3;

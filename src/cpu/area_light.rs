@@ -42,7 +42,7 @@ use crate::scene::{Pigment, Scene, ShapeKind};
 
 use super::normalize_scaled;
 use super::offset::error_scale;
-use super::spherical_rectangle::SphericalRectangle;
+use super::spherical_rectangle::{may_subtend, SphericalRectangle};
 use super::warp::{cone_one_minus_cos, uniform_cone, uniform_cone_pdf, uniform_sphere};
 
 pub use crate::prepare::{AreaLight, CUBE_FACE_MARGIN, SOLID_ANGLE_MAX, SOLID_ANGLE_MIN};
@@ -128,7 +128,11 @@ impl AreaLight {
         let mut corner = DVec3::splat(-0.5);
         corner[axis] = 0.5 * side;
         let t = &self.transform;
-        let rect = SphericalRectangle::new(x, t.point(corner), t.vector(DVec3::AXES[u]), t.vector(DVec3::AXES[v]));
+        let (corner, ea, eb) = (t.point(corner), t.vector(DVec3::AXES[u]), t.vector(DVec3::AXES[v]));
+        if !may_subtend(x, corner, ea, eb, SOLID_ANGLE_MIN) {
+            return None;
+        }
+        let rect = SphericalRectangle::new(x, corner, ea, eb);
         (SOLID_ANGLE_MIN..=SOLID_ANGLE_MAX).contains(&rect.solid_angle()).then_some(rect)
     }
 
@@ -581,7 +585,7 @@ mod tests {
         let light = AreaLight::new(&scene, 0).unwrap();
         let to_object = light.transform.inverse();
         // Below the lamp's middle: the bottom face only.
-        let below = DVec3::new(1.02, 0.05, 0.3);
+        let below = DVec3::new(1.02, 0.05, 1.2);
         let faces = light.cube_faces(below, u32::MAX);
         assert_eq!(faces.side, [0.0, 0.0, -1.0]);
         assert!((faces.area() - light.face_areas[2]).abs() < 1e-15);
@@ -619,10 +623,11 @@ mod tests {
             let top = light.transform.point(DVec3::new(0.1, 0.1, 0.5));
             assert_eq!(light.pdf(x, u32::MAX, top, light.transform.normal(DVec3::Z)), 0.0);
         }
-        // The broad bottom face (Ω ≈ 0.07 from below) is sampled by solid angle; the thin
-        // sides, seen edge-on from afar (Ω < SOLID_ANGLE_MIN), by area.
-        assert!(by_solid_angle[0] > 2000, "{by_solid_angle:?}");
-        assert_eq!(by_solid_angle[1], 0);
+        // From 0.8 below the lamp's middle, every sample is on the broad bottom face
+        // (Ω ≈ 0.3) and drawn by solid angle; from aside, farther and at a slant, every face
+        // subtends less than SOLID_ANGLE_MIN (the bottom one about 0.04) and is sampled by
+        // area.
+        assert_eq!(by_solid_angle, [2000, 0]);
         // A point on the plane of the top face (the ceiling the lamp touches), within the
         // margin, is in front of no face of the z pair: rounding cannot pick the top face.
         let ceiling = light.transform.point(DVec3::new(3.0, 0.2, 0.5 + CUBE_FACE_MARGIN / 2.0));

@@ -105,6 +105,18 @@ impl SphericalRectangle {
     }
 }
 
+/// Whether the rectangle `corner + s·ea + t·eb` may subtend `omega` or more from `o`: no
+/// part of a plane figure subtends more than its area over its plane's distance squared,
+/// so Ω ≤ A/z², tested as A³ ≥ ω·(d·(ea × eb))² (|ea × eb| = A, d·(ea × eb) = ±z·A) with
+/// no division and no corner term; far faces are told apart at the cost of a cross
+/// product.
+pub fn may_subtend(o: DVec3, corner: DVec3, ea: DVec3, eb: DVec3, omega: f64) -> bool {
+    let c = ea.cross(eb);
+    let a2 = c.length_squared();
+    let za = (corner - o).dot(c);
+    a2 * a2.sqrt() >= omega * za * za
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -184,6 +196,19 @@ mod tests {
                     assert!((got - p).abs() < 5.0 * sigma + 1e-9, "cell ({i}, {j}) from {o}: {got} vs {p}");
                 }
             }
+        }
+    }
+
+    /// The bound never excludes a rectangle that subtends ω: for each case, just below its
+    /// Ω it may subtend, and above A/z² it may not.
+    #[test]
+    fn the_bound_never_excludes_what_subtends_enough() {
+        for (o, corner, ea, eb) in cases() {
+            let omega = SphericalRectangle::new(o, corner, ea, eb).solid_angle();
+            assert!(may_subtend(o, corner, ea, eb, omega * (1.0 - 1e-12)));
+            let c = ea.cross(eb);
+            let z = (corner - o).dot(c.normalize()).abs();
+            assert!(!may_subtend(o, corner, ea, eb, c.length() / (z * z) * (1.0 + 1e-9)));
         }
     }
 
