@@ -191,6 +191,17 @@ fn cube_faces_area(f: CubeFaces) -> f32 {
     return f.weight.x + f.weight.y + f.weight.z;
 }
 
+// CubeFaces::solid_angle_pdf: the density of a point drawn by solid angle on a face of
+// sampled area `weight` (its share of the sampled area over its solid angle).
+fn cube_face_solid_angle_pdf(f: CubeFaces, weight: f32, r: SphericalRectangle) -> f32 {
+    return weight / (cube_faces_area(f) * r.solid_angle);
+}
+
+// The unit vector along object axis i (DVec3::AXES[i]).
+fn unit_axis(i: u32) -> vec3<f32> {
+    return select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>(i) == vec3<u32>(0u, 1u, 2u));
+}
+
 // AreaLight::solid_angle_face: the face of `axis` that f samples, seen from x, where NEE
 // samples it by solid angle; solid_angle 0 where it samples that face by area (a sheared
 // cube's parallelogram, both faces of the pair sampled, or Ω outside [SOLID_ANGLE_MIN,
@@ -199,14 +210,12 @@ fn solid_angle_face(light: AreaLight, s: Shape, x: vec3<f32>, f: CubeFaces, axis
     var r: SphericalRectangle;
     let side = f.side[axis];
     if (side != 0.0 && (light.rectangular_faces & (1u << axis)) != 0u) {
-        // The face's corner (−0.5 on its own two axes) and edges, in the world.
-        let along = vec3<u32>(axis) == vec3<u32>(0u, 1u, 2u);
-        let corner = select(vec3<f32>(-0.5), vec3<f32>(0.5 * side), along);
-        let ea = select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>((axis + 1u) % 3u) == vec3<u32>(0u, 1u, 2u));
-        let eb = select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>((axis + 2u) % 3u) == vec3<u32>(0u, 1u, 2u));
+        // The face's corner (−0.5 on its own two axes) and edges along its (u, v) axes
+        // (area_light::face_axes), in the world.
+        let corner = select(vec3<f32>(-0.5), vec3<f32>(0.5 * side), unit_axis(axis) > vec3<f32>(0.0));
         let c = affine_point(s.to_world, corner);
-        let a = affine_vector(s.to_world, ea);
-        let b = affine_vector(s.to_world, eb);
+        let a = affine_vector(s.to_world, unit_axis((axis + 1u) % 3u));
+        let b = affine_vector(s.to_world, unit_axis((axis + 2u) % 3u));
         if (may_subtend(x, c, a, b, SOLID_ANGLE_MIN)) {
             r = spherical_rectangle(x, c, a, b);
             if (!(r.solid_angle >= SOLID_ANGLE_MIN && r.solid_angle <= SOLID_ANGLE_MAX)) {
@@ -355,7 +364,7 @@ fn light_sample(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, xi0: f3
         var st = vec2<f32>(face.u, xi1);
         if (r.solid_angle > 0.0) {
             st = spherical_rectangle_sample(r, face.u, xi1);
-            solid_pdf = f.weight[face.axis] / (area * r.solid_angle);
+            solid_pdf = cube_face_solid_angle_pdf(f, f.weight[face.axis], r);
         }
         let pn = cube_face_point(face, st);
         p_obj = pn[0];
@@ -406,7 +415,7 @@ fn light_pdf(light: AreaLight, s: Shape, x: vec3<f32>, x_object: u32, y: vec3<f3
         }
         let r = solid_angle_face(light, s, x, f, u32(dot(axis, vec3<f32>(0.0, 1.0, 2.0))));
         if (r.solid_angle > 0.0) {
-            return dot(f.weight, axis) / (cube_faces_area(f) * r.solid_angle);
+            return cube_face_solid_angle_pdf(f, dot(f.weight, axis), r);
         }
         return light_area_pdf(s, x, y, n_obj, cube_faces_area(f));
     }

@@ -110,7 +110,7 @@ impl AreaLight {
         }
         let axis = n_obj.abs().max_position();
         match self.solid_angle_face(x, &faces, axis) {
-            Some(rect) => faces.weight[axis] / (faces.area() * rect.solid_angle()),
+            Some(rect) => faces.solid_angle_pdf(axis, &rect),
             None => self.area_pdf_solid_angle(x, y, n_obj, faces.area()),
         }
     }
@@ -237,7 +237,7 @@ impl AreaLight {
                 let (p, n) = face.point(s, t);
                 let y = self.transform.point(p);
                 let pdf = match rect {
-                    Some(r) => faces.weight[face.axis] / (faces.area() * r.solid_angle()),
+                    Some(r) => faces.solid_angle_pdf(face.axis, &r),
                     None => self.area_pdf_solid_angle(x, y, n, faces.area()),
                 };
                 (p, n, y, pdf)
@@ -281,6 +281,12 @@ impl CubeFaces {
     /// The world area sampled (the sampling density is its inverse).
     pub fn area(&self) -> f64 {
         self.weight.iter().sum()
+    }
+
+    /// The density of a point on the face of `axis` drawn by solid angle from `rect`: the
+    /// face's share of the sampled area (the chance of picking it) over its solid angle.
+    pub fn solid_angle_pdf(&self, axis: usize, rect: &SphericalRectangle) -> f64 {
+        self.weight[axis] / (self.area() * rect.solid_angle())
     }
 
     /// Whether the face with outward object normal `n_obj` is sampled. n_obj is ±1 on one

@@ -353,14 +353,14 @@ pub fn cube_lamp_over_a_floor(sheared: bool) -> (Scene, Vec<Color>) {
     let (w, h) = (12u32, 10u32);
     let rho = Color::new(0.8, 0.5, 0.2);
     let le = Color::new(3.0, 2.0, 1.0);
-    let shear = Transform::from_matrix(glam::DMat4::from_cols(
-        glam::DVec4::X,
-        glam::DVec4::Y,
-        glam::DVec4::new(0.3, 0.1, 1.0, 0.0),
-        glam::DVec4::W,
-    ))
-    .unwrap();
     let (lamp_t, camera_height) = if sheared {
+        let shear = Transform::from_matrix(glam::DMat4::from_cols(
+            glam::DVec4::X,
+            glam::DVec4::Y,
+            glam::DVec4::new(0.3, 0.1, 1.0, 0.0),
+            glam::DVec4::W,
+        ))
+        .unwrap();
         let t = Transform::translation(DVec3::new(4.5, 0.5, 1.3))
             * Transform::rotation_z(25.0)
             * Transform::rotation_x(10.0)

@@ -47,7 +47,6 @@ pub(crate) struct Feed {
 }
 
 impl Feed {
-    /// The twin says it is set up (true) or could not be (false).
     /// The twin says it is set up and about to take batches (true) or could not be set up
     /// (false).
     pub fn ready(&self, ok: bool) {
