@@ -187,3 +187,29 @@ fn bench_bad_arguments_fail_clearly() {
         assert!(err.contains(expect) && !err.contains("panicked"), "{args:?}: {err}");
     }
 }
+
+/// `--cold-kernels`: a table with each run's kernel creation, every run a new process that
+/// created every stage kernel of the scene (which caches it runs with: a unit test of
+/// `cold_environment` in src/cli/bench.rs).
+#[test]
+fn bench_times_cold_kernel_creation_in_new_processes() {
+    let Some(_gpu) = lumen::gpu::gpu_for_tests("bench_times_cold_kernel_creation_in_new_processes") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let args =
+        ["--device", "gpu", "--scenes", "tiny.sl", "--spp", "1", "--width", "8", "--max-spheres", "0", "--repeat", "2"];
+    let out = lumen_bench(dir.path(), &[&args[..], &["--cold-kernels"]].concat());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let md = String::from_utf8_lossy(&out.stdout);
+    let table = md.split("### Cold kernel creation").nth(1).unwrap_or_else(|| panic!("{md}"));
+    let row = table.lines().find(|l| l.starts_with("| tiny.sl |")).unwrap_or_else(|| panic!("{md}"));
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    let kernels: usize = cells[2].parse().unwrap_or_else(|_| panic!("{row}"));
+    assert!(kernels >= 2, "a path tracer has a camera, closest-hit, shading and film stage at least: {row}");
+    let runs: Vec<f64> = cells[3].split(", ").map(|s| s.parse().unwrap()).collect();
+    assert_eq!(runs.len(), 2, "{row}");
+    assert!(runs.iter().all(|&s| s > 0.0 && s < 120.0), "{row}");
+    // Without the flag there is no such table.
+    let plain = lumen_bench(dir.path(), &args);
+    assert!(plain.status.success() && !String::from_utf8_lossy(&plain.stdout).contains("Cold kernel creation"));
+}

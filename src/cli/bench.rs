@@ -21,7 +21,7 @@ use crate::color::Color;
 use crate::cpu::World;
 use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_LEAVES};
 use crate::gpu::pack::pack;
-use crate::gpu::render::{assemble_stages, GpuRenderOptions};
+use crate::gpu::render::{assemble_stages, GpuRenderOptions, GpuRenderer, TwinUse};
 use crate::gpu::Gpu;
 use crate::sampling::Pcg32;
 use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Transform};
@@ -62,6 +62,17 @@ pub struct BenchArgs {
     /// each run's GPU/CPU ratio: side-by-side figures on a shared, noisy machine.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeat: u32,
+    /// Also time the GPU's kernel creation with every cache cold, `--repeat` times per
+    /// scene: each time a new process of this program renders the scene at 8×8 and 1 spp
+    /// with a new, empty Mesa shader cache (MESA_SHADER_CACHE_DIR), without lumen's
+    /// pipeline cache (LUMEN_PIPELINE_CACHE=0) and without NVIDIA's shader disk cache
+    /// (__GL_SHADER_DISK_CACHE=0).
+    #[arg(long)]
+    pub cold_kernels: bool,
+    /// The process `--cold-kernels` starts: renders the one scene of `--scenes` at 8×8 and
+    /// 1 spp on the GPU and prints the kernels it created and the seconds that took.
+    #[arg(long, hide = true)]
+    pub cold_kernels_child: bool,
 }
 
 /// Settings after `--quick` and the defaults are applied.
@@ -147,6 +158,9 @@ pub fn spheres_scene(n: u32, width: u32, height: u32) -> Scene {
 /// Runs `lumen bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let plan = Plan::of(&args)?;
+    if args.cold_kernels_child {
+        return cold_kernels_child(&args, &plan);
+    }
     if let Some(path) = &args.output {
         crate::image::check_destination(path).with_context(|| format!("cannot write {}", path.display()))?;
     }
@@ -181,6 +195,14 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             None => report.push_str("Shader comparison skipped: no GPU device.\n"),
         }
     }
+    if args.cold_kernels {
+        report.push('\n');
+        if devices.iter().any(|d| d.kind() == Device::Gpu) {
+            report.push_str(&cold_kernels_table(&files, &plan, &args)?);
+        } else {
+            report.push_str("Cold kernel creation skipped: no GPU device.\n");
+        }
+    }
     report.push_str(&format!("\nPeak resident memory of the whole run: {}\n", format_bytes(peak_memory_bytes())));
     // The file first: it is written even when nobody reads standard output.
     if let Some(path) = &args.output {
@@ -189,6 +211,89 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", path.display());
     }
     Ok(super::output::print(format_args!("{report}\n"))?)
+}
+
+/// The environment of a `--cold-kernels` child: a new, empty Mesa shader cache in `cache`,
+/// lumen's pipeline cache off, NVIDIA's shader disk cache off.
+fn cold_environment(cache: &Path) -> [(&'static str, std::ffi::OsString); 3] {
+    [
+        ("MESA_SHADER_CACHE_DIR", cache.as_os_str().to_owned()),
+        (crate::gpu::pipeline_cache::PIPELINE_CACHE_ENV, "0".into()),
+        ("__GL_SHADER_DISK_CACHE", "0".into()),
+    ]
+}
+
+/// Kernel creation of each scene with every cache cold (`--cold-kernels`), each run in a
+/// process of its own: drivers read their cache settings when they load, once per process.
+fn cold_kernels_table(files: &[PathBuf], plan: &Plan, args: &BenchArgs) -> anyhow::Result<String> {
+    let exe = std::env::current_exe().context("cannot find this program to start its cold runs")?;
+    let mut rows = Vec::new();
+    for file in files {
+        let name = name_of(file);
+        let mut kernels = String::new();
+        let mut seconds = Vec::new();
+        let mut error = None;
+        for round in 0..plan.repeat {
+            eprintln!("{name}: cold kernel creation (run {} of {}) ...", round + 1, plan.repeat);
+            let cache = tempfile::tempdir().context("cannot create a directory for a cold shader cache")?;
+            let mut child = std::process::Command::new(&exe);
+            child.args(["bench", "--cold-kernels-child", "--device", "gpu", "--scenes"]).arg(file);
+            child.arg("--time").arg(plan.script.time.to_string());
+            for v in &plan.script.vars {
+                child.arg("--vars").arg(v);
+            }
+            if let Some(a) = &args.devices.adapter.adapter {
+                child.arg("--adapter").arg(a);
+            }
+            let out = child
+                .envs(cold_environment(cache.path()))
+                .stdin(std::process::Stdio::null())
+                .output()
+                .context("cannot start a cold kernel-creation run")?;
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            let words: Vec<&str> = stdout.split_whitespace().collect();
+            match (out.status.success(), &words[..]) {
+                (true, [k, s]) if s.parse::<f64>().is_ok() => {
+                    kernels = k.to_string();
+                    seconds.push(s.parse::<f64>()?);
+                }
+                _ => {
+                    let err = String::from_utf8_lossy(&out.stderr);
+                    let last = err.lines().rfind(|l| !l.trim().is_empty()).unwrap_or("no output");
+                    eprintln!("warning: {name}: cold kernel creation failed: {last}");
+                    error = Some(format!("error: {last}"));
+                    break;
+                }
+            }
+        }
+        rows.push(match error {
+            Some(e) => vec![name, e, String::new(), String::new()],
+            None => vec![
+                name,
+                kernels,
+                seconds.iter().map(|s| format!("{s:.2}")).collect::<Vec<_>>().join(", "),
+                median(&seconds).map_or(String::new(), |m| format!("{m:.2}")),
+            ],
+        });
+    }
+    Ok(format!(
+        "### Cold kernel creation\n\nEach run a new process renders the scene at 8×8 and 1 spp on the GPU with a new, \
+         empty Mesa shader cache, without lumen's pipeline cache and without NVIDIA's shader disk cache; seconds = \
+         the render's kernel creation (assembly, naga validation, pipeline creation and, on llvmpipe, the JIT \
+         compilation of every kernel before the first round), as `lumen render` reports it.\n\n{}",
+        markdown_table(&["scene", "kernels", "seconds (each run)", "median"], &rows)
+    ))
+}
+
+/// The process of one `--cold-kernels` run: prints "<kernels created> <seconds>".
+fn cold_kernels_child(args: &BenchArgs, plan: &Plan) -> anyhow::Result<()> {
+    let files = scene_files(&args.scenes)?;
+    let [file] = &files[..] else { bail!("--cold-kernels-child takes one scene, got {}", files.len()) };
+    let scene = plan.load_scene(file, 8, Some(8))?;
+    let gpu = Gpu::new(&args.devices.adapter.choice()).map_err(|e| anyhow!("{e}"))?;
+    let opts = GpuRenderOptions { spp: Some(1), twin: TwinUse::Never, ..GpuRenderOptions::default() };
+    let out = GpuRenderer::new().render(&gpu, &scene, &opts).map_err(|e| anyhow!("{e}"))?;
+    Ok(super::output::print(format_args!("{} {:.6}\n", out.kernels_compiled, out.kernel_seconds))?)
 }
 
 /// Rates with an SI prefix: 1.23 M.
@@ -583,6 +688,18 @@ fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> any
 
 #[cfg(test)]
 mod tests {
+
+    /// A cold run's caches: Mesa's in the given (new, empty) directory, lumen's and NVIDIA's
+    /// off, under the names those programs read.
+    #[test]
+    fn cold_runs_start_with_every_cache_empty_or_off() {
+        let env = cold_environment(Path::new("/tmp/x"));
+        let get = |k: &str| env.iter().find(|(n, _)| *n == k).map(|(_, v)| v.to_str().unwrap().to_string());
+        assert_eq!(get("MESA_SHADER_CACHE_DIR").as_deref(), Some("/tmp/x"));
+        assert_eq!(get("LUMEN_PIPELINE_CACHE").as_deref(), Some("0"));
+        assert_eq!(get("__GL_SHADER_DISK_CACHE").as_deref(), Some("0"));
+    }
+
     use super::*;
     use crate::cpu::paths_per_sample;
 
