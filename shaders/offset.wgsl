@@ -7,26 +7,22 @@ const OFFSET_ORIGIN: f32 = 0.03125;
 const OFFSET_FLOAT_SCALE: f32 = 1.52587890625e-5;
 const OFFSET_INT_SCALE: f32 = 256.0;
 
-fn offset_coord(p: f32, scale: f32, n: f32) -> f32 {
-    if (abs(p) < OFFSET_ORIGIN * scale) {
-        return p + OFFSET_FLOAT_SCALE * scale * n;
-    }
-    let ulps = i32(OFFSET_INT_SCALE * n);
-    let step = select(ulps, -ulps, p < 0.0);
-    let moved = bitcast<f32>(bitcast<i32>(p) + step);
-    // An exponent of all ones is ∞ or NaN: keep p.
-    if ((bitcast<u32>(moved) & 0x7F800000u) == 0x7F800000u) {
-        return p;
-    }
-    return moved;
-}
-
 // Moves surface point p (error scale `scale`) off the surface with geometric normal n
-// (either orientation) to the side that `dir` leaves through.
+// (either orientation) to the side that `dir` leaves through: per coordinate, near zero a
+// float step of 2⁻¹⁶·scale·n, elsewhere 256·n ulps, unless that lands on ∞ or NaN (then p).
+// Straight-line code on all three coordinates at once, each case computed and chosen by a
+// select: llvmpipe runs every branch of a lane-divergent `if` masked anyway, and the early
+// returns of a per-coordinate function made its three copies at each of a shading stage's
+// call sites cost about a sixth of that kernel's compile time (BENCHMARKS.md, "Spawned-ray
+// offsets in straight-line code"). Same values as the branches, bit for bit.
 fn offset_origin(p: vec3<f32>, scale: f32, n_geometric: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
-    var n = normalize_or(n_geometric, vec3<f32>(0.0));
-    if (dot(n, dir) < 0.0) {
-        n = -n;
-    }
-    return vec3<f32>(offset_coord(p.x, scale, n.x), offset_coord(p.y, scale, n.y), offset_coord(p.z, scale, n.z));
+    let g = normalize_or(n_geometric, vec3<f32>(0.0));
+    let n = select(g, -g, dot(g, dir) < 0.0);
+    let near_zero = abs(p) < vec3<f32>(OFFSET_ORIGIN * scale);
+    let float_step = p + OFFSET_FLOAT_SCALE * scale * n;
+    let ulps = vec3<i32>(OFFSET_INT_SCALE * n);
+    let int_step = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(ulps, -ulps, p < vec3<f32>(0.0)));
+    // An exponent of all ones is ∞ or NaN: keep p.
+    let overflow = (bitcast<vec3<u32>>(int_step) & vec3<u32>(0x7F800000u)) == vec3<u32>(0x7F800000u);
+    return select(select(int_step, p, overflow), float_step, near_zero);
 }

@@ -217,14 +217,10 @@ fn spherical_rectangles_match_the_cpu() {
     println!("worst relative Ω error {worst_omega:.2e}, worst fraction error {worst_st:.2e}");
 }
 
-/// `shaders/offset.wgsl` is scale-aware like `cpu::offset_origin`: a surface point of a
-/// scene scaled by 2⁻¹³ (≈ 1.2e-4), with its error scale, moves by exactly 2⁻¹³ times the
-/// unit point's offset in every coordinate, near zero or not; a near-zero coordinate moves
-/// by 2⁻¹⁶ times the error scale (the f32 constant).
-#[test]
-fn gpu_offsets_are_proportional_to_the_error_scale() {
-    let Some(gpu) = gpu_for_tests("gpu_offsets_are_proportional_to_the_error_scale") else { return };
-    let src = format!(
+/// A kernel with shaders/offset.wgsl whose invocation i runs `body` (reading `input`, writing
+/// `out[i]`).
+fn offset_kernel(body: &str) -> String {
+    format!(
         "{}\n{}\n{}\n{}\n
 @group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
@@ -232,14 +228,26 @@ fn gpu_offsets_are_proportional_to_the_error_scale() {
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
     let i = id.x;
     if (i >= arrayLength(&out)) {{ return; }}
-    let p = input[2u * i];
-    let n = input[2u * i + 1u].xyz;
-    out[i] = vec4<f32>(offset_origin(p.xyz, p.w, n, n), 0.0);
+    {body}
 }}",
         include_str!("../shaders/layout.wgsl"),
         include_str!("../shaders/rescale.wgsl"),
         include_str!("../shaders/ray.wgsl"),
         include_str!("../shaders/offset.wgsl"),
+    )
+}
+
+/// `shaders/offset.wgsl` is scale-aware like `cpu::offset_origin`: a surface point of a
+/// scene scaled by 2⁻¹³ (≈ 1.2e-4), with its error scale, moves by exactly 2⁻¹³ times the
+/// unit point's offset in every coordinate, near zero or not; a near-zero coordinate moves
+/// by 2⁻¹⁶ times the error scale (the f32 constant).
+#[test]
+fn gpu_offsets_are_proportional_to_the_error_scale() {
+    let Some(gpu) = gpu_for_tests("gpu_offsets_are_proportional_to_the_error_scale") else { return };
+    let src = offset_kernel(
+        "let p = input[2u * i];
+    let n = input[2u * i + 1u].xyz;
+    out[i] = vec4<f32>(offset_origin(p.xyz, p.w, n, n), 0.0);",
     );
     let kernel = gpu.compute_kernel("offset_test.wgsl", &src, "main").unwrap();
     let k = 2f32.powi(-13);
@@ -281,6 +289,66 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
             assert!(d_unit * n[a] >= 0.0, "point {i} axis {a}: moved against the normal");
         }
     }
+}
+
+/// `shaders/offset.wgsl` bit for bit against the rule written out here in f32 (the constants
+/// of `cpu::offset_origin`'s f32 form): near zero a float step of 2⁻¹⁶·scale·n, elsewhere
+/// 256·n ulps away from or towards zero, a step onto ∞ dropped, the normal turned to the
+/// side `dir` leaves through. Axis normals, so that normalising them is exact.
+#[test]
+fn gpu_offsets_follow_the_rule_bit_for_bit() {
+    let Some(gpu) = gpu_for_tests("gpu_offsets_follow_the_rule_bit_for_bit") else { return };
+    let src = offset_kernel(
+        "let p = input[3u * i];
+    out[i] = vec4<f32>(offset_origin(p.xyz, p.w, input[3u * i + 1u].xyz, input[3u * i + 2u].xyz), 0.0);",
+    );
+    fn rule(p: f32, scale: f32, n: f32) -> f32 {
+        if p.abs() < 0.03125 * scale {
+            return p + 1.525_878_9e-5 * scale * n;
+        }
+        let ulps = (256.0 * n) as i32;
+        let step = if p < 0.0 { -ulps } else { ulps };
+        let moved = f32::from_bits((p.to_bits() as i32).wrapping_add(step) as u32);
+        if moved.is_finite() {
+            moved
+        } else {
+            p
+        }
+    }
+    // (point, error scale, geometric normal, direction)
+    type Case = ([f32; 3], f32, [f32; 3], [f32; 3]);
+    let cases: [Case; 8] = [
+        ([0.001, 5.0, -7.0], 1.0, [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        ([0.001, 5.0, -7.0], 1.0, [1.0, 0.0, 0.0], [-1.0, 0.5, 0.0]),
+        ([5.0, 0.0, -7.0], 1.0, [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]),
+        ([-3.0, 2.0, 0.5], 2.0, [4.0, 0.0, 0.0], [1.0, 1.0, 1.0]),
+        ([100.0, -0.0, 1e-30], 1e4, [0.0, -3.0, 0.0], [0.0, -1.0, 0.0]),
+        ([f32::MAX, -f32::MAX, 1.0], 1.0, [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        ([f32::MAX, -f32::MAX, 1.0], 1.0, [0.0, -1.0, 0.0], [0.0, -1.0, 0.0]),
+        ([-f32::MIN_POSITIVE, 7.5e-39, 3.0e5], 1.0, [0.0, 0.0, -1.0], [0.2, 0.0, -1.0]),
+    ];
+    let mut input: Vec<[f32; 4]> = Vec::new();
+    for (p, s, n, d) in cases {
+        input.extend([[p[0], p[1], p[2], s], [n[0], n[1], n[2], 0.0], [d[0], d[1], d[2], 0.0]]);
+    }
+    let ib = gpu.storage_buffer("input", &input).unwrap();
+    let ob = gpu.storage_buffer_zeroed("out", (cases.len() * 16) as u64).unwrap();
+    let kernel = gpu.compute_kernel("offset_rule_test.wgsl", &src, "main").unwrap();
+    let group = kernel.bind_group(&gpu, 0, &[&ib, &ob]).unwrap();
+    gpu.dispatch(&kernel, &[&group], kernel.workgroups_for([cases.len() as u32, 1, 1])).unwrap();
+    let got: Vec<[f32; 4]> = gpu.read_buffer(&ob, cases.len()).unwrap();
+    for (i, (p, s, n, d)) in cases.iter().enumerate() {
+        // The unit axis normal, turned towards `dir`.
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let toward = if n[0] * d[0] + n[1] * d[1] + n[2] * d[2] < 0.0 { -1.0 } else { 1.0 };
+        for a in 0..3 {
+            let want = rule(p[a], *s, toward * n[a] / len);
+            assert_eq!(got[i][a].to_bits(), want.to_bits(), "case {i} axis {a}: {} against {want}", got[i][a]);
+        }
+    }
+    // The cases reach every branch of the rule: a float step, ulps both ways, a step onto ∞.
+    assert!(got[0][0] > 0.001 && got[1][0] < 0.001 && got[2][2] < -7.0 && got[3][0] > -3.0);
+    assert_eq!((got[5][0], got[6][1]), (f32::MAX, -f32::MAX));
 }
 
 use glam::DVec3;
