@@ -54,9 +54,14 @@ fn cube_surface(p: vec3<f32>, face_in: u32) -> SurfacePoint {
     point[axis] = s;
     var normal = vec3<f32>(0.0);
     normal[axis] = s * 2.0;
+// #if CUBE_UV_UNUSED
+    // No material of this shading stage reads a pigment on a cube (features::UV_SHAPES).
+    let uv = vec2<f32>(0.0);
+// #else
     let cu = CUBE_FACE_SIGN_U[face] * point[CUBE_FACE_AXIS_U[face]] * 2.0;
     let cv = CUBE_FACE_SIGN_V[face] * point[CUBE_FACE_AXIS_V[face]] * 2.0;
     let uv = vec2<f32>((CUBE_FACE_COL[face] + 0.5 * (cu + 1.0)) / 4.0, (CUBE_FACE_ROW[face] + 0.5 * (cv + 1.0)) / 3.0);
+// #endif
     return SurfacePoint(point, normal, uv);
 }
 // #endif

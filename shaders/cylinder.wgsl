@@ -3,7 +3,9 @@
 // #requires quadratic
 // #endif
 // #if SHADING
+// #if !CYLINDER_UV_UNUSED
 // #requires angles
+// #endif
 // #endif
 // Unit cylinder (axis z, radius 0.5, z ∈ [−0.5, 0.5], capped): mirrors
 // src/cpu/shapes/cylinder.rs. Faces: 0 side, 1 bottom cap, 2 top cap.
@@ -58,7 +60,12 @@ fn cylinder_surface(p: vec3<f32>, face: u32) -> SurfacePoint {
     if (face == 0u) {
         let r = normalize_or(vec3<f32>(p.x, p.y, 0.0), vec3<f32>(1.0, 0.0, 0.0));
         let z = clamp(p.z, -0.5, 0.5);
+// #if CYLINDER_UV_UNUSED
+        // No material of this shading stage reads a pigment on a cylinder (features::UV_SHAPES).
+        let uv = vec2<f32>(0.0);
+// #else
         let uv = vec2<f32>(z + 0.5, (atan2_precise(r.y, r.x) / TAU + 1.0) / 2.0);
+// #endif
         return SurfacePoint(vec3<f32>(0.5 * r.x, 0.5 * r.y, z), r, uv);
     }
     if (face == 2u) {

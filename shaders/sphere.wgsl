@@ -3,7 +3,9 @@
 // #requires quadratic
 // #endif
 // #if SHADING
+// #if !SPHERE_UV_UNUSED
 // #requires angles
+// #endif
 // #endif
 // Unit sphere (radius 1 at the origin): mirrors src/cpu/shapes/sphere.rs.
 
@@ -18,6 +20,7 @@ fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
 // #endif
 
 // #if SHADING
+// #if !SPHERE_UV_UNUSED
 // atan2(y, x)/2π wrapped to [0, 1).
 fn turns(y: f32, x: f32) -> f32 {
     var u = atan2_precise(y, x) / TAU;
@@ -29,10 +32,16 @@ fn turns(y: f32, x: f32) -> f32 {
     }
     return u;
 }
+// #endif
 
 fn sphere_surface(p: vec3<f32>) -> SurfacePoint {
     let n = normalize_or(p, vec3<f32>(0.0, 0.0, 1.0));
+// #if SPHERE_UV_UNUSED
+    // No material of this shading stage reads a pigment on a sphere (features::UV_SHAPES).
+    let uv = vec2<f32>(0.0);
+// #else
     let uv = vec2<f32>(turns(n.y, n.x), atan2_precise(length(n.xy), n.z) / PI);
+// #endif
     return SurfacePoint(n, n, uv);
 }
 // #endif

@@ -62,9 +62,11 @@ impl KindUse {
     /// The feature names a kind may do without. `EMISSION` (the emitted radiance at a hit
     /// and its MIS weight, `wf_shade.wgsl`) and `TEXTURED_EMISSION` (some such material's
     /// emission is checkered or an image: looked up at the hit's uv) are the shading stage's
-    /// own; the others are scene names ([`FeatureSet::names`]) that the stage keeps only when
-    /// the kind needs them.
-    pub const NAMES: [&'static str; 10] = [
+    /// own, and so are `SPHERE_UV`, `CUBE_UV` and `CYLINDER_UV` (a material of the kind with
+    /// a checkered or image pigment or emission sits on a shape of that kind, so the hit's
+    /// surface coordinates are needed there: [`UV_SHAPES`]); the others are scene names
+    /// ([`FeatureSet::names`]) that the stage keeps only when the kind needs them.
+    pub const NAMES: [&'static str; 13] = [
         "SPHERE",
         "PLANE",
         "CUBE",
@@ -75,6 +77,9 @@ impl KindUse {
         "PIGMENT_IMAGE",
         "EMISSION",
         "TEXTURED_EMISSION",
+        "SPHERE_UV",
+        "CUBE_UV",
+        "CYLINDER_UV",
     ];
     /// Every name.
     pub const ALL: KindUse = KindUse { bits: (1 << Self::NAMES.len()) - 1 };
@@ -131,6 +136,16 @@ impl KindUse {
         }
     }
 }
+
+/// The primitive kinds whose surface coordinates cost real work (arctangents, face tables),
+/// as (shape name, [`KindUse`] name saying some textured material of the kind sits on such a
+/// shape, the shading stage's name saying none does: its hits there skip the uv). Planes'
+/// uv is two subtractions, meshes' an interpolation of the loaded vertices.
+pub const UV_SHAPES: [(&str, &str, &str); 3] = [
+    ("SPHERE", "SPHERE_UV", "SPHERE_UV_UNUSED"),
+    ("CUBE", "CUBE_UV", "CUBE_UV_UNUSED"),
+    ("CYLINDER", "CYLINDER_UV", "CYLINDER_UV_UNUSED"),
+];
 
 /// BRDF kinds (`layout::brdf_kind::COUNT`), one shading stage each.
 pub const BRDF_KINDS: usize = 6;
@@ -298,12 +313,20 @@ impl FeatureSet {
             let kind = crate::gpu::layout::brdf_kind::of(&m.brdf);
             *f.brdf_flag(kind) = true;
             let mut u = f.shade_use[kind as usize].union(*carrier).with_pigment(m.brdf.pigment());
+            let mut textured = !matches!(m.brdf.pigment(), Pigment::Uniform(_));
             if m.is_emissive() {
                 u = u.with_pigment(&m.emitted).with("EMISSION");
                 if !matches!(m.emitted, Pigment::Uniform(_)) {
                     u = u.with("TEXTURED_EMISSION");
+                    textured = true;
                 }
                 f.light_use = f.light_use.with_pigment(&m.emitted);
+            }
+            // The material reads its surface's uv on every shape it sits on.
+            for (shape, uv, _) in UV_SHAPES {
+                if textured && carrier.has(shape) {
+                    u = u.with(uv);
+                }
             }
             f.shade_use[kind as usize] = u;
         }
@@ -718,7 +741,10 @@ mod tests {
         assert_eq!((flat.shade_use, flat.light_use), ([KindUse::NONE; BRDF_KINDS], KindUse::NONE));
         let uniform = KindUse::NONE.with("PIGMENT_UNIFORM");
         assert_eq!(f.shade_use[DIFFUSE as usize], uniform.with("SPHERE"));
-        let mirror_use = uniform.with("CUBE").with("PIGMENT_CHECKERED").with("EMISSION").with("TEXTURED_EMISSION");
+        // The mirror's checkered emission is looked up at the cube's uv; the clay sphere's
+        // uniform pigment needs no uv.
+        let mirror_use =
+            uniform.with("CUBE").with("PIGMENT_CHECKERED").with("EMISSION").with("TEXTURED_EMISSION").with("CUBE_UV");
         assert_eq!(f.shade_use[SPECULAR as usize], mirror_use);
         // The emitting cube is the one area light: its shape and emitted pigment.
         assert_eq!(f.light_use, KindUse::NONE.with("CUBE").with("PIGMENT_CHECKERED"));

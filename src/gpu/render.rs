@@ -835,6 +835,10 @@ mod tests {
             || KindUse::NAMES.iter().fold(KindUse::NONE, |u, n| if rng.next_u32() % 2 == 0 { u.with(n) } else { u });
         f.shade_use = std::array::from_fn(|_| some_use());
         f.light_use = some_use();
+        if f.csg && !(f.sphere || f.plane || f.cube || f.cylinder) {
+            // A CSG tree's leaves are primitives (FeatureSet::of sets their kinds).
+            f.sphere = true;
+        }
         f.bvh = f.csg || f.sphere || f.cube || f.cylinder || f.mesh;
         if !f.bvh && !f.plane {
             // Only materials of some shape count.
@@ -862,9 +866,19 @@ mod tests {
         }
         f.nee = f.nee && f.non_delta() && renderer == RendererKind::PathTracer;
         f.area_lights = f.area_lights && f.nee;
-        f.sphere_lights = f.area_lights && rng.next_u32() % 2 == 0;
-        f.cube_lights = f.area_lights && rng.next_u32() % 2 == 0;
+        f.sphere_lights = f.area_lights && f.sphere && rng.next_u32() % 2 == 0;
+        f.cube_lights = f.area_lights && f.cube && rng.next_u32() % 2 == 0;
         f.mesh_lights = f.area_lights && f.mesh && rng.next_u32() % 2 == 0;
+        if f.area_lights && !(f.sphere_lights || f.cube_lights || f.mesh_lights) {
+            // Area lights are spheres, cubes or meshes of the scene.
+            (f.sphere_lights, f.sphere, f.bvh) = (true, true, true);
+        }
+        // Light sampling keeps the lights' shape kinds, as FeatureSet::of records them.
+        for (on, name) in [(f.sphere_lights, "SPHERE"), (f.cube_lights, "CUBE"), (f.mesh_lights, "MESH")] {
+            if on {
+                f.light_use = f.light_use.with(name);
+            }
+        }
         with_random_lists(rng, f)
     }
 

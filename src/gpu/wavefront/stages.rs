@@ -7,7 +7,7 @@
 //! kernel holds only its own code: the call-graph test below checks that every function and
 //! global of every stage is used, for a covering set of scenes.
 
-use crate::gpu::features::{FeatureSet, KindUse, RendererKind};
+use crate::gpu::features::{FeatureSet, KindUse, RendererKind, UV_SHAPES};
 use crate::gpu::layout::brdf_kind;
 
 use super::contract::StateBuffer;
@@ -243,6 +243,13 @@ impl Stage {
                     // the sampled point (else it reads the uniform colour).
                     n.push("TEXTURED_LIGHTS");
                 }
+                // Shapes on which no material of the stage reads a pigment at the hit's uv
+                // skip computing it (a textured light's sampled point still needs it).
+                for (shape, uv, unused) in UV_SHAPES {
+                    if n.contains(&shape) && !used.has(uv) && !n.contains(&"TEXTURED_LIGHTS") {
+                        n.push(unused);
+                    }
+                }
                 if used.has("EMISSION") || n.contains(&"TEXTURED_LIGHTS") {
                     // The lights' object normals: for emission's MIS density, and for the
                     // face of a textured light's sampled point.
@@ -401,7 +408,10 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 42] = [
+    pub const NAMES: [&'static str; 45] = [
+        "SPHERE_UV_UNUSED",
+        "CUBE_UV_UNUSED",
+        "CYLINDER_UV_UNUSED",
         "MICROFACET",
         "CSG_SWEEPS",
         "EMISSION",
@@ -582,6 +592,36 @@ mod tests {
         assert!(Stage::Intersect.names(&both).contains(&"SMOOTH_GLASS_AS_ROUGH"));
         let with_csg = FeatureSet { csg: true, csg_trees: 1, csg_max_leaves: 2, ..both };
         assert!(csg_queue(&with_csg) && Stage::Csg.names(&with_csg).contains(&"SMOOTH_GLASS_AS_ROUGH"));
+    }
+
+    /// A shading stage skips a shape kind's uv where none of its materials on that kind
+    /// reads a textured pigment and no textured light is sampled: a checkered floor under
+    /// plain spheres keeps the plane's uv only; a checkered sphere, or a checkered light,
+    /// keeps the sphere's.
+    #[test]
+    fn shading_stages_skip_the_uv_no_pigment_reads() {
+        use crate::color::Color;
+        use crate::scene::{Brdf, Material, Pigment, SceneBuilder, Transform};
+        let checkers = Pigment::Checkered { n: 4, on: Color::WHITE, off: Color::BLACK };
+        let diffuse_names = |checkered_sphere: bool, checkered_light: bool| {
+            let mut b = SceneBuilder::new(2, 2);
+            let plain = b.diffuse(Color::gray(0.5));
+            let floor = b.material(Material::new(Brdf::Diffuse { pigment: checkers.clone() }, Pigment::default()));
+            let emitted = if checkered_light { checkers.clone() } else { Pigment::Uniform(Color::WHITE) };
+            let lamp = b.material(Material::new(Brdf::Diffuse { pigment: Pigment::default() }, emitted));
+            b.plane(Transform::IDENTITY, floor).cube(Transform::translation(glam::DVec3::Z * 5.0), lamp);
+            b.sphere(Transform::translation(glam::DVec3::Z), if checkered_sphere { floor } else { plain });
+            Stage::Shade(brdf_kind::DIFFUSE).names(&FeatureSet::of(&b.build().unwrap()))
+        };
+        let plain = diffuse_names(false, false);
+        assert!(plain.contains(&"SPHERE_UV_UNUSED") && !plain.contains(&"PIGMENT_IMAGE"), "{plain:?}");
+        // The lamp's cube is diffuse too, but emits a uniform colour.
+        assert!(plain.contains(&"CUBE_UV_UNUSED") && !plain.contains(&"CYLINDER_UV_UNUSED"), "{plain:?}");
+        let textured = diffuse_names(true, false);
+        assert!(!textured.contains(&"SPHERE_UV_UNUSED") && textured.contains(&"CUBE_UV_UNUSED"), "{textured:?}");
+        let lit = diffuse_names(false, true);
+        assert!(lit.contains(&"TEXTURED_LIGHTS"), "{lit:?}");
+        assert!(!lit.iter().any(|n| n.ends_with("_UV_UNUSED")), "{lit:?}");
     }
 
     /// wgpu refuses a dispatch that uses one buffer both as its indirect arguments and as
