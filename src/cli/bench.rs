@@ -688,6 +688,8 @@ fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> any
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use crate::cpu::paths_per_sample;
 
     /// A cold run's caches: Mesa's in the given (new, empty) directory, lumen's and NVIDIA's
     /// off, under the names those programs read.
@@ -699,9 +701,6 @@ mod tests {
         assert_eq!(get("LUMEN_PIPELINE_CACHE").as_deref(), Some("0"));
         assert_eq!(get("__GL_SHADER_DISK_CACHE").as_deref(), Some("0"));
     }
-
-    use super::*;
-    use crate::cpu::paths_per_sample;
 
     #[test]
     fn spheres_scene_has_n_spheres_in_view() {
