@@ -212,4 +212,16 @@ fn bench_times_cold_kernel_creation_in_new_processes() {
     // Without the flag there is no such table.
     let plain = lumen_bench(dir.path(), &args);
     assert!(plain.status.success() && !String::from_utf8_lossy(&plain.stdout).contains("Cold kernel creation"));
+    // A scene that does not load gets its error and location in the row; the others still run.
+    std::fs::write(dir.path().join("bad.sl"), "SPAWN\n    Shape.Sphere(.material nothere)\n").unwrap();
+    let mut with_bad = args.to_vec();
+    with_bad[3] = "tiny.sl,bad.sl";
+    with_bad[11] = "1";
+    let out = lumen_bench(dir.path(), &[&with_bad[..], &["--cold-kernels"]].concat());
+    let md = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = md.split("### Cold kernel creation").nth(1).unwrap_or_else(|| panic!("{md}"));
+    assert!(table.lines().any(|l| l.starts_with("| tiny.sl | ")), "{table}");
+    let bad = table.lines().find(|l| l.starts_with("| bad.sl |")).unwrap_or_else(|| panic!("{table}"));
+    assert!(bad.contains("does not load") && bad.contains("bad.sl:2:"), "{bad}");
 }

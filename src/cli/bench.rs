@@ -258,10 +258,13 @@ fn cold_kernels_table(files: &[PathBuf], plan: &Plan, args: &BenchArgs) -> anyho
                     seconds.push(s.parse::<f64>()?);
                 }
                 _ => {
+                    // The error and its location: the child's first two lines (an error
+                    // line, then for a script the file:line:col of the fault).
                     let err = String::from_utf8_lossy(&out.stderr);
-                    let last = err.lines().rfind(|l| !l.trim().is_empty()).unwrap_or("no output");
-                    eprintln!("warning: {name}: cold kernel creation failed: {last}");
-                    error = Some(format!("error: {last}"));
+                    let lines: Vec<&str> = err.lines().map(str::trim).filter(|l| !l.is_empty()).take(2).collect();
+                    let said = if lines.is_empty() { "no output".to_string() } else { lines.join(" ") };
+                    eprintln!("warning: {name}: cold kernel creation failed: {said}");
+                    error = Some(said);
                     break;
                 }
             }
