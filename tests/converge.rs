@@ -214,9 +214,8 @@ fn bench_times_cold_kernel_creation_in_new_processes() {
     assert!(plain.status.success() && !String::from_utf8_lossy(&plain.stdout).contains("Cold kernel creation"));
     // A scene that does not load gets its error and location in the row; the others still run.
     std::fs::write(dir.path().join("bad.sl"), "SPAWN\n    Shape.Sphere(.material nothere)\n").unwrap();
-    let mut with_bad = args.to_vec();
-    with_bad[3] = "tiny.sl,bad.sl";
-    with_bad[11] = "1";
+    let with_bad =
+        ["--device", "gpu", "--scenes", "tiny.sl,bad.sl", "--spp", "1", "--width", "8", "--max-spheres", "0"];
     let out = lumen_bench(dir.path(), &[&with_bad[..], &["--cold-kernels"]].concat());
     let md = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
