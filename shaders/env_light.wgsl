@@ -99,7 +99,8 @@ fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> EnvSample {
         // The row by the marginal distribution, then the column by that row's conditional
         // one, through one call site of dist1d_sample: llvmpipe inlines every call, and each
         // site compiles its binary search and per-lane loads again. NIR cannot prove this
-        // loop's trip count (two: a first draw is never negative), so it stays rolled.
+        // loop's trip count (two: a first draw is never negative), so it stays rolled; the
+        // exit test also holds for a NaN, so the loop ends whatever the tables hold.
         var v = vec3<f32>(-1.0);
         var u = vec3<f32>(0.0);
         var base = environment.dist_offset;
@@ -107,7 +108,7 @@ fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> EnvSample {
         var xi = xi1;
         loop {
             u = dist1d_sample(base, n, xi);
-            if (v.x >= 0.0) {
+            if (!(v.x < 0.0)) {
                 break;
             }
             v = u;

@@ -22,7 +22,7 @@ use crate::cpu::World;
 use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_LEAVES};
 use crate::gpu::pack::pack;
 use crate::gpu::render::{assemble_stages, GpuRenderOptions, GpuRenderer, TwinUse};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, Loops};
 use crate::sampling::Pcg32;
 use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Transform};
 
@@ -544,7 +544,9 @@ fn kernel_cost(gpu: &Gpu, features: &FeatureSet) -> anyhow::Result<(usize, usize
     let start = Instant::now();
     let (mut bytes, mut lines) = (0, 0);
     for (stage, a) in &stages {
-        let kernel = gpu.compute_kernel("bench kernel", &a.source, stage.entry().1).map_err(|e| anyhow!("{e}"))?;
+        let kernel = gpu
+            .kernel_with_loops("bench kernel", &a.source, stage.entry().1, Loops::Unbounded)
+            .map_err(|e| anyhow!("{e}"))?;
         drop(kernel);
         bytes += a.source.len();
         lines += a.source.lines().count();

@@ -84,6 +84,21 @@ pub struct ComputeKernel {
     pub binding_bytes: Vec<Vec<u64>>,
     /// `@workgroup_size` of the entry point.
     pub workgroup_size: [u32; 3],
+    /// How its loops were compiled (a twin device compiles it the same way, so that both
+    /// produce the same SPIR-V and share Mesa's cache entry).
+    pub loops: Loops,
+}
+
+/// How naga compiles a kernel's loops (wgpu's `ShaderRuntimeChecks::force_loop_bounding`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Loops {
+    /// Every loop gets a hidden iteration bound, so that no backend compiler may treat an
+    /// endless loop as unreachable: safe for any WGSL ([`Gpu::compute_kernel`]).
+    Bounded,
+    /// Loops as written, for lumen's own stage kernels only: every loop in `shaders/` ends by
+    /// construction (DESIGN.md "Loops that end"), and the hidden bound, a 64-bit counter
+    /// carried through each loop, costs 7–9 % of a render's instructions on llvmpipe.
+    Unbounded,
 }
 
 impl ComputeKernel {
@@ -163,6 +178,18 @@ impl Gpu {
     /// assert_eq!(gpu.read_buffer::<u32>(&buf, 4).unwrap(), [3, 6, 9, 12]);
     /// ```
     pub fn compute_kernel(&self, label: &str, source: &str, entry: &str) -> Result<ComputeKernel, GpuError> {
+        self.kernel_with_loops(label, source, entry, Loops::Bounded)
+    }
+
+    /// [`Gpu::compute_kernel`] with its loops compiled as `loops` says: [`Loops::Unbounded`]
+    /// only for sources whose every loop ends by construction (lumen's stage kernels).
+    pub(crate) fn kernel_with_loops(
+        &self,
+        label: &str,
+        source: &str,
+        entry: &str,
+        loops: Loops,
+    ) -> Result<ComputeKernel, GpuError> {
         let validated = validate_wgsl(label, source)?;
         let module = &validated.module;
         let ep = module
@@ -268,10 +295,21 @@ impl Gpu {
                 bind_group_layouts: &layout_refs,
                 immediate_size: 0,
             });
-            let shader = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
+            let descriptor =
+                wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source.into()) };
+            let shader = match loops {
+                Loops::Bounded => self.device.create_shader_module(descriptor),
+                Loops::Unbounded => {
+                    let mut checks = wgpu::ShaderRuntimeChecks::checked();
+                    checks.force_loop_bounding = false;
+                    // SAFETY: wgpu's condition for dropping the loop bound is that the
+                    // shader has no endless loop; `Loops::Unbounded` is only passed for
+                    // lumen's stage kernels, whose loops all end (DESIGN.md "Loops that
+                    // end", kept true by the test `every_shader_loop_is_one_that_ends`).
+                    // Bounds and division checks stay on.
+                    unsafe { self.device.create_shader_module_trusted(descriptor, checks) }
+                }
+            };
             let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),
                 layout: Some(&pipeline_layout),
@@ -285,7 +323,7 @@ impl Gpu {
             if let Some(cache) = &self.pipeline_cache {
                 let _ = cache.save();
             }
-            ComputeKernel { label: label.into(), pipeline, layouts, bindings, binding_bytes, workgroup_size }
+            ComputeKernel { label: label.into(), pipeline, layouts, bindings, binding_bytes, workgroup_size, loops }
         })
     }
 

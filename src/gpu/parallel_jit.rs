@@ -108,7 +108,8 @@ pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
                 let Some(twin) = gpu.twin() else { return };
                 while let Some(job) = take() {
                     // Failing here only moves the kernel's compilation to its first launch.
-                    if let Ok(kernel) = twin.compute_kernel(&job.kernel.label, job.source, job.entry) {
+                    let compiled = twin.kernel_with_loops(&job.kernel.label, job.source, job.entry, job.kernel.loops);
+                    if let Ok(kernel) = compiled {
                         let _ = launch_empty(&twin, &kernel);
                     }
                 }

@@ -15,7 +15,7 @@ use super::parallel_jit;
 use super::tables::{Table, TableForms, TableLimits, TablePlacement};
 use super::wavefront::{self, run_rounds, twin, Plan, Stage, StageKernels, StopReason};
 use super::{
-    Assembled, BindingKind, BoundResource, ComputeKernel, Gpu, GpuError, KernelCache, PassOptions, ShaderLibrary,
+    Assembled, BindingKind, BoundResource, ComputeKernel, Gpu, GpuError, KernelCache, Loops, PassOptions, ShaderLibrary,
 };
 use crate::image::HdrImage;
 use crate::scene::Scene;
@@ -507,7 +507,7 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
             .map(|(stage, assembled)| {
                 scope.spawn(move || {
                     let label = format!("{} stage (assembled)", stage.label());
-                    let k = gpu.compute_kernel(&label, &assembled.source, stage.entry().1)?;
+                    let k = gpu.kernel_with_loops(&label, &assembled.source, stage.entry().1, Loops::Unbounded)?;
                     Ok((stage, assembled.source, k))
                 })
             })
@@ -1156,6 +1156,115 @@ mod tests {
             let err = (f64::from(a) - want).abs();
             assert!(err < 2e-7 + ulp, "atan2({y:e}, {x:e}) = {a} on the device, {want} in f64 (error {err:e})");
         }
+    }
+
+    /// Whether `line` assigns to the variable `var` (`=`, `+=`, `-=`, `++`, `--`).
+    fn assigns(line: &str, var: &str) -> bool {
+        let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
+        line.match_indices(var).any(|(i, _)| {
+            let before = line[..i].chars().next_back();
+            let after = line[i + var.len()..].trim_start();
+            !before.is_some_and(ident)
+                && !after.starts_with(ident)
+                && ["=", "+=", "-=", "++", "--"].iter().any(|op| after.starts_with(op))
+                && !after.starts_with("==")
+        })
+    }
+
+    /// Every loop of the shader modules ends by construction, which is what lets the stage
+    /// kernels go without wgpu's hidden loop bound (`Loops::Unbounded`; DESIGN.md "Loops
+    /// that end"): each `for` counts a variable its body leaves alone up to a bound, each
+    /// `while` or `loop` is one of the audited ones below, and the generated modules have no
+    /// loop. A loop of another kind fails here until it is audited, listed, and described
+    /// in DESIGN.md.
+    #[test]
+    fn every_shader_loop_is_one_that_ends() {
+        // (module, function): why each ends.
+        let audited: BTreeSet<(&str, &str)> = [
+            // The walked node's index grows (children follow their parent in the
+            // flattened tree, accel::quantized) until a leaf.
+            ("shaders/world.wgsl", "bvh_descend"),
+            // The stack's top falls by one per pass.
+            ("shaders/world.wgsl", "bvh_pop"),
+            // Each pass descends to a leaf not visited before, or pops; a node is pushed
+            // at most once per walk.
+            ("shaders/world.wgsl", "traverse"),
+            ("shaders/mesh.wgsl", "mesh_first_crossing"),
+            // Binary searches: the interval [lo, hi) shrinks every pass.
+            ("shaders/env_light.wgsl", "dist1d_find_cell"),
+            ("shaders/lights.wgsl", "light_sample_mesh"),
+            // Two passes (row, then column): the second breaks (its exit also holds for a
+            // NaN).
+            ("shaders/env_light.wgsl", "env_sample"),
+            // Cycle walking over a permutation: the cycle through i < n comes back below n
+            // (i = a sample's cell, < s by PixelSamples).
+            ("shaders/permute.wgsl", "permute_below"),
+            // Each run takes the next crossings strictly after the last in (t, key) order
+            // (csg_offer), and a tree has 2 per leaf.
+            ("shaders/csg.wgsl", "csg_first"),
+            // Heap sort: the build's start or the heap's size falls every pass, a sift's
+            // hole index grows below the heap's size.
+            ("shaders/csg.wgsl", "csg_sort_ends"),
+            // Walks up the sweep table's parents (a tree lumen packs) to the root.
+            ("shaders/csg.wgsl", "csg_leaf_changed"),
+            ("shaders/csg.wgsl", "csg_sweep_classify"),
+            // Every pass moves one of the sorted ends' cursors forward (each at most n).
+            ("shaders/csg.wgsl", "csg_sweep_first"),
+        ]
+        .into_iter()
+        .collect();
+        let mut found = BTreeSet::new();
+        for (file, src) in MODULES {
+            let lines: Vec<&str> = src.lines().map(|l| l.split("//").next().unwrap_or("").trim()).collect();
+            let mut function = "";
+            for (n, &code) in lines.iter().enumerate() {
+                let at = format!("{file}:{}", n + 1);
+                if let Some(rest) = code.strip_prefix("fn ") {
+                    function = rest.split('(').next().unwrap_or("");
+                }
+                if code.starts_with("while ") || code.starts_with("while(") || code.starts_with("loop ") {
+                    found.insert((file, function));
+                }
+                let Some(head) = code.strip_prefix("for (") else { continue };
+                // for (var i = a; i < b; i++) {
+                let parts: Vec<&str> = head.split(';').map(str::trim).collect();
+                let var = parts[0].strip_prefix("var ").and_then(|p| p.split(" = ").next()).unwrap_or("");
+                assert!(
+                    parts.len() == 3
+                        && !var.is_empty()
+                        && parts[1].starts_with(&format!("{var} < "))
+                        && parts[2] == format!("{var}++) {{"),
+                    "{at}: not a counted loop: {code}"
+                );
+                // The body, to the brace that closes the header's, leaves the counter alone.
+                let mut depth = 1i32;
+                for body in &lines[n + 1..] {
+                    depth += body.matches('{').count() as i32 - body.matches('}').count() as i32;
+                    if depth <= 0 {
+                        break;
+                    }
+                    assert!(!assigns(body, var), "{at}: the body of a counted loop sets {var}: {body}");
+                }
+            }
+        }
+        assert_eq!(found, audited, "loops found (left) against the audited list (right)");
+        // The generated modules (tables, tags, unrolled lists, wavefront state) have none.
+        let mut all = FeatureSet { renderer: RendererKind::PathTracer, environment: EnvKind::Image, ..FeatureSet::default() };
+        (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) = (true, true, true, true, true, true);
+        all = with_random_lists(&mut Pcg32::new(7, 1), all);
+        for (stage, assembled) in assemble_stages(&all).unwrap() {
+            let mut generated = false;
+            for line in assembled.source.lines() {
+                if line.starts_with("// ---- module ") {
+                    generated = line.contains("(<generated");
+                }
+                let code = line.trim();
+                let looping = ["for (", "while ", "loop "].iter().any(|k| code.starts_with(k));
+                assert!(!(generated && looping), "{stage:?}: a loop in generated code: {line}");
+            }
+        }
+        assert!(assigns("    k += 1u;", "k") && assigns("k++;", "k") && !assigns("if (k == n) {", "k"));
+        assert!(!assigns("let kk = 1u;", "k") && !assigns("x.k = 2u;", "x"));
     }
 
     /// Tags reach WGSL only through the constants `layout::tags_wgsl` generates: no shader
