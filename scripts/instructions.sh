@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Instructions executed, counted by valgrind (cachegrind), for A/B comparisons on lavapipe
+# that this shared, noisy machine's clocks cannot resolve (BENCHMARKS.md "How the numbers are
+# defined": a count is the same from run to run to about 0.05 %, whatever else runs; it is
+# not a time, so a speed claim still needs the side-by-side timings):
+#
+#   scripts/instructions.sh render BIN SCENE [WIDTH] [SPP]
+#       the instructions of llvmpipe's JIT code (cachegrind's "???" bucket: the kernels)
+#       in a GPU render of SCENE on one device with a warm Mesa cache (the kernels come from it:
+#       a first, untimed run under valgrind fills it, since valgrind's CPU has other
+#       features than the host and so other cache keys). Default 96 px, 16 spp.
+#   scripts/instructions.sh cold BIN SCENE
+#       all instructions of an 8x8, 1-spp render with every cache cold and the kernels
+#       compiled one after another on one device (LUMEN_PARALLEL_JIT=0): the cost of
+#       kernel creation (goal 3), mostly LLVM's.
+#
+# MESA_SHADER_CACHE_DIR for `render` defaults to target/instructions-mesa-cache (per width:
+# set LP_NATIVE_VECTOR_WIDTH and a cache directory of its own to compare widths). Needs
+# valgrind (Debian: `apt-get install valgrind`).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mode=${1:?render or cold}
+bin=${2:?binary}
+scene=${3:?scene}
+export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
+out=$(mktemp)
+trap 'rm -f "$out"' EXIT
+case $mode in
+render)
+    width=${4:-96}
+    spp=${5:-16}
+    export MESA_SHADER_CACHE_DIR=${MESA_SHADER_CACHE_DIR:-$PWD/target/instructions-mesa-cache}
+    export LUMEN_PIPELINE_CACHE=0
+    for _ in 1 2; do
+        valgrind --tool=cachegrind --cache-sim=no --cachegrind-out-file="$out" "$bin" render "$scene" \
+            --device gpu --width "$width" --spp "$spp" --one-device -o "$out.pfm" >/dev/null 2>&1
+    done
+    rm -f "$out.pfm"
+    cg_annotate "$out" | awk '$NF == "???:???" { print $1; exit }'
+    ;;
+cold)
+    cache=$(mktemp -d)
+    MESA_SHADER_CACHE_DIR=$cache LUMEN_PIPELINE_CACHE=0 LUMEN_PARALLEL_JIT=0 valgrind --tool=cachegrind \
+        --cache-sim=no --cachegrind-out-file="$out" "$bin" render "$scene" --device gpu --width 8 --spp 1 \
+        -o "$out.png" >/dev/null 2>&1
+    rm -rf "$cache" "$out.png"
+    cg_annotate "$out" | awk '/PROGRAM TOTALS/ { print $1; exit }'
+    ;;
+*)
+    echo "usage: $0 render|cold BIN SCENE [WIDTH] [SPP]" >&2
+    exit 2
+    ;;
+esac
