@@ -86,12 +86,12 @@ pub struct ComputeKernel {
     pub workgroup_size: [u32; 3],
     /// How its loops were compiled (a twin device compiles it the same way, so that both
     /// produce the same SPIR-V and share Mesa's cache entry).
-    pub loops: Loops,
+    pub(crate) loops: Loops,
 }
 
 /// How naga compiles a kernel's loops (wgpu's `ShaderRuntimeChecks::force_loop_bounding`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Loops {
+pub(crate) enum Loops {
     /// Every loop gets a hidden iteration bound, so that no backend compiler may treat an
     /// endless loop as unreachable: safe for any WGSL ([`Gpu::compute_kernel`]).
     Bounded,

@@ -23,7 +23,8 @@ pub mod wavefront;
 
 pub use accumulate::Accumulator;
 pub use assemble::{preprocess, AssembleError, Assembled, FeatureNames, Preprocessed, ShaderLibrary, SourceLine};
-pub use compute::{validate_wgsl, BindingKind, BoundResource, ComputeKernel, Loops, ValidatedModule, MIN_BUFFER_BYTES};
+pub(crate) use compute::Loops;
+pub use compute::{validate_wgsl, BindingKind, BoundResource, ComputeKernel, ValidatedModule, MIN_BUFFER_BYTES};
 pub use device::{
     list_adapters, probe_loop_limiter, select_adapter, AdapterChoice, AdapterDescription, Gpu, GpuError, ADAPTER_ENV,
     LOOP_LIMITER_PROBE_TRIPS,

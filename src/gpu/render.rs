@@ -1249,7 +1249,8 @@ mod tests {
         }
         assert_eq!(found, audited, "loops found (left) against the audited list (right)");
         // The generated modules (tables, tags, unrolled lists, wavefront state) have none.
-        let mut all = FeatureSet { renderer: RendererKind::PathTracer, environment: EnvKind::Image, ..FeatureSet::default() };
+        let mut all =
+            FeatureSet { renderer: RendererKind::PathTracer, environment: EnvKind::Image, ..FeatureSet::default() };
         (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) = (true, true, true, true, true, true);
         all = with_random_lists(&mut Pcg32::new(7, 1), all);
         for (stage, assembled) in assemble_stages(&all).unwrap() {
