@@ -97,7 +97,7 @@ pub(crate) enum Loops {
     Bounded,
     /// Loops as written, for lumen's own stage kernels only: every loop in `shaders/` ends by
     /// construction (DESIGN.md "Loops that end"), and the hidden bound, a 64-bit counter
-    /// carried through each loop, costs 7–9 % of a render's instructions on llvmpipe.
+    /// carried through each loop, costs 7–13 % of a render's instructions on llvmpipe.
     Unbounded,
 }
 

@@ -921,6 +921,13 @@ mod tests {
         f
     }
 
+    /// A random feature set with every primitive kind, CSG and a BVH on.
+    fn everything_on(rng: &mut Pcg32, renderer: RendererKind, environment: EnvKind) -> FeatureSet {
+        let mut all = random_features(rng, renderer, environment);
+        (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) = (true, true, true, true, true, true);
+        with_random_lists(rng, all)
+    }
+
     #[test]
     fn a_covering_set_of_feature_sets_assembles_to_minimal_valid_wgsl() {
         let mut rng = Pcg32::new(3, 5);
@@ -928,10 +935,7 @@ mod tests {
         for renderer in [RendererKind::OnOff, RendererKind::Flat, RendererKind::PointLight, RendererKind::PathTracer] {
             for environment in [EnvKind::Background, EnvKind::Uniform, EnvKind::Gradient, EnvKind::Image] {
                 // Everything on, nothing on, and random subsets.
-                let mut all = random_features(&mut rng, renderer, environment);
-                (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) =
-                    (true, true, true, true, true, true);
-                all = with_random_lists(&mut rng, all);
+                let mut all = everything_on(&mut rng, renderer, environment);
                 all.csg_max_leaves = 4;
                 all.csg_max_depth = 3;
                 // Both packed forms, each with every table.
@@ -1249,19 +1253,20 @@ mod tests {
         }
         assert_eq!(found, audited, "loops found (left) against the audited list (right)");
         // The generated modules (tables, tags, unrolled lists, wavefront state) have none.
-        let mut all =
-            FeatureSet { renderer: RendererKind::PathTracer, environment: EnvKind::Image, ..FeatureSet::default() };
-        (all.sphere, all.plane, all.cube, all.cylinder, all.csg, all.bvh) = (true, true, true, true, true, true);
-        all = with_random_lists(&mut Pcg32::new(7, 1), all);
-        for (stage, assembled) in assemble_stages(&all).unwrap() {
-            let mut generated = false;
-            for line in assembled.source.lines() {
-                if line.starts_with("// ---- module ") {
-                    generated = line.contains("(<generated");
+        let mut rng = Pcg32::new(7, 1);
+        for renderer in [RendererKind::OnOff, RendererKind::Flat, RendererKind::PointLight, RendererKind::PathTracer] {
+            for environment in [EnvKind::Background, EnvKind::Uniform, EnvKind::Gradient, EnvKind::Image] {
+                for (stage, assembled) in assemble_stages(&everything_on(&mut rng, renderer, environment)).unwrap() {
+                    let mut generated = false;
+                    for line in assembled.source.lines() {
+                        if line.starts_with("// ---- module ") {
+                            generated = line.contains("(<generated");
+                        }
+                        let code = line.trim();
+                        let looping = ["for (", "while ", "loop "].iter().any(|k| code.starts_with(k));
+                        assert!(!(generated && looping), "{stage:?}: a loop in generated code: {line}");
+                    }
                 }
-                let code = line.trim();
-                let looping = ["for (", "while ", "loop "].iter().any(|k| code.starts_with(k));
-                assert!(!(generated && looping), "{stage:?}: a loop in generated code: {line}");
             }
         }
         assert!(assigns("    k += 1u;", "k") && assigns("k++;", "k") && !assigns("if (k == n) {", "k"));
