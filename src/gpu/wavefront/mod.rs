@@ -433,7 +433,7 @@ impl<'a> Runner<'a> {
 
     /// Rays still to intersect at `bounce` (a read-back: used only to stop deep renders early).
     fn rays_left(&self, bounce: u32) -> Result<u32, GpuError> {
-        let word = control::COUNT + queue::RAY + (bounce & 1);
+        let word = control::count(queue::RAY + (bounce & 1));
         self.submit_commands(|e| {
             e.copy_buffer_to_buffer(&self.control, 4 * u64::from(word), &self.probe, 0, 4);
             Ok(())
@@ -528,8 +528,8 @@ impl Runner<'_> {
         let last = if self.path_tracer {
             // Bounce 0, every slot queued for the closest-hit stage (implicitly: bounce 0's
             // queue is the slots in order), every other queue empty; the counters stay.
-            let mut words = vec![0u32; (control::COUNT + queue::COUNT) as usize];
-            words[(control::COUNT + queue::RAY) as usize] = batch.path_count;
+            let mut words = vec![0u32; control::count(queue::COUNT) as usize];
+            words[control::count(queue::RAY) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
             // Every launch empty but bounce 0's closest-hit one.
             for (buffer, kind) in self.args.iter().zip(StateBuffer::ARGS) {
