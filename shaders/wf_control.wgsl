@@ -15,7 +15,7 @@ fn queue_count() -> u32 {
 
 // Queue q is empty, and so is its launch.
 fn empty_queue(q: u32) {
-    atomicStore(&control[CTRL_COUNT + CTRL_LINE * q], 0u);
+    atomicStore(&control[ctrl_count(q)], 0u);
     wf_clear_launch(q);
 }
 
@@ -38,7 +38,7 @@ fn add_u64_counter(at: u32, n: u32) {
 fn advance() {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
     let current = Q_RAY + (bounce & 1u);
-    add_u64_counter(CTRL_RAYS, atomicLoad(&control[CTRL_COUNT + CTRL_LINE * current]));
+    add_u64_counter(CTRL_RAYS, atomicLoad(&control[ctrl_count(current)]));
     for (var q = 0u; q < queue_count(); q++) {
         if (q != Q_RAY + ((bounce + 1u) & 1u)) {
             empty_queue(q);

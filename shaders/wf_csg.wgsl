@@ -13,7 +13,7 @@
 @compute @workgroup_size(WF_WORKGROUP)
 fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let index = wf_index(gid);
-    let closest_count = atomicLoad(&control[CTRL_COUNT + CTRL_LINE * Q_CSG]);
+    let closest_count = atomicLoad(&control[ctrl_count(Q_CSG)]);
     let shadows = index >= closest_count;
 // #if WF_SHADOW_CSG
     var slot = WF_NONE;

@@ -25,7 +25,7 @@ fn field(f: u32, slot: u32) -> u32 {
 // #if WF_QUEUED
 // The path slot of queue entry k, or WF_NONE past the queue's end.
 fn wf_slot(q: u32, k: u32) -> u32 {
-    if (k >= atomicLoad(&control[CTRL_COUNT + CTRL_LINE * q])) {
+    if (k >= atomicLoad(&control[ctrl_count(q)])) {
         return WF_NONE;
     }
     return queues[q * batch.capacity + k];
@@ -48,7 +48,7 @@ fn deferred_record(slot: u32, r: u32) -> u32 {
 // makes it ⌈length / WF_WORKGROUP⌉ workgroups, one row (batch.capacity ≤ contract::MAX_SLOTS),
 // so no control kernel has to turn lengths into launch arguments between stages.
 fn wf_push(q: u32, slot: u32) {
-    let k = atomicAdd(&control[CTRL_COUNT + CTRL_LINE * q], 1u);
+    let k = atomicAdd(&control[ctrl_count(q)], 1u);
     queues[q * batch.capacity + k] = slot;
     if (k % WF_WORKGROUP == 0u) {
         wf_grow_launch(q, k / WF_WORKGROUP + 1u);

@@ -298,6 +298,10 @@ impl Stage {
             }
             Stage::Film | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
+        // Queue lengths are read by the queued stages and reset by the control kernels.
+        if names.contains(&"WF_QUEUED") || matches!(self, Stage::ShadowCsgArgs | Stage::Advance) {
+            names.push("WF_LENGTHS");
+        }
         // Where the tables are read from (their bindings are declared only where used).
         names.extend(f.tables.for_stage(self.hot()).names());
         if !scene.contains(&"GEOMETRY") {
@@ -408,7 +412,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 45] = [
+    pub const NAMES: [&'static str; 46] = [
         "SPHERE_UV_UNUSED",
         "CUBE_UV_UNUSED",
         "CYLINDER_UV_UNUSED",
@@ -436,6 +440,7 @@ impl Stage {
         "INDEXED_SHAPES",
         "CSG_QUEUE",
         "WF_QUEUED",
+        "WF_LENGTHS",
         "WF_PUSH",
         "WF_RAY_LOAD",
         "WF_BETA_LOAD",
