@@ -1,26 +1,26 @@
-// #requires random
 // Keyed permutations: sampling::permute and sampling::permute_below (src/sampling/strata.rs)
 // in the same u32 steps, so both devices permute alike.
 
 // sampling::permute: the place of element i under the permutation of 0..2^bits that `key`
-// picks (a four-round Feistel network, then a keyed rotation).
+// picks (four rounds of keyed xor or add, odd multiply and xor-shift modulo 2^bits, then a
+// rotation by the key's high half).
 fn permute(i: u32, bits: u32, key: u32) -> u32 {
     if (bits == 0u) {
         return 0u;
     }
     let mask = 0xFFFFFFFFu >> (32u - bits);
-    let a = bits / 2u;
-    let b = bits - a;
+    let half = (bits + 1u) / 2u;
+    let s = key & 0xFFFFu;
     var x = i & mask;
-    for (var round = 0u; round < 4u; round++) {
-        let low = select(b, a, round % 2u == 0u);
-        let high = bits - low;
-        let lo = x & ((1u << low) - 1u);
-        let hi = x >> low;
-        let f = hash32(lo ^ (key + round * 0x9E3779B9u));
-        x = (lo << high) | ((hi ^ f) & ((1u << high) - 1u));
-    }
-    return (x + hash32(key ^ 0x5851F42Du)) & mask;
+    x = ((x ^ s) * ((s >> 3u) | 1u)) & mask;
+    x ^= x >> half;
+    x = ((x + (s >> 5u)) * 0x2C1B3C6Du) & mask;
+    x ^= x >> half;
+    x = ((x ^ (s >> 9u)) * ((s >> 6u) | 1u)) & mask;
+    x ^= x >> half;
+    x = ((x + (s >> 2u)) * 0x297A2D39u) & mask;
+    x ^= x >> half;
+    return (x + (key >> 16u)) & mask;
 }
 
 // #if CAMERA
