@@ -230,8 +230,8 @@ mod tests {
 
     /// Two dimensions' permutations pair their strata as two independent shuffles would:
     /// the points (π_a(i), π_b(i)) of a block fill as many cells of a coarse grid, on
-    /// average over keys, as the points of two Fisher–Yates shuffles do (the oracle, with a
-    /// generator of its own). Rotations alone would put a block on one diagonal, affine
+    /// average over keys, as the points of two Fisher–Yates shuffles do (the oracle, drawn
+    /// from a PCG stream). Rotations alone would put a block on one diagonal, affine
     /// maps on a lattice (too few cells or too many).
     #[test]
     fn two_dimensions_pair_like_independent_shuffles() {
@@ -243,15 +243,8 @@ mod tests {
             }
             hit.iter().filter(|&&h| h).count() as f64 / hit.len() as f64
         }
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = move || {
-            // SplitMix64.
-            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        };
+        // The shuffles' generator: a PCG stream, which `permute` does not use.
+        let mut rng = crate::sampling::Pcg32::new(0x853C_49E6_748F_EA9B, 0xDA3E_39CB_94B9_5BDB);
         let trials = 2000u32;
         for bits in [2u32, 4, 5, 6, 8, 10] {
             let n = 1u32 << bits;
@@ -264,7 +257,7 @@ mod tests {
                 let mut shuffle = || {
                     let mut p: Vec<u32> = (0..n).collect();
                     for i in (1..n as usize).rev() {
-                        p.swap(i, (next() % (i as u64 + 1)) as usize);
+                        p.swap(i, (rng.next_u32() % (i as u32 + 1)) as usize);
                     }
                     p
                 };
