@@ -24,7 +24,8 @@ fn mesh_first_crossing(i: u32, ray: Ray) -> Crossing {
     let root = s.mesh & MESH_NODE_MASK;
     var best = Crossing(OPEN, 0u);
     var tmax = ray.tmax;
-    var walk = bvh_walk(root);
+    // The second stack region: this walk runs inside a leaf of the scene's walk.
+    var walk = bvh_walk(root, BVH_STACK_SIZE);
     var more = true;
     while (more) {
         if (bvh_descend(&walk, o, inv_dir, ray.tmin, tmax)) {

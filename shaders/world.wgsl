@@ -109,19 +109,27 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 // and their leaves' ranges (a node fetch is a per-lane loop or gather on llvmpipe), and a
 // pop loads nothing: a pushed child is skipped when its entry lies beyond the nearest hit
 // found since.
+//
+// The stacks are module-scope private arrays, a region of BVH_STACK_SIZE entries per walk
+// (the scene's walk from 0; a mesh's bottom-level walk, which runs inside a leaf of the
+// scene's, from BVH_STACK_SIZE), and the walk's own state is three words. Why: on wgpu's
+// OpenGL backend naga writes a pointer parameter as a GLSL `inout` one, copied in and out
+// at every call, so with the arrays inside the walk each bvh_descend and bvh_pop call
+// moved all 67 words: 29 % of spheres_10k.sl's instructions, 48 % of meshes.sl's, over
+// Mesa 22.3's llvmpipe (on Vulkan, where pointers stay pointers, 1 %: BENCHMARKS.md "BVH
+// stacks out of the walk's struct").
 struct BvhWalk {
     at: u32,
     top: u32,
-    stack: array<u32, BVH_STACK_SIZE>,
-    entry: array<f32, BVH_STACK_SIZE>,
+    bottom: u32,
 }
 
-// A walk of the tree whose root node is `root`.
-fn bvh_walk(root: u32) -> BvhWalk {
-    var w: BvhWalk;
-    w.at = root;
-    w.top = 0u;
-    return w;
+var<private> bvh_stack: array<u32, BVH_STACK_WORDS>;
+var<private> bvh_entry: array<f32, BVH_STACK_WORDS>;
+
+// A walk of the tree whose root node is `root`, its stack region starting at `bottom`.
+fn bvh_walk(root: u32, bottom: u32) -> BvhWalk {
+    return BvhWalk(root, bottom, bottom);
 }
 
 // The reference to the leaf of `count` primitives from `first`.
@@ -165,9 +173,9 @@ fn bvh_descend(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>,
             far = left;
             t_far = t.x;
         }
-        if (t_far < OPEN && (*w).top < BVH_STACK_SIZE) {
-            (*w).stack[(*w).top] = far;
-            (*w).entry[(*w).top] = t_far;
+        if (t_far < OPEN && (*w).top < (*w).bottom + BVH_STACK_SIZE) {
+            bvh_stack[(*w).top] = far;
+            bvh_entry[(*w).top] = t_far;
             (*w).top++;
         }
         (*w).at = near;
@@ -178,10 +186,10 @@ fn bvh_descend(w: ptr<function, BvhWalk>, origin: vec3<f32>, inv_dir: vec3<f32>,
 // Pops the next node the ray enters before tmax (widened as box_entry widens its exit);
 // false when none is left.
 fn bvh_pop(w: ptr<function, BvhWalk>, tmax: f32) -> bool {
-    while ((*w).top > 0u) {
+    while ((*w).top > (*w).bottom) {
         (*w).top--;
-        if ((*w).entry[(*w).top] <= tmax * 1.0000004) {
-            (*w).at = (*w).stack[(*w).top];
+        if (bvh_entry[(*w).top] <= tmax * 1.0000004) {
+            (*w).at = bvh_stack[(*w).top];
             return true;
         }
     }
@@ -296,7 +304,7 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
     }
 // #else
 // #if BVH
-    var walk = bvh_walk(0u);
+    var walk = bvh_walk(0u, 0u);
     // An empty tree skips the loop (not a return: deferred CSG trees are still to be
     // evaluated).
     var more = settings.bvh_node_count != 0u;
