@@ -87,17 +87,46 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
     out
 }
 
+/// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
+/// CPU renderer may be faster, and, where wgpu reached Mesa's llvmpipe through OpenGL (no
+/// Vulkan driver installed), that Mesa's Vulkan driver runs the same kernels faster
+/// (1.05–1.5× on the example scenes, Mesa 25.0 both ways, side by side: BENCHMARKS.md "BVH
+/// stacks out of the walk's struct").
+///
+/// ```
+/// use lumen::device::software_adapter_note;
+/// let vk = wgpu::AdapterInfo { name: "llvmpipe".into(), ..wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan) };
+/// assert!(software_adapter_note(&vk).unwrap().contains("--device cpu"));
+/// let gl = wgpu::AdapterInfo { backend: wgpu::Backend::Gl, ..vk.clone() };
+/// assert!(software_adapter_note(&gl).unwrap().contains("mesa-vulkan-drivers"));
+/// let hw = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
+/// assert!(software_adapter_note(&hw).is_none());
+/// ```
+pub fn software_adapter_note(info: &wgpu::AdapterInfo) -> Option<String> {
+    if info.device_type != wgpu::DeviceType::Cpu {
+        return None;
+    }
+    let mut note = format!(
+        "note: {} is a software adapter (the GPU API emulated on the CPU); lumen's own CPU renderer \
+         (--device cpu) is faster on some scenes",
+        info.name
+    );
+    if info.backend == wgpu::Backend::Gl && info.name.to_ascii_lowercase().contains("llvmpipe") {
+        note.push_str(
+            "\nnote: it is reached through OpenGL; Mesa's Vulkan driver (lavapipe: Debian's and Ubuntu's \
+             mesa-vulkan-drivers and libvulkan1) runs lumen's kernels faster",
+        );
+    }
+    Some(note)
+}
+
 /// Opens the device `choice` asks for. `Auto` falls back to the CPU, with a warning, when no
 /// GPU can be opened; an adapter asked for by name that does not exist is an error even
 /// then (the user wanted that one).
 pub fn open_device(choice: DeviceChoice, adapter: &AdapterChoice) -> Result<OpenDevice, GpuError> {
     let gpu_device = |g: Gpu| {
-        if g.adapter_info.device_type == wgpu::DeviceType::Cpu {
-            eprintln!(
-                "note: {} is a software adapter (the GPU API emulated on the CPU); lumen's own CPU renderer \
-                 (--device cpu) is faster on some scenes",
-                g.adapter_info.name
-            );
+        if let Some(note) = software_adapter_note(&g.adapter_info) {
+            eprintln!("{note}");
         }
         OpenDevice::gpu(g)
     };
