@@ -111,7 +111,7 @@ pub fn software_adapter_note(info: &wgpu::AdapterInfo) -> Option<String> {
          (--device cpu) is faster on some scenes",
         info.name
     );
-    if info.backend == wgpu::Backend::Gl && info.name.to_ascii_lowercase().contains("llvmpipe") {
+    if info.backend == wgpu::Backend::Gl && crate::gpu::is_llvmpipe(info) {
         note.push_str(
             "\nnote: it is reached through OpenGL; Mesa's Vulkan driver (lavapipe: Debian's and Ubuntu's \
              mesa-vulkan-drivers and libvulkan1) runs lumen's kernels faster",

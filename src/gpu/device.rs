@@ -202,6 +202,20 @@ fn enumerate() -> Vec<wgpu::Adapter> {
     adapters
 }
 
+/// Whether `info` is Mesa's llvmpipe (through Vulkan, where it is lavapipe, or OpenGL): the
+/// software adapter whose compilation, loop limits and speed lumen plans around.
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+/// info.name = "llvmpipe (LLVM 15.0.6, 128 bits)".into();
+/// assert!(lumen::gpu::is_llvmpipe(&info));
+/// info.name = "SwiftShader Device".into();
+/// assert!(!lumen::gpu::is_llvmpipe(&info));
+/// ```
+pub fn is_llvmpipe(info: &wgpu::AdapterInfo) -> bool {
+    info.name.to_ascii_lowercase().contains("llvmpipe")
+}
+
 /// All adapters this machine offers, best first.
 ///
 /// ```
@@ -415,7 +429,7 @@ mod tests {
         let count = probe_loop_limiter(&gpu).unwrap();
         println!("{}: the probe counted {count} of {LOOP_LIMITER_PROBE_TRIPS}", gpu.description());
         assert!(count == 65_535 || count == LOOP_LIMITER_PROBE_TRIPS, "{count}");
-        let llvmpipe = gpu.adapter_info.name.to_lowercase().contains("llvmpipe");
+        let llvmpipe = is_llvmpipe(&gpu.adapter_info);
         if llvmpipe && mesa_major(&gpu.adapter_info.driver_info).is_some_and(|m| m <= 22) {
             assert_eq!(count, 65_535, "{}", gpu.description());
         }

@@ -61,9 +61,7 @@ fn switched_off() -> bool {
 /// wgpu's OpenGL backend also reaches llvmpipe, but through EGL contexts that a second
 /// device on another thread would have to share with care).
 pub(crate) fn lazy_jit(info: &wgpu::AdapterInfo) -> bool {
-    info.backend == wgpu::Backend::Vulkan
-        && info.device_type == wgpu::DeviceType::Cpu
-        && info.name.to_ascii_lowercase().contains("llvmpipe")
+    info.backend == wgpu::Backend::Vulkan && info.device_type == wgpu::DeviceType::Cpu && super::is_llvmpipe(info)
 }
 
 /// Twins to open for `jobs` new kernels on a device described by `info` with `cores`
