@@ -6,9 +6,9 @@
 // the radiance.
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn camera_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let slot = wf_index(gid);
-    if (slot >= batch.path_count) {
+fn camera_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = wf_direct_slot(group.x, lane);
+    if (slot == WF_NONE) {
         return;
     }
     let id = path_id(slot);

@@ -13,9 +13,11 @@ fn queue_count() -> u32 {
     return arrayLength(&args_rays) / 3u;
 }
 
-// Queue q is empty, and so is its launch.
+// Queue q is empty in every shard, and so is its launch.
 fn empty_queue(q: u32) {
-    atomicStore(&control[ctrl_count(q)], 0u);
+    for (var s = 0u; s < WF_SHARDS; s++) {
+        atomicStore(&control[ctrl_count(q, s)], 0u);
+    }
     wf_clear_launch(q);
 }
 
@@ -38,7 +40,11 @@ fn add_u64_counter(at: u32, n: u32) {
 fn advance() {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
     let current = Q_RAY + (bounce & 1u);
-    add_u64_counter(CTRL_RAYS, atomicLoad(&control[ctrl_count(current)]));
+    var rays = 0u;
+    for (var s = 0u; s < WF_SHARDS; s++) {
+        rays += atomicLoad(&control[ctrl_count(current, s)]);
+    }
+    add_u64_counter(CTRL_RAYS, rays);
     for (var q = 0u; q < queue_count(); q++) {
         if (q != Q_RAY + ((bounce + 1u) & 1u)) {
             empty_queue(q);

@@ -1,13 +1,15 @@
 // #requires wavefront world
 // Ray counts of the stages that trace shadow rays (the CPU reference counts every query
-// alike, cpu::Context): one 64-bit add per invocation.
+// alike, cpu::Context): one 64-bit add per invocation, to the counter of the path's shard
+// (contract::Control), so that the threads of a software GPU do not share its line.
 
-fn flush_rays_traced() {
+fn flush_rays_traced(slot: u32) {
     if (rays_traced == 0u) {
         return;
     }
-    let old = atomicAdd(&control[CTRL_SHADOW_RAYS], rays_traced);
+    let at = ctrl_shadow_rays(wf_shard(slot));
+    let old = atomicAdd(&control[at], rays_traced);
     if (old + rays_traced < old) {
-        atomicAdd(&control[CTRL_SHADOW_RAYS + 1u], 1u);
+        atomicAdd(&control[at + 1u], 1u);
     }
 }

@@ -11,20 +11,20 @@
 // one place (Mesa inlines every call site).
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn csg_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let index = wf_index(gid);
-    let closest_count = atomicLoad(&control[ctrl_count(Q_CSG)]);
-    let shadows = index >= closest_count;
+fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
 // #if WF_SHADOW_CSG
-    var slot = WF_NONE;
-    if (shadows) {
-        slot = wf_slot(Q_SHADOW_CSG, index - closest_count);
-    } else {
-        slot = wf_slot(Q_CSG, index);
+    // Whichever of the two queues is not empty (its shards' lengths, or with shards the
+    // workgroups per shard, which the first push sets).
+    var closest = 0u;
+    for (var s = 0u; s < WF_SHARDS; s++) {
+        closest += atomicLoad(&control[ctrl_count(Q_CSG, s)]);
     }
+    let shadows = closest == 0u;
+    let slot = wf_slot(select(Q_CSG, Q_SHADOW_CSG, shadows), group.x, lane);
     let queries = select(1u, batch.shadow_rays, shadows);
 // #else
-    let slot = wf_slot(Q_CSG, index);
+    let shadows = false;
+    let slot = wf_slot(Q_CSG, group.x, lane);
     let queries = 1u;
 // #endif
     if (slot == WF_NONE) {

@@ -3,8 +3,8 @@
 // MIS-weighted against NEE (cpu::path_tracer), and their paths end.
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn escape_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let slot = wf_slot(Q_ESCAPE, wf_index(gid));
+fn escape_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = wf_slot(Q_ESCAPE, group.x, lane);
     if (slot == WF_NONE) {
         return;
     }

@@ -17,7 +17,7 @@ fn unfolded(x: vec3<f32>) -> vec3<f32> {
 
 @compute @workgroup_size(WF_WORKGROUP)
 fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let p = wf_index(gid);
+    let p = gid.x;
     if (p >= batch.pixel_count) {
         return;
     }

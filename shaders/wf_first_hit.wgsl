@@ -4,9 +4,9 @@
 // One invocation per camera sample writes its estimate to the path's radiance.
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn first_hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let slot = wf_index(gid);
-    if (slot >= batch.path_count) {
+fn first_hit_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = wf_direct_slot(group.x, lane);
+    if (slot == WF_NONE) {
         return;
     }
 // #if CSG
@@ -24,5 +24,5 @@ fn first_hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let value = radiance_point_light(ray);
 // #endif
     paths[field(F_RADIANCE, slot)] = vec4<f32>(value, 0.0);
-    flush_rays_traced();
+    flush_rays_traced(slot);
 }

@@ -5,17 +5,14 @@
 // reachable in this kernel costs every ray on SIMD software GPUs).
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn intersect_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn intersect_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
-    let index = wf_index(gid);
     // Bounce 0's queue is every slot in order: the camera stage writes no entries.
     var slot = WF_NONE;
     if (bounce == 0u) {
-        if (index < batch.path_count) {
-            slot = index;
-        }
+        slot = wf_direct_slot(group.x, lane);
     } else {
-        slot = wf_slot(Q_RAY + (bounce & 1u), index);
+        slot = wf_slot(Q_RAY + (bounce & 1u), group.x, lane);
     }
     if (slot == WF_NONE) {
         return;

@@ -9,26 +9,57 @@
 // index of a launch, queue slots and pushes, path fields and the (pixel, sample) a path
 // slot stands for. Which of them a stage gets is decided by src/gpu/wavefront/stages.rs.
 
-// The invocation's index in a launch: every launch is one row of workgroups, since a batch
-// has at most contract::MAX_SLOTS = 64 · 65,535 slots. (Not read from
-// `num_workgroups`, which D3D12 reports as 0 for indirect launches without wgpu's indirect
-// validation: src/gpu/device.rs, instance_flags.)
-fn wf_index(gid: vec3<u32>) -> u32 {
-    return gid.x;
-}
-
 // Index of field `f` of path `slot` in the structure-of-arrays `paths` and `words`.
 fn field(f: u32, slot: u32) -> u32 {
     return f * batch.capacity + slot;
 }
 
+// Every launch is one row of workgroups (a batch has at most contract::MAX_SLOTS =
+// 64 · 65,535 slots), and its size is never read from `num_workgroups`, which D3D12 reports
+// as 0 for indirect launches without wgpu's indirect validation (src/gpu/device.rs,
+// instance_flags): the launches over queues find their shards' runs in ctrl_groups.
+
+// #if WF_SHARD
+// The queue shard of path `slot` (contract::Control): blocks of WF_WORKGROUP slots go to the
+// shards in turn, and a path stays in the shard of its slot.
+fn wf_shard(slot: u32) -> u32 {
+    return (slot / WF_WORKGROUP) % WF_SHARDS;
+}
+// #endif
+
+// #if WF_DIRECT
+// The slot that invocation `lane` of workgroup `group` of a launch over all of the batch's
+// slots takes (Control::slot_groups workgroups), or WF_NONE past batch.path_count: run s of
+// the launch takes shard s's blocks, so a driver thread that runs one run of the launch
+// writes, and later pushes, only its own shard's paths.
+fn wf_direct_slot(group: u32, lane: u32) -> u32 {
+    var block = group;
+    if (WF_SHARDS > 1u) {
+        let runs = ((batch.path_count + WF_WORKGROUP - 1u) / WF_WORKGROUP + WF_SHARDS - 1u) / WF_SHARDS;
+        let s = group / runs;
+        block = (group - s * runs) * WF_SHARDS + s;
+    }
+    let slot = block * WF_WORKGROUP + lane;
+    return select(WF_NONE, slot, slot < batch.path_count);
+}
+// #endif
+
 // #if WF_QUEUED
-// The path slot of queue entry k, or WF_NONE past the queue's end.
-fn wf_slot(q: u32, k: u32) -> u32 {
-    if (k >= atomicLoad(&control[ctrl_count(q)])) {
+// The path slot that invocation `lane` of workgroup `group` of a launch over queue q takes,
+// or WF_NONE past the end of its shard. The launch is WF_SHARDS runs of ctrl_groups(q)
+// workgroups, run s over shard s (contract::Control); with one shard, entry group·64 + lane.
+fn wf_slot(q: u32, group: u32, lane: u32) -> u32 {
+    var s = 0u;
+    var k = group * WF_WORKGROUP + lane;
+    if (WF_SHARDS > 1u) {
+        let per = max(atomicLoad(&control[ctrl_groups(q)]), 1u);
+        s = min(group / per, WF_SHARDS - 1u);
+        k = (group - s * per) * WF_WORKGROUP + lane;
+    }
+    if (k >= atomicLoad(&control[ctrl_count(q, s)])) {
         return WF_NONE;
     }
-    return queues[q * batch.capacity + k];
+    return queues[(q * WF_SHARDS + s) * batch.shard_slots + k];
 }
 // #endif
 
@@ -42,14 +73,17 @@ fn deferred_record(slot: u32, r: u32) -> u32 {
 // #endif
 
 // #if WF_PUSH
-// Appends path `slot` to queue q (each path is in at most one queue of a kind per bounce,
-// so a queue never holds more than batch.capacity entries). The push that starts a
+// Appends path `slot` to its shard of queue q (each path is in at most one queue of a kind
+// per bounce, so a shard never holds more entries than its slots, which its region of
+// batch.shard_slots entries holds: Control::shard_slots). The push that starts a
 // workgroup's worth of entries grows the queue's launch to cover it: the largest such k
-// makes it ⌈length / WF_WORKGROUP⌉ workgroups, one row (batch.capacity ≤ contract::MAX_SLOTS),
-// so no control kernel has to turn lengths into launch arguments between stages.
+// makes it WF_SHARDS runs of the longest shard's ⌈length / WF_WORKGROUP⌉ workgroups, one
+// row (Control::max_slots), so no control kernel has to turn lengths into launch arguments
+// between stages.
 fn wf_push(q: u32, slot: u32) {
-    let k = atomicAdd(&control[ctrl_count(q)], 1u);
-    queues[q * batch.capacity + k] = slot;
+    let s = wf_shard(slot);
+    let k = atomicAdd(&control[ctrl_count(q, s)], 1u);
+    queues[(q * WF_SHARDS + s) * batch.shard_slots + k] = slot;
     if (k % WF_WORKGROUP == 0u) {
         wf_grow_launch(q, k / WF_WORKGROUP + 1u);
     }

@@ -129,8 +129,8 @@ fn pt_light_ray(hit: Hit, l: NeeSample, f: vec3<f32>, bsdf_pdf: f32) -> LightRay
 // #endif
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let slot = wf_slot(SHADE_QUEUE, wf_index(gid));
+fn shade_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = wf_slot(SHADE_QUEUE, group.x, lane);
     if (slot == WF_NONE) {
         return;
     }

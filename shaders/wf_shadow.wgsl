@@ -7,8 +7,8 @@
 // and adds those rays' contributions (in ray order, after the ones added here).
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let slot = wf_slot(Q_SHADOW, wf_index(gid));
+fn shadow_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = wf_slot(Q_SHADOW, group.x, lane);
     if (slot == WF_NONE) {
         return;
     }
@@ -55,5 +55,5 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         wf_push(Q_SHADOW_CSG, slot);
     }
 // #endif
-    flush_rays_traced();
+    flush_rays_traced(slot);
 }

@@ -124,6 +124,49 @@ fn images_do_not_depend_on_the_batch_size() {
     }
 }
 
+/// Queue shards (`GpuRenderOptions::queue_shards`, `wavefront::Control`) move where a
+/// path's queue entries live and which workgroup runs it, never what is computed: one,
+/// two and five shards give the same bits and ray counts for every renderer, with CSG
+/// trees met by closest-hit and shadow rays (the CSG stage's two queues), in whole batches
+/// and in batches that end mid-block (97 and 1,000 slots: shards of unequal length).
+#[test]
+fn queue_shards_give_the_same_bits() {
+    let Some(gpu) = gpu_for_tests("queue_shards_give_the_same_bits") else { return };
+    let csg = {
+        let mut b = SceneBuilder::new(12, 9);
+        let m = b.diffuse(Color::new(0.7, 0.5, 0.3));
+        let at = |x: f64, r: f64| Transform::translation(DVec3::new(x, 0.0, 0.0)) * Transform::scaling(DVec3::splat(r));
+        let ball = |x, r| Shape::primitive(ShapeKind::Sphere, at(x, r), m);
+        b.shape(Shape::csg(CsgOp::Diff, vec![ball(4.0, 1.0), ball(3.4, 0.6)], Transform::IDENTITY));
+        common::add_lit_props(&mut b);
+        b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() }).renderer(pt(2, 4, true));
+        b.build().unwrap()
+    };
+    let scenes = [
+        mixed_scene(pt(3, 5, true)),
+        mixed_scene(Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) }),
+        csg,
+    ];
+    for scene in &scenes {
+        let name = scene.renderer.name();
+        for batch in [0, 97, 1000] {
+            let mut outs = Vec::new();
+            for shards in [1, 2, 5] {
+                let mut opts =
+                    GpuRenderOptions { queue_shards: Some(shards), ..GpuRenderOptions::fixed_passes(Some(4), 4) };
+                opts.passes.batch_paths = batch;
+                let out = render(&gpu, scene, &opts).unwrap();
+                assert_eq!((out.spp_done, out.non_finite_samples, out.queue_shards), (4, 0, shards));
+                outs.push(out);
+            }
+            for (out, shards) in outs[1..].iter().zip([2, 5]) {
+                assert!(bits(&out.image) == bits(&outs[0].image), "{name}, batches of {batch}: {shards} shards");
+                assert_eq!(out.rays, outs[0].rays, "{name}, batches of {batch}: {shards} shards");
+            }
+        }
+    }
+}
+
 /// A twin device (llvmpipe: `wavefront::twin`, DESIGN.md "Twin devices") renders its share
 /// of the batches bit for bit as the render's own device would: every renderer, the twin
 /// forced on (`TwinUse::Always`, the host waiting until it is set up) and off, in batches of

@@ -234,6 +234,11 @@ pub struct FeatureSet {
     /// The tables read from uniform buffers or textures instead of storage buffers: chosen
     /// per render for the adapter ([`TableForms::choose`]); [`FeatureSet::of`] leaves it empty.
     pub tables: TableForms,
+    /// Shards per queue (`wavefront::Control`): on llvmpipe one per driver thread, so that
+    /// no two threads push to one queue length; 1 elsewhere. Chosen per render for the
+    /// adapter ([`crate::gpu::wavefront::queue_shards`]); [`FeatureSet::of`] leaves 0,
+    /// which counts as 1. The image is the same.
+    pub queue_shards: u32,
     /// Per BRDF kind (indexed by `layout::brdf_kind`), what the materials of that kind need
     /// in their shading stage: the shapes they sit on, their pigments, whether one emits.
     pub shade_use: [KindUse; BRDF_KINDS],
@@ -502,6 +507,7 @@ impl FeatureSet {
             planes_listed: self.planes_listed,
             nee: path,
             tables: self.tables,
+            queue_shards: self.queue_shards,
             shade_use: [KindUse::ALL; BRDF_KINDS],
             light_use: KindUse::ALL,
         }

@@ -102,6 +102,9 @@ pub struct GpuRenderOptions {
     /// Whether batches may be shared with a twin device on llvmpipe (`wavefront::twin`;
     /// `lumen render --one-device` is [`TwinUse::Never`]). The image is the same.
     pub twin: TwinUse,
+    /// Shards per queue of the wavefront renderer (`None`: [`wavefront::queue_shards`] of
+    /// the adapter; `wavefront::Control`). The image is the same.
+    pub queue_shards: Option<u32>,
 }
 
 /// When a render on llvmpipe shares its batches with a twin device (`wavefront::twin`).
@@ -152,11 +155,14 @@ pub struct GpuRenderOutput {
     pub non_finite_samples: u64,
     pub stop: StopReason,
     /// Features the kernels were compiled for (the scene's, or the override), leaving out
-    /// the table placement, which is [`Self::tables`].
+    /// the choices made for the adapter: the table placement, which is [`Self::tables`],
+    /// and the queue shards, [`Self::queue_shards`].
     pub features: FeatureSet,
     /// The tables the kernels read from uniform buffers and textures (chosen for the
     /// adapter).
     pub tables: TableForms,
+    /// Shards per queue ([`GpuRenderOptions::queue_shards`]).
+    pub queue_shards: u32,
     /// Batches run (each a launch of every stage for a run of whole pixels).
     pub batches: u64,
     /// Path slots per batch.
@@ -221,7 +227,14 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
         ("<generated tags>", super::layout::tags_wgsl()),
         ("<generated constants>", constants_module(features)),
         ("<generated scene tables>", super::tables::tables_wgsl().to_string()),
-        ("<generated wavefront state>", wavefront::wavefront_module(&stage.buffers(features), stage.shade_queue())),
+        (
+            "<generated wavefront state>",
+            wavefront::wavefront_module(
+                &stage.buffers(features),
+                stage.shade_queue(),
+                wavefront::Control::new(features.queue_shards),
+            ),
+        ),
         ("<generated unrolled lists>", super::traversal::unrolled_wgsl(features)),
     ];
     for (name, text) in &generated {
@@ -353,6 +366,7 @@ impl GpuRenderer {
     ) -> Result<GpuRenderOutput, GpuError> {
         let mut f = kernel_features(&packed.features, opts.features.map(|k| k.with_lists_of(&packed.features)))?;
         f.tables = TableForms::choose(packed, opts.tables, gpu.adapter_info.device_type, TableLimits::of(&gpu.limits));
+        f.queue_shards = opts.queue_shards.unwrap_or_else(|| wavefront::queue_shards(&gpu.adapter_info));
         let job = RenderJob { scene, packed, opts, start };
         let mut attempts = Attempts::default();
         let walked = f;
@@ -478,7 +492,8 @@ impl GpuRenderer {
             kernels_compiled,
             non_finite_samples: counters.non_finite + acc.nonfinite,
             stop: acc.stop,
-            features: FeatureSet { tables: TableForms::NONE, ..f },
+            features: FeatureSet { tables: TableForms::NONE, queue_shards: 0, ..f },
+            queue_shards: f.queue_shards.max(1),
             tables: f.tables,
             batches: acc.batches,
             batch_paths: runner.capacity(),
@@ -948,6 +963,9 @@ mod tests {
                 let none = FeatureSet { renderer, environment: none.environment, ..FeatureSet::default() };
                 assert_minimal(&none);
                 assert_minimal(&all);
+                // Queues in shards (llvmpipe's threads), and in one.
+                assert_minimal(&FeatureSet { queue_shards: 3, ..all });
+                assert_minimal(&FeatureSet { queue_shards: 2, ..none });
                 // A tree too large for private memory, whose queries give up after their
                 // walk budget, or go on with the sweeps.
                 for csg_sweeps in [false, true] {

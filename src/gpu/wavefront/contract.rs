@@ -71,37 +71,116 @@ pub mod queue {
     pub const COUNT: u32 = SHADE + brdf_kind::COUNT;
 }
 
-/// Words of the control buffer. Every queue's length has a 64-byte line of its own: the
-/// pushes of one launch add to several lengths at once from every core (llvmpipe runs a
-/// launch's workgroups on all of them), and lengths sharing a line made each push move the
-/// line between cores even when they pushed to different queues: false sharing, 9 % of
-/// glass.sl's CPU time on lavapipe (BENCHMARKS.md "Queue lengths on lines of their own").
-pub mod control {
-    use super::queue;
+/// Words of the control buffer, for a render whose queues have `shards` shards
+/// (`FeatureSet::queue_shards`).
+///
+/// Every queue length has a 64-byte line of its own: the pushes of one launch add to several
+/// lengths at once from every core (llvmpipe runs a launch's workgroups on all of them), and
+/// lengths sharing a line made each push move the line between cores even when they pushed
+/// to different queues: false sharing, 9 % of glass.sl's CPU time on lavapipe (BENCHMARKS.md
+/// "Queue lengths on lines of their own"). Shards go one step further for the pushes to the
+/// *same* queue: each queue is split into `shards` regions with a length each, and a path
+/// always lives in one shard: slots go to the shards by workgroup-sized blocks in turn
+/// (`wf_shard`), so that every shard holds a like share of the image. A launch over a queue
+/// runs shard after shard, `groups(q)` workgroups each, and a launch over all slots (camera,
+/// bounce 0's closest hits, first hits) likewise runs the blocks of shard 0, then shard 1's
+/// (`wf_direct_slot`). Where the driver hands each of its threads one run of a launch's
+/// workgroups (llvmpipe: `launch / threads` in a row, Mesa's `lp_cs_tpool`) and there is
+/// one shard per thread, a thread's pushes all go to the lengths of its own shard and no
+/// line travels between cores during a launch (cornell.sl spent 20 % of lavapipe's kernel
+/// time on the push atomics with one shard, BENCHMARKS.md "Queue shards").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Control {
+    shards: u32,
+}
+
+impl Control {
     /// Words per line: 64 bytes, the cache line of x86-64 and Arm cores (a GPU's atomics
     /// work on lines of 32 to 128 bytes).
     pub const LINE: u32 = 16;
     /// The bounce the stages of the current launch work on (read by every invocation,
     /// written only between launches).
     pub const BOUNCE: u32 = 0;
-    /// Queue lengths: queue q's at [`count`]`(q)`, one line each from `COUNT`.
-    pub const COUNT: u32 = LINE;
-    /// The word of queue q's length.
-    pub const fn count(q: u32) -> u32 {
-        COUNT + LINE * q
+
+    /// The layout for `shards` shards per queue (0 counts as 1).
+    pub fn new(shards: u32) -> Self {
+        Control { shards: shards.max(1) }
     }
-    /// Shadow rays traced (64-bit: low, high word), summed by the stages that trace them
-    /// (on every core: a line of its own).
-    pub const SHADOW_RAYS: u32 = count(queue::COUNT);
+
+    /// Shards per queue.
+    pub fn shards(self) -> u32 {
+        self.shards
+    }
+
+    /// The word of queue q's length in shard s (a line each, after the bounce's).
+    pub fn count(self, q: u32, s: u32) -> u32 {
+        Self::LINE * (1 + s * queue::COUNT + q)
+    }
+
+    /// The word of queue q's workgroups per shard (a line each): its launch is
+    /// `shards · groups(q)` workgroups, grown by the pushes (`wf_grow_launch`). Kept only
+    /// with two shards or more (with one, the launch's own size is the same number).
+    pub fn groups(self, q: u32) -> u32 {
+        Self::LINE * (1 + self.shards * queue::COUNT + q)
+    }
+
+    /// Words from 0 that every batch starts afresh: the bounce, the lengths and the
+    /// workgroups per shard.
+    pub fn batch_words(self) -> u32 {
+        self.groups(queue::COUNT)
+    }
+
+    /// Shadow rays traced by the paths of shard s (64-bit: low, high word), summed by the
+    /// stages that trace them; a line per shard.
+    pub fn shadow_rays(self, s: u32) -> u32 {
+        self.batch_words() + Self::LINE * s
+    }
+
     /// Closest-hit rays traced (64-bit), summed by the `advance` kernel.
-    pub const RAYS: u32 = SHADOW_RAYS + LINE;
+    pub fn rays(self) -> u32 {
+        self.shadow_rays(self.shards)
+    }
+
     /// Estimates that were NaN or infinite (written as 0).
-    pub const NAN: u32 = RAYS + 2;
+    pub fn nan(self) -> u32 {
+        self.rays() + 2
+    }
+
     /// Set when a CSG query gave up after its walk budget in kernels without the sweeps
     /// (shaders/csg.wgsl): the batch is void and the render starts again with them.
-    pub const CSG_OVER: u32 = NAN + 1;
+    pub fn csg_over(self) -> u32 {
+        self.nan() + 1
+    }
+
     /// Words in the buffer.
-    pub const WORDS: u32 = CSG_OVER + 1;
+    pub fn words(self) -> u32 {
+        self.csg_over() + 1
+    }
+
+    /// Most path slots per batch: `MAX_SLOTS` (64 · 65,535) less what rounding each shard up to whole
+    /// blocks may add to a launch, so that `shards` runs of a shard's workgroups stay within
+    /// one row.
+    pub fn max_slots(self) -> u32 {
+        MAX_SLOTS - WORKGROUP * (self.shards - 1)
+    }
+
+    /// Workgroups per shard of a launch over `slots` slots: the most blocks of 64 slots any
+    /// shard holds.
+    fn shard_groups(self, slots: u32) -> u32 {
+        slots.div_ceil(WORKGROUP).div_ceil(self.shards)
+    }
+
+    /// Workgroups of a launch over the first `path_count` slots (`wf_direct_slot`): a run
+    /// per shard.
+    pub fn slot_groups(self, path_count: u32) -> u32 {
+        self.shards * self.shard_groups(path_count)
+    }
+
+    /// Entries of one shard's region of a queue, for batches of up to `capacity` slots
+    /// (`BatchUniform::shard_slots`): a queue holds `shards` regions.
+    pub fn shard_slots(self, capacity: u32) -> u32 {
+        WORKGROUP * self.shard_groups(capacity).max(1)
+    }
 }
 
 /// Fields of `paths` (`vec4<f32>` each).
@@ -151,7 +230,10 @@ pub struct BatchUniform {
     /// simplify `(s + x) − s` to `x` under the reassociation WGSL allows (Mesa's lavapipe
     /// does, and the compensated sum's error term came out 0).
     pub zero: u32,
-    pub _pad: [u32; 3],
+    /// Entries of a queue shard's region ([`Control::shard_slots`]): shard s of queue q
+    /// starts at `(q · shards + s) · shard_slots` in `queues`.
+    pub shard_slots: u32,
+    pub _pad: [u32; 2],
 }
 
 const BATCH_WGSL: &str = "struct Batch {
@@ -164,9 +246,9 @@ const BATCH_WGSL: &str = "struct Batch {
     capacity: u32,
     shadow_rays: u32,
     zero: u32,
+    shard_slots: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 ";
 
@@ -262,37 +344,50 @@ pub fn launch_args(q: u32) -> StateBuffer {
     }
 }
 
-/// The generated `ctrl_count(q)`, the control word of queue q's length ([`control::count`]),
-/// in the stages that read or write lengths (`WF_LENGTHS`: the queued stages and the
-/// control kernels).
-fn queue_length_wgsl() -> String {
+/// The generated control-word helpers ([`Control`]): `ctrl_count(q, s)` and
+/// `ctrl_groups(q)` in the stages that read or write lengths (`WF_LENGTHS`: the queued
+/// stages and the control kernels), `ctrl_shadow_rays(s)` in those that count shadow rays
+/// (`WF_COUNT`).
+fn control_wgsl(c: Control) -> String {
+    let (line, queues, shards) = (Control::LINE, queue::COUNT, c.shards());
     format!(
-        "// #if WF_LENGTHS\n// The word of queue q's length in `control` (contract::control::count).\n\
-         fn ctrl_count(q: u32) -> u32 {{\n    return {}u + {}u * q;\n}}\n// #endif\n",
-        control::COUNT,
-        control::LINE
+        "// #if WF_LENGTHS\n// The word of queue q's length in shard s (contract::Control::count).\n\
+         fn ctrl_count(q: u32, s: u32) -> u32 {{\n    return {line}u * (1u + s * {queues}u + q);\n}}\n\
+         // The word of queue q's workgroups per shard (contract::Control::groups).\n\
+         fn ctrl_groups(q: u32) -> u32 {{\n    return {line}u * ({}u + q);\n}}\n// #endif\n\
+         // #if WF_COUNT\n// The shadow-ray counter of shard s (contract::Control::shadow_rays).\n\
+         fn ctrl_shadow_rays(s: u32) -> u32 {{\n    return {}u + {line}u * s;\n}}\n// #endif\n",
+        1 + shards * queues,
+        c.batch_words(),
     )
 }
 
 /// The generated WGSL that keeps launch arguments, for a stage binding `buffers`:
 /// `wf_grow_launch` (pushing stages) and `wf_clear_launch` (control kernels), each touching
-/// only the argument buffers the stage binds.
+/// only the argument buffers the stage binds. With shards, a launch is `WF_SHARDS` runs of
+/// `ctrl_groups(q)` workgroups, both kept here.
 fn launch_args_wgsl(buffers: &[StateBuffer]) -> String {
-    let mut grow = String::new();
-    let mut clear = String::new();
+    let mut grow =
+        String::from("    if (WF_SHARDS > 1u) {\n        atomicMax(&control[ctrl_groups(q)], groups);\n    }\n");
+    let mut clear =
+        String::from("    if (WF_SHARDS > 1u) {\n        atomicStore(&control[ctrl_groups(q)], 0u);\n    }\n");
+    let mut any = false;
     for b in StateBuffer::ARGS.into_iter().filter(|b| buffers.contains(b)) {
         let queues: Vec<String> =
             (0..queue::COUNT).filter(|&q| launch_args(q) == b).map(|q| format!("q == {q}u")).collect();
         let name = b.declaration_name();
         let test = queues.join(" || ");
-        grow.push_str(&format!("    if ({test}) {{\n        atomicMax(&{name}[3u * q], groups);\n    }}\n"));
+        grow.push_str(&format!(
+            "    if ({test}) {{\n        atomicMax(&{name}[3u * q], WF_SHARDS * groups);\n    }}\n"
+        ));
         clear.push_str(&format!("    if ({test}) {{\n        atomicStore(&{name}[3u * q], 0u);\n    }}\n"));
+        any = true;
     }
-    if grow.is_empty() {
+    if !any {
         return String::new();
     }
     format!(
-        "// #if WF_PUSH\n// Grows queue q's launch to at least `groups` workgroups (contract::launch_args).\n\
+        "// #if WF_PUSH\n// Grows queue q's launch to at least `groups` workgroups per shard (contract::launch_args).\n\
          fn wf_grow_launch(q: u32, groups: u32) {{\n{grow}}}\n// #endif\n\
          // #if STAGE_CONTROL\n// Queue q's launch is empty again.\nfn wf_clear_launch(q: u32) {{\n{clear}}}\n// #endif\n"
     )
@@ -324,12 +419,13 @@ pub fn csg_pool_entries(f: &FeatureSet) -> u64 {
 
 /// The generated `wavefront` module for a stage that binds `buffers`: every constant above,
 /// the `Batch` struct, the declarations of those buffers and, for a shading stage, the queue
-/// it drains (`SHADE_QUEUE`).
-pub fn wavefront_module(buffers: &[StateBuffer], shade_queue: Option<u32>) -> String {
+/// it drains (`SHADE_QUEUE`), with the control buffer laid out as `control`.
+pub fn wavefront_module(buffers: &[StateBuffer], shade_queue: Option<u32>, control: Control) -> String {
     let mut s =
         String::from("// #provides wavefront\n// The wavefront state, generated by src/gpu/wavefront/contract.rs.\n");
     let consts: [(&str, u32); 21] = [
         ("WF_WORKGROUP", WORKGROUP),
+        ("WF_SHARDS", control.shards()),
         ("WF_NONE", NONE),
         ("WF_QUEUES", queue::COUNT),
         ("HIT_FLIP", HIT_FLIP),
@@ -339,11 +435,10 @@ pub fn wavefront_module(buffers: &[StateBuffer], shade_queue: Option<u32>) -> St
         ("Q_SHADOW", queue::SHADOW),
         ("Q_SHADOW_CSG", queue::SHADOW_CSG),
         ("Q_SHADE", queue::SHADE),
-        ("CTRL_BOUNCE", control::BOUNCE),
-        ("CTRL_RAYS", control::RAYS),
-        ("CTRL_SHADOW_RAYS", control::SHADOW_RAYS),
-        ("CTRL_NAN", control::NAN),
-        ("CTRL_CSG_OVER", control::CSG_OVER),
+        ("CTRL_BOUNCE", Control::BOUNCE),
+        ("CTRL_RAYS", control.rays()),
+        ("CTRL_NAN", control.nan()),
+        ("CTRL_CSG_OVER", control.csg_over()),
         ("F_RAY_ORIGIN", path_field::RAY_ORIGIN),
         ("F_RAY_DIR", path_field::RAY_DIR),
         ("F_BETA", path_field::BETA),
@@ -357,7 +452,7 @@ pub fn wavefront_module(buffers: &[StateBuffer], shade_queue: Option<u32>) -> St
     if let Some(q) = shade_queue {
         s.push_str(&format!("const SHADE_QUEUE: u32 = {q}u;\n"));
     }
-    s.push_str(&queue_length_wgsl());
+    s.push_str(&control_wgsl(control));
     s.push_str(BATCH_WGSL);
     for b in buffers {
         s.push_str(&b.declaration());
@@ -375,7 +470,7 @@ mod tests {
     fn batch_struct_matches_rust_and_buffers_have_distinct_bindings() {
         // The pool's element type lives in the csg module (checked with it, in gpu::render).
         let alone: Vec<StateBuffer> = StateBuffer::ALL.into_iter().filter(|b| *b != StateBuffer::CsgPool).collect();
-        let src = wavefront_module(&alone, None);
+        let src = wavefront_module(&alone, None, Control::new(2));
         let v = crate::gpu::validate_wgsl("wavefront", &src).unwrap();
         let ty = v.module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Batch")).unwrap().1;
         let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("Batch is not a struct") };
@@ -390,6 +485,7 @@ mod tests {
             ("capacity", std::mem::offset_of!(BatchUniform, capacity)),
             ("shadow_rays", std::mem::offset_of!(BatchUniform, shadow_rays)),
             ("zero", std::mem::offset_of!(BatchUniform, zero)),
+            ("shard_slots", std::mem::offset_of!(BatchUniform, shard_slots)),
         ];
         for (m, (name, offset)) in members.iter().zip(rust) {
             assert_eq!((m.name.as_deref(), m.offset as usize), (Some(name), offset));
@@ -414,13 +510,51 @@ mod tests {
             assert!(q > queue::SHADOW_CSG && q < queue::COUNT);
         }
         assert_eq!(queue::COUNT, 12);
-        // Each length, and the shadow-ray counter, alone on its line; the rest after them.
-        let lines: Vec<u32> = (0..queue::COUNT).map(control::count).chain([control::SHADOW_RAYS]).collect();
-        for (a, b) in lines.iter().zip(&lines[1..]) {
-            assert!(b - a >= control::LINE && a % control::LINE == 0, "{a} {b}");
+        // Each length, workgroup count and shadow-ray counter alone on its line, for any
+        // number of shards; the 64-bit counters and flags after them, the bounce before.
+        for shards in [1, 2, 3, 16] {
+            let c = Control::new(shards);
+            let mut lines: Vec<u32> = (0..shards).flat_map(|s| (0..queue::COUNT).map(move |q| c.count(q, s))).collect();
+            lines.extend((0..queue::COUNT).map(|q| c.groups(q)));
+            lines.extend((0..shards).map(|s| c.shadow_rays(s)));
+            lines.push(c.rays());
+            assert_eq!(lines[0], Control::LINE);
+            for (a, b) in lines.iter().zip(&lines[1..]) {
+                assert!(b - a == Control::LINE && a % Control::LINE == 0, "{shards} shards: {a} {b}");
+            }
+            assert_eq!(c.batch_words(), c.shadow_rays(0));
+            assert!(c.rays() + 2 <= c.nan() && c.nan() < c.csg_over() && c.csg_over() < c.words());
         }
-        const { assert!(control::BOUNCE < control::COUNT) };
-        const { assert!(control::SHADOW_RAYS + control::LINE <= control::RAYS) };
-        const { assert!(control::RAYS + 2 <= control::NAN && control::NAN < control::CSG_OVER) };
+        assert_eq!(Control::new(0), Control::new(1));
+    }
+
+    /// A queue's shard regions hold their shards: slots go to shards by blocks of 64 in turn
+    /// (block b to shard b mod shards), and a shard's entry count, counted block by block,
+    /// never passes `shard_slots` for any batch up to the capacity; launches over the slots
+    /// cover them in one row.
+    #[test]
+    fn shards_cover_the_slots_in_whole_workgroups() {
+        for shards in [1, 2, 3, 7, 32] {
+            let c = Control::new(shards);
+            for capacity in [1, 63, 64, 65, 320, 1000, 4096, 100_003, c.max_slots() - 1, c.max_slots()] {
+                let per = c.shard_slots(capacity);
+                assert_eq!(per % WORKGROUP, 0);
+                assert!(shards * (per / WORKGROUP) <= MAX_GRID, "{shards} {capacity}");
+                for path_count in [1, capacity / 2 + 1, capacity] {
+                    let mut entries = vec![0u64; shards as usize];
+                    let blocks = path_count.div_ceil(WORKGROUP);
+                    for b in 0..blocks {
+                        let slots = (path_count - b * WORKGROUP).min(WORKGROUP);
+                        entries[(b % shards) as usize] += u64::from(slots);
+                    }
+                    assert!(entries.iter().all(|&n| n <= u64::from(per)), "{shards} {capacity} {path_count}");
+                    assert_eq!(entries.iter().sum::<u64>(), u64::from(path_count));
+                    let groups = c.slot_groups(path_count);
+                    assert!(groups % shards == 0 && groups * WORKGROUP >= path_count && groups <= MAX_GRID);
+                    assert!(u64::from(groups / shards) * u64::from(WORKGROUP) <= u64::from(per));
+                }
+            }
+        }
+        assert_eq!(Control::new(1).max_slots(), MAX_SLOTS);
     }
 }

@@ -23,7 +23,7 @@ mod schedule;
 mod stages;
 pub(crate) mod twin;
 
-pub use contract::{queue, wavefront_module, BatchUniform, StateBuffer};
+pub use contract::{queue, wavefront_module, BatchUniform, Control, StateBuffer};
 pub use schedule::{
     ctrlc_flag, Accumulated, PassOptions, StopReason, MAX_PATHS_PER_PIXEL_PER_ROUND, MAX_SPP_PER_ROUND,
 };
@@ -35,8 +35,8 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use contract::{control, launch_groups, path_field, word_field};
 pub use contract::{csg_pool_entries, CSG_POOL_ENTRY_BYTES, CSG_PRIVATE_POOL_MAX};
+use contract::{launch_groups, path_field, word_field};
 use schedule::BatchRunner;
 
 use crate::gpu::compute::ComputeKernel;
@@ -94,7 +94,38 @@ pub fn capacity(
     if used.contains(&StateBuffer::CsgPool) {
         slots = slots.min(csg_pool_budget(gpu) / per_slot(StateBuffer::CsgPool)).max(1);
     }
-    slots.min(u64::from(contract::MAX_SLOTS)) as u32
+    slots.min(u64::from(Control::new(features.queue_shards).max_slots())) as u32
+}
+
+/// Queue shards for a render on the adapter `info` ([`Control`], `FeatureSet::queue_shards`):
+/// on llvmpipe, one per worker thread of the driver, which takes `LP_NUM_THREADS` threads
+/// if set, else one per core (Mesa caps them at 32; 0 runs launches on the submitting
+/// thread alone); 1 on every other adapter, where a queue's pushes do not come from a few
+/// threads each taking a run of the launch.
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
+/// info.name = "NVIDIA H100".into();
+/// assert_eq!(lumen::gpu::wavefront::queue_shards(&info), 1);
+/// info.name = "llvmpipe (LLVM 15.0.6, 128 bits)".into();
+/// assert!((1..=32).contains(&lumen::gpu::wavefront::queue_shards(&info)));
+/// ```
+pub fn queue_shards(info: &wgpu::AdapterInfo) -> u32 {
+    if !crate::gpu::is_llvmpipe(info) {
+        return 1;
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    llvmpipe_threads(std::env::var("LP_NUM_THREADS").ok().as_deref(), cores)
+}
+
+/// llvmpipe's worker threads for the `LP_NUM_THREADS` setting and `cores` (as Mesa's
+/// `lp_screen` counts them), at least 1: a shard per thread.
+fn llvmpipe_threads(setting: Option<&str>, cores: usize) -> u32 {
+    let threads = match setting.map(str::trim).and_then(|s| s.parse::<u32>().ok()) {
+        Some(n) => n,
+        None => u32::try_from(cores).unwrap_or(u32::MAX),
+    };
+    threads.clamp(1, 32)
 }
 
 /// Where launch-argument buffer `b` is in `StateBuffer::ARGS` (and `Runner::args`).
@@ -160,6 +191,8 @@ pub(crate) struct Runner<'a> {
     staging: [wgpu::Buffer; 2],
     probe: wgpu::Buffer,
     capacity: u32,
+    /// The control buffer's layout (its queue shards: `FeatureSet::queue_shards`).
+    layout: Control,
     path_tracer: bool,
     csg: bool,
     shade: Vec<Stage>,
@@ -175,12 +208,12 @@ pub(crate) struct Runner<'a> {
     host_submit: Duration,
     host_wait: Duration,
     /// Whether a CSG query may give up after its walk budget (kernels without the sweeps,
-    /// a tree with a sweep table): each batch then copies `control::CSG_OVER` after its
+    /// a tree with a sweep table): each batch then copies `Control::csg_over` after its
     /// film in the staging buffer, and `collect` checks it.
     watch_csg: bool,
 }
 
-/// Bytes after a batch's film in its staging buffer that bring back `control::CSG_OVER`
+/// Bytes after a batch's film in its staging buffer that bring back `Control::csg_over`
 /// (one film texel's worth, so the read-back stays whole texels) where `Runner::watch_csg`.
 const FLAG_BYTES: u64 = 16;
 
@@ -239,7 +272,15 @@ impl<'a> Runner<'a> {
                 gpu.storage_buffer_zeroed(label, 16)
             }
         };
-        let queues = tiny("queues", StateBuffer::Queues)?;
+        let layout = Control::new(features.queue_shards);
+        // A region of `shard_slots` entries per queue and shard (Control::shard_slots): the
+        // slots, rounded up to whole blocks per shard.
+        let queues = if used.contains(&StateBuffer::Queues) {
+            let regions = u64::from(queue::COUNT) * u64::from(layout.shards());
+            gpu.storage_buffer_zeroed("queues", 4 * regions * u64::from(layout.shard_slots(capacity)))?
+        } else {
+            gpu.storage_buffer_zeroed("queues", 16)?
+        };
         let paths = storage("path state", StateBuffer::Paths)?;
         let words = tiny("path words", StateBuffer::Words)?;
         let shadow = tiny("shadow rays", StateBuffer::Shadow)?;
@@ -253,12 +294,12 @@ impl<'a> Runner<'a> {
         let staging_bytes = film_bytes + if watch_csg { FLAG_BYTES } else { 0 };
         let staging =
             [staging_buffer("film readback 0", staging_bytes)?, staging_buffer("film readback 1", staging_bytes)?];
-        let probe = staging_buffer("control readback", u64::from(control::WORDS) * 4)?;
+        let probe = staging_buffer("control readback", u64::from(layout.words()) * 4)?;
         let batch = gpu.uniform_buffer("batch", &<BatchUniform as bytemuck::Zeroable>::zeroed())?;
         let control = gpu.scoped(|| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("control"),
-                size: u64::from(control::WORDS).next_multiple_of(4) * 4,
+                size: u64::from(layout.words()).next_multiple_of(4) * 4,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
@@ -314,6 +355,7 @@ impl<'a> Runner<'a> {
             staging,
             probe,
             capacity,
+            layout,
             path_tracer: features.renderer == RendererKind::PathTracer,
             csg: kernels.kernels.contains_key(&Stage::Csg),
             shade,
@@ -364,10 +406,10 @@ impl<'a> Runner<'a> {
     }
 
     /// A launch of `stage` over `count` invocations, sized on the host (camera, film).
-    fn direct(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize, count: u32) -> Result<(), GpuError> {
+    fn direct(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize, groups: u32) -> Result<(), GpuError> {
         self.launch(pass, stage, |pass| {
             self.bind(pass, stage, film)?;
-            pass.dispatch_workgroups(launch_groups(count), 1, 1);
+            pass.dispatch_workgroups(groups, 1, 1);
             Ok(())
         })
     }
@@ -431,14 +473,18 @@ impl<'a> Runner<'a> {
         result.map(|_| index)
     }
 
-    /// Rays still to intersect at `bounce` (a read-back: used only to stop deep renders early).
+    /// Rays still to intersect at `bounce`, over every shard (a read-back: used only to stop
+    /// deep renders early).
     fn rays_left(&self, bounce: u32) -> Result<u32, GpuError> {
-        let word = control::count(queue::RAY + (bounce & 1));
+        let q = queue::RAY + (bounce & 1);
+        let (first, last) = (self.layout.count(q, 0), self.layout.count(q, self.layout.shards() - 1));
+        let bytes = 4 * u64::from(last - first + 1);
         self.submit_commands(|e| {
-            e.copy_buffer_to_buffer(&self.control, 4 * u64::from(word), &self.probe, 0, 4);
+            e.copy_buffer_to_buffer(&self.control, 4 * u64::from(first), &self.probe, 0, bytes);
             Ok(())
         })?;
-        Ok(self.read(&self.probe, 4)?[0])
+        let words = self.read(&self.probe, bytes)?;
+        Ok((0..self.layout.shards()).map(|s| words[(self.layout.count(q, s) - first) as usize]).sum())
     }
 
     fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u32>, GpuError> {
@@ -448,15 +494,13 @@ impl<'a> Runner<'a> {
     /// The ray and NaN counters (after every batch has been collected).
     pub fn counters(&self) -> Result<Counters, GpuError> {
         self.submit_commands(|e| {
-            e.copy_buffer_to_buffer(&self.control, 0, &self.probe, 0, u64::from(control::WORDS) * 4);
+            e.copy_buffer_to_buffer(&self.control, 0, &self.probe, 0, u64::from(self.layout.words()) * 4);
             Ok(())
         })?;
-        let w = self.read(&self.probe, u64::from(control::WORDS) * 4)?;
+        let w = self.read(&self.probe, u64::from(self.layout.words()) * 4)?;
         let word64 = |i: u32| u64::from(w[i as usize]) | (u64::from(w[i as usize + 1]) << 32);
-        Ok(Counters {
-            rays: word64(control::RAYS) + word64(control::SHADOW_RAYS),
-            non_finite: u64::from(w[control::NAN as usize]),
-        })
+        let shadow: u64 = (0..self.layout.shards()).map(|s| word64(self.layout.shadow_rays(s))).sum();
+        Ok(Counters { rays: word64(self.layout.rays()) + shadow, non_finite: u64::from(w[self.layout.nan() as usize]) })
     }
 }
 
@@ -524,18 +568,20 @@ impl Runner<'_> {
         if let Some(p) = &self.profiler {
             p.begin_batch(slot);
         }
+        let batch = &BatchUniform { shard_slots: self.layout.shard_slots(self.capacity), ..*batch };
         gpu.queue.write_buffer(&self.batch, 0, bytemuck::bytes_of(batch));
         let last = if self.path_tracer {
             // Bounce 0, every slot queued for the closest-hit stage (implicitly: bounce 0's
-            // queue is the slots in order), every other queue empty; the counters stay.
-            let mut words = vec![0u32; control::count(queue::COUNT) as usize];
-            words[control::count(queue::RAY) as usize] = batch.path_count;
+            // queue is the slots in order, and only its length's sum over the shards is read,
+            // by `advance`), every other queue empty; the counters stay.
+            let mut words = vec![0u32; self.layout.batch_words() as usize];
+            words[self.layout.count(queue::RAY, 0) as usize] = batch.path_count;
             gpu.queue.write_buffer(&self.control, 0, bytemuck::cast_slice(&words));
             // Every launch empty but bounce 0's closest-hit one.
             for (buffer, kind) in self.args.iter().zip(StateBuffer::ARGS) {
                 let mut args = [[0u32, 1, 1]; queue::COUNT as usize];
                 if kind == contract::launch_args(queue::RAY) {
-                    args[queue::RAY as usize][0] = launch_groups(batch.path_count);
+                    args[queue::RAY as usize][0] = self.layout.slot_groups(batch.path_count);
                 }
                 gpu.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&args));
             }
@@ -546,7 +592,7 @@ impl Runner<'_> {
                 e.clear_buffer(&self.paths, radiance, Some(u64::from(batch.path_count) * 16));
                 let mut pass = e
                     .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("camera"), timestamp_writes: None });
-                self.direct(&mut pass, Stage::Camera, 0, batch.path_count)
+                self.direct(&mut pass, Stage::Camera, 0, self.layout.slot_groups(batch.path_count))
             })?;
             // One submission per bounce keeps every submission short (OS GPU watchdogs).
             // Deep renders check every 8 bounces whether any path is left.
@@ -574,14 +620,14 @@ impl Runner<'_> {
                 match last {
                     // The last bounce (emission and escapes only), then the film.
                     Some(b) => self.bounce(&mut pass, b)?,
-                    None => self.direct(&mut pass, Stage::FirstHit, 0, batch.path_count)?,
+                    None => self.direct(&mut pass, Stage::FirstHit, 0, self.layout.slot_groups(batch.path_count))?,
                 }
-                self.direct(&mut pass, Stage::Film, slot, pixels)?;
+                self.direct(&mut pass, Stage::Film, slot, launch_groups(pixels))?;
             }
             let film_bytes = u64::from(pixels) * 32;
             e.copy_buffer_to_buffer(&self.films[slot], 0, &self.staging[slot], 0, film_bytes);
             if self.watch_csg {
-                let flag = 4 * u64::from(control::CSG_OVER);
+                let flag = 4 * u64::from(self.layout.csg_over());
                 e.copy_buffer_to_buffer(&self.control, flag, &self.staging[slot], film_bytes, 4);
             }
             if let Some(p) = &self.profiler {
@@ -590,5 +636,22 @@ impl Runner<'_> {
             Ok(())
         })?;
         Ok(Pending { slot, pixels, submission })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::llvmpipe_threads;
+
+    #[test]
+    fn a_shard_per_llvmpipe_thread() {
+        assert_eq!(llvmpipe_threads(None, 2), 2);
+        assert_eq!(llvmpipe_threads(None, 128), 32);
+        assert_eq!(llvmpipe_threads(Some("6"), 2), 6);
+        assert_eq!(llvmpipe_threads(Some(" 3 "), 64), 3);
+        // No worker threads: the submitting thread runs every workgroup, one shard.
+        assert_eq!(llvmpipe_threads(Some("0"), 8), 1);
+        // Unreadable settings are Mesa's default.
+        assert_eq!(llvmpipe_threads(Some("lots"), 4), 4);
     }
 }

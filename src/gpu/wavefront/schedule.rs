@@ -154,7 +154,9 @@ pub(crate) fn batches(plan: &Plan, j0: u32, samples: u32) -> Vec<BatchUniform> {
                 capacity: plan.capacity,
                 shadow_rays: plan.shadow_rays,
                 zero: 0,
-                _pad: [0; 3],
+                // The runner's: it knows its queue layout (Control::shard_slots).
+                shard_slots: 0,
+                _pad: [0; 2],
             }
         })
         .collect()

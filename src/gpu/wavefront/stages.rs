@@ -302,6 +302,14 @@ impl Stage {
         if names.contains(&"WF_QUEUED") || matches!(self, Stage::ShadowCsgArgs | Stage::Advance) {
             names.push("WF_LENGTHS");
         }
+        // A path's queue shard: where it is pushed, whose shadow-ray counter it adds to.
+        if names.contains(&"WF_PUSH") || names.contains(&"WF_COUNT") {
+            names.push("WF_SHARD");
+        }
+        // Launches over all of the batch's slots, shard by shard.
+        if matches!(self, Stage::Camera | Stage::FirstHit | Stage::Intersect) {
+            names.push("WF_DIRECT");
+        }
         // Where the tables are read from (their bindings are declared only where used).
         names.extend(f.tables.for_stage(self.hot()).names());
         if !scene.contains(&"GEOMETRY") {
@@ -412,7 +420,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 46] = [
+    pub const NAMES: [&'static str; 48] = [
         "SPHERE_UV_UNUSED",
         "CUBE_UV_UNUSED",
         "CYLINDER_UV_UNUSED",
@@ -441,6 +449,8 @@ impl Stage {
         "CSG_QUEUE",
         "WF_QUEUED",
         "WF_LENGTHS",
+        "WF_SHARD",
+        "WF_DIRECT",
         "WF_PUSH",
         "WF_RAY_LOAD",
         "WF_BETA_LOAD",
