@@ -11,7 +11,10 @@
 // one place (Mesa inlines every call site).
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    // local.x, not local_invocation_index: llvmpipe derives the index from all three
+    // components, a dozen scalar divisions per group of lanes.
+    let lane = local.x;
 // #if WF_SHADOW_CSG
     // Whichever of the two queues is not empty (its shards' lengths, or with shards the
     // workgroups per shard, which the first push sets).

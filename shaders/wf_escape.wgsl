@@ -3,7 +3,10 @@
 // MIS-weighted against NEE (cpu::path_tracer), and their paths end.
 
 @compute @workgroup_size(WF_WORKGROUP)
-fn escape_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn escape_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    // local.x, not local_invocation_index: llvmpipe derives the index from all three
+    // components, a dozen scalar divisions per group of lanes.
+    let lane = local.x;
     let slot = wf_slot(Q_ESCAPE, group.x, lane);
     if (slot == WF_NONE) {
         return;

@@ -5,6 +5,15 @@
 // #if WF_RAY_STORE
 // #requires ray
 // #endif
+// #if WF_QUEUED
+// #requires divide
+// #endif
+// #if WF_DIRECT
+// #requires divide
+// #endif
+// #if WF_PATH_ID
+// #requires divide
+// #endif
 // Helpers of the wavefront stages (docs/DESIGN.md "Wavefront renderer"): the invocation
 // index of a launch, queue slots and pushes, path fields and the (pixel, sample) a path
 // slot stands for. Which of them a stage gets is decided by src/gpu/wavefront/stages.rs.
@@ -36,7 +45,7 @@ fn wf_direct_slot(group: u32, lane: u32) -> u32 {
     var block = group;
     if (WF_SHARDS > 1u) {
         let runs = ((batch.path_count + WF_WORKGROUP - 1u) / WF_WORKGROUP + WF_SHARDS - 1u) / WF_SHARDS;
-        let s = group / runs;
+        let s = div_small(group, runs);
         block = (group - s * runs) * WF_SHARDS + s;
     }
     let slot = block * WF_WORKGROUP + lane;
@@ -53,7 +62,7 @@ fn wf_slot(q: u32, group: u32, lane: u32) -> u32 {
     var k = group * WF_WORKGROUP + lane;
     if (WF_SHARDS > 1u) {
         let per = max(atomicLoad(&control[ctrl_groups(q)]), 1u);
-        s = min(group / per, WF_SHARDS - 1u);
+        s = min(div_small(group, per), WF_SHARDS - 1u);
         k = (group - s * per) * WF_WORKGROUP + lane;
     }
     if (k >= atomicLoad(&control[ctrl_count(q, s)])) {
@@ -142,8 +151,10 @@ struct PathId {
 fn path_id(slot: u32) -> PathId {
     let n = batch.paths_per_sample;
     let per_pixel = batch.samples * n;
-    let r = slot % per_pixel;
-    let j = batch.sample_begin + r / n;
-    return PathId(batch.pixel_begin + slot / per_pixel, j, j * n + r % n);
+    let p = div_small(slot, per_pixel);
+    let r = slot - p * per_pixel;
+    let i = div_small(r, n);
+    let j = batch.sample_begin + i;
+    return PathId(batch.pixel_begin + p, j, j * n + r - i * n);
 }
 // #endif

@@ -12,6 +12,7 @@ use lumen::scene::PcgSeed;
 const RANDOM_WGSL: &str = include_str!("../shaders/random.wgsl");
 const PERMUTE_WGSL: &str = include_str!("../shaders/permute.wgsl");
 const STRATA_WGSL: &str = include_str!("../shaders/strata.wgsl");
+const DIVIDE_WGSL: &str = include_str!("../shaders/divide.wgsl");
 
 /// The bindings and the start of `main` of the kernels `run_keyed_kernel` runs: invocation
 /// `i` reads its key `k`; the test's body follows, then a closing brace.
@@ -95,6 +96,47 @@ fn random_streams_match_the_cpu_bit_for_bit() {
             }
             assert_eq!(got_f[i].to_bits(), rng.next_f32().to_bits(), "seed {seed:?} key {k:?} float");
         }
+    }
+}
+
+/// `shaders/divide.wgsl`'s quotients through f32 against integer division, where they are
+/// nearest to being wrong: numerators a multiple of the divisor and one either side, up to
+/// the largest slot index, for divisors from 1 to 2²², and pseudo-random pairs.
+#[test]
+fn small_quotients_are_exact() {
+    let Some(gpu) = gpu_for_tests("small_quotients_are_exact") else { return };
+    let kernel_src = format!(
+        "{DIVIDE_WGSL}
+{KEYED_KERNEL_HEAD}
+    out_u[i] = div_small(k.x, k.y);
+}}"
+    );
+    let kernel = gpu.compute_kernel("divide_test.wgsl", &kernel_src, "main").unwrap();
+    const LIMIT: u32 = 1 << 22;
+    let mut keys: Vec<[u32; 4]> = Vec::new();
+    let divisors = (1..=70u32).chain([97, 127, 128, 129, 1000, 1023, 1024, 4095, 65_535, 65_536, 1 << 21, LIMIT - 1]);
+    for b in divisors {
+        let top = (LIMIT - 1) / b;
+        for q in (0..=top.min(300)).chain((top.saturating_sub(300))..=top).chain((0..=top).step_by(9_973)) {
+            for a in [q * b, (q * b).wrapping_sub(1), q * b + 1] {
+                if a < LIMIT {
+                    keys.push([a, b, 0, 0]);
+                }
+            }
+        }
+    }
+    let mut x = 0x9E37_79B9u32;
+    for _ in 0..20_000 {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        let a = x % LIMIT;
+        let b = 1 + (x.rotate_left(11) % (1 << (x % 22))).max(1);
+        keys.push([a, b, 0, 0]);
+    }
+    let (got, _) = run_keyed_kernel(&gpu, &kernel, PcgSeed::default(), &keys, 1, 0);
+    for (i, &[a, b, ..]) in keys.iter().enumerate() {
+        assert_eq!(got[i], a / b, "{a} / {b}");
     }
 }
 

@@ -22,7 +22,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 52] = [
+const MODULES: [(&str, &str); 53] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -42,6 +42,7 @@ const MODULES: [(&str, &str); 52] = [
     ("shaders/world.wgsl", include_str!("../../shaders/world.wgsl")),
     ("shaders/camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     ("shaders/offset.wgsl", include_str!("../../shaders/offset.wgsl")),
+    ("shaders/divide.wgsl", include_str!("../../shaders/divide.wgsl")),
     ("shaders/rescale.wgsl", include_str!("../../shaders/rescale.wgsl")),
     ("shaders/onb.wgsl", include_str!("../../shaders/onb.wgsl")),
     ("shaders/textures.wgsl", include_str!("../../shaders/textures.wgsl")),

@@ -1,0 +1,18 @@
+// Integer quotients of the small numbers that name paths and workgroups, without integer
+// division: llvmpipe has no vector divide for integers, so each `a / b` between lanes
+// became four scalar `div` instructions (in the camera stage, a third of its time on
+// skybox.sl). A slot index is below contract::MAX_SLOTS < 2²², so the f32 quotient is within
+// one of the integer one (WGSL allows x / y 2.5 ULP, under 0.7 below 2²²) and one step
+// each way makes it exact.
+
+// ⌊a / b⌋ for a < 2²² and b ≥ 1.
+fn div_small(a: u32, b: u32) -> u32 {
+    var q = u32(f32(a) / f32(b));
+    let r = i32(a) - i32(q * b);
+    if (r < 0) {
+        q -= 1u;
+    } else if (u32(r) >= b) {
+        q += 1u;
+    }
+    return q;
+}
