@@ -1,4 +1,4 @@
-// #requires bindings random permute ray
+// #requires bindings random permute ray divide
 // Camera rays: mirrors scene::Camera::ray and cpu::pixel_samples (DESIGN.md "Random
 // numbers"). camera.to_world places the camera relative to its own position.
 
@@ -35,8 +35,8 @@ fn pixel_sample_position(pixel: u32, j: u32) -> vec2<f32> {
     if (settings.jitter == JITTER_STRATIFIED) {
         // Multi-jittered: cell (c, r), sub-column π_x(r), sub-row π_y(c).
         let s = settings.samples_per_side;
-        let c = j % s;
-        let r = j / s;
+        let r = div_u32(j, s);
+        let c = j - r * s;
         let key = camera_strata_key(settings.strata_seed, pixel);
         let sub_col = permute_below(r, s, key);
         let sub_row = permute_below(c, s, hash32(key));
@@ -46,9 +46,10 @@ fn pixel_sample_position(pixel: u32, j: u32) -> vec2<f32> {
     return vec2<f32>(xi0, xi1);
 }
 
-// The camera ray of sample j of pixel (col, row).
-fn pixel_ray(col: u32, row: u32, j: u32) -> Ray {
-    let pixel = row * settings.width + col;
+// The camera ray of sample j of pixel `pixel` (row-major).
+fn pixel_ray(pixel: u32, j: u32) -> Ray {
+    let row = div_u32(pixel, settings.width);
+    let col = pixel - row * settings.width;
     let px = pixel_sample_position(pixel, j);
     let u = (f32(col) + px.x) / f32(settings.width);
     let v = 1.0 - (f32(row) + px.y) / f32(settings.height);

@@ -16,3 +16,15 @@ fn div_small(a: u32, b: u32) -> u32 {
     }
     return q;
 }
+
+// #if CAMERA
+// ⌊a / b⌋ for any a and b ≥ 1 (pixel and camera-sample indices): div_small below 2²², the
+// integer division above (only for images past 4 megapixels; lanes that all stay below skip
+// it).
+fn div_u32(a: u32, b: u32) -> u32 {
+    if (a < 4194304u) {
+        return div_small(a, b);
+    }
+    return a / b;
+}
+// #endif

@@ -15,7 +15,5 @@ fn camera_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
         return;
     }
     let id = path_id(slot);
-    let col = id.pixel % settings.width;
-    let row = id.pixel / settings.width;
-    store_ray(slot, pixel_ray(col, row, id.j));
+    store_ray(slot, pixel_ray(id.pixel, id.j));
 }

@@ -16,7 +16,7 @@ fn first_hit_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
     csg_use_slot(slot);
 // #endif
     let id = path_id(slot);
-    let ray = pixel_ray(id.pixel % settings.width, id.pixel / settings.width, id.j);
+    let ray = pixel_ray(id.pixel, id.j);
 // #if ONOFF
     let value = radiance_onoff(ray);
 // #endif

@@ -101,14 +101,16 @@ fn random_streams_match_the_cpu_bit_for_bit() {
 
 /// `shaders/divide.wgsl`'s quotients through f32 against integer division, where they are
 /// nearest to being wrong: numerators a multiple of the divisor and one either side, up to
-/// the largest slot index, for divisors from 1 to 2²², and pseudo-random pairs.
+/// the largest slot index, for divisors from 1 to 2²², and pseudo-random pairs; `div_u32`
+/// also for numerators up to 2³² − 1 (pixel indices of huge images).
 #[test]
 fn small_quotients_are_exact() {
     let Some(gpu) = gpu_for_tests("small_quotients_are_exact") else { return };
     let kernel_src = format!(
         "{DIVIDE_WGSL}
 {KEYED_KERNEL_HEAD}
-    out_u[i] = div_small(k.x, k.y);
+    out_u[2u * i] = div_small(k.x, k.y);
+    out_u[2u * i + 1u] = div_u32(k.z, k.y);
 }}"
     );
     let kernel = gpu.compute_kernel("divide_test.wgsl", &kernel_src, "main").unwrap();
@@ -120,7 +122,7 @@ fn small_quotients_are_exact() {
         for q in (0..=top.min(300)).chain((top.saturating_sub(300))..=top).chain((0..=top).step_by(9_973)) {
             for a in [q * b, (q * b).wrapping_sub(1), q * b + 1] {
                 if a < LIMIT {
-                    keys.push([a, b, 0, 0]);
+                    keys.push([a, b, a.wrapping_mul(977).wrapping_add(q), 0]);
                 }
             }
         }
@@ -132,11 +134,13 @@ fn small_quotients_are_exact() {
         x ^= x << 5;
         let a = x % LIMIT;
         let b = 1 + (x.rotate_left(11) % (1 << (x % 22))).max(1);
-        keys.push([a, b, 0, 0]);
+        keys.push([a, b, x, 0]);
     }
-    let (got, _) = run_keyed_kernel(&gpu, &kernel, PcgSeed::default(), &keys, 1, 0);
-    for (i, &[a, b, ..]) in keys.iter().enumerate() {
-        assert_eq!(got[i], a / b, "{a} / {b}");
+    keys.extend([[0, 1, u32::MAX, 0], [1, 3, LIMIT, 0], [2, 7, LIMIT - 1, 0], [3, 1, u32::MAX - 1, 0]]);
+    let (got, _) = run_keyed_kernel(&gpu, &kernel, PcgSeed::default(), &keys, 2, 0);
+    for (i, &[a, b, c, _]) in keys.iter().enumerate() {
+        assert_eq!(got[2 * i], a / b, "{a} / {b}");
+        assert_eq!(got[2 * i + 1], c / b, "{c} / {b}");
     }
 }
 
