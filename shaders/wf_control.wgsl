@@ -43,6 +43,11 @@ fn advance() {
     var rays = 0u;
     for (var s = 0u; s < WF_SHARDS; s++) {
         rays += atomicLoad(&control[ctrl_count(current, s)]);
+// #if WF_SHADOW_COUNT
+        // Without point lights each path in the shadow queue traced one shadow ray: the
+        // shadow stage need not count them with an atomic per invocation.
+        rays += atomicLoad(&control[ctrl_count(Q_SHADOW, s)]);
+// #endif
     }
     add_u64_counter(CTRL_RAYS, rays);
     for (var q = 0u; q < queue_count(); q++) {

@@ -1,4 +1,7 @@
-// #requires wf_path world wf_counting wf_shadow_ray
+// #requires wf_path world wf_shadow_ray
+// #if WF_COUNT
+// #requires wf_counting
+// #endif
 // Shadow stage: for every path that queued shadow rays this bounce, trace them in order
 // (any-hit) and add the contribution of each one nothing blocks. One invocation per path,
 // so a path's radiance is only ever written by one invocation, in a fixed order. With
@@ -32,7 +35,9 @@ fn shadow_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
         }
         let ray = s.ray;
 // #if CSG_QUEUE
+// #if WF_COUNT
         rays_traced += 1u;
+// #endif
         let record = deferred_record(slot, 1u + k);
         var trees = 0u;
         if (traverse(ray, true).c.t >= OPEN) {
@@ -58,5 +63,7 @@ fn shadow_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
         wf_push(Q_SHADOW_CSG, slot);
     }
 // #endif
+// #if WF_COUNT
     flush_rays_traced(slot);
+// #endif
 }

@@ -1435,7 +1435,8 @@ USING Camera.Perspective() Image(4, 4) Renderer.PathTracer(.n 1, .max_depth 3) T
 
 /// The GPU counts what the CPU reference counts: one ray per closest-hit and per shadow
 /// query, for every renderer and with NEE on and off (closest-hit rays by queue length,
-/// shadow rays by the stages that trace them). Paths whose f32 and f64 versions part ways
+/// shadow rays by the stages that trace them, or without point lights by the shadow
+/// queue's length). Paths whose f32 and f64 versions part ways
 /// (the ≤ 1 % of pixels that the image comparisons allow) can trace different numbers of
 /// rays, so the totals must agree to 0.5 %; neither the count nor the image (bitwise) may
 /// depend on how paths are batched.
@@ -1447,6 +1448,7 @@ fn gpu_ray_counts_match_the_cpu() {
         ("Flat", shapes_scene(Renderer::Flat { background: Color::BLACK })),
         ("PointLight", shapes_scene(Renderer::PointLight { background: Color::BLACK, ambient: Color::gray(0.01) })),
         ("path tracer, NEE", path_traced_scene(true, None)),
+        ("path tracer, NEE, no point lights", Scene { point_lights: Vec::new(), ..path_traced_scene(true, None) }),
         ("path tracer, no NEE", path_traced_scene(false, Some(Environment::Uniform(Color::gray(0.3))))),
     ];
     for (name, scene) in scenes {

@@ -290,12 +290,18 @@ impl Stage {
             Stage::Shadow => {
                 let mut n =
                     keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK"]].concat());
-                n.extend(["SHADOWS", "WF_QUEUED", "WF_COUNT", "TRAVERSE", "SPANS"]);
+                n.extend(["SHADOWS", "WF_QUEUED", "TRAVERSE", "SPANS"]);
+                // With point lights a path may queue several rays, counted as traced;
+                // without, one each, counted by the queue's length (`advance`).
+                if f.point_lights {
+                    n.push("WF_COUNT");
+                }
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED", "WF_PUSH"]);
                 }
                 n
             }
+            Stage::Advance if has_shadow_rays(f) && !f.point_lights => vec!["WF_SHADOW_COUNT"],
             Stage::Film | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
         // Queue lengths are read by the queued stages and reset by the control kernels.
@@ -420,7 +426,7 @@ impl Stage {
     }
 
     /// Every name [`Self::names`] may add beyond the scene's.
-    pub const NAMES: [&'static str; 48] = [
+    pub const NAMES: [&'static str; 49] = [
         "SPHERE_UV_UNUSED",
         "CUBE_UV_UNUSED",
         "CYLINDER_UV_UNUSED",
@@ -451,6 +457,7 @@ impl Stage {
         "WF_LENGTHS",
         "WF_SHARD",
         "WF_DIRECT",
+        "WF_SHADOW_COUNT",
         "WF_PUSH",
         "WF_RAY_LOAD",
         "WF_BETA_LOAD",
