@@ -16,8 +16,8 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     // components, a dozen scalar divisions per group of lanes.
     let lane = local.x;
 // #if WF_SHADOW_CSG
-    // Whichever of the two queues is not empty (its shards' lengths, or with shards the
-    // workgroups per shard, which the first push sets).
+    // Whichever of the two queues is not empty: the closest-hit one unless its lengths,
+    // summed over the shards, are 0.
     var closest = 0u;
     for (var s = 0u; s < WF_SHARDS; s++) {
         closest += atomicLoad(&control[ctrl_count(Q_CSG, s)]);

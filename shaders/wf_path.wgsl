@@ -14,8 +14,8 @@
 // #if WF_PATH_ID
 // #requires divide
 // #endif
-// Helpers of the wavefront stages (docs/DESIGN.md "Wavefront renderer"): the invocation
-// index of a launch, queue slots and pushes, path fields and the (pixel, sample) a path
+// Helpers of the wavefront stages (docs/DESIGN.md "Wavefront renderer"): the slot an
+// invocation takes, queue shards and pushes, path fields and the (pixel, sample) a path
 // slot stands for. Which of them a stage gets is decided by src/gpu/wavefront/stages.rs.
 
 // Index of field `f` of path `slot` in the structure-of-arrays `paths` and `words`.

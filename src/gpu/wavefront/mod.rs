@@ -405,7 +405,8 @@ impl<'a> Runner<'a> {
         Ok(())
     }
 
-    /// A launch of `stage` over `count` invocations, sized on the host (camera, film).
+    /// A launch of `stage` of `groups` workgroups, sized on the host (camera, first hits,
+    /// film).
     fn direct(&self, pass: &mut wgpu::ComputePass<'_>, stage: Stage, film: usize, groups: u32) -> Result<(), GpuError> {
         self.launch(pass, stage, |pass| {
             self.bind(pass, stage, film)?;
