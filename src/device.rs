@@ -90,10 +90,10 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 /// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
 /// CPU renderer may be as fast or faster (on Vulkan lavapipe the two are at parity on
 /// glass.sl and skybox.sl and the GPU leads elsewhere: BENCHMARKS.md "Kernels without
-/// per-lane integer division"; other software adapters are unmeasured), and, where wgpu reached Mesa's llvmpipe through OpenGL (no
-/// Vulkan driver installed), that Mesa's Vulkan driver runs the same kernels faster
-/// (1.05–1.5× on the example scenes, Mesa 25.0 both ways, side by side: BENCHMARKS.md "BVH
-/// stacks out of the walk's struct").
+/// per-lane integer division"; other software adapters are unmeasured), and, where wgpu
+/// reached Mesa's llvmpipe through OpenGL (no Vulkan driver installed), that Mesa's Vulkan
+/// driver runs the same kernels faster (1.05–1.5× on the example scenes, Mesa 25.0 both
+/// ways, side by side: BENCHMARKS.md "BVH stacks out of the walk's struct").
 ///
 /// ```
 /// use lumen::device::software_adapter_note;

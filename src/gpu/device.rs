@@ -165,7 +165,7 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 /// 65,535 (WebGPU's minimum `max_compute_workgroups_per_dimension`; a batch has at most
 /// 64 · 65,535 slots), y = z = 1. Without the validation D3D12 would report
 /// `num_workgroups` as 0, so no kernel reads that builtin (every launch is one row, and
-/// `wf_index` is the invocation's x).
+/// the slot an invocation takes comes from its workgroup's x: `wf_slot`, `wf_direct_slot`).
 fn instance_flags() -> wgpu::InstanceFlags {
     wgpu::InstanceFlags::from_build_config() - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL
 }

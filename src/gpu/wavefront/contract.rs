@@ -31,8 +31,9 @@ pub const WORKGROUP: u32 = 64;
 pub const MAX_GRID: u32 = 65_535;
 /// Most path slots per batch: then every launch (over a queue, the slots or the batch's
 /// pixels, never more than the slots) is one row of at most `MAX_GRID` workgroups, so the
-/// pushes can keep a queue's launch arguments as (⌈length / 64⌉, 1, 1) (`wf_push`) and an
-/// invocation's index is its `global_invocation_id.x` (`wf_index`). Four million paths in
+/// pushes can keep a queue's launch arguments as (shards · ⌈longest shard / 64⌉, 1, 1)
+/// (`wf_push`, with [`Control::max_slots`] for the shards' rounding) and an invocation finds
+/// its slot from its workgroup's x (`wf_slot`, `wf_direct_slot`). Four million paths in
 /// flight is more than the largest GPU keeps resident (an H200: 132 SMs × 2,048 threads).
 pub const MAX_SLOTS: u32 = WORKGROUP * MAX_GRID;
 

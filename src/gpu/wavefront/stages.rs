@@ -291,9 +291,7 @@ impl Stage {
                 let mut n =
                     keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK"]].concat());
                 n.extend(["SHADOWS", "WF_QUEUED", "TRAVERSE", "SPANS"]);
-                // With point lights a path may queue several rays, counted as traced;
-                // without, one each, counted by the queue's length (`advance`).
-                if f.point_lights {
+                if !shadow_rays_counted_by_queue(f) {
                     n.push("WF_COUNT");
                 }
                 if csg_queue(f) {
@@ -301,7 +299,7 @@ impl Stage {
                 }
                 n
             }
-            Stage::Advance if has_shadow_rays(f) && !f.point_lights => vec!["WF_SHADOW_COUNT"],
+            Stage::Advance if shadow_rays_counted_by_queue(f) => vec!["WF_SHADOW_COUNT"],
             Stage::Film | Stage::ShadowCsgArgs | Stage::Advance => vec![],
         };
         // Queue lengths are read by the queued stages and reset by the control kernels.
@@ -521,6 +519,13 @@ pub fn csg_queue(f: &FeatureSet) -> bool {
 /// does not grow with the number of lights.
 pub fn has_shadow_rays(f: &FeatureSet) -> bool {
     f.renderer == RendererKind::PathTracer && f.non_delta() && (f.point_lights || f.nee)
+}
+
+/// Whether `advance` counts the shadow rays by the shadow queue's length: without point
+/// lights a vertex queues at most its one NEE ray. With them a path may queue several, and
+/// the shadow stage counts what it traces (`WF_COUNT`, an atomic per invocation).
+fn shadow_rays_counted_by_queue(f: &FeatureSet) -> bool {
+    has_shadow_rays(f) && !f.point_lights
 }
 
 /// The BRDF kinds a scene shades, each with its own kernel and queue (smooth glass has
