@@ -1,3 +1,4 @@
+// #requires float_index
 // Integer quotients of the small numbers that name paths and workgroups, without integer
 // division: llvmpipe has no vector divide for integers, so each `a / b` between lanes
 // became four scalar `div` instructions (in the camera stage, a third of its time on
@@ -7,7 +8,7 @@
 
 // ⌊a / b⌋ for a < 2²² and b ≥ 1.
 fn div_small(a: u32, b: u32) -> u32 {
-    var q = u32(f32(a) / f32(b));
+    var q = floor_small(f32(a) / f32(b));
     let r = i32(a) - i32(q * b);
     if (r < 0) {
         q -= 1u;

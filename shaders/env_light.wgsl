@@ -1,4 +1,12 @@
 // #requires bindings environment lights
+// #if ENV_IMAGE
+// #if STAGE_SHADE
+// #requires float_index
+// #endif
+// #if STAGE_ESCAPE
+// #requires cell_index
+// #endif
+// #endif
 // The environment as a light: mirrors cpu::env_light and sampling::distribution (the
 // tables are packed in `floats` at environment.dist_offset, see src/gpu/pack.rs).
 
@@ -58,8 +66,8 @@ fn env_row_base(row: u32) -> u32 {
 fn env_dist_pdf(u: f32, v: f32) -> f32 {
     let w = environment.tex_width;
     let h = environment.tex_height;
-    let row = min(u32(max(v * f32(h), 0.0)), h - 1u);
-    let col = min(u32(max(u * f32(w), 0.0)), w - 1u);
+    let row = cell_index(v * f32(h), h);
+    let col = cell_index(u * f32(w), w);
     return dist1d_pdf_cell(environment.dist_offset, h, row) * dist1d_pdf_cell(env_row_base(row), w, col);
 }
 // #endif
@@ -112,12 +120,12 @@ fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> EnvSample {
                 break;
             }
             v = u;
-            base = env_row_base(u32(v.z));
+            base = env_row_base(floor_small(v.z));
             n = environment.tex_width;
             xi = xi0;
         }
         let dir = equirect_dir(u.x, v.x, environment.rotation_rad);
-        return EnvSample(dir, env_image_pdf(u.y * v.y, v.x), env_texel_radiance(u32(u.z), u32(v.z)));
+        return EnvSample(dir, env_image_pdf(u.y * v.y, v.x), env_texel_radiance(floor_small(u.z), floor_small(v.z)));
     }
 // #endif
     let dir = uniform_sphere(xi0, azimuth);

@@ -2,7 +2,7 @@
 // #if ENV_IMAGE
 // #requires textures
 // #if !STAGE_SHADE
-// #requires angles
+// #requires angles cell_index
 // #endif
 // #endif
 // What escaping rays see: mirrors scene::Environment::radiance and cpu::env_light. Without
@@ -31,8 +31,8 @@ fn equirect_uv(d: vec3<f32>, rotation_rad: f32) -> vec2<f32> {
 fn env_image_radiance(uv: vec2<f32>) -> vec3<f32> {
     let w = environment.tex_width;
     let h = environment.tex_height;
-    let col = min(u32(uv.x * f32(w)), w - 1u);
-    let row = min(u32(uv.y * f32(h)), h - 1u);
+    let col = cell_index(uv.x * f32(w), w);
+    let row = cell_index(uv.y * f32(h), h);
     return env_texel_radiance(col, row);
 }
 // #endif

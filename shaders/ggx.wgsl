@@ -1,4 +1,4 @@
-// #requires bindings onb
+// #requires bindings onb float_index
 // #if PATHTRACER
 // #requires finite
 // #endif
@@ -110,7 +110,7 @@ fn world_sample(f: Frame, s: LocalSample, delta_weight: vec3<f32>) -> BsdfSample
 // The albedo row at `offset` in `rows` (`n` nodes uniform in √μ) read at μ.
 fn albedo_row(offset: u32, n: u32, mu: f32) -> f32 {
     let t = clamp(sqrt(max(mu, 0.0)), 0.0, 1.0) * f32(n - 1u);
-    let j = min(u32(floor(t)), n - 2u);
+    let j = min(floor_small(t), n - 2u);
     let w = t - f32(j);
     return row_at(offset + j) * (1.0 - w) + row_at(offset + j + 1u) * w;
 }

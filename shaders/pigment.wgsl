@@ -1,6 +1,6 @@
 // #requires bindings
 // #if PIGMENT_IMAGE
-// #requires textures
+// #requires textures cell_index
 // #endif
 // Pigments: mirrors scene::Pigment::color_at (uniform, checkered, image nearest/bilinear).
 
@@ -12,8 +12,8 @@ fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     if (p.image_filter == FILTER_NEAREST) {
-        let col = min(u32(max(u * f32(w), 0.0)), w - 1u);
-        let row = min(u32(max(v * f32(h), 0.0)), h - 1u);
+        let col = cell_index(u * f32(w), w);
+        let row = cell_index(v * f32(h), h);
         return texel(p.tex_offset, w, col, row);
     }
     // Bilinear: wrap in u, clamp in v.
@@ -26,7 +26,7 @@ fn image_lookup(p: Pigment, u: f32, v: f32) -> vec3<f32> {
     let wi = i32(w);
     let c0 = u32(((i32(x0) % wi) + wi) % wi);
     let c1 = u32(((i32(x0 + 1.0) % wi) + wi) % wi);
-    let r0 = u32(y0);
+    let r0 = floor_small(y0);
     let r1 = min(r0 + 1u, h - 1u);
     let top = texel(p.tex_offset, w, c0, r0) * (1.0 - fx) + texel(p.tex_offset, w, c1, r0) * fx;
     let bottom = texel(p.tex_offset, w, c0, r1) * (1.0 - fx) + texel(p.tex_offset, w, c1, r1) * fx;

@@ -5,7 +5,7 @@
 // #if SHADOWS
 // #requires wf_shadow_ray
 // #if NEE
-// #requires env_light
+// #requires env_light cell_index
 // #endif
 // #endif
 // Shading stage of one BRDF kind (SHADE_QUEUE; src/gpu/wavefront/stages.rs compiles one per
@@ -71,7 +71,7 @@ fn pt_sample_light(hit: Hit, xi0: f32, xi1: f32, xi2: f32) -> NeeSample {
         return l;
     }
     let select_pdf = light_selection_pdf();
-    let choice = min(u32(xi0 * f32(n)), n - 1u);
+    let choice = cell_index(xi0 * f32(n), n);
     let azimuth = turn(xi2);
 // #if AREA_LIGHTS
     if (choice < settings.area_light_count) {

@@ -12,6 +12,8 @@ use lumen::scene::PcgSeed;
 const RANDOM_WGSL: &str = include_str!("../shaders/random.wgsl");
 const PERMUTE_WGSL: &str = include_str!("../shaders/permute.wgsl");
 const STRATA_WGSL: &str = include_str!("../shaders/strata.wgsl");
+const FLOAT_INDEX_WGSL: &str = include_str!("../shaders/float_index.wgsl");
+const CELL_INDEX_WGSL: &str = include_str!("../shaders/cell_index.wgsl");
 const DIVIDE_WGSL: &str = include_str!("../shaders/divide.wgsl");
 
 /// The bindings and the start of `main` of the kernels `run_keyed_kernel` runs: invocation
@@ -107,7 +109,8 @@ fn random_streams_match_the_cpu_bit_for_bit() {
 fn small_quotients_are_exact() {
     let Some(gpu) = gpu_for_tests("small_quotients_are_exact") else { return };
     let kernel_src = format!(
-        "{DIVIDE_WGSL}
+        "{FLOAT_INDEX_WGSL}
+{DIVIDE_WGSL}
 {KEYED_KERNEL_HEAD}
     out_u[2u * i] = div_small(k.x, k.y);
     out_u[2u * i + 1u] = div_u32(k.z, k.y);
@@ -141,6 +144,49 @@ fn small_quotients_are_exact() {
     for (i, &[a, b, c, _]) in keys.iter().enumerate() {
         assert_eq!(got[2 * i], a / b, "{a} / {b}");
         assert_eq!(got[2 * i + 1], c / b, "{c} / {b}");
+    }
+}
+
+/// `shaders/float_index.wgsl` and `shaders/cell_index.wgsl` against Rust's saturating float-to-integer conversion (what
+/// WGSL's `u32(f32)` does, and what the CPU renderer's `as` casts do): `floor_small` at and
+/// either side of every integer it is used for up to 2²³ − 1, `cell_index` also for
+/// negative, huge and infinite values and for cells of 1 to 2²³ − 1.
+#[test]
+fn float_indices_match_saturating_conversion() {
+    let Some(gpu) = gpu_for_tests("float_indices_match_saturating_conversion") else { return };
+    let kernel_src = format!(
+        "{FLOAT_INDEX_WGSL}
+{CELL_INDEX_WGSL}
+{KEYED_KERNEL_HEAD}
+    let x = bitcast<f32>(k.x);
+    out_u[2u * i] = select(0u, floor_small(x), k.z == 1u);
+    out_u[2u * i + 1u] = cell_index(x, k.y);
+}}"
+    );
+    let kernel = gpu.compute_kernel("float_index_test.wgsl", &kernel_src, "main").unwrap();
+    const TOP: u32 = (1 << 23) - 1;
+    let mut xs: Vec<f32> = Vec::new();
+    let mut m = 0u32;
+    while m <= TOP {
+        let f = m as f32;
+        xs.extend([f, f.next_down(), f.next_up(), f + 0.5]);
+        m = if m < 4096 { m + 1 } else { m + 1 + m / 97 };
+    }
+    xs.extend([TOP as f32, (TOP as f32).next_down(), -0.0, -0.25, -1.0, -3.5e6, 8388608.0, 1e9, 3e38]);
+    xs.extend([f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE, 1e-30]);
+    let mut keys: Vec<[u32; 4]> = Vec::new();
+    for (i, &x) in xs.iter().enumerate() {
+        let n = [1u32, 2, 3, 255, 4096, 1 << 22, TOP][i % 7];
+        let in_domain = (0.0..=TOP as f32).contains(&x) && x.floor() + 8388608.0 < 16777216.0;
+        keys.push([x.to_bits(), n, u32::from(in_domain), 0]);
+    }
+    let (got, _) = run_keyed_kernel(&gpu, &kernel, PcgSeed::default(), &keys, 2, 0);
+    for (i, &[bits, n, in_domain, _]) in keys.iter().enumerate() {
+        let x = f32::from_bits(bits);
+        if in_domain == 1 {
+            assert_eq!(got[2 * i], x as u32, "floor_small({x:e})");
+        }
+        assert_eq!(got[2 * i + 1], (x.max(0.0) as u32).min(n - 1), "cell_index({x:e}, {n})");
     }
 }
 

@@ -22,7 +22,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 53] = [
+const MODULES: [(&str, &str); 55] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -42,6 +42,8 @@ const MODULES: [(&str, &str); 53] = [
     ("shaders/world.wgsl", include_str!("../../shaders/world.wgsl")),
     ("shaders/camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     ("shaders/offset.wgsl", include_str!("../../shaders/offset.wgsl")),
+    ("shaders/float_index.wgsl", include_str!("../../shaders/float_index.wgsl")),
+    ("shaders/cell_index.wgsl", include_str!("../../shaders/cell_index.wgsl")),
     ("shaders/divide.wgsl", include_str!("../../shaders/divide.wgsl")),
     ("shaders/rescale.wgsl", include_str!("../../shaders/rescale.wgsl")),
     ("shaders/onb.wgsl", include_str!("../../shaders/onb.wgsl")),
