@@ -8,8 +8,10 @@
 // #requires env_light cell_index
 // #endif
 // #endif
-// Shading stage of one BRDF kind (SHADE_QUEUE; src/gpu/wavefront/stages.rs compiles one per
-// kind the scene uses, each with only its BRDF's code): one path vertex of
+// Shading stage of the BRDF kinds of its kernel (src/gpu/wavefront/stages.rs: one kernel per
+// delta kind the scene uses, one shared by the kinds that sample lights, each with only the
+// code of its kinds), launched once per kind over that kind's queue (shade_queue.x): one
+// path vertex of
 // cpu::path_tracer per invocation. Seven draws, emission MIS-weighted against NEE; at
 // non-delta vertices the point lights and NEE become shadow rays with their contribution
 // (traced by the shadow stage, pbrt-v4's deferred scheme); then BSDF sampling, Russian
@@ -133,7 +135,7 @@ fn shade_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
     // local.x, not local_invocation_index: llvmpipe derives the index from all three
     // components, a dozen scalar divisions per group of lanes.
     let lane = local.x;
-    let slot = wf_slot(SHADE_QUEUE, group.x, lane);
+    let slot = wf_slot(shade_queue.x, group.x, lane);
     if (slot == WF_NONE) {
         return;
     }

@@ -45,6 +45,19 @@ fn bits(img: &lumen::image::HdrImage) -> Vec<[u32; 3]> {
     img.pixels().iter().map(|p| [p.r.to_bits(), p.g.to_bits(), p.b.to_bits()]).collect()
 }
 
+/// A rough metal (a conductor of grey reflectance, roughness 0.3) that emits nothing.
+fn rough_metal(b: &mut SceneBuilder) -> MaterialId {
+    b.material(Material::new(
+        Brdf::Conductor {
+            pigment: Pigment::Uniform(Color::gray(0.9)),
+            roughness: 0.3,
+            fresnel: None,
+            multiple_scattering: true,
+        },
+        Pigment::Uniform(Color::BLACK),
+    ))
+}
+
 /// Diffuse, glass and mirror surfaces, an emitting sphere and cube (NEE), a point light
 /// and a plane: every stage the path tracer has.
 fn mixed_scene(renderer: Renderer) -> Scene {
@@ -426,15 +439,7 @@ fn uniform_and_storage_tables_give_the_same_bits() {
         let mut b = SceneBuilder::new(12, 9);
         let pigment = Pigment::Image { image: img.clone(), filter: ImageFilter::Bilinear };
         let wall = b.material(Material::new(Brdf::Diffuse { pigment }, Pigment::Uniform(Color::BLACK)));
-        let metal = b.material(Material::new(
-            Brdf::Conductor {
-                pigment: Pigment::Uniform(Color::gray(0.9)),
-                roughness: 0.3,
-                fresnel: None,
-                multiple_scattering: true,
-            },
-            Pigment::Uniform(Color::BLACK),
-        ));
+        let metal = rough_metal(&mut b);
         b.sphere(Transform::translation(DVec3::new(4.0, 0.8, 0.0)), wall)
             .sphere(Transform::translation(DVec3::new(4.0, -1.2, 0.0)) * Transform::scaling(DVec3::splat(0.8)), metal)
             .camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() })
@@ -571,4 +576,18 @@ fn kernel_creation_is_counted_once_per_renderer() {
     assert_eq!(second.kernels_compiled, 0);
     assert!(second.kernel_seconds < first.kernel_seconds);
     assert!(bits(&first.image) == bits(&second.image));
+    // With a rough metal beside the diffuse surfaces, both kinds sample lights and share one
+    // shading kernel (Stage::kernel_kinds), created once: one kernel fewer than stages.
+    let mut b = SceneBuilder::new(12, 9);
+    let white = b.diffuse(Color::gray(0.7));
+    let metal = rough_metal(&mut b);
+    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), white);
+    b.sphere(Transform::translation(DVec3::new(2.0, 0.5, 0.0)) * Transform::scaling(DVec3::splat(0.5)), metal);
+    common::add_lit_props(&mut b);
+    b.camera(Camera { aspect_ratio: 12.0 / 9.0, ..Camera::default() }).renderer(pt(1, 3, true));
+    let metal_scene = b.build().unwrap();
+    let shared = GpuRenderer::new().render(&gpu, &metal_scene, &opts).unwrap();
+    let stages = lumen::gpu::wavefront::Stage::for_scene(&shared.features);
+    assert!(stages.contains(&lumen::gpu::wavefront::Stage::Shade(lumen::gpu::layout::brdf_kind::CONDUCTOR)));
+    assert_eq!(shared.kernels_compiled, stages.len() - 1);
 }

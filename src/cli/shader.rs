@@ -46,7 +46,12 @@ pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
         args.scene.display(),
         features.names().join(" ")
     );
-    for (stage, a) in &stages {
+    for (i, (stage, a)) in stages.iter().enumerate() {
+        // Stages that share a kernel (the kinds that sample lights) print it once.
+        if let Some((first, _)) = stages[..i].iter().find(|(_, b)| b.source == a.source) {
+            text.push_str(&format!("\n// ===== stage {}: the kernel of {} =====\n", stage.label(), first.label()));
+            continue;
+        }
         text.push_str(&format!(
             "\n// ===== stage {} (entry point {}; features: {}) =====\n{}",
             stage.label(),

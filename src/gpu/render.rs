@@ -232,11 +232,7 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
         ("<generated scene tables>", super::tables::tables_wgsl().to_string()),
         (
             "<generated wavefront state>",
-            wavefront::wavefront_module(
-                &stage.buffers(features),
-                stage.shade_queue(),
-                wavefront::Control::new(features.queue_shards),
-            ),
+            wavefront::wavefront_module(&stage.buffers(features), wavefront::Control::new(features.queue_shards)),
         ),
         ("<generated unrolled lists>", super::traversal::unrolled_wgsl(features)),
     ];
@@ -272,11 +268,18 @@ pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>,
 pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
     let mut out = String::new();
     let packed = super::pack::pack(scene, None).map_err(pack_error)?;
+    let mut printed: Vec<(Stage, String)> = Vec::new();
     for (stage, a) in assemble_stages(&packed.features)? {
         let (_, entry) = stage.entry();
+        // Stages that share a kernel (Stage::kernel_kinds) print it once.
+        if let Some((first, _)) = printed.iter().find(|(_, s)| *s == a.source) {
+            out.push_str(&format!("// ===== stage {}: the kernel of {} =====\n", stage.label(), first.label()));
+            continue;
+        }
         out.push_str(&format!("// ===== stage {} (entry point {entry}) =====\n", stage.label()));
         out.push_str(&a.source);
         out.push('\n');
+        printed.push((stage, a.source));
     }
     Ok(out)
 }
@@ -513,13 +516,22 @@ impl GpuRenderer {
 fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> Result<StageKernels, GpuError> {
     let mut kernels = BTreeMap::new();
     let mut missing = Vec::new();
+    // Stages with the same source (the kinds that share a shading kernel) wait for its one
+    // compilation.
+    let mut sharing: Vec<(Stage, Stage)> = Vec::new();
     for (stage, assembled) in assemble_stages(features)? {
         let entry = stage.entry().1;
         match cache.get(&assembled.source, entry) {
             Some(k) => {
                 kernels.insert(stage, k);
             }
-            None => missing.push((stage, assembled)),
+            None => match missing
+                .iter()
+                .find(|(s, a): &&(Stage, Assembled)| a.source == assembled.source && s.entry().1 == entry)
+            {
+                Some(&(first, _)) => sharing.push((stage, first)),
+                None => missing.push((stage, assembled)),
+            },
         }
     }
     let built: Vec<Result<(Stage, String, ComputeKernel), GpuError>> = std::thread::scope(|scope| {
@@ -549,6 +561,10 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
     parallel_jit::compile_ahead(gpu, &jobs)?;
     for (stage, source, kernel) in built {
         kernels.insert(stage, cache.insert(&source, stage.entry().1, kernel));
+    }
+    for (stage, first) in sharing {
+        let k = kernels.get(&first).cloned().ok_or_else(|| GpuError::Internal(format!("no kernel for {first:?}")))?;
+        kernels.insert(stage, k);
     }
     Ok(StageKernels { kernels, compiled })
 }

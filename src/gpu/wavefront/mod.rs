@@ -162,7 +162,7 @@ fn state_bytes(buffer: StateBuffer, shadow_rays: u32, features: &FeatureSet) -> 
         StateBuffer::DeferredRefs => 4 * (crate::prepare::CSG_DEFER_MAX as u64 + 1) * (1 + u64::from(shadow_rays)),
         // The compensated sum: value and error (wf_film.wgsl).
         StateBuffer::Film => 32,
-        StateBuffer::ArgsRays | StateBuffer::ArgsHits | StateBuffer::ArgsCsg => 0,
+        StateBuffer::ArgsRays | StateBuffer::ArgsHits | StateBuffer::ArgsCsg | StateBuffer::ShadeQueue => 0,
         StateBuffer::CsgPool => contract::csg_pool_entries(features) * contract::CSG_POOL_ENTRY_BYTES,
     }
 }
@@ -320,8 +320,15 @@ impl<'a> Runner<'a> {
             args_buffer("launch arguments: hits")?,
             args_buffer("launch arguments: CSG")?,
         ];
-        let buffer_of = |b: StateBuffer, film: usize| -> &wgpu::Buffer {
-            match b {
+        // Each shading stage's queue, in the uniform its launches bind.
+        let shade_queues: BTreeMap<Stage, wgpu::Buffer> = kernels
+            .kernels
+            .keys()
+            .filter_map(|&s| s.shade_queue().map(|q| (s, q)))
+            .map(|(s, q)| Ok((s, gpu.uniform_buffer("shading queue", &[q, 0, 0, 0])?)))
+            .collect::<Result<_, GpuError>>()?;
+        let buffer_of = |b: StateBuffer, film: usize, stage: Stage| -> Result<&wgpu::Buffer, GpuError> {
+            Ok(match b {
                 StateBuffer::Batch => &batch,
                 StateBuffer::Control => &control,
                 StateBuffer::Queues => &queues,
@@ -332,13 +339,16 @@ impl<'a> Runner<'a> {
                 StateBuffer::Film => &films[film],
                 StateBuffer::ArgsRays | StateBuffer::ArgsHits | StateBuffer::ArgsCsg => &args[args_index(b)],
                 StateBuffer::CsgPool => &csg_pool,
-            }
+                StateBuffer::ShadeQueue => shade_queues
+                    .get(&stage)
+                    .ok_or_else(|| GpuError::Internal(format!("no shading queue for {stage:?}")))?,
+            })
         };
         let mut groups0 = BTreeMap::new();
         for (&stage, kernel) in &kernels.kernels {
             for film in 0..if stage == Stage::Film { 2 } else { 1 } {
                 let refs: Vec<&wgpu::Buffer> =
-                    stage.buffers(features).into_iter().map(|b| buffer_of(b, film)).collect();
+                    stage.buffers(features).into_iter().map(|b| buffer_of(b, film, stage)).collect::<Result<_, _>>()?;
                 groups0.insert((stage, film), kernel.bind_group(gpu, 0, &refs)?);
             }
         }

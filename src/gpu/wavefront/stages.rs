@@ -26,7 +26,8 @@ pub enum Stage {
     Csg,
     /// Rays that hit nothing: environment radiance, MIS-weighted.
     Escape,
-    /// One path vertex at a surface of one BRDF kind (`Material::brdf`).
+    /// One path vertex at a surface of one BRDF kind (`Material::brdf`), over that kind's
+    /// queue. The kinds that sample lights share one kernel ([`Stage::kernel_kinds`]).
     Shade(u32),
     /// Shadow rays, any-hit, with their deferred contributions.
     Shadow,
@@ -60,11 +61,30 @@ impl Stage {
         stages
     }
 
-    /// The queue a shading stage drains (`SHADE_QUEUE` in its WGSL).
+    /// The queue a shading stage drains (`shade_queue.x` in its WGSL: each shading stage
+    /// binds its own small uniform holding it).
     pub fn shade_queue(self) -> Option<u32> {
         match self {
             Stage::Shade(kind) => Some(super::queue::shade(kind)),
             _ => None,
+        }
+    }
+
+    /// The BRDF kinds whose code a shading stage's kernel holds: its own, or, for a kind that
+    /// samples lights, every such kind of the scene. Those kinds' kernels would each hold
+    /// the same light sampling, MIS and shadow-ray code, about half of a shading kernel
+    /// (docs/DESIGN.md "One kernel for the kinds that sample lights"), so they share one
+    /// kernel, compiled once and launched once per kind over that kind's queue: the kind
+    /// is the same in every lane of a launch, so the other kinds' code is skipped there.
+    /// Delta kinds (mirror, smooth glass) keep kernels of their own, which have no light
+    /// code. Empty for other stages.
+    pub fn kernel_kinds(self, f: &FeatureSet) -> Vec<u32> {
+        match self {
+            Stage::Shade(kind) if casts_shadow_rays(kind) => {
+                shade_kinds(f).into_iter().filter(|&k| casts_shadow_rays(k)).collect()
+            }
+            Stage::Shade(kind) => vec![kind],
+            _ => Vec::new(),
         }
     }
 
@@ -122,6 +142,9 @@ impl Stage {
             Stage::Film => vec![Batch, Control, Paths, Film],
             Stage::ShadowCsgArgs | Stage::Advance => vec![Control],
         };
+        if matches!(self, Stage::Shade(_)) {
+            buffers.push(ShadeQueue);
+        }
         // The launch arguments of the queues the stage pushes to (or, for the control
         // kernels, empties). In binding order: bind groups pair buffers with bindings by
         // position (ComputeKernel::bind_group).
@@ -149,6 +172,24 @@ impl Stage {
 
     /// The assembly feature names of this stage for a scene with features `f`.
     pub fn names(self, f: &FeatureSet) -> Vec<&'static str> {
+        let kinds = self.kernel_kinds(f);
+        if kinds.len() > 1 {
+            // A shared shading kernel: every kind's names, but a shape's "uv unused" only
+            // where no kind reads it.
+            let lists: Vec<Vec<&'static str>> = kinds.iter().map(|&k| Stage::Shade(k).kind_names(f)).collect();
+            let mut names = lists.concat();
+            names.sort();
+            names.dedup();
+            names.retain(|n| {
+                !UV_SHAPES.iter().any(|&(_, _, unused)| unused == *n) || lists.iter().all(|l| l.contains(n))
+            });
+            return names;
+        }
+        self.kind_names(f)
+    }
+
+    /// [`Stage::names`] for a stage of one kind.
+    fn kind_names(self, f: &FeatureSet) -> Vec<&'static str> {
         let scene = f.names();
         let keep = |allowed: &[&'static str]| -> Vec<&'static str> {
             scene.iter().copied().filter(|n| allowed.contains(n)).collect()
@@ -615,10 +656,54 @@ mod tests {
         assert!(stages.contains(&Stage::Shade(brdf_kind::ROUGH_DIELECTRIC)));
         let rough = Stage::Shade(brdf_kind::ROUGH_DIELECTRIC).names(&both);
         assert!(rough.contains(&"DIELECTRIC") && rough.contains(&"ROUGH_DIELECTRIC"), "{rough:?}");
-        assert!(!Stage::Shade(brdf_kind::DIFFUSE).names(&both).contains(&"DIELECTRIC"));
+        // Diffuse and rough glass both sample lights: one kernel, which holds smooth glass's
+        // code for the rough stage; beside smooth glass alone, diffuse holds no glass code.
+        assert_eq!(Stage::Shade(brdf_kind::DIFFUSE).names(&both), rough);
+        assert!(!Stage::Shade(brdf_kind::DIFFUSE).names(&alone).contains(&"DIELECTRIC"));
         assert!(Stage::Intersect.names(&both).contains(&"SMOOTH_GLASS_AS_ROUGH"));
         let with_csg = FeatureSet { csg: true, csg_trees: 1, csg_max_leaves: 2, ..both };
         assert!(csg_queue(&with_csg) && Stage::Csg.names(&with_csg).contains(&"SMOOTH_GLASS_AS_ROUGH"));
+    }
+
+    /// The kinds that sample lights share one kernel, with every such kind's code and one
+    /// copy of the light code; delta kinds keep kernels of their own without light code.
+    /// The shared kernel's stages assemble to the same source, which `stage_kernels`
+    /// compiles once.
+    #[test]
+    fn kinds_that_sample_lights_share_one_kernel() {
+        let f = FeatureSet {
+            sphere: true,
+            bvh: true,
+            pigment_uniform: true,
+            diffuse: true,
+            conductor: true,
+            plastic: true,
+            specular: true,
+            dielectric: true,
+            nee: true,
+            area_lights: true,
+            sphere_lights: true,
+            renderer: RendererKind::PathTracer,
+            ..FeatureSet::default()
+        };
+        let shading = [brdf_kind::DIFFUSE, brdf_kind::CONDUCTOR, brdf_kind::PLASTIC];
+        for kind in shading {
+            assert_eq!(Stage::Shade(kind).kernel_kinds(&f), shading.to_vec());
+        }
+        assert_eq!(Stage::Shade(brdf_kind::SPECULAR).kernel_kinds(&f), vec![brdf_kind::SPECULAR]);
+        assert!(Stage::Intersect.kernel_kinds(&f).is_empty());
+        let shared = Stage::Shade(brdf_kind::DIFFUSE).names(&f);
+        for name in ["DIFFUSE", "CONDUCTOR", "PLASTIC", "NEE", "SHADOWS", "MICROFACET"] {
+            assert!(shared.contains(&name), "{name} missing from {shared:?}");
+        }
+        assert!(!shared.contains(&"SPECULAR") && !shared.contains(&"DIELECTRIC"), "{shared:?}");
+        let mirror = Stage::Shade(brdf_kind::SPECULAR).names(&f);
+        assert!(mirror.contains(&"SPECULAR") && !mirror.contains(&"DIFFUSE"), "{mirror:?}");
+        // (NEE stays for the emission's MIS weight; no shadow rays.)
+        assert!(!mirror.contains(&"SHADOWS") && !mirror.contains(&"MICROFACET"), "{mirror:?}");
+        let source = |kind| crate::gpu::render::assemble_stage(&f, Stage::Shade(kind)).unwrap().source;
+        assert_eq!(source(brdf_kind::DIFFUSE), source(brdf_kind::PLASTIC));
+        assert_ne!(source(brdf_kind::DIFFUSE), source(brdf_kind::SPECULAR));
     }
 
     /// A shading stage skips a shape kind's uv where none of its materials on that kind
