@@ -169,10 +169,22 @@ fn float_indices_match_saturating_conversion() {
     let mut m = 0u32;
     while m <= TOP {
         let f = m as f32;
-        xs.extend([f, f.next_down(), f.next_up(), f + 0.5]);
+        // Its neighbours among floats (bits ± 1; no f32::next_up before Rust 1.86).
+        let below = if m == 0 { -0.0 } else { f32::from_bits(f.to_bits() - 1) };
+        xs.extend([f, below, f32::from_bits(f.to_bits() + 1), f + 0.5]);
         m = if m < 4096 { m + 1 } else { m + 1 + m / 97 };
     }
-    xs.extend([TOP as f32, (TOP as f32).next_down(), -0.0, -0.25, -1.0, -3.5e6, 8388608.0, 1e9, 3e38]);
+    xs.extend([
+        TOP as f32,
+        f32::from_bits((TOP as f32).to_bits() - 1),
+        -0.0,
+        -0.25,
+        -1.0,
+        -3.5e6,
+        8388608.0,
+        1e9,
+        3e38,
+    ]);
     xs.extend([f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE, 1e-30]);
     let mut keys: Vec<[u32; 4]> = Vec::new();
     for (i, &x) in xs.iter().enumerate() {
