@@ -12,9 +12,7 @@
 
 @compute @workgroup_size(WF_WORKGROUP)
 fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    // local.x, not local_invocation_index: llvmpipe derives the index from all three
-    // components, a dozen scalar divisions per group of lanes.
-    let lane = local.x;
+    let lane = local.x; // not local_invocation_index (wf_path.wgsl)
 // #if WF_SHADOW_CSG
     // Whichever of the two queues is not empty: the closest-hit one unless its lengths,
     // summed over the shards, are 0.

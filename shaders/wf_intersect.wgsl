@@ -6,9 +6,7 @@
 
 @compute @workgroup_size(WF_WORKGROUP)
 fn intersect_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    // local.x, not local_invocation_index: llvmpipe derives the index from all three
-    // components, a dozen scalar divisions per group of lanes.
-    let lane = local.x;
+    let lane = local.x; // not local_invocation_index (wf_path.wgsl)
     let bounce = atomicLoad(&control[CTRL_BOUNCE]);
     // Bounce 0's queue is every slot in order: the camera stage writes no entries.
     var slot = WF_NONE;

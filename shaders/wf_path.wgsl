@@ -23,6 +23,9 @@ fn field(f: u32, slot: u32) -> u32 {
     return f * batch.capacity + slot;
 }
 
+// Stages name their lane by `local_invocation_id.x`, never `local_invocation_index`: llvmpipe
+// derives the index from all three components, a dozen scalar divisions per group of lanes.
+
 // Every launch is one row of workgroups (a batch has at most contract::MAX_SLOTS =
 // 64 · 65,535 slots), and its size is never read from `num_workgroups`, which D3D12 reports
 // as 0 for indirect launches without wgpu's indirect validation (src/gpu/device.rs,

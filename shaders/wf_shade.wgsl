@@ -132,9 +132,7 @@ fn pt_light_ray(hit: Hit, l: NeeSample, f: vec3<f32>, bsdf_pdf: f32) -> LightRay
 
 @compute @workgroup_size(WF_WORKGROUP)
 fn shade_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    // local.x, not local_invocation_index: llvmpipe derives the index from all three
-    // components, a dozen scalar divisions per group of lanes.
-    let lane = local.x;
+    let lane = local.x; // not local_invocation_index (wf_path.wgsl)
     let slot = wf_slot(shade_queue.x, group.x, lane);
     if (slot == WF_NONE) {
         return;

@@ -10,6 +10,7 @@ use super::script_args::ScriptArgs;
 use crate::gpu::pack::pack;
 use crate::gpu::render::assemble_stages;
 use crate::gpu::tables::{TableForms, TableLimits, TablePlacement};
+use crate::gpu::wavefront::Stage;
 use crate::image::write_atomically;
 
 /// Arguments of `lumen shader`.
@@ -46,12 +47,13 @@ pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
         args.scene.display(),
         features.names().join(" ")
     );
-    for (i, (stage, a)) in stages.iter().enumerate() {
-        // Stages that share a kernel (the kinds that sample lights) print it once.
-        if let Some((first, _)) = stages[..i].iter().find(|(_, b)| b.source == a.source) {
-            text.push_str(&format!("\n// ===== stage {}: the kernel of {} =====\n", stage.label(), first.label()));
+    for stage in Stage::for_scene(&features) {
+        // A stage that launches another's kernel (the kinds that sample lights) names it.
+        let Some((_, a)) = stages.iter().find(|(s, _)| *s == stage) else {
+            let owner = stage.kernel_stage(&features);
+            text.push_str(&format!("\n// ===== stage {}: the kernel of {} =====\n", stage.label(), owner.label()));
             continue;
-        }
+        };
         text.push_str(&format!(
             "\n// ===== stage {} (entry point {}; features: {}) =====\n{}",
             stage.label(),

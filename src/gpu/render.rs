@@ -248,9 +248,15 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
     Ok(assembled)
 }
 
-/// Every stage kernel that renders scenes with `features`.
+/// Every distinct kernel that renders scenes with `features`, by the stage it is assembled
+/// for: a stage that launches another stage's kernel ([`Stage::kernel_stage`], the kinds
+/// that sample lights) is not assembled again.
 pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>, GpuError> {
-    Stage::for_scene(features).into_iter().map(|s| Ok((s, assemble_stage(features, s)?))).collect()
+    Stage::for_scene(features)
+        .into_iter()
+        .filter(|s| s.kernel_stage(features) == *s)
+        .map(|s| Ok((s, assemble_stage(features, s)?)))
+        .collect()
 }
 
 /// The WGSL of the kernels that render `scene` (for `lumen shader`), stage by stage.
@@ -268,18 +274,22 @@ pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>,
 pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
     let mut out = String::new();
     let packed = super::pack::pack(scene, None).map_err(pack_error)?;
-    let mut printed: Vec<(Stage, String)> = Vec::new();
-    for (stage, a) in assemble_stages(&packed.features)? {
-        let (_, entry) = stage.entry();
-        // Stages that share a kernel (Stage::kernel_kinds) print it once.
-        if let Some((first, _)) = printed.iter().find(|(_, s)| *s == a.source) {
-            out.push_str(&format!("// ===== stage {}: the kernel of {} =====\n", stage.label(), first.label()));
-            continue;
+    let f = &packed.features;
+    let kernels: BTreeMap<Stage, Assembled> = assemble_stages(f)?.into_iter().collect();
+    for stage in Stage::for_scene(f) {
+        match kernels.get(&stage) {
+            Some(a) => {
+                let (_, entry) = stage.entry();
+                out.push_str(&format!("// ===== stage {} (entry point {entry}) =====\n", stage.label()));
+                out.push_str(&a.source);
+                out.push('\n');
+            }
+            None => out.push_str(&format!(
+                "// ===== stage {}: the kernel of {} =====\n",
+                stage.label(),
+                stage.kernel_stage(f).label()
+            )),
         }
-        out.push_str(&format!("// ===== stage {} (entry point {entry}) =====\n", stage.label()));
-        out.push_str(&a.source);
-        out.push('\n');
-        printed.push((stage, a.source));
     }
     Ok(out)
 }
@@ -516,22 +526,13 @@ impl GpuRenderer {
 fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> Result<StageKernels, GpuError> {
     let mut kernels = BTreeMap::new();
     let mut missing = Vec::new();
-    // Stages with the same source (the kinds that share a shading kernel) wait for its one
-    // compilation.
-    let mut sharing: Vec<(Stage, Stage)> = Vec::new();
     for (stage, assembled) in assemble_stages(features)? {
         let entry = stage.entry().1;
         match cache.get(&assembled.source, entry) {
             Some(k) => {
                 kernels.insert(stage, k);
             }
-            None => match missing
-                .iter()
-                .find(|(s, a): &&(Stage, Assembled)| a.source == assembled.source && s.entry().1 == entry)
-            {
-                Some(&(first, _)) => sharing.push((stage, first)),
-                None => missing.push((stage, assembled)),
-            },
+            None => missing.push((stage, assembled)),
         }
     }
     let built: Vec<Result<(Stage, String, ComputeKernel), GpuError>> = std::thread::scope(|scope| {
@@ -562,9 +563,14 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
     for (stage, source, kernel) in built {
         kernels.insert(stage, cache.insert(&source, stage.entry().1, kernel));
     }
-    for (stage, first) in sharing {
-        let k = kernels.get(&first).cloned().ok_or_else(|| GpuError::Internal(format!("no kernel for {first:?}")))?;
-        kernels.insert(stage, k);
+    // The stages that launch another stage's kernel.
+    for stage in Stage::for_scene(features) {
+        let owner = stage.kernel_stage(features);
+        if owner != stage {
+            let k =
+                kernels.get(&owner).cloned().ok_or_else(|| GpuError::Internal(format!("no kernel for {owner:?}")))?;
+            kernels.insert(stage, k);
+        }
     }
     Ok(StageKernels { kernels, compiled })
 }

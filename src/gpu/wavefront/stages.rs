@@ -88,6 +88,16 @@ impl Stage {
         }
     }
 
+    /// The stage whose kernel this stage launches: the first of its kernel's kinds for a
+    /// shading stage ([`Stage::kernel_kinds`]), itself for every other stage. Only those
+    /// stages are assembled and compiled (`gpu::render::assemble_stages`).
+    pub fn kernel_stage(self, f: &FeatureSet) -> Stage {
+        match (self, self.kernel_kinds(f).first()) {
+            (Stage::Shade(_), Some(&first)) => Stage::Shade(first),
+            _ => self,
+        }
+    }
+
     /// The root module and entry point.
     pub fn entry(self) -> (&'static str, &'static str) {
         match self {
