@@ -447,7 +447,15 @@ fn gpu_offsets_follow_the_rule_bit_for_bit() {
         let toward = if n[0] * d[0] + n[1] * d[1] + n[2] * d[2] < 0.0 { -1.0 } else { 1.0 };
         for a in 0..3 {
             let want = rule(p[a], *s, toward * n[a] / len);
-            assert_eq!(got[i][a].to_bits(), want.to_bits(), "case {i} axis {a}: {} against {want}", got[i][a]);
+            // WGSL lets an implementation flush subnormal values to zero (Mesa 26.1's
+            // llvmpipe does, BENCHMARKS.md "Mesa 26.1 lavapipe on an Intel host"): there a
+            // subnormal coordinate comes back as a zero.
+            let flushed = want.is_subnormal() && got[i][a] == 0.0;
+            assert!(
+                got[i][a].to_bits() == want.to_bits() || flushed,
+                "case {i} axis {a}: {} against {want}",
+                got[i][a]
+            );
         }
     }
     // The cases reach every branch of the rule: a float step, ulps both ways, a step onto ∞.
