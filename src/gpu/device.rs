@@ -216,6 +216,68 @@ pub fn is_llvmpipe(info: &wgpu::AdapterInfo) -> bool {
     info.name.to_ascii_lowercase().contains("llvmpipe")
 }
 
+/// llvmpipe's SIMD width in bits, from its adapter name ("llvmpipe (LLVM 19.1.7, 256 bits)").
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+/// info.name = "llvmpipe (LLVM 19.1.7, 256 bits)".into();
+/// assert_eq!(lumen::gpu::llvmpipe_vector_bits(&info), Some(256));
+/// info.name = "NVIDIA H100".into();
+/// assert_eq!(lumen::gpu::llvmpipe_vector_bits(&info), None);
+/// ```
+pub fn llvmpipe_vector_bits(info: &wgpu::AdapterInfo) -> Option<u32> {
+    if !is_llvmpipe(info) {
+        return None;
+    }
+    let words: Vec<&str> = info.name.split(|c: char| c.is_whitespace() || c == ',' || c == '(' || c == ')').collect();
+    words.windows(2).find(|w| w[1] == "bits").and_then(|w| w[0].parse().ok())
+}
+
+/// The Mesa release (major, minor) of a Mesa driver, from the driver information its
+/// adapter reports ("Mesa 26.1.6-1~bpo13+1 (LLVM 19.1.7)" on Vulkan, "4.5 (Core Profile)
+/// Mesa 25.0.7" on OpenGL).
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+/// info.driver_info = "Mesa 26.1.6-1~bpo13+1 (LLVM 19.1.7)".into();
+/// assert_eq!(lumen::gpu::mesa_version(&info), Some((26, 1)));
+/// info.driver_info = "580.159.04".into();
+/// assert_eq!(lumen::gpu::mesa_version(&info), None);
+/// ```
+pub fn mesa_version(info: &wgpu::AdapterInfo) -> Option<(u32, u32)> {
+    let (_, rest) = info.driver_info.split_once("Mesa ")?;
+    let mut parts = rest.split(|c: char| !c.is_ascii_digit());
+    let major = parts.next()?.parse().ok()?;
+    let minor = parts.next()?.parse().ok()?;
+    Some((major, minor))
+}
+
+/// Whether lumen reads scene tables through `textureLoad` on this adapter (software
+/// adapters only place tables in textures at all: `tables::TableForms::choose`).
+///
+/// Mesa 26.1's llvmpipe at 256-bit vectors fetches texels wrongly: on an Intel host the
+/// one-invocation kernel of `Gpu::u32_texture`'s example crashed in the JIT code, and
+/// renders with texture tables disagreed with the CPU on a sixth of their pixels, while
+/// the same kernels with the tables in uniform or storage buffers, or at 128 bits, were
+/// right (BENCHMARKS.md "Mesa 26.1 lavapipe on an Intel host"). llvmpipe at 128 bits (what
+/// `lumen` asks for) and Mesa up to 25.0 at any width passed every test; for other Mesa
+/// releases with wider vectors, which were not tried, the tables stay in buffers.
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+/// info.name = "llvmpipe (LLVM 19.1.7, 256 bits)".into();
+/// info.driver_info = "Mesa 26.1.6 (LLVM 19.1.7)".into();
+/// assert!(!lumen::gpu::texel_fetches_trusted(&info));
+/// info.name = "llvmpipe (LLVM 19.1.7, 128 bits)".into();
+/// assert!(lumen::gpu::texel_fetches_trusted(&info));
+/// ```
+pub fn texel_fetches_trusted(info: &wgpu::AdapterInfo) -> bool {
+    if !is_llvmpipe(info) {
+        return true;
+    }
+    llvmpipe_vector_bits(info).is_some_and(|bits| bits <= 128) || mesa_version(info).is_some_and(|v| v <= (25, 0))
+}
+
 /// All adapters this machine offers, best first.
 ///
 /// ```

@@ -381,7 +381,12 @@ impl GpuRenderer {
         start: Instant,
     ) -> Result<GpuRenderOutput, GpuError> {
         let mut f = kernel_features(&packed.features, opts.features.map(|k| k.with_lists_of(&packed.features)))?;
-        f.tables = TableForms::choose(packed, opts.tables, gpu.adapter_info.device_type, TableLimits::of(&gpu.limits));
+        f.tables = TableForms::choose(
+            packed,
+            opts.tables,
+            gpu.adapter_info.device_type,
+            TableLimits::of(&gpu.limits, &gpu.adapter_info),
+        );
         f.queue_shards = opts.queue_shards.unwrap_or_else(|| wavefront::queue_shards(&gpu.adapter_info));
         let job = RenderJob { scene, packed, opts, start };
         let mut attempts = Attempts::default();

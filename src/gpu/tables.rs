@@ -314,7 +314,7 @@ pub enum TablePlacement {
 }
 
 /// What the adapter allows the table forms: the bytes of a uniform binding and the rows
-/// of a 2D texture.
+/// of a 2D texture (0: no texture tables on this adapter).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableLimits {
     pub max_uniform_bytes: u64,
@@ -322,17 +322,20 @@ pub struct TableLimits {
 }
 
 impl TableLimits {
-    /// The limits of an adapter.
-    pub fn of(limits: &wgpu::Limits) -> Self {
-        TableLimits {
-            max_uniform_bytes: limits.max_uniform_buffer_binding_size,
-            max_texture_rows: limits.max_texture_dimension_2d,
-        }
+    /// The limits of an adapter with `limits`, named by `info`: no texture rows where its
+    /// texel fetches are not trusted ([`crate::gpu::texel_fetches_trusted`]).
+    pub fn of(limits: &wgpu::Limits, info: &wgpu::AdapterInfo) -> Self {
+        let rows = if crate::gpu::texel_fetches_trusted(info) { limits.max_texture_dimension_2d } else { 0 };
+        TableLimits { max_uniform_bytes: limits.max_uniform_buffer_binding_size, max_texture_rows: rows }
     }
 
     /// WebGPU's defaults, which every adapter offers.
     pub fn webgpu_default() -> Self {
-        Self::of(&wgpu::Limits::default())
+        let defaults = wgpu::Limits::default();
+        TableLimits {
+            max_uniform_bytes: defaults.max_uniform_buffer_binding_size,
+            max_texture_rows: defaults.max_texture_dimension_2d,
+        }
     }
 }
 
@@ -703,6 +706,33 @@ mod tests {
         assert_eq!(auto.for_stage(true).form(Table::Shapes), TableForm::Storage);
         let texture = TableForms::choose(&large, TablePlacement::Texture, cpu, webgpu);
         assert_eq!(texture.for_stage(true).form(Table::Shapes), TableForm::Texture);
+    }
+
+    /// An adapter whose texel fetches are not trusted (Mesa 26.1's llvmpipe at 256 bits)
+    /// gets no texture rows, so its tables stay in buffers, even where textures are asked for.
+    #[test]
+    fn untrusted_texel_fetches_keep_the_tables_in_buffers() {
+        let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+        info.name = "llvmpipe (LLVM 19.1.7, 256 bits)".into();
+        info.driver_info = "Mesa 26.1.6-1~bpo13+1 (LLVM 19.1.7)".into();
+        let wgpu_limits = wgpu::Limits::default();
+        let untrusted = TableLimits::of(&wgpu_limits, &info);
+        assert_eq!(untrusted, limits(wgpu_limits.max_uniform_buffer_binding_size, 0));
+        let large = spheres(600);
+        let cpu = wgpu::DeviceType::Cpu;
+        let auto = TableForms::choose(&large, TablePlacement::Auto, cpu, untrusted);
+        assert_eq!((auto.form(Table::Shapes), auto.form(Table::Materials)), (TableForm::Storage, TableForm::Uniform));
+        let forced = TableForms::choose(&large, TablePlacement::Texture, cpu, untrusted);
+        assert_eq!(forced, TableForms::NONE.with_hot_textures(true));
+        // The same driver at 128 bits, Mesa 25.0 at 256, and every hardware driver keep them.
+        for (name, driver) in [
+            ("llvmpipe (LLVM 19.1.7, 128 bits)", "Mesa 26.1.6 (LLVM 19.1.7)"),
+            ("llvmpipe (LLVM 15.0.6, 256 bits)", "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"),
+            ("NVIDIA H200", "580.159.04"),
+        ] {
+            (info.name, info.driver_info) = (name.into(), driver.into());
+            assert_eq!(TableLimits::of(&wgpu_limits, &info), TableLimits::webgpu_default(), "{name}");
+        }
     }
 
     /// The texture accessors rebuild each struct from the words at its members' offsets
