@@ -88,17 +88,25 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 }
 
 /// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
-/// CPU renderer may be as fast or faster (on Vulkan lavapipe the two are at parity on
-/// glass.sl and skybox.sl and the GPU leads elsewhere: BENCHMARKS.md "Kernels without
-/// per-lane integer division"; other software adapters are unmeasured), and, where wgpu
-/// reached Mesa's llvmpipe through OpenGL (no Vulkan driver installed), that Mesa's Vulkan
-/// driver runs the same kernels faster (1.05–1.5× on the example scenes, Mesa 25.0 both
-/// ways, side by side: BENCHMARKS.md "BVH stacks out of the walk's struct").
+/// CPU renderer may be as fast or faster (on Mesa 25's Vulkan lavapipe the two are at
+/// parity on skybox.sl and the GPU leads elsewhere; other software adapters are unmeasured),
+/// except on an llvmpipe of Mesa 26.1 or later with wider vectors than 128 bits, which ran
+/// every example scene 1.4–3.6× faster than the CPU renderer (BENCHMARKS.md "Mesa 26.1
+/// lavapipe on an Intel host"); and, where wgpu reached Mesa's llvmpipe through OpenGL (no
+/// Vulkan driver installed), that Mesa's Vulkan driver runs the same kernels faster
+/// (1.05–1.5× on the example scenes, Mesa 25.0 both ways, side by side: BENCHMARKS.md "BVH
+/// stacks out of the walk's struct").
 ///
 /// ```
 /// use lumen::device::software_adapter_note;
-/// let vk = wgpu::AdapterInfo { name: "llvmpipe".into(), ..wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan) };
+/// let vk = wgpu::AdapterInfo { name: "llvmpipe (LLVM 15.0.6, 128 bits)".into(), ..wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan) };
 /// assert!(software_adapter_note(&vk).unwrap().contains("--device cpu"));
+/// let wide = wgpu::AdapterInfo {
+///     name: "llvmpipe (LLVM 19.1.7, 256 bits)".into(),
+///     driver_info: "Mesa 26.1.6 (LLVM 19.1.7)".into(),
+///     ..vk.clone()
+/// };
+/// assert!(!software_adapter_note(&wide).unwrap().contains("--device cpu"));
 /// let gl = wgpu::AdapterInfo { backend: wgpu::Backend::Gl, ..vk.clone() };
 /// assert!(software_adapter_note(&gl).unwrap().contains("mesa-vulkan-drivers"));
 /// let hw = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
@@ -108,11 +116,12 @@ pub fn software_adapter_note(info: &wgpu::AdapterInfo) -> Option<String> {
     if info.device_type != wgpu::DeviceType::Cpu {
         return None;
     }
-    let mut note = format!(
-        "note: {} is a software adapter (the GPU API emulated on the CPU); lumen's own CPU renderer \
-         (--device cpu) is as fast or faster on some scenes",
-        info.name
-    );
+    let mut note = format!("note: {} is a software adapter (the GPU API emulated on the CPU)", info.name);
+    let outruns_the_cpu = crate::gpu::llvmpipe_prefers_wide_vectors(info)
+        && crate::gpu::llvmpipe_vector_bits(info).is_some_and(|bits| bits > 128);
+    if !outruns_the_cpu {
+        note.push_str("; lumen's own CPU renderer (--device cpu) is as fast or faster on some scenes");
+    }
     if info.backend == wgpu::Backend::Gl && crate::gpu::is_llvmpipe(info) {
         note.push_str(
             "\nnote: it is reached through OpenGL; Mesa's Vulkan driver (lavapipe: Debian's and Ubuntu's \

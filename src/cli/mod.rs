@@ -71,6 +71,7 @@ pub fn main() -> ExitCode {
     #[cfg(unix)]
     let _runtime_dir = headless::ensure_runtime_dir();
     software_driver::prefer_narrow_vectors();
+    crate::gpu::on_adapter_chosen(software_driver::relaunch_if_wider_is_faster);
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return clap_exit(&e),

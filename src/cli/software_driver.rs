@@ -2,16 +2,21 @@
 //!
 //! llvmpipe JIT-compiles each compute kernel at its first dispatch with LLVM, one kernel
 //! after another, and by default vectorises it over the host's widest SIMD registers
-//! (256 bits here). lumen's stages are dominated by lane-divergent storage-buffer
-//! accesses, which llvmpipe compiles into per-lane code; at 128 bits every such access
-//! expands to 4 lanes instead of 8, so a scene's kernels compile 30–40 % faster, and the
-//! same renders run as fast (measured side by side: docs/DESIGN.md "Software adapters",
-//! BENCHMARKS.md). So `lumen` asks llvmpipe for 128-bit vectors unless the user chose a
-//! width. The variable only affects llvmpipe; hardware drivers never read it.
-//! `.cargo/config.toml` sets the same value for `cargo test`, `cargo bench` and examples,
-//! so the tests exercise the driver configuration the program uses.
+//! (256 bits here). Up to Mesa 25, llvmpipe compiles every lane-divergent storage-buffer
+//! access into per-lane code; at 128 bits each such access expands to 4 lanes instead of
+//! 8, so a scene's kernels compile 30–40 % faster, and the same renders run as fast
+//! (measured side by side: docs/DESIGN.md "Software adapters", BENCHMARKS.md). So `lumen`
+//! asks llvmpipe for 128-bit vectors unless the user chose a width. Mesa 26.1 turns those
+//! accesses into gathers, and there 256-bit vectors render 1.15–1.7× faster than 128 on an
+//! Intel host: when the adapter turns out to be such an llvmpipe (known only once the driver
+//! is loaded, and llvmpipe reads the width only then), `lumen` relaunches itself with 256
+//! ([`relaunch_if_wider_is_faster`], registered with `gpu::on_adapter_chosen`). The variable
+//! only affects llvmpipe; hardware drivers never read it. `.cargo/config.toml` sets 128
+//! for `cargo test`, `cargo bench` and examples, so the tests exercise the configuration
+//! CI's Mesa 25 gets.
 
 use std::ffi::OsStr;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The variable llvmpipe reads once, when the driver is first loaded.
 pub const VECTOR_WIDTH_ENV: &str = "LP_NATIVE_VECTOR_WIDTH";
@@ -24,6 +29,10 @@ pub fn vector_width_to_set(inherited: Option<&OsStr>) -> Option<&'static str> {
     inherited.is_none().then_some(VECTOR_WIDTH_BITS)
 }
 
+/// Whether this process set the width itself ([`prefer_narrow_vectors`]), so that it may
+/// choose another once it knows the driver.
+static WIDTH_SET_HERE: AtomicBool = AtomicBool::new(false);
+
 /// Asks llvmpipe for [`VECTOR_WIDTH_BITS`]-bit vectors unless the variable is set.
 ///
 /// Must run at the very start of `main`, before any thread exists (it changes the
@@ -32,12 +41,115 @@ pub fn vector_width_to_set(inherited: Option<&OsStr>) -> Option<&'static str> {
 pub fn prefer_narrow_vectors() {
     if let Some(bits) = vector_width_to_set(std::env::var_os(VECTOR_WIDTH_ENV).as_deref()) {
         std::env::set_var(VECTOR_WIDTH_ENV, bits);
+        WIDTH_SET_HERE.store(true, Ordering::Relaxed);
     }
+}
+
+/// The width to relaunch with on adapter `info`, if any: 256 bits where the width was
+/// lumen's own 128, the adapter is an llvmpipe that runs faster wide
+/// ([`crate::gpu::llvmpipe_prefers_wide_vectors`]), and the host has 256-bit SIMD
+/// registers (`host_bits`, what llvmpipe would use).
+pub fn wider_width(info: &wgpu::AdapterInfo, set_here: bool, host_bits: u32) -> Option<u32> {
+    let gains = set_here
+        && crate::gpu::llvmpipe_vector_bits(info) == Some(128)
+        && crate::gpu::llvmpipe_prefers_wide_vectors(info)
+        && host_bits >= 256;
+    gains.then_some(256)
+}
+
+/// The widest SIMD registers llvmpipe would use here (it caps them at 256 bits).
+fn host_vector_bits() -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        return 256;
+    }
+    128
+}
+
+/// Relaunches this process with wider llvmpipe vectors where [`wider_width`] says so: the
+/// same program, arguments and process id, the variable set (so the new process keeps
+/// it). Registered with `gpu::on_adapter_chosen`, so it runs before the device is opened,
+/// a render has begun or an output file exists; only output printed before (scene
+/// warnings) shows twice. Where the relaunch fails, the render goes on at 128 bits.
+pub fn relaunch_if_wider_is_faster(info: &wgpu::AdapterInfo) {
+    let Some(bits) = wider_width(info, WIDTH_SET_HERE.load(Ordering::Relaxed), host_vector_bits()) else {
+        return;
+    };
+    #[cfg(target_os = "linux")]
+    {
+        let err = relaunch(bits);
+        eprintln!("note: could not relaunch with {bits}-bit llvmpipe vectors ({err}); going on at 128 bits");
+    }
+}
+
+/// `exec` of this process's own file with its own command line and `LP_NATIVE_VECTOR_WIDTH`
+/// = `bits`; returns only on failure. /proc/self/cmdline is the command line as the
+/// process was started, with a dynamic loader's own arguments where the program was run
+/// through one (scripts/newer_lavapipe.sh), and /proc/self/exe the file that was started.
+#[cfg(target_os = "linux")]
+fn relaunch(bits: u32) -> std::io::Error {
+    use std::io::Write;
+    use std::os::unix::process::CommandExt;
+    let cmdline = match std::fs::read("/proc/self/cmdline") {
+        Ok(c) => c,
+        Err(e) => return e,
+    };
+    let mut args = command_line(&cmdline).into_iter();
+    let Some(first) = args.next() else {
+        return std::io::Error::other("empty command line");
+    };
+    let _ = std::io::stdout().flush();
+    std::process::Command::new("/proc/self/exe").arg0(first).args(args).env(VECTOR_WIDTH_ENV, bits.to_string()).exec()
+}
+
+/// The arguments of a /proc/PID/cmdline: NUL-terminated strings (an empty argument is an
+/// empty string between two NULs).
+#[cfg(target_os = "linux")]
+fn command_line(raw: &[u8]) -> Vec<std::ffi::OsString> {
+    use std::os::unix::ffi::OsStrExt;
+    let body = raw.strip_suffix(&[0]).unwrap_or(raw);
+    if body.is_empty() && raw.len() <= 1 {
+        return Vec::new();
+    }
+    body.split(|b| *b == 0).map(|a| OsStr::from_bytes(a).to_os_string()).collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn llvmpipe(bits: u32, mesa: &str) -> wgpu::AdapterInfo {
+        let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+        info.name = format!("llvmpipe (LLVM 19.1.7, {bits} bits)");
+        info.driver_info = format!("Mesa {mesa} (LLVM 19.1.7)");
+        info
+    }
+
+    #[test]
+    fn wider_vectors_only_where_the_driver_gains_and_the_width_was_ours() {
+        assert_eq!(wider_width(&llvmpipe(128, "26.1.6-1~bpo13+1"), true, 256), Some(256));
+        assert_eq!(wider_width(&llvmpipe(128, "27.0.0"), true, 512), Some(256));
+        // The user's (or a parent's) width, already wide, an older Mesa, a narrow host.
+        assert_eq!(wider_width(&llvmpipe(128, "26.1.6"), false, 256), None);
+        assert_eq!(wider_width(&llvmpipe(256, "26.1.6"), true, 256), None);
+        assert_eq!(wider_width(&llvmpipe(128, "26.0.3"), true, 256), None);
+        assert_eq!(wider_width(&llvmpipe(128, "25.0.7-2~bpo12+1"), true, 256), None);
+        assert_eq!(wider_width(&llvmpipe(128, "26.1.6"), true, 128), None);
+        let mut hardware = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
+        hardware.name = "NVIDIA H200".into();
+        assert_eq!(wider_width(&hardware, true, 256), None);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn command_lines_split_at_their_nuls() {
+        let args = |raw: &[u8]| command_line(raw).into_iter().map(|a| a.into_string().unwrap()).collect::<Vec<_>>();
+        assert_eq!(args(b"lumen\0render\0a b.sl\0"), ["lumen", "render", "a b.sl"]);
+        assert_eq!(args(b"lumen\0\0-o\0"), ["lumen", "", "-o"]);
+        assert_eq!(args(b"lumen"), ["lumen"]);
+        assert!(args(b"").is_empty());
+        assert!(args(b"\0").is_empty());
+    }
 
     #[test]
     fn a_width_the_user_chose_is_kept() {

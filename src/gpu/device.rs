@@ -5,7 +5,7 @@
 //! wrong, and [`Gpu::check`] / [`Gpu::scoped`] turn those records into [`GpuError`]s.
 
 use std::fmt;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use thiserror::Error;
 
@@ -252,6 +252,27 @@ pub fn mesa_version(info: &wgpu::AdapterInfo) -> Option<(u32, u32)> {
     Some((major, minor))
 }
 
+/// The first Mesa release whose llvmpipe was measured to run lumen's kernels faster with
+/// 256-bit vectors than with 128: it compiles lane-divergent loads into gathers
+/// (BENCHMARKS.md "Mesa 26.1 lavapipe on an Intel host"; Mesa 25.0 does not, and the
+/// releases between were not tried).
+pub const WIDE_VECTORS_FROM_MESA: (u32, u32) = (26, 1);
+
+/// Whether `info` is an llvmpipe of Mesa [`WIDE_VECTORS_FROM_MESA`] or later, whatever
+/// width it runs at now.
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+/// info.name = "llvmpipe (LLVM 19.1.7, 128 bits)".into();
+/// info.driver_info = "Mesa 26.1.6 (LLVM 19.1.7)".into();
+/// assert!(lumen::gpu::llvmpipe_prefers_wide_vectors(&info));
+/// info.driver_info = "Mesa 25.0.7 (LLVM 15.0.6)".into();
+/// assert!(!lumen::gpu::llvmpipe_prefers_wide_vectors(&info));
+/// ```
+pub fn llvmpipe_prefers_wide_vectors(info: &wgpu::AdapterInfo) -> bool {
+    is_llvmpipe(info) && mesa_version(info).is_some_and(|v| v >= WIDE_VECTORS_FROM_MESA)
+}
+
 /// Whether lumen reads scene tables through `textureLoad` on this adapter (software
 /// adapters only place tables in textures at all: `tables::TableForms::choose`).
 ///
@@ -276,6 +297,24 @@ pub fn texel_fetches_trusted(info: &wgpu::AdapterInfo) -> bool {
         return true;
     }
     llvmpipe_vector_bits(info).is_some_and(|bits| bits <= 128) || mesa_version(info).is_some_and(|v| v <= (25, 0))
+}
+
+/// The function [`Gpu::new`] calls with the adapter it chose, before opening it.
+static ADAPTER_HOOK: OnceLock<fn(&wgpu::AdapterInfo)> = OnceLock::new();
+
+/// Registers `hook`, called with the adapter every [`Gpu::new`] chooses before the device
+/// is opened; only the first registration counts. The `lumen` program relaunches itself
+/// there when the driver would run its kernels faster with settings it reads only at
+/// start-up (`cli::software_driver`); a library cannot do that on its own behalf.
+///
+/// ```
+/// fn show(info: &wgpu::AdapterInfo) {
+///     eprintln!("opening {}", info.name);
+/// }
+/// lumen::gpu::on_adapter_chosen(show);
+/// ```
+pub fn on_adapter_chosen(hook: fn(&wgpu::AdapterInfo)) {
+    let _ = ADAPTER_HOOK.set(hook);
 }
 
 /// All adapters this machine offers, best first.
@@ -360,6 +399,9 @@ impl Gpu {
             adapters.iter().map(|a| AdapterDescription::from_info(&a.get_info())).collect();
         let index = select_adapter(&descriptions, choice)?;
         let adapter = adapters.into_iter().nth(index).ok_or(GpuError::NoAdapter)?;
+        if let Some(hook) = ADAPTER_HOOK.get() {
+            hook(&adapter.get_info());
+        }
         Self::open(adapter)
     }
 
