@@ -226,7 +226,6 @@ fn cold_environment(cache: &Path) -> [(&'static str, std::ffi::OsString); 3] {
 /// Kernel creation of each scene with every cache cold (`--cold-kernels`), each run in a
 /// process of its own: drivers read their cache settings when they load, once per process.
 fn cold_kernels_table(files: &[PathBuf], plan: &Plan, args: &BenchArgs) -> anyhow::Result<String> {
-    let exe = std::env::current_exe().context("cannot find this program to start its cold runs")?;
     let mut rows = Vec::new();
     for file in files {
         let name = name_of(file);
@@ -236,7 +235,8 @@ fn cold_kernels_table(files: &[PathBuf], plan: &Plan, args: &BenchArgs) -> anyho
         for round in 0..plan.repeat {
             eprintln!("{name}: cold kernel creation (run {} of {}) ...", round + 1, plan.repeat);
             let cache = tempfile::tempdir().context("cannot create a directory for a cold shader cache")?;
-            let mut child = std::process::Command::new(&exe);
+            let mut child =
+                super::own_process::this_program().context("cannot find this program to start its cold runs")?;
             child.args(["bench", "--cold-kernels-child", "--device", "gpu", "--scenes"]).arg(file);
             child.arg("--time").arg(plan.script.time.to_string());
             for v in &plan.script.vars {

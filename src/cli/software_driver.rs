@@ -82,36 +82,18 @@ pub fn relaunch_if_wider_is_faster(info: &wgpu::AdapterInfo) {
     }
 }
 
-/// `exec` of this process's own file with its own command line and `LP_NATIVE_VECTOR_WIDTH`
-/// = `bits`; returns only on failure. /proc/self/cmdline is the command line as the
-/// process was started, with a dynamic loader's own arguments where the program was run
-/// through one (scripts/newer_lavapipe.sh), and /proc/self/exe the file that was started.
+/// `exec` of this program again ([`super::own_process::this_program`]) with its own
+/// arguments and `LP_NATIVE_VECTOR_WIDTH` = `bits`; returns only on failure.
 #[cfg(target_os = "linux")]
 fn relaunch(bits: u32) -> std::io::Error {
     use std::io::Write;
     use std::os::unix::process::CommandExt;
-    let cmdline = match std::fs::read("/proc/self/cmdline") {
+    let mut cmd = match super::own_process::this_program() {
         Ok(c) => c,
         Err(e) => return e,
     };
-    let mut args = command_line(&cmdline).into_iter();
-    let Some(first) = args.next() else {
-        return std::io::Error::other("empty command line");
-    };
     let _ = std::io::stdout().flush();
-    std::process::Command::new("/proc/self/exe").arg0(first).args(args).env(VECTOR_WIDTH_ENV, bits.to_string()).exec()
-}
-
-/// The arguments of a /proc/PID/cmdline: NUL-terminated strings (an empty argument is an
-/// empty string between two NULs).
-#[cfg(target_os = "linux")]
-fn command_line(raw: &[u8]) -> Vec<std::ffi::OsString> {
-    use std::os::unix::ffi::OsStrExt;
-    let body = raw.strip_suffix(&[0]).unwrap_or(raw);
-    if body.is_empty() && raw.len() <= 1 {
-        return Vec::new();
-    }
-    body.split(|b| *b == 0).map(|a| OsStr::from_bytes(a).to_os_string()).collect()
+    cmd.args(std::env::args_os().skip(1)).env(VECTOR_WIDTH_ENV, bits.to_string()).exec()
 }
 
 #[cfg(test)]
@@ -138,17 +120,6 @@ mod tests {
         let mut hardware = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
         hardware.name = "NVIDIA H200".into();
         assert_eq!(wider_width(&hardware, true, 256), None);
-    }
-
-    #[cfg(target_os = "linux")]
-    #[test]
-    fn command_lines_split_at_their_nuls() {
-        let args = |raw: &[u8]| command_line(raw).into_iter().map(|a| a.into_string().unwrap()).collect::<Vec<_>>();
-        assert_eq!(args(b"lumen\0render\0a b.sl\0"), ["lumen", "render", "a b.sl"]);
-        assert_eq!(args(b"lumen\0\0-o\0"), ["lumen", "", "-o"]);
-        assert_eq!(args(b"lumen"), ["lumen"]);
-        assert!(args(b"").is_empty());
-        assert!(args(b"\0").is_empty());
     }
 
     #[test]

@@ -1,0 +1,62 @@
+//! Starting this program again: the relaunch with other driver settings
+//! (`software_driver`) and `lumen bench --cold-kernels`' runs in fresh processes.
+
+use std::process::Command;
+
+/// A command that starts this program again, without arguments of its own: its file and,
+/// where the program was started through a dynamic loader by hand (as
+/// `scripts/newer_lavapipe.sh` runs it, under another system's loader), the loader with
+/// its own arguments. There `current_exe` is the loader, and only /proc/self/cmdline
+/// still holds the loader's arguments (the loader hands the program what follows them).
+pub fn this_program() -> std::io::Result<Command> {
+    #[cfg(target_os = "linux")]
+    {
+        let started = command_line(&std::fs::read("/proc/self/cmdline")?);
+        let own = std::env::args_os().count();
+        if own >= 1 && started.len() > own {
+            use std::os::unix::process::CommandExt;
+            // The loader and its arguments, then the program's file.
+            let program = started.len() - own;
+            let mut cmd = Command::new("/proc/self/exe");
+            cmd.arg0(&started[0]).args(&started[1..=program]);
+            return Ok(cmd);
+        }
+    }
+    Ok(Command::new(std::env::current_exe()?))
+}
+
+/// The arguments of a /proc/PID/cmdline: NUL-terminated strings (an empty argument is an
+/// empty string between two NULs).
+#[cfg(target_os = "linux")]
+fn command_line(raw: &[u8]) -> Vec<std::ffi::OsString> {
+    use std::os::unix::ffi::OsStrExt;
+    let body = raw.strip_suffix(&[0]).unwrap_or(raw);
+    if body.is_empty() && raw.len() <= 1 {
+        return Vec::new();
+    }
+    body.split(|b| *b == 0).map(|a| std::ffi::OsStr::from_bytes(a).to_os_string()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn command_lines_split_at_their_nuls() {
+        use super::command_line;
+        let args = |raw: &[u8]| command_line(raw).into_iter().map(|a| a.into_string().unwrap()).collect::<Vec<_>>();
+        assert_eq!(args(b"lumen\0render\0a b.sl\0"), ["lumen", "render", "a b.sl"]);
+        assert_eq!(args(b"lumen\0\0-o\0"), ["lumen", "", "-o"]);
+        assert_eq!(args(b"lumen"), ["lumen"]);
+        assert!(args(b"").is_empty());
+        assert!(args(b"\0").is_empty());
+    }
+
+    /// Started directly (as the test harness is), this program is its own file.
+    #[test]
+    fn this_program_is_the_running_file() {
+        let cmd = super::this_program().unwrap();
+        let file = std::path::Path::new(cmd.get_program());
+        assert_eq!(file.canonicalize().unwrap(), std::env::current_exe().unwrap().canonicalize().unwrap());
+        assert_eq!(cmd.get_args().count(), 0);
+    }
+}
