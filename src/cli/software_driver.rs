@@ -80,6 +80,9 @@ pub fn relaunch_if_wider_is_faster(info: &wgpu::AdapterInfo) {
         let err = relaunch(bits);
         eprintln!("note: could not relaunch with {bits}-bit llvmpipe vectors ({err}); going on at 128 bits");
     }
+    // (Elsewhere no relaunch: llvmpipe through lavapipe is a Linux driver.)
+    #[cfg(not(target_os = "linux"))]
+    let _ = bits;
 }
 
 /// `exec` of this program again ([`super::own_process::this_program`]) with its own
