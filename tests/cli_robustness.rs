@@ -16,7 +16,7 @@ fn scene_dir() -> tempfile::TempDir {
 }
 
 fn lumen(dir: &Path) -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lumen"));
+    let mut cmd = common::lumen_command();
     cmd.current_dir(dir);
     cmd
 }

@@ -2,7 +2,7 @@
 //! fall like 1/spp, and argument errors that must fail before any rendering.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 mod common;
 use common::TINY_SKY_SL as SCENE;
@@ -10,13 +10,7 @@ use common::TINY_SKY_SL as SCENE;
 fn lumen(dir: &Path, args: &[&str]) -> Output {
     let scene = dir.join("tiny.sl");
     std::fs::write(&scene, SCENE).unwrap();
-    Command::new(env!("CARGO_BIN_EXE_lumen"))
-        .arg("converge")
-        .arg(&scene)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run lumen")
+    common::lumen_command().arg("converge").arg(&scene).args(args).current_dir(dir).output().expect("run lumen")
 }
 
 #[test]
@@ -136,7 +130,7 @@ fn bad_arguments_fail_clearly() {
 
 fn lumen_bench(dir: &Path, args: &[&str]) -> Output {
     std::fs::write(dir.join("tiny.sl"), SCENE).unwrap();
-    Command::new(env!("CARGO_BIN_EXE_lumen")).arg("bench").args(args).current_dir(dir).output().expect("run lumen")
+    common::lumen_command().arg("bench").args(args).current_dir(dir).output().expect("run lumen")
 }
 
 #[test]

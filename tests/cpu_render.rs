@@ -452,13 +452,7 @@ mod cli {
 
     fn lumen(dir: &Path, args: &[&str]) -> std::process::Output {
         std::fs::write(dir.join("tiny.sl"), SCRIPT).unwrap();
-        Command::new(env!("CARGO_BIN_EXE_lumen"))
-            .current_dir(dir)
-            .arg("render")
-            .arg("tiny.sl")
-            .args(args)
-            .output()
-            .unwrap()
+        crate::common::lumen_command().current_dir(dir).arg("render").arg("tiny.sl").args(args).output().unwrap()
     }
 
     #[test]
@@ -509,7 +503,7 @@ mod cli {
         // `cache`: the value of LUMEN_PIPELINE_CACHE, or unset.
         let render = |out: &str, cache: Option<&Path>| {
             std::fs::write(dir.path().join("tiny.sl"), SCRIPT).unwrap();
-            let mut cmd = Command::new(env!("CARGO_BIN_EXE_lumen"));
+            let mut cmd = crate::common::lumen_command();
             cmd.current_dir(dir.path()).env_remove("LUMEN_PIPELINE_CACHE").env("XDG_CACHE_HOME", &xdg);
             if let Some(c) = cache {
                 cmd.env("LUMEN_PIPELINE_CACHE", c);
@@ -535,7 +529,7 @@ mod cli {
     fn shader_and_check_show_the_specialised_kernel() {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("tiny.sl"), SCRIPT).unwrap();
-        let run = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_lumen")).current_dir(dir.path()).args(args).output();
+        let run = |args: &[&str]| crate::common::lumen_command().current_dir(dir.path()).args(args).output();
         let out = run(&["shader", "tiny.sl", "-o", "tiny.wgsl"]).unwrap();
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let wgsl = std::fs::read_to_string(dir.path().join("tiny.wgsl")).unwrap();
@@ -574,7 +568,7 @@ mod cli {
         let dir = tempfile::tempdir().unwrap();
         let script = SCRIPT.replace("TRANSLATE(.X 3)", "TRANSLATE(.X 3, .Y $4*TIME$)");
         std::fs::write(dir.path().join("anim.sl"), script).unwrap();
-        let out = Command::new(env!("CARGO_BIN_EXE_lumen"))
+        let out = crate::common::lumen_command()
             .current_dir(dir.path())
             .args(["render", "anim.sl", "--device", "cpu", "--frames", "0:1:3", "-o", "f.pfm", "-o", "f.png"])
             .output()
@@ -614,11 +608,8 @@ mod cli {
             assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
             assert!(!dir.path().join("out.png").exists(), "{args:?} left an output");
         }
-        let out = Command::new(env!("CARGO_BIN_EXE_lumen"))
-            .args(["render", "missing.sl"])
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
+        let out =
+            crate::common::lumen_command().args(["render", "missing.sl"]).current_dir(dir.path()).output().unwrap();
         assert!(!out.status.success());
     }
 }

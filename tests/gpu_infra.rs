@@ -162,7 +162,7 @@ fn the_opengl_backend_renders_as_vulkan_does() {
         return;
     }
     let lumen = |gl: bool| {
-        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_lumen"));
+        let mut cmd = common::lumen_command();
         if gl {
             cmd.env("WGPU_BACKEND", "gl");
         } else {
@@ -212,4 +212,36 @@ fn the_opengl_backend_renders_as_vulkan_does() {
         println!("{scene}: {a}");
         a.check(common::Tolerance::share(0.99)).unwrap_or_else(|e| panic!("{scene}, OpenGL vs Vulkan: {e}"));
     }
+}
+
+/// On an llvmpipe of Mesa 26.1 or later `lumen` relaunches itself with 256-bit vectors when
+/// the width was its own choice, and keeps a width that was set (cli::software_driver,
+/// DESIGN.md "Vector width"). Only such a driver shows it: with another adapter (CI's Mesa
+/// 25) the test says it was skipped; run it through scripts/newer_lavapipe.sh's runner
+/// (README "How it is checked").
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn lumen_widens_llvmpipe_vectors_where_the_driver_gains() {
+    let Some(gpu) = lumen::gpu::gpu_for_tests("lumen_widens_llvmpipe_vectors_where_the_driver_gains") else {
+        return;
+    };
+    if !lumen::gpu::llvmpipe_prefers_wide_vectors(&gpu.adapter_info) || !std::arch::is_x86_feature_detected!("avx2") {
+        println!("skipped: {} is not an llvmpipe that runs faster with wider vectors", gpu.adapter_info.name);
+        return;
+    }
+    let devices = |width: Option<&str>| {
+        let mut cmd = common::lumen_command();
+        cmd.arg("devices");
+        match width {
+            Some(w) => cmd.env("LP_NATIVE_VECTOR_WIDTH", w),
+            None => cmd.env_remove("LP_NATIVE_VECTOR_WIDTH"),
+        };
+        let out = cmd.output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let chosen = devices(None);
+    assert!(chosen.lines().next().is_some_and(|l| l.contains("256 bits")), "{chosen}");
+    let set = devices(Some("128"));
+    assert!(set.lines().next().is_some_and(|l| l.contains("128 bits")), "{set}");
 }

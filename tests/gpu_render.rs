@@ -1480,7 +1480,7 @@ USING Camera.Perspective() Image(4, 4) Renderer.PathTracer(.n 1, .max_depth 3) T
     )
     .unwrap();
     let run = |device: &str, out: &str| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_lumen"))
+        common::lumen_command()
             .current_dir(dir.path())
             .args(["render", "huge.sl", "--device", device, "-o", out])
             .output()

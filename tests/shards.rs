@@ -5,7 +5,6 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use common::add_lit_props;
 use glam::DVec3;
@@ -123,7 +122,7 @@ fn gpu_shards_merge_into_the_one_render_image() {
 // ---------------------------------------------------------------- the command line
 
 fn lumen(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_lumen")).current_dir(dir).args(args).output().unwrap()
+    common::lumen_command().current_dir(dir).args(args).output().unwrap()
 }
 
 fn ok(dir: &Path, args: &[&str]) {

@@ -16,7 +16,7 @@ pub mod gpu_args;
 pub mod headless;
 pub mod merge;
 pub mod output;
-mod own_process;
+pub mod own_process;
 pub mod render;
 pub mod script_args;
 mod shader;

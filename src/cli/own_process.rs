@@ -1,26 +1,50 @@
-//! Starting this program again: the relaunch with other driver settings
-//! (`software_driver`) and `lumen bench --cold-kernels`' runs in fresh processes.
+//! Starting this program (or another) again the way this process was started: the
+//! relaunch with other driver settings (`software_driver`), `lumen bench --cold-kernels`'
+//! runs in fresh processes, and tests that start `lumen`.
 
+use std::ffi::OsString;
+use std::path::Path;
 use std::process::Command;
 
-/// A command that starts this program again, without arguments of its own: its file and,
-/// where the program was started through a dynamic loader by hand (as
-/// `scripts/newer_lavapipe.sh` runs it, under another system's loader), the loader with
-/// its own arguments. There `current_exe` is the loader, and only /proc/self/cmdline
-/// still holds the loader's arguments (the loader hands the program what follows them).
-pub fn this_program() -> std::io::Result<Command> {
+/// The dynamic loader and its own arguments, where this process was started through a
+/// loader by hand (as `scripts/newer_lavapipe.sh` runs programs, under another system's
+/// loader and libraries); `None` where it was started directly. There `current_exe` is the
+/// loader, and only /proc/self/cmdline still holds the loader's arguments (the loader
+/// hands the program the arguments that follow its own).
+pub fn loader_prefix() -> Option<Vec<OsString>> {
     #[cfg(target_os = "linux")]
     {
-        let started = command_line(&std::fs::read("/proc/self/cmdline")?);
+        let started = command_line(&std::fs::read("/proc/self/cmdline").ok()?);
         let own = std::env::args_os().count();
         if own >= 1 && started.len() > own {
-            use std::os::unix::process::CommandExt;
-            // The loader and its arguments, then the program's file.
-            let program = started.len() - own;
-            let mut cmd = Command::new("/proc/self/exe");
-            cmd.arg0(&started[0]).args(&started[1..=program]);
-            return Ok(cmd);
+            return Some(started[..started.len() - own].to_vec());
         }
+    }
+    None
+}
+
+/// A command that starts `program` (without arguments of its own) as this process was
+/// started: through the same dynamic loader, with its arguments, where there was one.
+pub fn through_own_loader(program: &Path) -> Command {
+    match loader_prefix() {
+        Some(prefix) => {
+            let mut cmd = Command::new("/proc/self/exe");
+            #[cfg(unix)]
+            std::os::unix::process::CommandExt::arg0(&mut cmd, &prefix[0]);
+            cmd.args(&prefix[1..]).arg(program);
+            cmd
+        }
+        None => Command::new(program),
+    }
+}
+
+/// A command that starts this program again, without arguments of its own
+/// ([`through_own_loader`] of its file, which /proc/self/cmdline names where a loader ran it).
+pub fn this_program() -> std::io::Result<Command> {
+    #[cfg(target_os = "linux")]
+    if let Some(prefix) = loader_prefix() {
+        let started = command_line(&std::fs::read("/proc/self/cmdline")?);
+        return Ok(through_own_loader(Path::new(&started[prefix.len()])));
     }
     Ok(Command::new(std::env::current_exe()?))
 }

@@ -437,3 +437,14 @@ pub fn assert_close_to_closed_form(img: &HdrImage, want: &[Color], pixel: f64, t
     }
     assert!((sum_got / sum_want - 1.0).abs() < total, "image total {sum_got} vs {sum_want}");
 }
+
+/// A command that starts the `lumen` binary the way this test process was started: through
+/// the same dynamic loader, with its arguments, where a cargo runner started the tests
+/// through one (`scripts/newer_lavapipe.sh`'s `run`, README "How it is checked"), so that
+/// `lumen` reaches the same GPU driver as the test.
+pub fn lumen_command() -> std::process::Command {
+    // (Cargo defines the binary's path for integration tests, not for the example that
+    // shares this module and never calls this.)
+    let lumen = option_env!("CARGO_BIN_EXE_lumen").unwrap_or("lumen");
+    lumen::cli::own_process::through_own_loader(Path::new(lumen))
+}
