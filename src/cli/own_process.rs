@@ -75,12 +75,28 @@ mod tests {
         assert!(args(b"\0").is_empty());
     }
 
-    /// Started directly (as the test harness is), this program is its own file.
+    /// This program is its own file, or where a loader started it (a cargo runner such as
+    /// scripts/newer_lavapipe.sh's), the loader's own file with its arguments and then the
+    /// program's.
     #[test]
     fn this_program_is_the_running_file() {
         let cmd = super::this_program().unwrap();
-        let file = std::path::Path::new(cmd.get_program());
-        assert_eq!(file.canonicalize().unwrap(), std::env::current_exe().unwrap().canonicalize().unwrap());
-        assert_eq!(cmd.get_args().count(), 0);
+        let args: Vec<_> = cmd.get_args().collect();
+        match super::loader_prefix() {
+            None => {
+                let file = std::path::Path::new(cmd.get_program());
+                assert_eq!(file.canonicalize().unwrap(), std::env::current_exe().unwrap().canonicalize().unwrap());
+                assert!(args.is_empty());
+            }
+            Some(prefix) => {
+                assert_eq!(cmd.get_program(), "/proc/self/exe");
+                assert_eq!(args.len(), prefix.len());
+                let program = std::path::Path::new(args[args.len() - 1]);
+                assert_eq!(
+                    program.file_name(),
+                    std::env::args_os().next().as_deref().map(std::path::Path::new).and_then(|p| p.file_name())
+                );
+            }
+        }
     }
 }
