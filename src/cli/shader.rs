@@ -8,9 +8,8 @@ use clap::Args;
 
 use super::script_args::ScriptArgs;
 use crate::gpu::pack::pack;
-use crate::gpu::render::assemble_stages;
+use crate::gpu::render::kernel_listing;
 use crate::gpu::tables::{TableForms, TableLimits, TablePlacement};
-use crate::gpu::wavefront::Stage;
 use crate::image::write_atomically;
 
 /// Arguments of `lumen shader`.
@@ -41,27 +40,12 @@ pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
         let limits = TableLimits::webgpu_default();
         features.tables = TableForms::choose(&packed, args.tables, wgpu::DeviceType::Cpu, limits);
     }
-    let stages = assemble_stages(&features).map_err(|e| anyhow!("cannot assemble the kernels: {e}"))?;
-    let mut text = format!(
-        "// lumen render kernels for {}\n// scene features: {}\n",
+    let kernels = kernel_listing(&features).map_err(|e| anyhow!("cannot assemble the kernels: {e}"))?;
+    let text = format!(
+        "// lumen render kernels for {}\n// scene features: {}\n{kernels}",
         args.scene.display(),
         features.names().join(" ")
     );
-    for stage in Stage::for_scene(&features) {
-        // A stage that launches another's kernel (the kinds that sample lights) names it.
-        let Some((_, a)) = stages.iter().find(|(s, _)| *s == stage) else {
-            let owner = stage.kernel_stage(&features);
-            text.push_str(&format!("\n// ===== stage {}: the kernel of {} =====\n", stage.label(), owner.label()));
-            continue;
-        };
-        text.push_str(&format!(
-            "\n// ===== stage {} (entry point {}; features: {}) =====\n{}",
-            stage.label(),
-            stage.entry().1,
-            stage.names(&features).join(" "),
-            a.source
-        ));
-    }
     match &args.output {
         Some(path) => {
             write_atomically(path, text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;

@@ -259,7 +259,8 @@ pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>,
         .collect()
 }
 
-/// The WGSL of the kernels that render `scene` (for `lumen shader`), stage by stage.
+/// The WGSL of the kernels that render `scene` with every table in storage buffers, stage
+/// by stage ([`kernel_listing`]).
 ///
 /// ```
 /// use lumen::scene::*;
@@ -272,20 +273,27 @@ pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>,
 /// assert!(src.contains("fn intersect_stage") && !src.contains("fn csg_stage"));
 /// ```
 pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
-    let mut out = String::new();
     let packed = super::pack::pack(scene, None).map_err(pack_error)?;
-    let f = &packed.features;
+    kernel_listing(&packed.features)
+}
+
+/// The assembled kernels of a render with features `f`, stage by stage (`lumen shader`):
+/// each stage's header (entry point and assembly features) and source; a stage that launches
+/// another stage's kernel (the kinds that sample lights) names that stage instead.
+pub fn kernel_listing(f: &FeatureSet) -> Result<String, GpuError> {
     let kernels: BTreeMap<Stage, Assembled> = assemble_stages(f)?.into_iter().collect();
+    let mut out = String::new();
     for stage in Stage::for_scene(f) {
         match kernels.get(&stage) {
-            Some(a) => {
-                let (_, entry) = stage.entry();
-                out.push_str(&format!("// ===== stage {} (entry point {entry}) =====\n", stage.label()));
-                out.push_str(&a.source);
-                out.push('\n');
-            }
+            Some(a) => out.push_str(&format!(
+                "\n// ===== stage {} (entry point {}; features: {}) =====\n{}",
+                stage.label(),
+                stage.entry().1,
+                stage.names(f).join(" "),
+                a.source
+            )),
             None => out.push_str(&format!(
-                "// ===== stage {}: the kernel of {} =====\n",
+                "\n// ===== stage {}: the kernel of {} =====\n",
                 stage.label(),
                 stage.kernel_stage(f).label()
             )),
