@@ -38,13 +38,14 @@ pub fn through_own_loader(program: &Path) -> Command {
     }
 }
 
-/// A command that starts this program again, without arguments of its own
-/// ([`through_own_loader`] of its file, which /proc/self/cmdline names where a loader ran it).
+/// A command that starts this program again, without arguments of its own: its file, or,
+/// where a loader ran it, [`through_own_loader`] of the file the loader was given (the
+/// program's first argument, as the loader hands it over).
 pub fn this_program() -> std::io::Result<Command> {
-    #[cfg(target_os = "linux")]
-    if let Some(prefix) = loader_prefix() {
-        let started = command_line(&std::fs::read("/proc/self/cmdline")?);
-        return Ok(through_own_loader(Path::new(&started[prefix.len()])));
+    if loader_prefix().is_some() {
+        if let Some(file) = std::env::args_os().next() {
+            return Ok(through_own_loader(Path::new(&file)));
+        }
     }
     Ok(Command::new(std::env::current_exe()?))
 }
