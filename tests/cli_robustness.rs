@@ -124,25 +124,21 @@ fn llvmpipe_gets_128_bit_vectors_unless_the_user_chose_a_width() {
         eprintln!("skipped: no llvmpipe adapter ({default})");
         return;
     }
-    // llvmpipe names its vector width in the adapter name: lumen's 128 bits, or 256 where
-    // lumen relaunched itself on a driver that runs faster so (cli::software_driver).
+    // llvmpipe names its vector width in the adapter name: lumen's 128 bits, or the host's
+    // width where lumen relaunched itself on a driver that runs faster so
+    // (cli::software_driver).
     let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
     info.name = "llvmpipe".into();
     info.driver_info = default.lines().find(|l| l.contains("driver:")).unwrap_or_default().into();
-    let wide = lumen::gpu::llvmpipe_prefers_wide_vectors(&info) && wide_registers();
-    let want = if wide { ", 256 bits)" } else { ", 128 bits)" };
-    assert!(default.contains("llvmpipe (LLVM") && default.contains(want), "{default}");
+    let bits = if lumen::gpu::llvmpipe_prefers_wide_vectors(&info) {
+        lumen::cli::software_driver::host_vector_bits()
+    } else {
+        128
+    };
+    let want = format!(", {bits} bits)");
+    assert!(default.contains("llvmpipe (LLVM") && default.contains(&want), "{default}");
     let chosen = devices(Some("256"));
     assert!(chosen.contains(", 256 bits)"), "{chosen}");
-}
-
-/// Whether the host has 256-bit SIMD registers (AVX2), which llvmpipe would use.
-fn wide_registers() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        return true;
-    }
-    false
 }
 
 /// `lumen render` under a 4 GiB address-space limit (`ulimit -v`, as the reproducer).

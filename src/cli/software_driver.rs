@@ -1,19 +1,20 @@
 //! Settings for Mesa's llvmpipe, the software GPU that lavapipe (Vulkan) runs on.
 //!
 //! llvmpipe JIT-compiles each compute kernel at its first dispatch with LLVM, one kernel
-//! after another, and by default vectorises it over the host's widest SIMD registers
-//! (256 bits here). Up to Mesa 25, llvmpipe compiles every lane-divergent storage-buffer
-//! access into per-lane code; at 128 bits each such access expands to 4 lanes instead of
-//! 8, so a scene's kernels compile 30–40 % faster, and the same renders run as fast
-//! (measured side by side: docs/DESIGN.md "Software adapters", BENCHMARKS.md). So `lumen`
-//! asks llvmpipe for 128-bit vectors unless the user chose a width. Mesa 26.1 turns those
-//! accesses into gathers, and there 256-bit vectors render 1.15–1.7× faster than 128 on an
-//! Intel host: when the adapter turns out to be such an llvmpipe (known only once the driver
-//! is loaded, and llvmpipe reads the width only then), `lumen` relaunches itself with 256
-//! ([`relaunch_if_wider_is_faster`], registered with `gpu::on_adapter_chosen`). The variable
-//! only affects llvmpipe; hardware drivers never read it. `.cargo/config.toml` sets 128
-//! for `cargo test`, `cargo bench` and examples, so the tests exercise the configuration
-//! CI's Mesa 25 gets.
+//! after another, and by default vectorises it over 256-bit registers where the host has
+//! them (also with AVX-512). Up to Mesa 25, llvmpipe compiles every lane-divergent
+//! storage-buffer access into per-lane code; at 128 bits each such access expands to 4
+//! lanes instead of 8, so a scene's kernels compile 30–40 % faster, and the same renders
+//! run as fast (measured side by side: docs/DESIGN.md "Software adapters", BENCHMARKS.md).
+//! So `lumen` asks llvmpipe for 128-bit vectors unless the user chose a width. Mesa 26.1
+//! turns those accesses into gathers, and there wider vectors win: on an Intel host 256 bits
+//! rendered 1.15–1.7× faster than 128, and 512 bits faster again on most scenes. When the
+//! adapter turns out to be such an llvmpipe (known only once the driver is loaded, and
+//! llvmpipe reads the width only then), `lumen` relaunches itself with the host's width
+//! ([`relaunch_if_wider_is_faster`], registered with `gpu::on_adapter_chosen`;
+//! [`host_vector_bits`]). The variable only affects llvmpipe; hardware drivers never read
+//! it. `.cargo/config.toml` sets 128 for `cargo test`, `cargo bench` and examples, so the
+//! tests exercise the configuration CI's Mesa 25 gets.
 
 use std::ffi::OsStr;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -45,23 +46,42 @@ pub fn prefer_narrow_vectors() {
     }
 }
 
-/// The width to relaunch with on adapter `info`, if any: 256 bits where the width was
-/// lumen's own 128, the adapter is an llvmpipe that runs faster wide
-/// ([`crate::gpu::llvmpipe_prefers_wide_vectors`]), and the host has 256-bit SIMD
-/// registers (`host_bits`, what llvmpipe would use).
+/// The width to relaunch with on adapter `info`, if any: the host's `host_bits`
+/// ([`host_vector_bits`]) where the width was lumen's own 128, the adapter is an llvmpipe
+/// that runs faster wide ([`crate::gpu::llvmpipe_prefers_wide_vectors`]), and the host has
+/// registers wider than 128 bits.
 pub fn wider_width(info: &wgpu::AdapterInfo, set_here: bool, host_bits: u32) -> Option<u32> {
     let gains = set_here
         && crate::gpu::llvmpipe_vector_bits(info) == Some(128)
         && crate::gpu::llvmpipe_prefers_wide_vectors(info)
-        && host_bits >= 256;
-    gains.then_some(256)
+        && host_bits > 128;
+    gains.then_some(host_bits)
 }
 
-/// The widest SIMD registers llvmpipe would use here (it caps them at 256 bits).
-fn host_vector_bits() -> u32 {
+/// The vector width lumen gives an llvmpipe that gains from wide vectors on this host: 512
+/// bits with the AVX-512 of Intel's Ice Lake and AMD's Zen 4 generations or later (VBMI2
+/// marks them), 256 with AVX2, else 128.
+///
+/// On the Intel host of 2026-12-06 Mesa 26.1 at 512 bits rendered most example scenes
+/// 4–21 % faster than at 256 (spheres_10k.sl and skybox.sl most; cornell.sl and mirrors.sl,
+/// already 3× the CPU, 5–7 % slower) and created kernels within a second still
+/// (BENCHMARKS.md "512-bit vectors on Mesa 26.1"). Earlier AVX-512 cores (Skylake-SP,
+/// Cascade Lake) lower the whole core's clock while 512-bit code runs, so they keep 256.
+///
+/// ```
+/// let bits = lumen::cli::software_driver::host_vector_bits();
+/// assert!([128, 256, 512].contains(&bits));
+/// ```
+pub fn host_vector_bits() -> u32 {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        return 256;
+    {
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f") && has!("avx512bw") && has!("avx512dq") && has!("avx512vl") && has!("avx512vbmi2") {
+            return 512;
+        }
+        if has!("avx2") {
+            return 256;
+        }
     }
     128
 }
@@ -69,8 +89,8 @@ fn host_vector_bits() -> u32 {
 /// Relaunches this process with wider llvmpipe vectors where [`wider_width`] says so: the
 /// same program, arguments and process id, the variable set (so the new process keeps
 /// it). Registered with `gpu::on_adapter_chosen`, so it runs before the device is opened,
-/// a render has begun or an output file exists; only output printed before (scene
-/// warnings) shows twice. Where the relaunch fails, the render goes on at 128 bits.
+/// a render has begun or an output file exists (and before lumen has printed anything, so
+/// nothing shows twice). Where the relaunch fails, the render goes on at 128 bits.
 pub fn relaunch_if_wider_is_faster(info: &wgpu::AdapterInfo) {
     let Some(bits) = wider_width(info, WIDTH_SET_HERE.load(Ordering::Relaxed), host_vector_bits()) else {
         return;
@@ -113,7 +133,7 @@ mod tests {
     #[test]
     fn wider_vectors_only_where_the_driver_gains_and_the_width_was_ours() {
         assert_eq!(wider_width(&llvmpipe(128, "26.1.6-1~bpo13+1"), true, 256), Some(256));
-        assert_eq!(wider_width(&llvmpipe(128, "27.0.0"), true, 512), Some(256));
+        assert_eq!(wider_width(&llvmpipe(128, "27.0.0"), true, 512), Some(512));
         // The user's (or a parent's) width, already wide, an older Mesa, a narrow host.
         assert_eq!(wider_width(&llvmpipe(128, "26.1.6"), false, 256), None);
         assert_eq!(wider_width(&llvmpipe(256, "26.1.6"), true, 256), None);
