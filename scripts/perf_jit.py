@@ -21,7 +21,9 @@ share of all JIT samples) and writes /tmp/annotated/kernel<index>.txt. Which ker
 which: `LUMEN_PARALLEL_JIT=0` compiles a scene's kernels in the order `lumen shader`
 prints them after sorting by WGSL length, longest first (src/gpu/parallel_jit.rs). Samples
 land on the instruction after a slow one (skid): a `lock xadd` shows on the next line.
-Used for BENCHMARKS.md "Unrolled lists" (2026-12-04).
+Works with Mesa 25's listings and Mesa 26.1's (run both commands through
+`target/newer-lavapipe/run` for the latter). Used for BENCHMARKS.md "Unrolled lists"
+(2026-12-04).
 """
 
 import bisect
@@ -87,8 +89,12 @@ def main():
     addrs = sorted(counts)
     os.makedirs(out_dir, exist_ok=True)
     print(f"{total} samples in JIT code")
-    for index, (name, instrs) in enumerate(functions(asm_listing)):
-        if name != "cs_co_variant" or len(instrs) < 50:
+    funcs = functions(asm_listing)
+    # Mesa 25 runs a kernel's body as a coroutine (`cs_co_variant`, beside a small
+    # `cs_variant` that drives it); Mesa 26.1 compiles the body into `cs_variant` itself.
+    body = "cs_co_variant" if any(name == "cs_co_variant" for name, _ in funcs) else "cs_variant"
+    for index, (name, instrs) in enumerate(funcs):
+        if name != body or len(instrs) < 50:
             continue
         offsets = {off for off, _ in instrs}
         found = locate(counts, addrs, offsets, total)
