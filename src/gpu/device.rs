@@ -280,7 +280,9 @@ pub fn llvmpipe_prefers_wide_vectors(info: &wgpu::AdapterInfo) -> bool {
 /// one-invocation kernel of `Gpu::u32_texture`'s example crashed in the JIT code, and
 /// renders with texture tables disagreed with the CPU on a sixth of their pixels, while
 /// the same kernels with the tables in uniform or storage buffers, or at 128 bits, were
-/// right (BENCHMARKS.md "Mesa 26.1 lavapipe on an Intel host"). llvmpipe at 128 bits (what
+/// right (BENCHMARKS.md "Mesa 26.1 lavapipe on an Intel host"); at 256 and at 512 bits a
+/// spheres_10k.sl render with its tables in textures later died of SIGSEGV (2026-12-06,
+/// "512-bit vectors on Mesa 26.1"). llvmpipe at 128 bits (what
 /// `lumen` asks for) and Mesa up to 25.0 at any width passed every test; for other Mesa
 /// releases with wider vectors, which were not tried, the tables stay in buffers.
 ///
