@@ -28,9 +28,7 @@ pub fn run(args: DevicesArgs) -> anyhow::Result<()> {
     let selected = select_adapter(&adapters, &choice);
     // As a render would (gpu::on_adapter_chosen): list the adapters as it will open them.
     if let Some(a) = selected.as_ref().ok().and_then(|&i| adapters.get(i)) {
-        let mut info = wgpu::AdapterInfo::new(a.device_type, a.backend);
-        (info.name, info.driver, info.driver_info) = (a.name.clone(), a.driver.clone(), a.driver_info.clone());
-        super::software_driver::relaunch_if_wider_is_faster(&info);
+        super::software_driver::relaunch_if_wider_is_faster(&a.info());
     }
     for (i, a) in adapters.iter().enumerate() {
         let mark = if selected.as_ref().ok() == Some(&i) { "  (selected)" } else { "" };

@@ -26,7 +26,23 @@ pub fn loader_prefix() -> Option<Vec<OsString>> {
 /// A command that starts `program` (without arguments of its own) as this process was
 /// started: through the same dynamic loader, with its arguments, where there was one.
 pub fn through_own_loader(program: &Path) -> Command {
-    match loader_prefix() {
+    command_after(loader_prefix(), program)
+}
+
+/// A command that starts this program again, without arguments of its own: its file, or,
+/// where a loader ran it, [`through_own_loader`] of the file the loader was given (the
+/// program's first argument, as the loader hands it over).
+pub fn this_program() -> std::io::Result<Command> {
+    if let (Some(prefix), Some(file)) = (loader_prefix(), std::env::args_os().next()) {
+        return Ok(command_after(Some(prefix), Path::new(&file)));
+    }
+    Ok(Command::new(std::env::current_exe()?))
+}
+
+/// `program` run through the loader command `prefix` (its file, then its arguments), or
+/// directly without one.
+fn command_after(prefix: Option<Vec<OsString>>, program: &Path) -> Command {
+    match prefix {
         Some(prefix) => {
             let mut cmd = Command::new("/proc/self/exe");
             #[cfg(unix)]
@@ -36,18 +52,6 @@ pub fn through_own_loader(program: &Path) -> Command {
         }
         None => Command::new(program),
     }
-}
-
-/// A command that starts this program again, without arguments of its own: its file, or,
-/// where a loader ran it, [`through_own_loader`] of the file the loader was given (the
-/// program's first argument, as the loader hands it over).
-pub fn this_program() -> std::io::Result<Command> {
-    if loader_prefix().is_some() {
-        if let Some(file) = std::env::args_os().next() {
-            return Ok(through_own_loader(Path::new(&file)));
-        }
-    }
-    Ok(Command::new(std::env::current_exe()?))
 }
 
 /// The arguments of a /proc/PID/cmdline: NUL-terminated strings (an empty argument is an

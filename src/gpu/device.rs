@@ -111,6 +111,14 @@ impl AdapterDescription {
         }
     }
 
+    /// The adapter information this description was made from (as [`on_adapter_chosen`]'s
+    /// hook receives it).
+    pub fn info(&self) -> wgpu::AdapterInfo {
+        let mut info = wgpu::AdapterInfo::new(self.device_type, self.backend);
+        (info.name, info.driver, info.driver_info) = (self.name.clone(), self.driver.clone(), self.driver_info.clone());
+        info
+    }
+
     /// A human word for the device type.
     pub fn device_type_name(&self) -> &'static str {
         device_type_name(self.device_type)

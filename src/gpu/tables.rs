@@ -325,16 +325,18 @@ impl TableLimits {
     /// The limits of an adapter with `limits`, named by `info`: no texture rows where its
     /// texel fetches are not trusted ([`crate::gpu::texel_fetches_trusted`]).
     pub fn of(limits: &wgpu::Limits, info: &wgpu::AdapterInfo) -> Self {
-        let rows = if crate::gpu::texel_fetches_trusted(info) { limits.max_texture_dimension_2d } else { 0 };
-        TableLimits { max_uniform_bytes: limits.max_uniform_buffer_binding_size, max_texture_rows: rows }
+        Self::from_limits(limits, crate::gpu::texel_fetches_trusted(info))
     }
 
     /// WebGPU's defaults, which every adapter offers.
     pub fn webgpu_default() -> Self {
-        let defaults = wgpu::Limits::default();
+        Self::from_limits(&wgpu::Limits::default(), true)
+    }
+
+    fn from_limits(limits: &wgpu::Limits, textures: bool) -> Self {
         TableLimits {
-            max_uniform_bytes: defaults.max_uniform_buffer_binding_size,
-            max_texture_rows: defaults.max_texture_dimension_2d,
+            max_uniform_bytes: limits.max_uniform_buffer_binding_size,
+            max_texture_rows: if textures { limits.max_texture_dimension_2d } else { 0 },
         }
     }
 }
