@@ -9,7 +9,8 @@
 //!   the round in f64 ([`Accumulator`]). Pixel values do not depend on how pixels are split
 //!   into batches, so batch size is free to follow the device.
 //! - The host keeps the device busy: batch k + 1 is submitted before batch k's sums are
-//!   read back (two film and staging buffers), and nothing else is read back. Where
+//!   read back (two film and staging buffers), across round ends too unless a time limit
+//!   is set, and nothing else is read back. Where
 //!   devices share the batches (`wavefront::twin`), one batch per device is submitted
 //!   ahead, so that whichever device finishes first finds the next one waiting.
 
@@ -163,6 +164,12 @@ pub(crate) fn batches(plan: &Plan, j0: u32, samples: u32) -> Vec<BatchUniform> {
 }
 
 /// Renders `plan.total_spp` samples per pixel in rounds of batches run by `runner`.
+///
+/// Without a time limit, rounds overlap: the next round's first batch is submitted while
+/// the last ones of the round before still run, so the device does not idle at a round's
+/// end while the host reads back, commits and records. Its size then comes from the last
+/// round already finished, one round behind. A time limit keeps rounds apart, so that the
+/// decision to start one is taken with the time they really took.
 pub(crate) fn run_rounds<R: BatchRunner>(
     runner: &mut R,
     plan: &Plan,
@@ -182,7 +189,7 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     }
     let start = Instant::now();
     let max_spp = opts.max_spp_per_pass.clamp(1, MAX_SPP_PER_ROUND);
-    let mut acc = Accumulator::new(width, height).map_err(|e| GpuError::OutOfMemory(format!("host memory: {e}")))?;
+    let acc = Accumulator::new(width, height).map_err(|e| GpuError::OutOfMemory(format!("host memory: {e}")))?;
     let progress = progress_bar(opts.progress, u64::from(total_spp) * u64::from(width) * u64::from(height));
     let cancelled = || opts.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst));
     // A round never leaves slots idle that more samples could fill: a batch makes the same
@@ -193,58 +200,51 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     // one-sample round, keeps the first round at `initial_spp_per_pass` and lets later
     // ones shrink below that.
     let fill = full_batch_samples(plan).min(max_spp);
-    let first = if opts.time_limit.is_none() { opts.initial_spp_per_pass.max(fill) } else { opts.initial_spp_per_pass };
+    let overlap = opts.time_limit.is_none();
+    let first = if overlap { opts.initial_spp_per_pass.max(fill) } else { opts.initial_spp_per_pass };
     let mut spp_per_round = first.clamp(1, max_spp);
-    let (mut done, mut rounds, mut batch_count) = (0u32, 0u32, 0u64);
+    let mut flight = InFlight::new(runner, acc, progress, total_spp);
+    // Samples per pixel of the rounds submitted so far.
+    let mut submitted = 0u32;
+    let mut rounds = 0u32;
     let mut stop = StopReason::Completed;
     // Batches submitted ahead of the one collected: one for a device alone (its two film
     // slots alternate); one per device where several share the batches, so that a device
     // finishing before the batch the host waits for finds the next one queued.
     let ahead = plan.devices.max(1) as usize;
 
-    'rounds: while done < total_spp {
-        let samples = round_samples(plan, spp_per_round.min(total_spp - done));
-        let t = Instant::now();
+    'rounds: while submitted < total_spp {
+        let samples = round_samples(plan, spp_per_round.min(total_spp - submitted));
         rounds += 1;
-        let mut pending: VecDeque<(R::Pending, BatchUniform)> = VecDeque::new();
-        for (k, batch) in batches(plan, plan.sample_begin + done, samples).iter().enumerate() {
-            let submitted = runner.submit(batch, k % 2)?;
-            batch_count += 1;
-            pending.push_back((submitted, *batch));
-            if pending.len() > ahead {
-                if let Some((p, b)) = pending.pop_front() {
-                    let sums = runner.collect(p)?;
-                    acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
-                    progress.inc(u64::from(b.pixel_count) * u64::from(samples));
-                }
-            }
+        let list = batches(plan, plan.sample_begin + submitted, samples);
+        let begun = Instant::now();
+        for (k, batch) in list.iter().enumerate() {
+            let end = (k + 1 == list.len()).then_some(RoundEnd { samples, begun });
+            flight.submit(batch, rounds, end)?;
+            flight.collect_beyond(ahead)?;
             if cancelled() {
-                runner.drain()?;
-                acc.discard_round();
+                // Rounds before this one were all submitted: keep them; drop this one.
+                flight.collect_rounds_before(rounds)?;
+                flight.runner.drain()?;
+                flight.acc.discard_round();
                 stop = StopReason::Interrupted;
                 break 'rounds;
             }
         }
-        while let Some((p, b)) = pending.pop_front() {
-            let sums = runner.collect(p)?;
-            acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
-            progress.inc(u64::from(b.pixel_count) * u64::from(samples));
+        submitted += samples;
+        if !overlap || submitted == total_spp {
+            flight.collect_beyond(0)?;
+            if cancelled() {
+                flight.acc.discard_round();
+                stop = StopReason::Interrupted;
+                break;
+            }
         }
-        if cancelled() {
-            acc.discard_round();
-            stop = StopReason::Interrupted;
-            break;
-        }
-        acc.commit_round(samples);
-        done += samples;
-        progress.set_message(format!("{done}/{total_spp} spp, {samples} spp/round"));
-        let per_sample = t.elapsed().as_secs_f64() / f64::from(samples);
-        runner.seconds_left(per_sample * f64::from(total_spp - done));
         let remaining = match opts.time_limit {
             Some(limit) => {
                 let elapsed = start.elapsed();
                 if elapsed >= limit {
-                    if done < total_spp {
+                    if submitted < total_spp {
                         stop = StopReason::TimeLimit;
                     }
                     break;
@@ -253,6 +253,8 @@ pub(crate) fn run_rounds<R: BatchRunner>(
             }
             None => None,
         };
+        // Without a finished round yet (overlapping rounds), only the growth cap applies.
+        let per_sample = flight.per_sample.unwrap_or(0.0);
         spp_per_round = next_spp_per_pass(
             samples,
             per_sample,
@@ -262,15 +264,94 @@ pub(crate) fn run_rounds<R: BatchRunner>(
             RoundBounds { floor: fill, max: max_spp },
         );
     }
+    let InFlight { acc, progress, batches, .. } = flight;
     progress.finish_and_clear();
     Ok(Accumulated {
         image: acc.mean_image(),
         spp_done: acc.spp() as u32,
         rounds,
-        batches: batch_count,
+        batches,
         stop,
         nonfinite: acc.nonfinite(),
     })
+}
+
+/// Marks the last batch of a round: its samples per pixel and when its first batch was
+/// submitted.
+#[derive(Debug, Clone, Copy)]
+struct RoundEnd {
+    samples: u32,
+    begun: Instant,
+}
+
+/// The batches in flight, oldest first, and what their collection feeds: the image, the
+/// progress bar, and the rate of the last finished round.
+struct InFlight<'r, R: BatchRunner> {
+    runner: &'r mut R,
+    acc: Accumulator,
+    progress: ProgressBar,
+    /// Each batch's pending read-back, its uniform, its round (counted from 1) and, on a
+    /// round's last batch, the round's end.
+    pending: VecDeque<(R::Pending, BatchUniform, u32, Option<RoundEnd>)>,
+    /// Batches submitted (the film slot of the next one alternates with it).
+    batches: u64,
+    total_spp: u32,
+    /// When the last round was committed, or the rounds began.
+    last_commit: Instant,
+    /// Seconds per sample per pixel of the last finished round.
+    per_sample: Option<f64>,
+}
+
+impl<'r, R: BatchRunner> InFlight<'r, R> {
+    fn new(runner: &'r mut R, acc: Accumulator, progress: ProgressBar, total_spp: u32) -> Self {
+        let (pending, last_commit) = (VecDeque::new(), Instant::now());
+        Self { runner, acc, progress, pending, batches: 0, total_spp, last_commit, per_sample: None }
+    }
+
+    fn submit(&mut self, batch: &BatchUniform, round: u32, end: Option<RoundEnd>) -> Result<(), GpuError> {
+        // With one device at most two batches are in flight, so slot k % 2 is free again.
+        let pending = self.runner.submit(batch, (self.batches % 2) as usize)?;
+        self.batches += 1;
+        self.pending.push_back((pending, *batch, round, end));
+        Ok(())
+    }
+
+    /// Collects the oldest batches until at most `ahead` remain in flight.
+    fn collect_beyond(&mut self, ahead: usize) -> Result<(), GpuError> {
+        while self.pending.len() > ahead {
+            self.collect_oldest()?;
+        }
+        Ok(())
+    }
+
+    /// Collects every batch of the rounds before `round`.
+    fn collect_rounds_before(&mut self, round: u32) -> Result<(), GpuError> {
+        while self.pending.front().is_some_and(|p| p.2 < round) {
+            self.collect_oldest()?;
+        }
+        Ok(())
+    }
+
+    /// Adds the oldest batch's sums to the round; its last batch commits the round.
+    fn collect_oldest(&mut self) -> Result<(), GpuError> {
+        let Some((pending, b, _, end)) = self.pending.pop_front() else { return Ok(()) };
+        let sums = self.runner.collect(pending)?;
+        self.acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
+        self.progress.inc(u64::from(b.pixel_count) * u64::from(b.samples));
+        if let Some(RoundEnd { samples, begun }) = end {
+            self.acc.commit_round(samples);
+            let now = Instant::now();
+            // The round ran from its first submission or the last commit, whichever was
+            // later (with overlapping rounds, the device was busy with the one before).
+            let per_sample = (now - begun.max(self.last_commit)).as_secs_f64() / f64::from(samples);
+            self.last_commit = now;
+            self.per_sample = Some(per_sample);
+            let done = self.acc.spp() as u32;
+            self.progress.set_message(format!("{done}/{} spp, {samples} spp/round", self.total_spp));
+            self.runner.seconds_left(per_sample * f64::from(self.total_spp.saturating_sub(done)));
+        }
+        Ok(())
+    }
 }
 
 /// Camera samples per pixel that fill one batch's path slots on each device when the whole
@@ -363,13 +444,13 @@ mod tests {
     #[test]
     fn the_first_round_fills_the_slots_without_a_time_limit() {
         // 15 pixels, 2 paths per sample, 64 slots: 2 samples fill a batch (60 paths).
-        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
+        let mut fake = Fake::new(None);
         let p = Plan { total_spp: 9, ..plan(5, 3, 2, 64) };
         run_rounds(&mut fake, &p, &PassOptions::default()).unwrap();
         assert_eq!((fake.submitted[0].samples, fake.submitted[0].path_count), (2, 60));
         assert!(fake.submitted.iter().all(|b| b.samples >= 1 && b.path_count <= 64));
         // With a time limit the first round is `initial_spp_per_pass`.
-        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
+        let mut fake = Fake::new(None);
         let opts = PassOptions { time_limit: Some(Duration::from_secs(3600)), ..PassOptions::default() };
         run_rounds(&mut fake, &p, &opts).unwrap();
         assert_eq!(fake.submitted[0].samples, 1);
@@ -426,12 +507,30 @@ mod tests {
         cancel_after: Option<(usize, Arc<AtomicBool>)>,
         /// Batches submitted and not yet collected: now, and the most at once.
         in_flight: (usize, usize),
+        /// Submissions (true) and collections, with the batch's first camera sample.
+        log: Vec<(bool, u32)>,
+    }
+
+    impl Fake {
+        fn new(cancel_after: Option<(usize, Arc<AtomicBool>)>) -> Self {
+            Self { submitted: vec![], cancel_after, in_flight: (0, 0), log: vec![] }
+        }
+
+        /// Whether some round's first batch went in before the round before it was all
+        /// collected.
+        fn rounds_overlapped(&self) -> bool {
+            self.log
+                .iter()
+                .enumerate()
+                .any(|(i, &(submit, j0))| submit && self.log[i..].iter().any(|&(s, j)| !s && j < j0))
+        }
     }
 
     impl BatchRunner for Fake {
         type Pending = BatchUniform;
         fn submit(&mut self, batch: &BatchUniform, _slot: usize) -> Result<BatchUniform, GpuError> {
             self.submitted.push(*batch);
+            self.log.push((true, batch.sample_begin));
             self.in_flight.0 += 1;
             self.in_flight.1 = self.in_flight.1.max(self.in_flight.0);
             if let Some((k, flag)) = &self.cancel_after {
@@ -443,6 +542,7 @@ mod tests {
         }
         fn collect(&mut self, b: BatchUniform) -> Result<Vec<[f64; 3]>, GpuError> {
             self.in_flight.0 -= 1;
+            self.log.push((false, b.sample_begin));
             // Sample j of pixel p is worth p + j: the round's sum is exact in f32.
             Ok((0..b.pixel_count)
                 .map(|i| {
@@ -459,7 +559,7 @@ mod tests {
 
     #[test]
     fn rounds_give_every_pixel_the_mean_of_its_samples() {
-        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
+        let mut fake = Fake::new(None);
         let p = Plan { total_spp: 10, ..plan(5, 3, 2, 8) };
         let out =
             run_rounds(&mut fake, &p, &PassOptions { target_pass_seconds: f64::MAX, ..Default::default() }).unwrap();
@@ -467,6 +567,45 @@ mod tests {
         for (i, px) in out.image.pixels().iter().enumerate() {
             assert_eq!(px.r, i as f32 + 4.5, "pixel {i}: mean of p + j over j < 10");
         }
+    }
+
+    /// Without a time limit a round's first batch is submitted before the last batch of
+    /// the round before is collected (the device never drains at a round's end), and the
+    /// image is still every pixel's mean over whole rounds; with a time limit rounds stay
+    /// apart.
+    #[test]
+    fn rounds_overlap_unless_a_time_limit_is_set() {
+        let p = Plan { total_spp: 10, ..plan(5, 3, 2, 8) };
+        let opts = PassOptions { target_pass_seconds: f64::MAX, max_spp_per_pass: 3, ..Default::default() };
+        let mut fake = Fake::new(None);
+        let out = run_rounds(&mut fake, &p, &opts).unwrap();
+        assert!(fake.rounds_overlapped());
+        // Rounds of 1, 2, 3, 3 and 1 samples (one pixel's 2·3 paths fit the 8 slots).
+        assert_eq!((out.spp_done, out.rounds, fake.in_flight), (10, 5, (0, 2)));
+        for (i, px) in out.image.pixels().iter().enumerate() {
+            assert_eq!(px.r, i as f32 + 4.5, "pixel {i}");
+        }
+        let mut fake = Fake::new(None);
+        let limited = PassOptions { time_limit: Some(Duration::from_secs(3600)), ..opts };
+        let out = run_rounds(&mut fake, &p, &limited).unwrap();
+        assert!(!fake.rounds_overlapped());
+        assert_eq!(out.spp_done, 10);
+    }
+
+    /// Ctrl-C during a round keeps the rounds before it, even those whose last batches were
+    /// still in flight when it came, and drops the rest.
+    #[test]
+    fn cancel_keeps_the_rounds_submitted_before_it() {
+        let flag = Arc::new(AtomicBool::new(false));
+        // Three slots, one sample per round: 15 pixels in 6 batches per round (an even
+        // number for two devices); two devices keep two batches ahead, so the cancel at
+        // round 2's first batch finds round 1's last batch uncollected.
+        let mut fake = Fake::new(Some((7, flag.clone())));
+        let p = Plan { devices: 2, ..plan(5, 3, 1, 3) };
+        let opts = PassOptions { cancel: Some(flag), max_spp_per_pass: 1, ..PassOptions::default() };
+        let out = run_rounds(&mut fake, &p, &opts).unwrap();
+        assert_eq!((out.spp_done, out.stop, out.rounds), (1, StopReason::Interrupted, 2));
+        assert!(out.image.pixels().iter().enumerate().all(|(i, px)| px.r == i as f32));
     }
 
     /// Shared by two devices, rounds come in even numbers of batches, one more batch is
@@ -477,7 +616,7 @@ mod tests {
         let opts = PassOptions { target_pass_seconds: f64::MAX, max_spp_per_pass: 3, ..Default::default() };
         let mut images = Vec::new();
         for devices in [1, 2] {
-            let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
+            let mut fake = Fake::new(None);
             let p = Plan { total_spp: 10, devices, ..plan(5, 3, 2, 8) };
             let out = run_rounds(&mut fake, &p, &opts).unwrap();
             assert_eq!((out.spp_done, fake.in_flight), (10, (0, devices as usize + 1)));
@@ -492,7 +631,7 @@ mod tests {
     fn cancel_drops_the_unfinished_round() {
         let flag = Arc::new(AtomicBool::new(false));
         // Batches of 4 pixels at 1 spp: the first round has 4 batches; cancel in round 2.
-        let mut fake = Fake { submitted: vec![], cancel_after: Some((6, flag.clone())), in_flight: (0, 0) };
+        let mut fake = Fake::new(Some((6, flag.clone())));
         let opts =
             PassOptions { cancel: Some(flag), initial_spp_per_pass: 1, max_spp_per_pass: 1, ..PassOptions::default() };
         let out = run_rounds(&mut fake, &plan(4, 4, 1, 4), &opts).unwrap();
@@ -502,7 +641,7 @@ mod tests {
 
     #[test]
     fn a_time_limit_stops_between_rounds_with_uniform_spp() {
-        let mut fake = Fake { submitted: vec![], cancel_after: None, in_flight: (0, 0) };
+        let mut fake = Fake::new(None);
         let opts = PassOptions { time_limit: Some(Duration::ZERO), ..PassOptions::default() };
         let out = run_rounds(&mut fake, &plan(3, 3, 1, 1024), &opts).unwrap();
         assert_eq!((out.spp_done, out.stop), (1, StopReason::TimeLimit));
