@@ -88,8 +88,10 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 }
 
 /// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
-/// CPU renderer may be as fast or faster (on Mesa 25's Vulkan lavapipe the two are at
-/// parity on skybox.sl and the GPU leads elsewhere; other software adapters are unmeasured),
+/// CPU renderer may be as fast or faster (on Mesa 25's Vulkan lavapipe, on a loaded host,
+/// the two are at parity on glass.sl and skybox.sl, the CPU slightly ahead on
+/// spheres_10k.sl, and the GPU leads elsewhere: BENCHMARKS.md "Rounds overlap again";
+/// other software adapters are unmeasured),
 /// except on an llvmpipe of Mesa 26.1 or later with wider vectors than 128 bits, which ran
 /// every example scene 1.4–3.6× faster than the CPU renderer (BENCHMARKS.md "Mesa 26.1
 /// lavapipe on an Intel host"); and, where wgpu reached Mesa's llvmpipe through OpenGL (no

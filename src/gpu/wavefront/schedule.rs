@@ -232,13 +232,14 @@ pub(crate) fn run_rounds<R: BatchRunner>(
             }
         }
         submitted += samples;
+        // Every round submitted is whole: collecting its batches commits it.
         if !overlap || submitted == total_spp {
             flight.collect_beyond(0)?;
-            if cancelled() {
-                flight.acc.discard_round();
-                stop = StopReason::Interrupted;
-                break;
-            }
+        }
+        if cancelled() && submitted < total_spp {
+            flight.collect_beyond(0)?;
+            stop = StopReason::Interrupted;
+            break;
         }
         let remaining = match opts.time_limit {
             Some(limit) => {
