@@ -425,7 +425,7 @@ impl Gpu {
     /// use lumen::gpu::gpu_for_tests;
     /// let Some(gpu) = gpu_for_tests("u32_texture_doc") else { return };
     /// if !lumen::gpu::texel_fetches_trusted(&gpu.adapter_info) {
-    ///     return; // a driver whose texel fetches lumen never uses (Mesa 26.1's llvmpipe wider than 128 bits)
+    ///     return; // a driver whose texel fetches lumen never uses (Mesa 26.1's llvmpipe)
     /// }
     /// let src = "@group(0) @binding(0) var t: texture_2d<u32>;
     /// @group(0) @binding(1) var<storage, read_write> v: array<u32>;

@@ -284,29 +284,30 @@ pub fn llvmpipe_prefers_wide_vectors(info: &wgpu::AdapterInfo) -> bool {
 /// Whether lumen reads scene tables through `textureLoad` on this adapter (software
 /// adapters only place tables in textures at all: `tables::TableForms::choose`).
 ///
-/// Mesa 26.1's llvmpipe at 256-bit vectors fetches texels wrongly: on an Intel host the
-/// one-invocation kernel of `Gpu::u32_texture`'s example crashed in the JIT code, and
-/// renders with texture tables disagreed with the CPU on a sixth of their pixels, while
-/// the same kernels with the tables in uniform or storage buffers, or at 128 bits, were
-/// right (BENCHMARKS.md "Mesa 26.1 lavapipe on an Intel host"); at 256 and at 512 bits a
-/// spheres_10k.sl render with its tables in textures later died of SIGSEGV (2026-12-06,
-/// "512-bit vectors on Mesa 26.1"). llvmpipe at 128 bits (what
-/// `lumen` asks for) and Mesa up to 25.0 at any width passed every test; for other Mesa
-/// releases with wider vectors, which were not tried, the tables stay in buffers.
+/// Mesa 26.1's llvmpipe fetches texels wrongly or crashes, at every vector width on some
+/// host: on an Intel host at 256 bits the one-invocation kernel of `Gpu::u32_texture`'s
+/// example crashed in the JIT code and renders with texture tables disagreed with the CPU
+/// on a sixth of their pixels (BENCHMARKS.md "Mesa 26.1 lavapipe on an Intel host"), and at
+/// 256 and 512 bits a spheres_10k.sl render with its tables in textures died of SIGSEGV
+/// ("512-bit vectors on Mesa 26.1"); on an AMD Zen 4 host at 128 bits, the width that had
+/// passed every test on Intel, spheres_10k.sl and meshes.sl died of SIGSEGV with lumen's
+/// own placement and every example scene with `--tables texture` ("Zen 4", 2026-12-06).
+/// The same kernels with the tables in uniform or storage buffers were right everywhere.
+/// So on llvmpipe only Mesa up to 25.0, which passed every test at every width on both
+/// hosts, reads tables from textures; later releases keep them in buffers until one is
+/// measured.
 ///
 /// ```
 /// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
-/// info.name = "llvmpipe (LLVM 19.1.7, 256 bits)".into();
+/// info.name = "llvmpipe (LLVM 19.1.7, 128 bits)".into();
 /// info.driver_info = "Mesa 26.1.6 (LLVM 19.1.7)".into();
 /// assert!(!lumen::gpu::texel_fetches_trusted(&info));
-/// info.name = "llvmpipe (LLVM 19.1.7, 128 bits)".into();
+/// info.name = "llvmpipe (LLVM 15.0.6, 128 bits)".into();
+/// info.driver_info = "Mesa 25.0.7 (LLVM 15.0.6)".into();
 /// assert!(lumen::gpu::texel_fetches_trusted(&info));
 /// ```
 pub fn texel_fetches_trusted(info: &wgpu::AdapterInfo) -> bool {
-    if !is_llvmpipe(info) {
-        return true;
-    }
-    llvmpipe_vector_bits(info).is_some_and(|bits| bits <= 128) || mesa_version(info).is_some_and(|v| v <= (25, 0))
+    !is_llvmpipe(info) || mesa_version(info).is_some_and(|v| v <= (25, 0))
 }
 
 /// The function [`Gpu::new`] calls with the adapter it chose, before opening it.
