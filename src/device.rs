@@ -90,11 +90,11 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 /// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
 /// CPU renderer may be as fast or faster (on Mesa 25's Vulkan lavapipe, on a loaded host,
 /// the two are at parity on glass.sl and skybox.sl, the CPU slightly ahead on
-/// spheres_10k.sl, and the GPU leads elsewhere: BENCHMARKS.md "Rounds overlap again";
-/// other software adapters are unmeasured),
+/// spheres_10k.sl, and the GPU leads elsewhere: BENCHMARKS.md "Rounds overlap again", and
+/// so on an AMD Zen 4 host, "An AMD Zen 4 host"; other software adapters are unmeasured),
 /// except on an llvmpipe of Mesa 26.1 or later with wider vectors than 128 bits, which ran
 /// every example scene 1.4–3.6× faster than the CPU renderer (BENCHMARKS.md "Mesa 26.1
-/// lavapipe on an Intel host"); and, where wgpu reached Mesa's llvmpipe through OpenGL (no
+/// lavapipe on an Intel host"; 1.3–4.7× at 512 bits on the Zen 4 host); and, where wgpu reached Mesa's llvmpipe through OpenGL (no
 /// Vulkan driver installed), that Mesa's Vulkan driver runs the same kernels faster
 /// (1.05–1.5× on the example scenes, Mesa 25.0 both ways, side by side: BENCHMARKS.md "BVH
 /// stacks out of the walk's struct").
