@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Two builds side by side on a lent hardware GPU: a speed claim there is a ratio measured in
 # one run, the builds alternating, like everywhere else (BENCHMARKS.md "Second lease" was
-# measured so). The device machine cannot reach crates.io, so both binaries are built here:
+# measured so). The device machine cannot reach crates.io, so both binaries are built here
+# (`scripts/device_prepare.sh A` does it, or by hand):
 #
 #   mkdir -p target/devab
 #   strip -o target/devab/lumen-a <the build before the change>/lumen

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 12, goal 4: lumen's figures on a hardware GPU, in one run. A lent GPU machine is held
 # for minutes, cannot reach crates.io, and may lack the Vulkan loader, so everything is
-# prepared here and this script only measures there:
+# prepared here and this script only measures there (`scripts/device_prepare.sh` does all
+# of it, for this script, device_tests.sh and device_ab.sh; by hand:)
 #
 #   cargo build --release && mkdir -p target/device && strip -o target/device/lumen target/release/lumen
 #   # optional, the megakernel side of the comparison (its last commit, 7eced3b):

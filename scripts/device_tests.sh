@@ -4,7 +4,8 @@
 # The device machine cannot reach crates.io, so the test binaries are built here and run
 # there:
 #
-#   scripts/device_tests.sh pack        # here: builds, strips and packs them (~30 MB)
+#   scripts/device_tests.sh pack        # here: builds, strips and packs them (~30 MB;
+#                                       # scripts/device_prepare.sh runs it)
 #
 # then, on the device machine (carry: target/devcarry and the loader's .gl, as
 # scripts/device_check.sh's header says):
@@ -27,7 +28,8 @@ suites=(gpu_render wavefront gpu_specialised stability meshes shards converge gp
 
 case "${1:-}" in
 pack)
-    cargo test --release --no-run 2>&1 | tee /dev/stderr |
+    # (tee to a copy of stderr, not to /dev/stderr: reopening that truncates a log file.)
+    cargo test --release --no-run 2>&1 | tee >(cat >&2) |
         grep -o 'target/release/deps/[a-z_]*-[0-9a-f]*' | sort -u > "$pack.list" || exit 1
     rm -rf "$pack" && mkdir -p "$pack/bin"
     for s in "${suites[@]}"; do
