@@ -94,8 +94,9 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 /// so on an AMD Zen 4 host, "An AMD Zen 4 host"; other software adapters are unmeasured),
 /// except on an llvmpipe of Mesa 26.1 or later with wider vectors than 128 bits, which ran
 /// every example scene 1.4–3.6× faster than the CPU renderer (BENCHMARKS.md "Mesa 26.1
-/// lavapipe on an Intel host"; 1.3–4.7× at 512 bits on the Zen 4 host); and, where wgpu reached Mesa's llvmpipe through OpenGL (no
-/// Vulkan driver installed), that Mesa's Vulkan driver runs the same kernels faster
+/// lavapipe on an Intel host"; 1.3–4.7× at 512 bits on the Zen 4 host); and, where wgpu
+/// reached Mesa's llvmpipe through OpenGL (no Vulkan driver installed), that Mesa's Vulkan
+/// driver runs the same kernels faster
 /// (1.05–1.5× on the example scenes, Mesa 25.0 both ways, side by side: BENCHMARKS.md "BVH
 /// stacks out of the walk's struct").
 ///

@@ -216,10 +216,9 @@ fn the_opengl_backend_renders_as_vulkan_does() {
 
 /// On an llvmpipe of Mesa 26.1 or later `lumen` relaunches itself with the host's vector
 /// width (256 or 512 bits) when the width was its own choice, and keeps a width that was set
-/// (cli::software_driver,
-/// DESIGN.md "Vector width"). Only such a driver shows it: with another adapter (CI's Mesa
-/// 25) the test says it was skipped; run it through scripts/newer_lavapipe.sh's runner
-/// (README "How it is checked").
+/// (cli::software_driver, DESIGN.md "Vector width"). Only such a driver shows it: with
+/// another adapter (CI's Mesa 25) the test says it was skipped; run it through
+/// scripts/newer_lavapipe.sh's runner (README "How it is checked").
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn lumen_widens_llvmpipe_vectors_where_the_driver_gains() {

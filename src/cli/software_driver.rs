@@ -9,11 +9,10 @@
 //! So `lumen` asks llvmpipe for 128-bit vectors unless the user chose a width. Mesa 26.1
 //! turns those accesses into gathers, and there wider vectors win: on an Intel host 256 bits
 //! rendered 1.15–1.7× faster than 128, and 512 bits faster again on most scenes, as on an
-//! AMD Zen 4 host. When the
-//! adapter turns out to be such an llvmpipe (known only once the driver is loaded, and
-//! llvmpipe reads the width only then), `lumen` relaunches itself with the host's width
-//! ([`relaunch_if_wider_is_faster`], registered with `gpu::on_adapter_chosen`;
-//! [`host_vector_bits`]). The variable only affects llvmpipe; hardware drivers never read
+//! AMD Zen 4 host. When the adapter turns out to be such an llvmpipe (known only once the
+//! driver is loaded, and llvmpipe reads the width only then), `lumen` relaunches itself
+//! with the host's width ([`relaunch_if_wider_is_faster`], registered with
+//! `gpu::on_adapter_chosen`; [`host_vector_bits`]). The variable only affects llvmpipe; hardware drivers never read
 //! it. `.cargo/config.toml` sets 128 for `cargo test`, `cargo bench` and examples, so the
 //! tests exercise the configuration CI's Mesa 25 gets.
 
@@ -69,8 +68,9 @@ pub fn wider_width(info: &wgpu::AdapterInfo, set_here: bool, host_bits: u32) -> 
 /// (BENCHMARKS.md "512-bit vectors on Mesa 26.1"). On an AMD Zen 4 host (2026-12-06),
 /// whose cores split 512-bit operations in two 256-bit halves, 512 bits still won: 14 %
 /// over 256 in the geometric mean of the example scenes, from 4 % slower (demo.sl) to
-/// 37 % faster (cornell.sl, mirrors.sl) (BENCHMARKS.md "An AMD Zen 4 host"). Earlier AVX-512 cores (Skylake-SP,
-/// Cascade Lake) lower the whole core's clock while 512-bit code runs, so they keep 256.
+/// 37 % faster (cornell.sl, mirrors.sl) (BENCHMARKS.md "An AMD Zen 4 host"). Earlier
+/// AVX-512 cores (Skylake-SP, Cascade Lake) lower the whole core's clock while 512-bit code
+/// runs, so they keep 256.
 ///
 /// ```
 /// let bits = lumen::cli::software_driver::host_vector_bits();

@@ -219,7 +219,8 @@ pub(crate) fn run_rounds<R: BatchRunner>(
         let list = batches(plan, plan.sample_begin + submitted, samples);
         let begun = Instant::now();
         for (k, batch) in list.iter().enumerate() {
-            let end = (k + 1 == list.len()).then_some(RoundEnd { samples, begun });
+            // The round's last batch carries when the round began: its collection commits it.
+            let end = (k + 1 == list.len()).then_some(begun);
             flight.submit(batch, rounds, end)?;
             flight.collect_beyond(ahead)?;
             if cancelled() {
@@ -277,14 +278,6 @@ pub(crate) fn run_rounds<R: BatchRunner>(
     })
 }
 
-/// Marks the last batch of a round: its samples per pixel and when its first batch was
-/// submitted.
-#[derive(Debug, Clone, Copy)]
-struct RoundEnd {
-    samples: u32,
-    begun: Instant,
-}
-
 /// The batches in flight, oldest first, and what their collection feeds: the image, the
 /// progress bar, and the rate of the last finished round.
 struct InFlight<'r, R: BatchRunner> {
@@ -292,8 +285,8 @@ struct InFlight<'r, R: BatchRunner> {
     acc: Accumulator,
     progress: ProgressBar,
     /// Each batch's pending read-back, its uniform, its round (counted from 1) and, on a
-    /// round's last batch, the round's end.
-    pending: VecDeque<(R::Pending, BatchUniform, u32, Option<RoundEnd>)>,
+    /// round's last batch, when its round's first batch was submitted.
+    pending: VecDeque<(R::Pending, BatchUniform, u32, Option<Instant>)>,
     /// Batches submitted (the film slot of the next one alternates with it).
     batches: u64,
     total_spp: u32,
@@ -309,7 +302,7 @@ impl<'r, R: BatchRunner> InFlight<'r, R> {
         Self { runner, acc, progress, pending, batches: 0, total_spp, last_commit, per_sample: None }
     }
 
-    fn submit(&mut self, batch: &BatchUniform, round: u32, end: Option<RoundEnd>) -> Result<(), GpuError> {
+    fn submit(&mut self, batch: &BatchUniform, round: u32, end: Option<Instant>) -> Result<(), GpuError> {
         // With one device at most two batches are in flight, so slot k % 2 is free again.
         let pending = self.runner.submit(batch, (self.batches % 2) as usize)?;
         self.batches += 1;
@@ -339,7 +332,9 @@ impl<'r, R: BatchRunner> InFlight<'r, R> {
         let sums = self.runner.collect(pending)?;
         self.acc.add_pixels(b.pixel_begin as usize, &sums[..b.pixel_count as usize]);
         self.progress.inc(u64::from(b.pixel_count) * u64::from(b.samples));
-        if let Some(RoundEnd { samples, begun }) = end {
+        if let Some(begun) = end {
+            // Every batch of a round has its samples per pixel.
+            let samples = b.samples;
             self.acc.commit_round(samples);
             let now = Instant::now();
             // The round ran from its first submission or the last commit, whichever was
