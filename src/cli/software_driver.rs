@@ -68,7 +68,8 @@ pub fn wider_width(info: &wgpu::AdapterInfo, set_here: bool, host_bits: u32) -> 
 /// (BENCHMARKS.md "512-bit vectors on Mesa 26.1"). On an AMD Zen 4 host (2026-12-06),
 /// whose cores split 512-bit operations in two 256-bit halves, 512 bits still won: 14 %
 /// over 256 in the geometric mean of the example scenes, from 4 % slower (demo.sl) to
-/// 37 % faster (cornell.sl, mirrors.sl) (BENCHMARKS.md "An AMD Zen 4 host"). Earlier
+/// 37 % faster (cornell.sl, mirrors.sl) (BENCHMARKS.md "An AMD Zen 4 host"); on a Zen 3
+/// host (AVX2) 256 bits beat 128 by 25 % (BENCHMARKS.md "An AMD Zen 3 host"). Earlier
 /// AVX-512 cores (Skylake-SP, Cascade Lake) lower the whole core's clock while 512-bit code
 /// runs, so they keep 256.
 ///
