@@ -91,12 +91,13 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 /// CPU renderer may be as fast or faster (on Mesa 25's Vulkan lavapipe, on a loaded host,
 /// the two are at parity on glass.sl and skybox.sl, the CPU slightly ahead on
 /// spheres_10k.sl, and the GPU leads elsewhere: BENCHMARKS.md "Rounds overlap again", and
-/// so on an AMD Zen 4 host, "An AMD Zen 4 host"; other software adapters are unmeasured),
-/// except on an llvmpipe of Mesa 26.1 or later with wider vectors than 128 bits, which ran
-/// every example scene 1.4–3.6× faster than the CPU renderer (BENCHMARKS.md "Mesa 26.1
-/// lavapipe on an Intel host"; 1.3–4.7× at 512 bits on the Zen 4 host); and, where wgpu
-/// reached Mesa's llvmpipe through OpenGL (no Vulkan driver installed), that Mesa's Vulkan
-/// driver runs the same kernels faster
+/// so on AMD Zen 3 and Zen 4 hosts, "An AMD Zen 3 host", "An AMD Zen 4 host"; other
+/// software adapters are unmeasured), except on an llvmpipe of Mesa 26.1 or later with
+/// vectors wider than 256 bits, which ran every example scene 1.3–4.7× faster than the CPU
+/// renderer on the AVX-512 hosts measured (BENCHMARKS.md "512-bit vectors on Mesa 26.1",
+/// "An AMD Zen 4 host"). At 256 bits it does not always: on the Zen 3 host spheres_10k.sl
+/// stayed at parity (0.98–1.01×). And, where wgpu reached Mesa's llvmpipe through OpenGL
+/// (no Vulkan driver installed), that Mesa's Vulkan driver runs the same kernels faster
 /// (1.05–1.5× on the example scenes, Mesa 25.0 both ways, side by side: BENCHMARKS.md "BVH
 /// stacks out of the walk's struct").
 ///
@@ -105,11 +106,13 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 /// let vk = wgpu::AdapterInfo { name: "llvmpipe (LLVM 15.0.6, 128 bits)".into(), ..wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan) };
 /// assert!(software_adapter_note(&vk).unwrap().contains("--device cpu"));
 /// let wide = wgpu::AdapterInfo {
-///     name: "llvmpipe (LLVM 19.1.7, 256 bits)".into(),
+///     name: "llvmpipe (LLVM 19.1.7, 512 bits)".into(),
 ///     driver_info: "Mesa 26.1.6 (LLVM 19.1.7)".into(),
 ///     ..vk.clone()
 /// };
 /// assert!(!software_adapter_note(&wide).unwrap().contains("--device cpu"));
+/// let avx2 = wgpu::AdapterInfo { name: "llvmpipe (LLVM 19.1.7, 256 bits)".into(), ..wide.clone() };
+/// assert!(software_adapter_note(&avx2).unwrap().contains("--device cpu"));
 /// let gl = wgpu::AdapterInfo { backend: wgpu::Backend::Gl, ..vk.clone() };
 /// assert!(software_adapter_note(&gl).unwrap().contains("mesa-vulkan-drivers"));
 /// let hw = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
@@ -121,7 +124,7 @@ pub fn software_adapter_note(info: &wgpu::AdapterInfo) -> Option<String> {
     }
     let mut note = format!("note: {} is a software adapter (the GPU API emulated on the CPU)", info.name);
     let outruns_the_cpu = crate::gpu::llvmpipe_prefers_wide_vectors(info)
-        && crate::gpu::llvmpipe_vector_bits(info).is_some_and(|bits| bits > 128);
+        && crate::gpu::llvmpipe_vector_bits(info).is_some_and(|bits| bits > 256);
     if !outruns_the_cpu {
         note.push_str("; lumen's own CPU renderer (--device cpu) is as fast or faster on some scenes");
     }
