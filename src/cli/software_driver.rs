@@ -12,9 +12,9 @@
 //! AMD Zen 4 host. When the adapter turns out to be such an llvmpipe (known only once the
 //! driver is loaded, and llvmpipe reads the width only then), `lumen` relaunches itself
 //! with the host's width ([`relaunch_if_wider_is_faster`], registered with
-//! `gpu::on_adapter_chosen`; [`host_vector_bits`]). The variable only affects llvmpipe; hardware drivers never read
-//! it. `.cargo/config.toml` sets 128 for `cargo test`, `cargo bench` and examples, so the
-//! tests exercise the configuration CI's Mesa 25 gets.
+//! `gpu::on_adapter_chosen`; [`host_vector_bits`]). The variable only affects llvmpipe;
+//! hardware drivers never read it. `.cargo/config.toml` sets 128 for `cargo test`, `cargo
+//! bench` and examples, so the tests exercise the configuration CI's Mesa 25 gets.
 
 use std::ffi::OsStr;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -234,11 +234,11 @@ pub(crate) fn run_rounds<R: BatchRunner>(
         }
         submitted += samples;
         // Every round submitted is whole: collecting its batches commits it.
-        if !overlap || submitted == total_spp {
+        let interrupted = submitted < total_spp && cancelled();
+        if !overlap || submitted == total_spp || interrupted {
             flight.collect_beyond(0)?;
         }
-        if cancelled() && submitted < total_spp {
-            flight.collect_beyond(0)?;
+        if interrupted {
             stop = StopReason::Interrupted;
             break;
         }
