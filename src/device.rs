@@ -65,6 +65,32 @@ impl OpenDevice {
             OpenDevice::Gpu { gpu, .. } => format!("gpu ({})", gpu.adapter_info.name),
         }
     }
+
+    /// For a GPU, its backend and driver as wgpu reports them (`vulkan, llvmpipe Mesa
+    /// 25.0.7 (LLVM 15.0.6)`): figures on a software adapter move with the driver's version
+    /// (BENCHMARKS.md "Mesa 25 against Mesa 22 lavapipe"). `None` for the CPU.
+    pub fn driver(&self) -> Option<String> {
+        match self {
+            OpenDevice::Cpu => None,
+            OpenDevice::Gpu { gpu, .. } => Some(driver_text(&gpu.adapter_info)),
+        }
+    }
+}
+
+/// An adapter's backend and driver, as [`OpenDevice::driver`] reports them.
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+/// assert_eq!(lumen::device::driver_text(&info), "vulkan");
+/// (info.driver, info.driver_info) = ("llvmpipe".into(), "Mesa 25.0.7 (LLVM 15.0.6)".into());
+/// assert_eq!(lumen::device::driver_text(&info), "vulkan, llvmpipe Mesa 25.0.7 (LLVM 15.0.6)");
+/// ```
+pub fn driver_text(info: &wgpu::AdapterInfo) -> String {
+    let driver = [info.driver.trim(), info.driver_info.trim()].join(" ");
+    match driver.trim() {
+        "" => info.backend.to_string(),
+        d => format!("{}, {d}", info.backend),
+    }
 }
 
 /// Opens each requested device once (duplicates dropped, order kept). A GPU that cannot be

@@ -66,6 +66,7 @@ fn cpu_error_falls_like_one_over_spp() {
     assert!((printed - slope).abs() < 2e-3, "{printed} vs {slope}");
     let md = std::fs::read_to_string(dir.path().join("res/converge.md")).unwrap();
     assert_eq!(md.lines().filter(|l| l.starts_with("| cpu |")).count(), 3);
+    assert!(md.contains(&format!("\nMachine: {}.\n", lumen::analysis::Host::detect())), "{md}");
     let png = image::open(dir.path().join("res/converge.png")).unwrap();
     assert!(png.width() >= 320 && png.height() >= 240);
     // The same plot as a vector image, with the devices in its legend.
@@ -164,6 +165,9 @@ fn bench_reports_scenes_and_sphere_scaling_on_the_cpu() {
     }
     assert!(!md.contains("| 1000 |"));
     assert!(md.contains("- cpu: ") && md.contains("Peak resident memory"));
+    // The machine the figures belong to (no GPU measured, so no driver).
+    let machine = format!("\nMachine: {}.\n", lumen::analysis::Host::detect());
+    assert!(md.contains(&machine), "{machine} missing in {md}");
 }
 
 #[test]

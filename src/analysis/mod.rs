@@ -1,5 +1,6 @@
 //! Measuring renderers: image error metrics, least-squares fits on log-log data, result
-//! tables (CSV and Markdown), a log-log plot written as PNG, and the process's peak memory.
+//! tables (CSV and Markdown), a log-log plot written as PNG, the process's peak memory, and
+//! the machine the figures were measured on.
 //!
 //! `lumen converge` and `lumen bench` are thin drivers over this module, so everything that
 //! turns numbers into conclusions (slopes, plateaus, efficiencies) is unit-tested here on
@@ -21,6 +22,7 @@
 //! ```
 
 mod font;
+mod host;
 mod line_fit;
 mod measure;
 mod metrics;
@@ -28,6 +30,7 @@ mod plot;
 mod table;
 
 pub use crate::memory::{format_bytes, peak_memory_bytes};
+pub use host::{parse_cpuinfo, Host};
 pub use line_fit::{fit_line, fit_loglog, tail_flattens, LineFit};
 pub use measure::{measure, measure_with, open_devices, Device, Measurement, OpenDevice};
 pub use metrics::{mse, rel_mse, rmse, ErrorMetrics, REL_MSE_EPSILON};

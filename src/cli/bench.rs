@@ -155,6 +155,18 @@ pub fn spheres_scene(n: u32, width: u32, height: u32) -> Scene {
     b.build().expect("generated spheres scene is valid")
 }
 
+/// The machine the figures were measured on: its CPU and, for a GPU, the driver (both move
+/// the figures: BENCHMARKS.md compares hosts and Mesa versions).
+pub fn machine_line(devices: &[OpenDevice]) -> String {
+    let drivers: Vec<String> = devices.iter().filter_map(OpenDevice::driver).collect();
+    let mut line = format!("Machine: {}", crate::analysis::Host::detect());
+    if !drivers.is_empty() {
+        line.push_str(&format!("; GPU driver: {}", drivers.join(", ")));
+    }
+    line.push('.');
+    line
+}
+
 /// Runs `lumen bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let plan = Plan::of(&args)?;
@@ -174,10 +186,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         measure(d, &spheres_scene(1, 8, 8), 1, false).map_err(|e| anyhow!("{}: {e}", d.kind()))?;
     }
     let mut report = format!(
-        "Devices: {}. Scenes at width {} px, {} spp.\n\n",
+        "Devices: {}. Scenes at width {} px, {} spp.\n\n{}\n\n",
         devices.iter().map(OpenDevice::describe).collect::<Vec<_>>().join(", "),
         plan.width,
-        plan.spp
+        plan.spp,
+        machine_line(&devices)
     );
     report.push_str(&scenes_table(&files, &devices, &plan));
     if plan.max_spheres > 0 {

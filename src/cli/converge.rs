@@ -160,7 +160,8 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
         }
     }
     let descriptions: Vec<String> = devices.iter().map(OpenDevice::describe).collect();
-    write_results(&args, &scene, &table, &reference_note, &descriptions)
+    let machine = super::bench::machine_line(&devices);
+    write_results(&args, &scene, &table, &reference_note, &descriptions, &machine)
 }
 
 /// One line per device: the fitted slope of log MSE against log spp, and a plateau note.
@@ -186,6 +187,7 @@ fn write_results(
     table: &ConvergeTable,
     reference_note: &str,
     devices: &[String],
+    machine: &str,
 ) -> anyhow::Result<()> {
     let dir = &args.output;
     let slopes = slope_lines(table);
@@ -198,7 +200,7 @@ fn write_results(
         .with_context(|| format!("cannot write {}", csv.display()))?;
     let name = args.scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let md = format!(
-        "# lumen converge {name}\n\n{}×{} pixels, {} renderer; reference: {reference_note}; devices: {}.\n\
+        "# lumen converge {name}\n\n{}×{} pixels, {} renderer; reference: {reference_note}; devices: {}.\n{machine}\n\
          relMSE = mean((x − r)² / (r² + {REL_MSE_EPSILON})); efficiency = 1 / (MSE · seconds); seconds are the \
          wall time of each render call (GPU: including packing; its kernel is compiled once, in a discarded warm-up render).\n\n{}\n{}\n",
         scene.width,
