@@ -191,7 +191,7 @@ fn bench_bad_arguments_fail_clearly() {
 /// `cold_environment` in src/cli/bench.rs).
 #[test]
 fn bench_times_cold_kernel_creation_in_new_processes() {
-    let Some(_gpu) = lumen::gpu::gpu_for_tests("bench_times_cold_kernel_creation_in_new_processes") else { return };
+    let Some(gpu) = lumen::gpu::gpu_for_tests("bench_times_cold_kernel_creation_in_new_processes") else { return };
     let dir = tempfile::tempdir().unwrap();
     let args =
         ["--device", "gpu", "--scenes", "tiny.sl", "--spp", "1", "--width", "8", "--max-spheres", "0", "--repeat", "2"];
@@ -199,6 +199,13 @@ fn bench_times_cold_kernel_creation_in_new_processes() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     let md = String::from_utf8_lossy(&out.stdout);
+    // The report names the machine, the GPU's driver included.
+    let machine = format!(
+        "\nMachine: {}; GPU driver: {}.\n",
+        lumen::analysis::Host::detect(),
+        lumen::device::driver_text(&gpu.adapter_info)
+    );
+    assert!(md.contains(&machine), "{machine} missing in {md}");
     let table = md.split("### Cold kernel creation").nth(1).unwrap_or_else(|| panic!("{md}"));
     let row = table.lines().find(|l| l.starts_with("| tiny.sl |")).unwrap_or_else(|| panic!("{md}"));
     let cells: Vec<&str> = row.split('|').map(str::trim).collect();
