@@ -86,8 +86,7 @@ impl OpenDevice {
 /// assert_eq!(lumen::device::driver_text(&info), "vulkan, llvmpipe Mesa 25.0.7 (LLVM 15.0.6)");
 /// ```
 pub fn driver_text(info: &wgpu::AdapterInfo) -> String {
-    let driver = [info.driver.trim(), info.driver_info.trim()].join(" ");
-    match driver.trim() {
+    match crate::gpu::driver_name(info).as_str() {
         "" => info.backend.to_string(),
         d => format!("{}, {d}", info.backend),
     }

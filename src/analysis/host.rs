@@ -7,6 +7,8 @@
 
 use std::fmt;
 
+use crate::device::OpenDevice;
+
 /// What [`Host::detect`] found about this machine's CPU.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Host {
@@ -56,6 +58,19 @@ impl fmt::Display for Host {
     }
 }
 
+/// The line `lumen bench` and `lumen converge` put in their reports: this machine and, for
+/// a GPU among `devices`, its backend and driver (both move the figures: BENCHMARKS.md
+/// compares hosts and Mesa versions).
+pub fn machine_line(devices: &[OpenDevice]) -> String {
+    let drivers: Vec<String> = devices.iter().filter_map(OpenDevice::driver).collect();
+    let mut line = format!("Machine: {}", Host::detect());
+    if !drivers.is_empty() {
+        line.push_str(&format!("; GPU driver: {}", drivers.join(", ")));
+    }
+    line.push('.');
+    line
+}
+
 /// The first processor's name and, on x86-64, its family and model, from the text of
 /// Linux's `/proc/cpuinfo` (`model name`, `cpu family`, `model`; where `model name` is
 /// missing, as on some Arm kernels, `Hardware` names the machine).
@@ -73,7 +88,9 @@ pub fn parse_cpuinfo(text: &str) -> (Option<String>, Option<(u32, u32)>) {
     (name, family_model)
 }
 
-/// The widest vector extension this CPU runs (detected at run time).
+/// The widest vector extension this CPU runs (detected at run time). A description, not
+/// `cli::software_driver::host_vector_bits`, which picks llvmpipe's width and asks more of
+/// an AVX-512 core before it chooses 512 bits.
 fn vector_isa() -> Option<&'static str> {
     #[cfg(target_arch = "x86_64")]
     {

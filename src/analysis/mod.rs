@@ -30,7 +30,7 @@ mod plot;
 mod table;
 
 pub use crate::memory::{format_bytes, peak_memory_bytes};
-pub use host::{parse_cpuinfo, Host};
+pub use host::{machine_line, parse_cpuinfo, Host};
 pub use line_fit::{fit_line, fit_loglog, tail_flattens, LineFit};
 pub use measure::{measure, measure_with, open_devices, Device, Measurement, OpenDevice};
 pub use metrics::{mse, rel_mse, rmse, ErrorMetrics, REL_MSE_EPSILON};

@@ -155,18 +155,6 @@ pub fn spheres_scene(n: u32, width: u32, height: u32) -> Scene {
     b.build().expect("generated spheres scene is valid")
 }
 
-/// The machine the figures were measured on: its CPU and, for a GPU, the driver (both move
-/// the figures: BENCHMARKS.md compares hosts and Mesa versions).
-pub fn machine_line(devices: &[OpenDevice]) -> String {
-    let drivers: Vec<String> = devices.iter().filter_map(OpenDevice::driver).collect();
-    let mut line = format!("Machine: {}", crate::analysis::Host::detect());
-    if !drivers.is_empty() {
-        line.push_str(&format!("; GPU driver: {}", drivers.join(", ")));
-    }
-    line.push('.');
-    line
-}
-
 /// Runs `lumen bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let plan = Plan::of(&args)?;
@@ -190,7 +178,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         devices.iter().map(OpenDevice::describe).collect::<Vec<_>>().join(", "),
         plan.width,
         plan.spp,
-        machine_line(&devices)
+        crate::analysis::machine_line(&devices)
     );
     report.push_str(&scenes_table(&files, &devices, &plan));
     if plan.max_spheres > 0 {

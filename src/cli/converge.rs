@@ -160,7 +160,7 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
         }
     }
     let descriptions: Vec<String> = devices.iter().map(OpenDevice::describe).collect();
-    let machine = super::bench::machine_line(&devices);
+    let machine = crate::analysis::machine_line(&devices);
     write_results(&args, &scene, &table, &reference_note, &descriptions, &machine)
 }
 

@@ -37,8 +37,9 @@ pub fn run(args: DevicesArgs) -> anyhow::Result<()> {
             a.backend,
             a.device_type_name()
         ));
-        if !a.driver.is_empty() || !a.driver_info.is_empty() {
-            out.line(format_args!("   driver: {}", [a.driver.trim(), a.driver_info.trim()].join(" ").trim()));
+        let driver = a.driver_name();
+        if !driver.is_empty() {
+            out.line(format_args!("   driver: {driver}"));
         }
     }
     out.print()?;

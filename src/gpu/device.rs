@@ -123,18 +123,39 @@ impl AdapterDescription {
     pub fn device_type_name(&self) -> &'static str {
         device_type_name(self.device_type)
     }
+
+    /// The driver's name and version, as [`driver_name`] gives them.
+    pub fn driver_name(&self) -> String {
+        join_driver(&self.driver, &self.driver_info)
+    }
 }
 
 impl fmt::Display for AdapterDescription {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{} ({}, {}", self.name, self.backend, self.device_type_name())?;
-        match (self.driver.is_empty(), self.driver_info.is_empty()) {
-            (true, true) => write!(f, ")"),
-            (false, true) => write!(f, ", driver {})", self.driver),
-            (true, false) => write!(f, ", driver {})", self.driver_info),
-            (false, false) => write!(f, ", driver {} {})", self.driver, self.driver_info),
+        match self.driver_name().as_str() {
+            "" => write!(f, ")"),
+            driver => write!(f, ", driver {driver})"),
         }
     }
+}
+
+/// An adapter's driver as wgpu reports it: its name and its version details joined
+/// (`llvmpipe Mesa 25.0.7 (LLVM 15.0.6)`), empty where the driver says neither. What
+/// `lumen devices` lists and the benchmark reports name.
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan);
+/// assert_eq!(lumen::gpu::driver_name(&info), "");
+/// info.driver_info = " Mesa 25.0.7 ".into();
+/// assert_eq!(lumen::gpu::driver_name(&info), "Mesa 25.0.7");
+/// ```
+pub fn driver_name(info: &wgpu::AdapterInfo) -> String {
+    join_driver(&info.driver, &info.driver_info)
+}
+
+fn join_driver(driver: &str, details: &str) -> String {
+    [driver.trim(), details.trim()].join(" ").trim().to_string()
 }
 
 fn device_type_name(t: wgpu::DeviceType) -> &'static str {

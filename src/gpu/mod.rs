@@ -26,9 +26,9 @@ pub use assemble::{preprocess, AssembleError, Assembled, FeatureNames, Preproces
 pub(crate) use compute::Loops;
 pub use compute::{validate_wgsl, BindingKind, BoundResource, ComputeKernel, ValidatedModule, MIN_BUFFER_BYTES};
 pub use device::{
-    is_llvmpipe, list_adapters, llvmpipe_prefers_wide_vectors, llvmpipe_vector_bits, mesa_version, on_adapter_chosen,
-    probe_loop_limiter, select_adapter, texel_fetches_trusted, AdapterChoice, AdapterDescription, Gpu, GpuError,
-    ADAPTER_ENV, LOOP_LIMITER_PROBE_TRIPS, WIDE_VECTORS_FROM_MESA,
+    driver_name, is_llvmpipe, list_adapters, llvmpipe_prefers_wide_vectors, llvmpipe_vector_bits, mesa_version,
+    on_adapter_chosen, probe_loop_limiter, select_adapter, texel_fetches_trusted, AdapterChoice, AdapterDescription,
+    Gpu, GpuError, ADAPTER_ENV, LOOP_LIMITER_PROBE_TRIPS, WIDE_VECTORS_FROM_MESA,
 };
 pub use kernel_cache::KernelCache;
 pub use test_support::{gpu_for_tests, gpu_required, REQUIRE_GPU_ENV};
