@@ -2,7 +2,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::{Crossing, Span, SurfacePoint};
+use super::{slab, Crossing, Span, SurfacePoint};
 
 /// Where one cube face lands in the 4×3 cross of the uv square: the cell `(col, row)`
 /// (counted from u = 0, v = 0) and which signed object axis runs along u and along v in
@@ -30,35 +30,15 @@ pub const CUBE_FACE_LAYOUT: [CubeFace; 6] = [
     CubeFace { col: 3, row: 1, axis_u: 0, sign_u: -1, axis_v: 1, sign_v: 1 },
 ];
 
-/// Slab test. Divisions (not reciprocals) keep the t of coincident faces of different
-/// boxes bit-identical when their transforms agree along that axis; an axis the ray runs
-/// parallel to is decided by the origin alone (no 0·∞ = NaN when the origin lies on the
-/// slab); ties between axes at edges and corners keep the first axis (`>`/`<`), and the
-/// inclusive `enter ≤ exit` test keeps hits exactly on edges.
+/// The box as three slabs ([`slab::clip`] says how ties and parallel lines are decided);
+/// the inclusive `enter ≤ exit` test keeps hits exactly on edges.
 pub(super) fn span(o: DVec3, d: DVec3) -> Option<Span> {
     let mut enter = Crossing::open(f64::NEG_INFINITY);
     let mut exit = Crossing::open(f64::INFINITY);
     for axis in 0..3 {
-        let (oi, di) = (o[axis], d[axis]);
-        if di == 0.0 {
-            if oi.abs() > 0.5 {
-                return None;
-            }
-            continue;
-        }
-        let t_lo = (-0.5 - oi) / di;
-        let t_hi = (0.5 - oi) / di;
         let face = 2 * axis as u8;
-        let (near, far) = if di > 0.0 {
-            (Crossing::new(t_lo, face), Crossing::new(t_hi, face + 1))
-        } else {
-            (Crossing::new(t_hi, face + 1), Crossing::new(t_lo, face))
-        };
-        if near.t > enter.t {
-            enter = near;
-        }
-        if far.t < exit.t {
-            exit = far;
+        if !slab::clip(&mut enter, &mut exit, o[axis], d[axis], face, face + 1) {
+            return None;
         }
     }
     (enter.t <= exit.t).then_some(Span { enter, exit })

@@ -2,7 +2,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::{sphere_roots, Crossing, Span, SurfacePoint};
+use super::{slab, sphere_roots, Crossing, Span, SurfacePoint};
 
 /// Face codes.
 const SIDE: u8 = 0;
@@ -22,24 +22,8 @@ pub(super) fn span(o: DVec3, d: DVec3) -> Option<Span> {
         let (t0, t1) = sphere_roots(fxy, dxy, 0.25)?;
         (Crossing::new(t0, SIDE), Crossing::new(t1, SIDE))
     };
-    if d.z == 0.0 {
-        if o.z.abs() > 0.5 {
-            return None;
-        }
-    } else {
-        let t_lo = (-0.5 - o.z) / d.z;
-        let t_hi = (0.5 - o.z) / d.z;
-        let (near, far) = if d.z > 0.0 {
-            (Crossing::new(t_lo, BOTTOM), Crossing::new(t_hi, TOP))
-        } else {
-            (Crossing::new(t_hi, TOP), Crossing::new(t_lo, BOTTOM))
-        };
-        if near.t > enter.t {
-            enter = near;
-        }
-        if far.t < exit.t {
-            exit = far;
-        }
+    if !slab::clip(&mut enter, &mut exit, o.z, d.z, BOTTOM, TOP) {
+        return None;
     }
     (enter.t <= exit.t).then_some(Span { enter, exit })
 }

@@ -11,6 +11,7 @@ mod cylinder;
 mod instance;
 mod plane;
 mod quadratic;
+mod slab;
 mod sphere;
 
 use glam::{DVec2, DVec3};
