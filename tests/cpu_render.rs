@@ -9,7 +9,7 @@ mod common;
 
 use std::f64::consts::PI;
 
-use common::{furnace, mean_and_stderr, pt};
+use common::{furnace, lit_floor, lit_floor_radiance, mean_and_stderr, pt};
 
 use glam::DVec3;
 use lumen::color::Color;
@@ -142,23 +142,6 @@ fn tinted_mirror_under_uniform_sky_shows_tint_times_sky() {
     }
 }
 
-/// A diffuse floor (z = 0) seen from a camera at height 3 looking straight down, lit by a
-/// point light of intensity I (linear_radius 1: falloff 1/d²).
-fn lit_floor(rho: Color, light: DVec3, intensity: Color, renderer: Renderer) -> Scene {
-    let mut b = SceneBuilder::new(12, 10);
-    let m = b.diffuse(rho);
-    let cam = Camera {
-        projection: Projection::Perspective { screen_distance: 1.0 },
-        aspect_ratio: 1.2,
-        transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
-    };
-    b.plane(Transform::IDENTITY, m)
-        .camera(cam)
-        .point_light(PointLight { position: light, color: intensity, linear_radius: 1.0 })
-        .renderer(renderer);
-    b.build().unwrap()
-}
-
 #[test]
 fn point_light_on_a_diffuse_plane_matches_the_closed_form_pixel_by_pixel() {
     let rho = Color::new(0.8, 0.5, 0.2);
@@ -169,13 +152,7 @@ fn point_light_on_a_diffuse_plane_matches_the_closed_form_pixel_by_pixel() {
         let img = run(&scene, None).image;
         for row in 0..10 {
             for col in 0..12 {
-                // The camera ray through the pixel centre meets z = 0 at t = −o.z / d.z.
-                let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
-                let p = r.origin - r.dir * (r.origin.z / r.dir.z);
-                let to = light - p;
-                let d2 = to.length_squared();
-                let cos = to.z / d2.sqrt();
-                let expected = rho * intensity * (cos / (PI * d2));
+                let expected = lit_floor_radiance(&scene, rho, light, intensity, col, row);
                 let got = px(&img, col, row);
                 for (g, e) in got.to_array().into_iter().zip(expected.to_array()) {
                     assert!((g / e - 1.0).abs() < 1e-6, "({col},{row}): {got:?} vs {expected:?}");

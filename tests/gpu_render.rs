@@ -1283,27 +1283,11 @@ fn point_lit_plane_matches_the_closed_form_on_the_gpu() {
     let light = DVec3::new(1.0, 0.5, 2.0);
     let intensity = Color::new(10.0, 20.0, 5.0);
     for renderer in [Renderer::PointLight { background: Color::BLACK, ambient: Color::BLACK }, pt(1, 1, 10, true)] {
-        let mut b = SceneBuilder::new(12, 10);
-        let m = b.diffuse(rho);
-        let cam = Camera {
-            projection: Projection::Perspective { screen_distance: 1.0 },
-            aspect_ratio: 1.2,
-            transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
-        };
-        b.plane(Transform::IDENTITY, m)
-            .camera(cam)
-            .point_light(PointLight { position: light, color: intensity, linear_radius: 1.0 })
-            .renderer(renderer);
-        let scene = b.build().unwrap();
+        let scene = common::lit_floor(rho, light, intensity, renderer);
         let img = gpu_run(&gpu, &scene, None);
         for row in 0..10 {
             for col in 0..12 {
-                let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
-                let p = r.origin - r.dir * (r.origin.z / r.dir.z);
-                let to = light - p;
-                let d2 = to.length_squared();
-                let cos = to.z / d2.sqrt();
-                let expected = rho * intensity * (cos / (std::f64::consts::PI * d2));
+                let expected = common::lit_floor_radiance(&scene, rho, light, intensity, col, row);
                 let got: Color = img.get(col, row).into();
                 for (g, e) in [(got.r, expected.r), (got.g, expected.g), (got.b, expected.b)] {
                     assert!((g / e - 1.0).abs() < 1e-5, "({col},{row}): {got:?} vs {expected:?}");

@@ -30,6 +30,35 @@ USING
     Tracer(.samples_per_side 1)
 ";
 
+/// A diffuse floor (z = 0) of albedo `rho` seen from a camera at height 3 looking straight
+/// down, 12×10 pixels, lit by a point light of intensity `intensity` at `light`
+/// (linear_radius 1: falloff 1/d²).
+pub fn lit_floor(rho: Color, light: DVec3, intensity: Color, renderer: Renderer) -> Scene {
+    let mut b = SceneBuilder::new(12, 10);
+    let m = b.diffuse(rho);
+    let cam = Camera {
+        projection: Projection::Perspective { screen_distance: 1.0 },
+        aspect_ratio: 1.2,
+        transform: Transform::translation(DVec3::new(0.3, -0.2, 3.0)) * Transform::rotation_y(90.0),
+    };
+    b.plane(Transform::IDENTITY, m)
+        .camera(cam)
+        .point_light(PointLight { position: light, color: intensity, linear_radius: 1.0 })
+        .renderer(renderer);
+    b.build().unwrap()
+}
+
+/// The radiance of `lit_floor`'s pixel (col, row) by the closed form ρ/π · I · cosθ / d²,
+/// where the camera ray through the pixel centre meets z = 0 (at t = −o.z / d.z).
+pub fn lit_floor_radiance(scene: &Scene, rho: Color, light: DVec3, intensity: Color, col: usize, row: usize) -> Color {
+    let r = scene.camera.ray((col as f64 + 0.5) / 12.0, 1.0 - (row as f64 + 0.5) / 10.0);
+    let p = r.origin - r.dir * (r.origin.z / r.dir.z);
+    let to = light - p;
+    let d2 = to.length_squared();
+    let cos = to.z / d2.sqrt();
+    rho * intensity * (cos / (std::f64::consts::PI * d2))
+}
+
 /// Every `.sl` script in `scenes/`, sorted by name.
 pub fn example_scene_files() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
