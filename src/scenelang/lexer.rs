@@ -3,6 +3,9 @@
 use super::error::{did_you_mean, ErrorKind, LineIndex, SceneLangError, Span};
 use super::value::Ty;
 
+/// What a malformed number should have looked like (errors' `expected` line).
+const NUMBER_EXAMPLES: &str = "a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`";
+
 /// The fixed list of commands (all-uppercase words).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Command {
@@ -282,33 +285,20 @@ impl<'a> Lexer<'a> {
             }
             let exp_end = digits(j);
             if exp_end == j {
-                let bad_end = self.word_end(end);
-                return Err(self
-                    .error(
-                        Span::new(start, bad_end - start),
-                        ErrorKind::BadNumber,
-                        format!("bad number `{}`", &self.source[start..bad_end]),
-                    )
-                    .with_expected("digits after the exponent, as in `1e2` or `1E-2`"));
+                return Err(self.bad_number(
+                    start,
+                    self.word_end(end),
+                    "digits after the exponent, as in `1e2` or `1E-2`",
+                ));
             }
             end = exp_end;
         }
         // A number glued to letters or another dot (`12abc`, `1.2.3`) is one bad token.
         if end < b.len() && (is_word_char(b[end] as char) || b[end] == b'.') {
-            let bad_end = self.word_end(end);
-            return Err(self
-                .error(
-                    Span::new(start, bad_end - start),
-                    ErrorKind::BadNumber,
-                    format!("bad number `{}`", &self.source[start..bad_end]),
-                )
-                .with_expected("a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`"));
+            return Err(self.bad_number(start, self.word_end(end), NUMBER_EXAMPLES));
         }
         let text = &self.source[start..end];
-        let v: f64 = text.parse().map_err(|_| {
-            self.error(Span::new(start, end - start), ErrorKind::BadNumber, format!("bad number `{text}`"))
-                .with_expected("a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`")
-        })?;
+        let v: f64 = text.parse().map_err(|_| self.bad_number(start, end, NUMBER_EXAMPLES))?;
         if !v.is_finite() {
             return Err(self
                 .error(Span::new(start, end - start), ErrorKind::BadNumber, format!("number `{text}` is out of range"))
@@ -316,6 +306,16 @@ impl<'a> Lexer<'a> {
         }
         self.pos = end;
         Ok(Tok::Number(v))
+    }
+
+    /// The error for the malformed number in `source[start..end]`, with what was expected.
+    fn bad_number(&self, start: usize, end: usize, expected: &str) -> SceneLangError {
+        self.error(
+            Span::new(start, end - start),
+            ErrorKind::BadNumber,
+            format!("bad number `{}`", &self.source[start..end]),
+        )
+        .with_expected(expected)
     }
 
     fn word_end(&self, from: usize) -> usize {
