@@ -9,7 +9,7 @@ const CUBE_FACE_SIGN_U = array<f32, 6>(-1.0, 1.0, 1.0, 1.0, 1.0, -1.0);
 const CUBE_FACE_AXIS_V = array<u32, 6>(1u, 1u, 2u, 2u, 1u, 1u);
 const CUBE_FACE_SIGN_V = array<f32, 6>(1.0, 1.0, -1.0, 1.0, 1.0, 1.0);
 
-// #if SPANS
+// #if SHAPE_SPANS
 // The slab test of src/cpu/shapes/cube.rs in straight-line vector code (the same divisions
 // and comparisons, in the same axis order, so the same crossings): a per-axis loop with an
 // early return stays a loop on llvmpipe, run masked around each listed cube.

@@ -1,5 +1,5 @@
 // #requires ray
-// #if SPANS
+// #if SHAPE_SPANS
 // #requires quadratic
 // #endif
 // #if SHADING
@@ -10,7 +10,7 @@
 // Unit cylinder (axis z, radius 0.5, z ∈ [−0.5, 0.5], capped): mirrors
 // src/cpu/shapes/cylinder.rs. Faces: 0 side, 1 bottom cap, 2 top cap.
 
-// #if SPANS
+// #if SHAPE_SPANS
 fn cylinder_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     let fxy = vec3<f32>(o.x, o.y, 0.0);
     let dxy = vec3<f32>(d.x, d.y, 0.0);

@@ -14,6 +14,9 @@
 // #if MESH
 // #requires mesh
 // #endif
+// #if ROUND_SPHERES
+// #requires quadratic
+// #endif
 // Placed primitives: mirrors src/cpu/shapes/{mod,instance}.rs. The ray moves into object
 // space without normalising its direction, so t means the same point in both spaces.
 
@@ -91,7 +94,20 @@ fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
         return mesh_first_crossing(i, ray);
     }
 // #endif
+// #if ROUND_SPHERES
+    // Every finite shape is a round sphere (features::FeatureSet::round_spheres): the
+    // quadratic in the world, about the centre (to_world's translation) with the squared
+    // radius (the squared length of a row of s·R), from six of the record's words where
+    // the object-space test loads thirteen. t is the same parameter either way.
+    let w = shape_at(i).to_world;
+    let r = sphere_roots(ray.origin - vec3<f32>(w.r0.w, w.r1.w, w.r2.w), ray.dir, dot(w.r0.xyz, w.r0.xyz));
+    if (r.z == 0.0) {
+        return Crossing(OPEN, 0u);
+    }
+    return span_first_crossing(Span(Crossing(r.x, 0u), Crossing(r.y, 0u), true), ray);
+// #else
     return span_first_crossing(shape_span(i, ray), ray);
+// #endif
 }
 // #endif
 // #endif

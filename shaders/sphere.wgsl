@@ -1,5 +1,5 @@
 // #requires ray
-// #if SPANS
+// #if SHAPE_SPANS
 // #requires quadratic
 // #endif
 // #if SHADING
@@ -9,7 +9,7 @@
 // #endif
 // Unit sphere (radius 1 at the origin): mirrors src/cpu/shapes/sphere.rs.
 
-// #if SPANS
+// #if SHAPE_SPANS
 fn sphere_span(o: vec3<f32>, d: vec3<f32>) -> Span {
     let r = sphere_roots(o, d, 1.0);
     if (r.z == 0.0) {

@@ -973,6 +973,58 @@ fn sphere(at: DVec3, r: f64, m: MaterialId) -> Shape {
     Shape::primitive(ShapeKind::Sphere, Transform::translation(at) * Transform::scaling(DVec3::splat(r)), m)
 }
 
+/// Thirty spheres, too many for an object list, each placed by a similarity (turned,
+/// some mirrored, radii 0.08 to 0.45), among them a lamp, glass (rays start inside) and
+/// mirrors, over a floor: the walk tests them in the world (FeatureSet::round_spheres),
+/// and the image is the CPU's, with a flat renderer and the path tracer.
+#[test]
+fn round_spheres_tested_in_the_world_match_the_cpu() {
+    let Some(gpu) = gpu_for_tests("round_spheres_tested_in_the_world_match_the_cpu") else { return };
+    for renderer in flat_and_path_traced() {
+        let mut b = SceneBuilder::new(32, 24);
+        let materials = [
+            b.diffuse(Color::new(0.8, 0.3, 0.2)),
+            b.diffuse(Color::new(0.2, 0.6, 0.8)),
+            common::glass(&mut b),
+            common::mirror(&mut b),
+            common::emissive(&mut b, 0.0, 6.0),
+        ];
+        for k in 0..30u32 {
+            let (i, j) = (f64::from(k % 6), f64::from(k / 6));
+            let r = 0.08 + 0.37 * f64::from((k * 7) % 11) / 10.0;
+            let mirrored = if k % 3 == 0 { -r } else { r };
+            let z = 0.3 * f64::from((k * 5) % 7) - 1.0;
+            let place = Transform::translation(DVec3::new(1.0 + 0.5 * j, -1.5 + 0.6 * i, z))
+                * Transform::rotation_z(37.0 * f64::from(k))
+                * Transform::rotation_x(11.0 * f64::from(k))
+                * Transform::scaling(DVec3::new(mirrored, r, r));
+            b.sphere(place, materials[(k % 5) as usize]);
+        }
+        let floor = b.diffuse(Color::gray(0.6));
+        b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.5)), floor)
+            .camera(Camera {
+                projection: Projection::Perspective { screen_distance: 2.0 },
+                aspect_ratio: 32.0 / 24.0,
+                ..Camera::default()
+            })
+            .renderer(renderer)
+            .environment(Environment::Uniform(Color::gray(0.5)))
+            .tracer(Tracer { samples_per_side: 2, rng: PcgSeed::default() });
+        let scene = b.build().unwrap();
+        let f = lumen::gpu::features::FeatureSet::of(&scene);
+        assert!(f.round_spheres && !f.object_list, "{f:?}");
+        println!("{}", scene.renderer.name());
+        let img = assert_matches_cpu(&gpu, &scene, None, 0.99);
+        // The spheres fill much of the frame (the comparison is not of sky and floor alone):
+        // pixels unlike both the sky's (top left) and the floor's (bottom left).
+        let (sky, floor) = (img.get(0, 0), img.get(0, 23));
+        let unlike = |p: &lumen::color::Rgb32, q: lumen::color::Rgb32| (p.r - q.r).abs() + (p.g - q.g).abs() > 0.05;
+        let spheres = img.pixels().iter().filter(|p| unlike(p, sky) && unlike(p, floor)).count();
+        println!("{spheres} of {} pixels show spheres", img.pixels().len());
+        assert!(spheres * 3 > img.pixels().len(), "{spheres}");
+    }
+}
+
 /// Trees whose interval lists would be huge: an INTERSECT of 32 two-sphere UNITEs (2³²
 /// pieces along a ray; the GPU once refused it) and a DIFF of a slab by a FUSE of 100
 /// spheres, whose leaves' spans live in the storage pool rather than in private memory

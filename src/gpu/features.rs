@@ -14,6 +14,12 @@ use crate::scene::{Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
 pub const FULL_CSG_MAX_LEAVES: u32 = 16;
 pub const FULL_CSG_MAX_DEPTH: u32 = 8;
 
+/// The sphere radii (similarity scales) that [`FeatureSet::round_spheres`] admits: 2⁻²⁰ to
+/// 2²⁰. Within them the world-space test's squared radius and distances stay far inside
+/// f32's range wherever the object-space test's do; the extreme scales of STABILITY.md
+/// keep the object-space test.
+pub const ROUND_SCALES: std::ops::RangeInclusive<f64> = 9.5367431640625e-7..=1048576.0;
+
 /// Environment kinds, for specialisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EnvKind {
@@ -215,6 +221,14 @@ pub struct FeatureSet {
     pub mesh: bool,
     /// Finite objects exist, traversed through the BVH (planes are tested separately).
     pub bvh: bool,
+    /// The finite objects are walked (not `object_list`) and every one is a sphere placed
+    /// by a similarity of scale within [`ROUND_SCALES`] (`Transform::similarity_scale`): a
+    /// round sphere, which a walk's leaf tests in the world from six words of its record
+    /// (centre and a row of its `to_world`) instead of moving the ray into object space
+    /// with the thirteen words of `to_object` and the kind (DESIGN.md "Round spheres"). It
+    /// selects an algorithm, so a kernel covers only scenes that agree on it
+    /// ([`Self::missing_for`]).
+    pub round_spheres: bool,
     /// The finite objects are tested in turn, as a list behind the root box, instead of
     /// through a BVH walk ([`super::traversal::prefers_list`] decides).
     pub object_list: bool,
@@ -393,6 +407,16 @@ impl FeatureSet {
             .iter()
             .filter(|s| matches!(crate::prepare::Placement::of(s), crate::prepare::Placement::Tree(_)));
         f.object_list = super::traversal::prefers_list(&f, u32::try_from(finite.count()).unwrap_or(u32::MAX));
+        f.round_spheres = f.bvh
+            && !f.object_list
+            && scene.shapes.iter().all(|s| match s {
+                Shape::Primitive(p) => {
+                    p.kind == ShapeKind::Plane
+                        || (p.kind == ShapeKind::Sphere
+                            && p.transform.similarity_scale().is_some_and(|k| ROUND_SCALES.contains(&k)))
+                }
+                _ => false,
+            });
         f
     }
 
@@ -460,11 +484,12 @@ impl FeatureSet {
     /// at least [`FULL_CSG_MAX_LEAVES`] and [`FULL_CSG_MAX_DEPTH`]), pigment, BRDF and
     /// light kind and every environment ([`EnvKind::All`]), for this set's renderer.
     ///
-    /// Three things stay the scene's, because they select an algorithm rather than add code:
+    /// Four things stay the scene's, because they select an algorithm rather than add code:
     /// the renderer (one integrator per kernel), whether CSG
     /// trees are deferred past the BVH traversal (the CPU reference decides that from the
     /// tree count, `prepare::CSG_DEFER_MAX`; a deferring full kernel gets every deferral
-    /// slot) and whether the finite objects are walked through the BVH or tested as a list.
+    /// slot), whether the finite objects are walked through the BVH or tested as a list,
+    /// and whether a walk's leaves are round spheres tested in the world.
     /// Run-time switches (`settings.nee`, light counts, `environment.kind`, pigment and
     /// shape kinds) choose among the compiled paths, so the result is the scene's image.
     pub fn full_for(&self) -> FeatureSet {
@@ -503,6 +528,7 @@ impl FeatureSet {
             renderer: self.renderer,
             bvh: true,
             object_list: self.object_list,
+            round_spheres: self.round_spheres,
             listed: self.listed,
             planes_listed: self.planes_listed,
             nee: path,
@@ -533,6 +559,11 @@ impl FeatureSet {
             .collect();
         if self.renderer != scene.renderer {
             missing.push(format!("renderer {:?} (kernel: {:?})", scene.renderer, self.renderer));
+        }
+        // Round spheres' world-space test is wrong for other shapes and rounds differently
+        // from the object-space one: the kernel must agree with the scene.
+        if self.round_spheres != scene.round_spheres {
+            missing.push(format!("round spheres {} (kernel: {})", scene.round_spheres, self.round_spheres));
         }
         for (k, (kernel, needed)) in self.shade_use.iter().zip(&scene.shade_use).enumerate() {
             if !kernel.covers(*needed) {
@@ -585,7 +616,7 @@ impl FeatureSet {
 
     /// Every feature name a shader may test that the scene decides (see [`Self::names`]; the
     /// table placements' names are [`super::tables::Table::feature`]).
-    pub const ALL_NAMES: [&'static str; 39] = [
+    pub const ALL_NAMES: [&'static str; 40] = [
         "MATERIALS",
         "GEOMETRY",
         "SHADOWS",
@@ -596,6 +627,7 @@ impl FeatureSet {
         "MESH",
         "CSG",
         "BVH",
+        "ROUND_SPHERES",
         "OBJECT_LIST",
         "UNROLLED_PLANES",
         "BVH_WALK",
@@ -640,6 +672,7 @@ impl FeatureSet {
             (self.mesh, "MESH"),
             (self.csg, "CSG"),
             (self.bvh, "BVH"),
+            (self.bvh && self.round_spheres, "ROUND_SPHERES"),
             (self.lists_objects(), "OBJECT_LIST"),
             (self.unrolls_planes(), "UNROLLED_PLANES"),
             // Meshes walk their bottom-level BVHs whatever the top level does.
@@ -727,6 +760,50 @@ mod tests {
     use super::*;
     use crate::color::Color;
     use crate::scene::{Brdf, CsgOp, Material, PathTracerSettings, PointLight, SceneBuilder, Transform};
+
+    /// Round spheres: only when the finite objects are walked and every one is a sphere
+    /// placed by a similarity of scale within ROUND_SCALES (planes beside them allowed); a
+    /// kernel and a scene must agree on it.
+    #[test]
+    fn round_spheres_need_a_walk_over_similarity_spheres_only() {
+        let scene = |extra: &dyn Fn(&mut SceneBuilder, crate::scene::MaterialId), count: u32| {
+            let mut b = SceneBuilder::new(4, 4);
+            let m = b.diffuse(Color::gray(0.5));
+            b.plane(Transform::IDENTITY, m);
+            for i in 0..count {
+                let at = Transform::translation(DVec3::new(f64::from(i), 0.0, 1.0));
+                let turn = Transform::rotation_z(10.0 * f64::from(i)) * Transform::rotation_x(33.0);
+                b.sphere(at * turn * Transform::scaling(DVec3::new(-0.3, 0.3, 0.3)), m);
+            }
+            extra(&mut b, m);
+            FeatureSet::of(&b.build().unwrap())
+        };
+        let none = |_: &mut SceneBuilder, _| {};
+        let round = scene(&none, 12);
+        assert!(round.round_spheres && !round.object_list && round.names().contains(&"ROUND_SPHERES"));
+        // A few spheres are tested as a list: nothing to walk.
+        assert!(!scene(&none, 3).round_spheres);
+        // An ellipsoid, a cube, or a radius outside ROUND_SCALES among them.
+        let ellipsoid = |b: &mut SceneBuilder, m| {
+            b.sphere(Transform::scaling(DVec3::new(1.0, 1.0, 1.001)), m);
+        };
+        let cube = |b: &mut SceneBuilder, m| {
+            b.shape(Shape::primitive(ShapeKind::Cube, Transform::IDENTITY, m));
+        };
+        let tiny = |b: &mut SceneBuilder, m| {
+            b.sphere(Transform::scaling(DVec3::splat(0.5 * ROUND_SCALES.start())), m);
+        };
+        let huge = |b: &mut SceneBuilder, m| {
+            b.sphere(Transform::scaling(DVec3::splat(2.0 * ROUND_SCALES.end())), m);
+        };
+        for extra in [&ellipsoid as &dyn Fn(&mut SceneBuilder, crate::scene::MaterialId), &cube, &tiny, &huge] {
+            assert!(!scene(extra, 12).round_spheres);
+        }
+        // Kernels and scenes must agree: either test on the other's scene is refused.
+        let other = FeatureSet { round_spheres: false, ..round };
+        assert!(!other.covers(&round) && !round.covers(&other) && round.full_for().covers(&round));
+        assert!(other.missing_for(&round).iter().any(|m| m.contains("round spheres")));
+    }
 
     /// Each BRDF kind records the shapes its materials sit on, their pigments and whether
     /// one emits; the lights add theirs; a kernel that keeps less for a kind is refused.

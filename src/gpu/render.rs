@@ -896,6 +896,8 @@ mod tests {
             f.sphere = true;
         }
         f.bvh = f.csg || f.sphere || f.cube || f.cylinder || f.mesh;
+        // Round spheres: only spheres among the finite objects (FeatureSet::of).
+        f.round_spheres = f.sphere && !(f.cube || f.cylinder || f.mesh || f.csg) && rng.next_u32() % 2 == 0;
         if !f.bvh && !f.plane {
             // Only materials of some shape count.
             (f.diffuse, f.specular, f.dielectric) = (false, false, false);

@@ -119,6 +119,30 @@ impl Transform {
     pub fn normal(&self, n: DVec3) -> DVec3 {
         self.inv.transpose().transform_vector3(n)
     }
+    /// The scale factor s when the transformation is a similarity (s times a rotation or
+    /// reflection, then a translation), to within `1e-9` relative in every entry of MᵀM =
+    /// s²·I; `None` otherwise. A unit sphere placed by a similarity is round, of radius s,
+    /// which lets the GPU test it in the world (`gpu::features::FeatureSet::round_spheres`).
+    ///
+    /// ```
+    /// use lumen::scene::Transform;
+    /// use glam::DVec3;
+    /// let t = Transform::translation(DVec3::X) * Transform::rotation_z(30.0) * Transform::scaling(DVec3::splat(-2.0));
+    /// assert!((t.similarity_scale().unwrap() - 2.0).abs() < 1e-12);
+    /// assert_eq!(Transform::scaling(DVec3::new(1.0, 1.0, 2.0)).similarity_scale(), None);
+    /// ```
+    pub fn similarity_scale(&self) -> Option<f64> {
+        let cols = [self.m.x_axis.truncate(), self.m.y_axis.truncate(), self.m.z_axis.truncate()];
+        let s2 = cols.iter().map(|c| c.length_squared()).sum::<f64>() / 3.0;
+        let round = (0..3).all(|i| {
+            (i..3).all(|j| {
+                let want = if i == j { s2 } else { 0.0 };
+                (cols[i].dot(cols[j]) - want).abs() <= 1e-9 * s2
+            })
+        });
+        (round && s2.is_finite() && s2 > 0.0).then(|| s2.sqrt())
+    }
+
     /// Relative test for tests and DUMP output.
     pub fn is_consistent(&self) -> bool {
         (self.m * self.inv).abs_diff_eq(DMat4::IDENTITY, 1e-9)
@@ -136,6 +160,30 @@ impl std::ops::Mul for Transform {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rotations, reflections, uniform scales and translations in any order keep a
+    /// similarity; a shear or an unequal scale does not, however small, beyond 1e-9.
+    #[test]
+    fn similarity_scale_is_the_uniform_scale_of_a_similarity() {
+        let turn = Transform::rotation_x(17.0) * Transform::rotation_y(-40.0) * Transform::rotation_z(123.0);
+        for s in [1e-12, 0.3, 1.0, 7.5, 1e12] {
+            let t = Transform::translation(DVec3::new(5.0, -2.0, 1e3))
+                * turn
+                * Transform::scaling(DVec3::new(-s, s, s))
+                * Transform::rotation_z(9.0);
+            let k = t.similarity_scale().unwrap_or_else(|| panic!("scale {s}"));
+            assert!((k / s - 1.0).abs() < 1e-12, "{k} vs {s}");
+        }
+        assert_eq!(Transform::IDENTITY.similarity_scale(), Some(1.0));
+        let shear =
+            Transform::from_rows([1.0, 1e-6, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+        assert_eq!((turn * shear.unwrap()).similarity_scale(), None);
+        let squashed = Transform::scaling(DVec3::new(2.0, 2.0, 2.0 * (1.0 + 1e-8)));
+        assert_eq!((turn * squashed).similarity_scale(), None);
+        // Rounding far below the tolerance is still a similarity.
+        let nearly = Transform::scaling(DVec3::new(2.0, 2.0, 2.0 * (1.0 + 1e-12)));
+        assert!(nearly.similarity_scale().is_some());
+    }
 
     #[test]
     fn rotation_is_right_handed_in_degrees() {

@@ -220,7 +220,11 @@ impl Stage {
             }
             Stage::Intersect => {
                 let mut n = keep(
-                    &[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK", "MATERIALS"]].concat(),
+                    &[
+                        &SHAPES[..],
+                        &["CSG", "BVH", "ROUND_SPHERES", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK", "MATERIALS"],
+                    ]
+                    .concat(),
                 );
                 n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
                 if csg_queue(f) {
@@ -339,8 +343,10 @@ impl Stage {
                 n
             }
             Stage::Shadow => {
-                let mut n =
-                    keep(&[&SHAPES[..], &["CSG", "BVH", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK"]].concat());
+                let mut n = keep(
+                    &[&SHAPES[..], &["CSG", "BVH", "ROUND_SPHERES", "OBJECT_LIST", "UNROLLED_PLANES", "BVH_WALK"]]
+                        .concat(),
+                );
                 n.extend(["SHADOWS", "WF_QUEUED", "TRAVERSE", "SPANS"]);
                 if !shadow_rays_counted_by_queue(f) {
                     n.push("WF_COUNT");
@@ -374,9 +380,18 @@ impl Stage {
                 names.retain(|n| *n != "MATERIALS");
             }
         }
-        // Finite shapes' spans: for BVH leaves and CSG leaves (planes alone cross by their
-        // own test).
-        if names.contains(&"SPANS") && (scene.contains(&"BVH") || scene.contains(&"CSG")) {
+        // How the traversing stages go through the scene: a walk of the BVH, a loop over the
+        // planes (both bounded by settings), or unrolled lists only.
+        let walks = names.contains(&"BVH") && !names.contains(&"OBJECT_LIST");
+        let plane_loop = names.contains(&"PLANE") && !names.contains(&"UNROLLED_PLANES");
+        // A walk over round spheres tests its leaves in the world, without spans.
+        let span_leaves = walks && !names.contains(&"ROUND_SPHERES");
+        // CSG trees evaluated in this stage (not handed to the CSG stage's queue).
+        let evaluates_csg = names.contains(&"CSG") && !names.contains(&"CSG_QUEUE");
+        // Finite shapes' spans: for BVH leaves, listed objects and CSG leaves (planes alone
+        // cross by their own test).
+        let listed = names.contains(&"BVH") && !walks;
+        if names.contains(&"SPANS") && (span_leaves || listed || evaluates_csg) {
             names.push("SHAPE_SPANS");
         }
         // Placed shapes and the camera transform points; nothing else does.
@@ -399,10 +414,6 @@ impl Stage {
         {
             names.push("AFFINE");
         }
-        // How the traversing stages go through the scene: a walk of the BVH, a loop over the
-        // planes (both bounded by settings), or unrolled lists only.
-        let walks = names.contains(&"BVH") && !names.contains(&"OBJECT_LIST");
-        let plane_loop = names.contains(&"PLANE") && !names.contains(&"UNROLLED_PLANES");
         // The settings uniform, for the stages that read it.
         let settings = match self {
             Stage::Camera | Stage::FirstHit | Stage::Shade(_) => true,
@@ -447,12 +458,11 @@ impl Stage {
         }
         // The object references (`indices`): read by the BVH walk, the planes' loop and CSG
         // evaluation; unrolled lists hold theirs as constants.
-        let evaluates_csg = names.contains(&"CSG") && !names.contains(&"CSG_QUEUE");
         if names.contains(&"SPANS") && (walks || plane_loop || evaluates_csg) {
             names.push("OBJECT_REFS");
         }
         // Spans of shapes known only by an index at run time (walks' leaves, CSG leaves).
-        if names.contains(&"SHAPE_SPANS") && (walks || evaluates_csg) {
+        if names.contains(&"SHAPE_SPANS") && (span_leaves || evaluates_csg) {
             names.push("INDEXED_SHAPES");
         }
         names.sort();
