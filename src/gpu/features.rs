@@ -18,7 +18,7 @@ pub const FULL_CSG_MAX_DEPTH: u32 = 8;
 /// 2²⁰. Within them the world-space test's squared radius and distances stay far inside
 /// f32's range wherever the object-space test's do; the extreme scales of STABILITY.md
 /// keep the object-space test.
-pub const ROUND_SCALES: std::ops::RangeInclusive<f64> = 9.5367431640625e-7..=1048576.0;
+pub const ROUND_SCALES: std::ops::RangeInclusive<f64> = (1.0 / 1048576.0)..=1048576.0;
 
 /// Environment kinds, for specialisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
