@@ -976,11 +976,13 @@ fn sphere(at: DVec3, r: f64, m: MaterialId) -> Shape {
 /// Thirty spheres, too many for an object list, each placed by a similarity (turned,
 /// some mirrored, radii 0.08 to 0.45), among them a lamp, glass (rays start inside) and
 /// mirrors, over a floor: the walk tests them in the world (FeatureSet::round_spheres),
-/// and the image is the CPU's, with a flat renderer and the path tracer.
+/// and the image is the CPU's, with a flat renderer and the path tracer, at this size and
+/// with the whole scene (camera included) scaled by 10⁵ and by 10⁻⁴, whose radii are near
+/// the ends of `ROUND_SCALES`.
 #[test]
 fn round_spheres_tested_in_the_world_match_the_cpu() {
     let Some(gpu) = gpu_for_tests("round_spheres_tested_in_the_world_match_the_cpu") else { return };
-    for renderer in flat_and_path_traced() {
+    for (size, renderer) in [1.0, 1e5, 1e-4].into_iter().flat_map(|k| flat_and_path_traced().map(|r| (k, r))) {
         let mut b = SceneBuilder::new(32, 24);
         let materials = [
             b.diffuse(Color::new(0.8, 0.3, 0.2)),
@@ -994,18 +996,18 @@ fn round_spheres_tested_in_the_world_match_the_cpu() {
             let r = 0.08 + 0.37 * f64::from((k * 7) % 11) / 10.0;
             let mirrored = if k % 3 == 0 { -r } else { r };
             let z = 0.3 * f64::from((k * 5) % 7) - 1.0;
-            let place = Transform::translation(DVec3::new(1.0 + 0.5 * j, -1.5 + 0.6 * i, z))
+            let place = Transform::translation(size * DVec3::new(1.0 + 0.5 * j, -1.5 + 0.6 * i, z))
                 * Transform::rotation_z(37.0 * f64::from(k))
                 * Transform::rotation_x(11.0 * f64::from(k))
-                * Transform::scaling(DVec3::new(mirrored, r, r));
+                * Transform::scaling(size * DVec3::new(mirrored, r, r));
             b.sphere(place, materials[(k % 5) as usize]);
         }
         let floor = b.diffuse(Color::gray(0.6));
-        b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.5)), floor)
+        b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.5 * size)), floor)
             .camera(Camera {
                 projection: Projection::Perspective { screen_distance: 2.0 },
                 aspect_ratio: 32.0 / 24.0,
-                ..Camera::default()
+                transform: Transform::scaling(DVec3::splat(size)),
             })
             .renderer(renderer)
             .environment(Environment::Uniform(Color::gray(0.5)))
@@ -1013,7 +1015,7 @@ fn round_spheres_tested_in_the_world_match_the_cpu() {
         let scene = b.build().unwrap();
         let f = lumen::gpu::features::FeatureSet::of(&scene);
         assert!(f.round_spheres && !f.object_list, "{f:?}");
-        println!("{}", scene.renderer.name());
+        println!("{} at size {size}", scene.renderer.name());
         let img = assert_matches_cpu(&gpu, &scene, None, 0.99);
         // The spheres fill much of the frame (the comparison is not of sky and floor alone):
         // pixels unlike both the sky's (top left) and the floor's (bottom left).
