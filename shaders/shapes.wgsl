@@ -95,10 +95,11 @@ fn shape_first_crossing(i: u32, ray: Ray) -> Crossing {
     }
 // #endif
 // #if ROUND_SPHERES
-    // Every finite shape is a round sphere (features::FeatureSet::round_spheres): the
-    // quadratic in the world, about the centre (to_world's translation) with the squared
-    // radius (the squared length of a row of s·R), from six of the record's words where
-    // the object-space test loads thirteen. t is the same parameter either way.
+    // Every finite shape is a round sphere (prepare::round_spheres, as cpu::World's
+    // round_first_crossing): the quadratic in the world, about the centre (to_world's
+    // translation) with the squared radius (the squared length of its first row, s² for
+    // s·R), from six of the record's words where the object-space test loads thirteen.
+    // t is the same parameter either way.
     let w = shape_at(i).to_world;
     let r = sphere_roots(ray.origin - vec3<f32>(w.r0.w, w.r1.w, w.r2.w), ray.dir, dot(w.r0.xyz, w.r0.xyz));
     if (r.z == 0.0) {

@@ -3,9 +3,9 @@
 use crate::accel::{Bvh, Visit};
 use crate::cpu::csg::{CsgHit, CsgTree};
 use crate::cpu::mesh::{MeshCrossing, MeshObject};
-use crate::cpu::shapes::{Crossing, Instance};
+use crate::cpu::shapes::{sphere_roots, Crossing, Instance};
 use crate::cpu::{Hit, Ray};
-use crate::prepare::{MeshBvhs, SceneBvh, CSG_DEFER_MAX};
+use crate::prepare::{all_round, MeshBvhs, RoundSphere, SceneBvh, CSG_DEFER_MAX};
 use crate::scene::{Scene, Shape};
 
 /// One top-level shape, prepared. Primitives (the common case) stay inline for locality.
@@ -13,6 +13,9 @@ use crate::scene::{Scene, Shape};
 #[derive(Debug, Clone, PartialEq)]
 enum Object {
     Primitive(Instance),
+    /// A sphere of a scene whose finite objects are all round spheres
+    /// (`prepare::all_round`), tested in the world as the GPU's walk tests it.
+    Round(Instance, RoundSphere),
     Csg(CsgTree),
     Mesh(MeshObject),
 }
@@ -39,6 +42,7 @@ impl Object {
     fn closest(&self, ray: &Ray) -> Option<Found> {
         match self {
             Object::Primitive(p) => p.first_crossing(ray).map(Found::Primitive),
+            Object::Round(_, r) => round_first_crossing(r, ray).map(Found::Primitive),
             Object::Csg(c) => c.closest(ray).map(Found::Csg),
             Object::Mesh(m) => m.closest(ray).map(Found::Mesh),
         }
@@ -47,10 +51,19 @@ impl Object {
     fn occludes(&self, ray: &Ray) -> bool {
         match self {
             Object::Primitive(p) => p.first_crossing(ray).is_some(),
+            Object::Round(_, r) => round_first_crossing(r, ray).is_some(),
             Object::Csg(c) => c.occluded(ray),
             Object::Mesh(m) => m.occludes(ray),
         }
     }
+}
+
+/// The first crossing of round sphere `r` with t in the open range (tmin, tmax): the
+/// quadratic about its centre in the world, whose roots are the object-space test's t
+/// (`Instance::first_crossing`).
+fn round_first_crossing(r: &RoundSphere, ray: &Ray) -> Option<Crossing> {
+    let (t0, t1) = sphere_roots(ray.origin - r.centre, ray.dir, r.radius2)?;
+    [t0, t1].into_iter().find(|t| *t > ray.tmin && *t < ray.tmax && t.is_finite()).map(|t| Crossing::new(t, 0))
 }
 
 /// Every top-level shape of a scene with its transformations precomputed, the bounded ones
@@ -92,11 +105,16 @@ impl World {
     /// Prepares a list of top-level shapes (index i is reported as `Hit::shape = i`).
     pub fn from_shapes(shapes: &[Shape]) -> World {
         let meshes = MeshBvhs::of(shapes);
+        let round = all_round(shapes);
         let objects = shapes
             .iter()
             .map(|s| match s {
                 Shape::Primitive(p) => {
-                    Object::Primitive(Instance { kind: p.kind, to_world: p.transform, material: p.material })
+                    let instance = Instance { kind: p.kind, to_world: p.transform, material: p.material };
+                    match RoundSphere::of(p).filter(|_| round) {
+                        Some(r) => Object::Round(instance, r),
+                        None => Object::Primitive(instance),
+                    }
                 }
                 Shape::Csg(c) => Object::Csg(CsgTree::from_csg(c)),
                 Shape::Mesh(m) => {
@@ -161,7 +179,9 @@ impl World {
         }
         let (id, found) = best?;
         let (s, material) = match (&self.objects[id as usize], found) {
-            (Object::Primitive(p), Found::Primitive(c)) => (p.surface_hit(ray, c, false), p.material),
+            (Object::Primitive(p) | Object::Round(p, _), Found::Primitive(c)) => {
+                (p.surface_hit(ray, c, false), p.material)
+            }
             (Object::Csg(c), Found::Csg(h)) => c.surface_hit(ray, h),
             (Object::Mesh(m), Found::Mesh(c)) => (m.surface_hit(ray, c), m.material),
             _ => unreachable!("objects report their own kind of hit"),
@@ -205,5 +225,59 @@ impl World {
             }
         }
         (tmax < ray.tmax).then_some(tmax)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::color::Color;
+    use crate::scene::{SceneBuilder, Transform};
+
+    /// In a scene of round spheres the world-space test finds the object-space test's
+    /// crossings (to f64 rounding); one ellipsoid among them turns it off for all.
+    #[test]
+    fn round_spheres_are_crossed_where_their_object_space_test_crosses_them() {
+        let build = |egg: bool| {
+            let mut b = SceneBuilder::new(4, 4);
+            let m = b.diffuse(Color::gray(0.5));
+            for k in 0..12 {
+                let r = 0.1 + 0.05 * f64::from(k);
+                let at = Transform::translation(DVec3::new(3.0 + f64::from(k), 0.3 * f64::from(k % 3), -0.2));
+                b.sphere(at * Transform::rotation_z(29.0 * f64::from(k)) * Transform::scaling(DVec3::new(-r, r, r)), m);
+            }
+            if egg {
+                b.sphere(Transform::translation(DVec3::Z * 9.0) * Transform::scaling(DVec3::new(1.0, 1.0, 1.5)), m);
+            }
+            World::new(&b.build().unwrap())
+        };
+        let round = build(false);
+        assert!(round.objects.iter().all(|o| matches!(o, Object::Round(..))));
+        assert!(build(true).objects.iter().all(|o| matches!(o, Object::Primitive(_))));
+        let mut hits = 0;
+        for i in 0..200 {
+            let a = f64::from(i) * 0.013;
+            let ray = Ray::new(
+                DVec3::new(0.0, -0.2, 0.0),
+                DVec3::new(1.0, a.sin() * 0.2, a.cos() * 0.05),
+                0.0,
+                f64::INFINITY,
+            );
+            let want = round.objects.iter().filter_map(|o| match o {
+                Object::Round(p, _) => p.first_crossing(&ray),
+                _ => None,
+            });
+            let want = want.map(|c| c.t).fold(f64::INFINITY, f64::min);
+            match round.intersect(&ray) {
+                Some(h) => {
+                    assert!((h.t / want - 1.0).abs() < 1e-12, "ray {i}: {} vs {want}", h.t);
+                    hits += 1;
+                }
+                None => assert!(want.is_infinite(), "ray {i}: missed a crossing at {want}"),
+            }
+        }
+        assert!(hits > 50, "{hits}");
     }
 }

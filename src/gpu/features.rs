@@ -14,12 +14,6 @@ use crate::scene::{Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
 pub const FULL_CSG_MAX_LEAVES: u32 = 16;
 pub const FULL_CSG_MAX_DEPTH: u32 = 8;
 
-/// The sphere radii (similarity scales) that [`FeatureSet::round_spheres`] admits: 2⁻²⁰ to
-/// 2²⁰. Within them the world-space test's squared radius and distances stay far inside
-/// f32's range wherever the object-space test's do; the extreme scales of STABILITY.md
-/// keep the object-space test.
-pub const ROUND_SCALES: std::ops::RangeInclusive<f64> = (1.0 / 1048576.0)..=1048576.0;
-
 /// Environment kinds, for specialisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EnvKind {
@@ -221,13 +215,12 @@ pub struct FeatureSet {
     pub mesh: bool,
     /// Finite objects exist, traversed through the BVH (planes are tested separately).
     pub bvh: bool,
-    /// The finite objects are walked (not `object_list`) and every one is a sphere placed
-    /// by a similarity of scale within [`ROUND_SCALES`] (`Transform::similarity_scale`): a
-    /// round sphere, which a walk's leaf tests in the world from six words of its record
-    /// (centre and a row of its `to_world`) instead of moving the ray into object space
-    /// with the thirteen words of `to_object` and the kind (DESIGN.md "Round spheres"). It
-    /// selects an algorithm, so a kernel covers only scenes that agree on it
-    /// ([`Self::missing_for`]).
+    /// The finite objects are walked (not `object_list`) and every one is a round sphere
+    /// ([`crate::prepare::all_round`]), which a walk's leaf tests in the world from six
+    /// words of its record (centre and a row of its `to_world`) instead of moving the ray
+    /// into object space with the thirteen words of `to_object` and the kind, as the CPU
+    /// reference does for such scenes (DESIGN.md "Round spheres"). It selects an algorithm,
+    /// so a kernel covers only scenes that agree on it ([`Self::missing_for`]).
     pub round_spheres: bool,
     /// The finite objects are tested in turn, as a list behind the root box, instead of
     /// through a BVH walk ([`super::traversal::prefers_list`] decides).
@@ -407,16 +400,8 @@ impl FeatureSet {
             .iter()
             .filter(|s| matches!(crate::prepare::Placement::of(s), crate::prepare::Placement::Tree(_)));
         f.object_list = super::traversal::prefers_list(&f, u32::try_from(finite.count()).unwrap_or(u32::MAX));
-        f.round_spheres = f.bvh
-            && !f.object_list
-            && scene.shapes.iter().all(|s| match s {
-                Shape::Primitive(p) => {
-                    p.kind == ShapeKind::Plane
-                        || (p.kind == ShapeKind::Sphere
-                            && p.transform.similarity_scale().is_some_and(|k| ROUND_SCALES.contains(&k)))
-                }
-                _ => false,
-            });
+        // Listed objects load their records once per SIMD group: no gain to test there.
+        f.round_spheres = f.bvh && !f.object_list && crate::prepare::all_round(&scene.shapes);
         f
     }
 
@@ -762,7 +747,7 @@ mod tests {
     use crate::scene::{Brdf, CsgOp, Material, PathTracerSettings, PointLight, SceneBuilder, Transform};
 
     /// Round spheres: only when the finite objects are walked and every one is a sphere
-    /// placed by a similarity of scale within ROUND_SCALES (planes beside them allowed); a
+    /// placed by a similarity of scale within prepare::ROUND_SCALES (planes beside them allowed); a
     /// kernel and a scene must agree on it.
     #[test]
     fn round_spheres_need_a_walk_over_similarity_spheres_only() {
@@ -791,10 +776,10 @@ mod tests {
             b.shape(Shape::primitive(ShapeKind::Cube, Transform::IDENTITY, m));
         };
         let tiny = |b: &mut SceneBuilder, m| {
-            b.sphere(Transform::scaling(DVec3::splat(0.5 * ROUND_SCALES.start())), m);
+            b.sphere(Transform::scaling(DVec3::splat(0.5 * crate::prepare::ROUND_SCALES.start())), m);
         };
         let huge = |b: &mut SceneBuilder, m| {
-            b.sphere(Transform::scaling(DVec3::splat(2.0 * ROUND_SCALES.end())), m);
+            b.sphere(Transform::scaling(DVec3::splat(2.0 * crate::prepare::ROUND_SCALES.end())), m);
         };
         for extra in [&ellipsoid as &dyn Fn(&mut SceneBuilder, crate::scene::MaterialId), &cube, &tiny, &huge] {
             assert!(!scene(extra, 12).round_spheres);

@@ -7,6 +7,7 @@
 pub mod mesh_bvh;
 pub mod pixel_samples;
 pub mod render_form;
+pub mod round_spheres;
 pub mod sample_range;
 
 use glam::{DMat3, DVec3};
@@ -19,6 +20,7 @@ use crate::scene::{Aabb, Environment, MaterialId, Scene, Shape, ShapeKind, Trans
 pub use mesh_bvh::{mesh_bvh, MeshBvhs};
 pub use pixel_samples::{camera_strata_key, PixelSamples, CAMERA_STRATA_SALT};
 pub use render_form::{render_form, source_shape};
+pub use round_spheres::{all_round, RoundSphere, ROUND_SCALES};
 pub use sample_range::{SampleRange, SampleRangeError};
 
 /// Most top-level CSG trees whose evaluation a closest-hit query defers until the
