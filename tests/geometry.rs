@@ -39,10 +39,10 @@ fn close(a: DVec3, b: DVec3) -> bool {
 }
 fn check_hit(h: &Hit, t: f64, normal: DVec3, material: u32, front: bool) {
     assert!((h.t - t).abs() < 1e-9, "t {} != {t} ({h:?})", h.t);
-    assert!(close(h.normal, normal), "normal {} != {normal} ({h:?})", h.normal);
+    assert!(close(h.surface.normal, normal), "normal {} != {normal} ({h:?})", h.surface.normal);
     assert_eq!(h.material, MaterialId(material), "{h:?}");
-    assert_eq!(h.front_face, front, "{h:?}");
-    assert!(h.point.is_finite() && h.uv.is_finite());
+    assert_eq!(h.surface.front_face, front, "{h:?}");
+    assert!(h.surface.point.is_finite() && h.surface.uv.is_finite());
 }
 
 // ---------------------------------------------------------------- primitives
@@ -52,13 +52,13 @@ fn sphere_hits_from_outside_inside_and_grazing() {
     let w = World::from_shapes(&[sphere(tr(5.0, 0.0, 0.0) * sc(2.0, 2.0, 2.0), 0)]);
     let h = hit(&w, ray(DVec3::ZERO, DVec3::new(0.5, 0.0, 0.0)));
     check_hit(&h, 6.0, -DVec3::X, 0, true);
-    assert_eq!(h.point, DVec3::new(3.0, 0.0, 0.0));
+    assert_eq!(h.surface.point, DVec3::new(3.0, 0.0, 0.0));
     // From inside: the far wall, back face, normal towards the origin.
     let h = hit(&w, ray(DVec3::new(5.0, 0.0, 0.0), DVec3::Z));
     check_hit(&h, 2.0, -DVec3::Z, 0, false);
     // Grazing (tangent) ray: one touching point, no NaN.
     let h = hit(&w, ray(DVec3::new(0.0, 2.0, 0.0), DVec3::X));
-    assert!((h.t - 5.0).abs() < 1e-7 && h.normal.is_finite() && h.normal.dot(DVec3::X) <= 0.0);
+    assert!((h.t - 5.0).abs() < 1e-7 && h.surface.normal.is_finite() && h.surface.normal.dot(DVec3::X) <= 0.0);
     assert!(w.intersect(&ray(DVec3::new(0.0, 2.0 + 1e-9, 0.0), DVec3::X)).is_none());
     // Range is open: a hit exactly at tmax or tmin is not reported.
     assert!(w.intersect(&Ray::new(DVec3::ZERO, DVec3::X, 0.0, 3.0)).is_none());
@@ -75,7 +75,7 @@ fn tiny_sphere_far_away_and_huge_sphere_farther() {
         let h = hit(&w, ray(DVec3::new(0.0, y, 0.0), DVec3::X));
         let want = 1e4 - (1e-6 - y * y).sqrt();
         assert!((h.t - want).abs() < 4e-12, "y = {y}: {} vs {want}", h.t);
-        assert!(((h.point - DVec3::new(1e4, 0.0, 0.0)).length() - 1e-3).abs() < 4e-12);
+        assert!(((h.surface.point - DVec3::new(1e4, 0.0, 0.0)).length() - 1e-3).abs() < 4e-12);
     }
     assert!(w.intersect(&ray(DVec3::new(0.0, 1.001e-3, 0.0), DVec3::X)).is_none());
     // Radius 1e6 at 1e8.
@@ -91,7 +91,7 @@ fn plane_from_both_sides_and_parallel() {
     let w = World::from_shapes(&[prim(ShapeKind::Plane, tr(0.0, 0.0, -1.0), 3)]);
     let h = hit(&w, ray(DVec3::ZERO, DVec3::new(1.0, 0.0, -0.5)));
     check_hit(&h, 2.0, DVec3::Z, 3, true);
-    assert_eq!(h.point, DVec3::new(2.0, 0.0, -1.0));
+    assert_eq!(h.surface.point, DVec3::new(2.0, 0.0, -1.0));
     let h = hit(&w, ray(DVec3::new(0.0, 0.0, -3.0), DVec3::Z));
     check_hit(&h, 2.0, -DVec3::Z, 3, false);
     assert!(w.intersect(&ray(DVec3::ZERO, DVec3::X)).is_none());
@@ -115,15 +115,15 @@ fn cube_faces_edges_corners() {
     // Along an edge (y = z = 1): enters at x = −1.
     let h = hit(&w, ray(DVec3::new(-3.0, 1.0, 1.0), DVec3::X));
     assert_eq!(h.t, 2.0);
-    assert!(h.normal.is_finite() && h.normal.dot(DVec3::X) <= 0.0);
+    assert!(h.surface.normal.is_finite() && h.surface.normal.dot(DVec3::X) <= 0.0);
     // Through a corner diagonally.
     let h = hit(&w, ray(DVec3::splat(-3.0), DVec3::ONE));
     assert_eq!(h.t, 2.0);
-    assert_eq!(h.point, DVec3::splat(-1.0));
+    assert_eq!(h.surface.point, DVec3::splat(-1.0));
     // Origin on a face plane, direction parallel to it: grazes the face, no NaN.
     let h = hit(&w, ray(DVec3::new(-3.0, 1.0, 0.0), DVec3::X));
     assert_eq!(h.t, 2.0);
-    assert!(h.normal.is_finite());
+    assert!(h.surface.normal.is_finite());
     // Inside: exits.
     let h = hit(&w, ray(DVec3::ZERO, DVec3::new(0.0, 0.0, -2.0)));
     check_hit(&h, 0.5, DVec3::Z, 1, false);
@@ -137,7 +137,7 @@ fn cylinder_side_caps_rim() {
     check_hit(&hit(&w, ray(DVec3::new(0.3, 0.2, -5.0), DVec3::Z)), 4.0, -DVec3::Z, 2, true);
     // Diagonal through the rim of the top cap at x = −1, z = 1.
     let h = hit(&w, ray(DVec3::new(-2.0, 0.0, 2.0), DVec3::new(1.0, 0.0, -1.0)));
-    assert!((h.t - 1.0).abs() < 1e-12 && h.normal.is_finite());
+    assert!((h.t - 1.0).abs() < 1e-12 && h.surface.normal.is_finite());
     // Parallel to the axis just outside / on the side surface.
     assert!(w.intersect(&ray(DVec3::new(1.0 + 1e-9, 0.0, -5.0), DVec3::Z)).is_none());
     let h = hit(&w, ray(DVec3::new(0.0, 0.0, 0.0), DVec3::new(0.0, 1.0, 0.0)));
@@ -149,15 +149,15 @@ fn uv_of_every_shape_per_spec() {
     // Sphere radius 2 at (10, 0, 0): hit at object point (0, −1, 0) → u = 3/4, v = 1/2.
     let w = World::from_shapes(&[sphere(tr(10.0, 0.0, 0.0) * sc(2.0, 2.0, 2.0), 0)]);
     let h = hit(&w, ray(DVec3::new(10.0, -5.0, 0.0), DVec3::Y));
-    assert!((h.uv - DVec2::new(0.75, 0.5)).length() < 1e-12, "{}", h.uv);
+    assert!((h.surface.uv - DVec2::new(0.75, 0.5)).length() < 1e-12, "{}", h.surface.uv);
     // From above at 45° latitude in the +x,+y quadrant direction: u = 1/8, v = acos(z)/π.
     let p = DVec3::new(1.0, 1.0, 2f64.sqrt()).normalize();
     let h = hit(&w, ray(DVec3::new(10.0, 0.0, 0.0) + 4.0 * p, -p));
-    assert!((h.uv - DVec2::new(0.125, 0.25)).length() < 1e-12, "{}", h.uv);
+    assert!((h.surface.uv - DVec2::new(0.125, 0.25)).length() < 1e-12, "{}", h.surface.uv);
     // Plane, translated: uv from the object-space point.
     let w = World::from_shapes(&[prim(ShapeKind::Plane, tr(0.5, 0.0, 0.0), 0)]);
     let h = hit(&w, ray(DVec3::new(2.75, -0.25, 1.0), -DVec3::Z));
-    assert!((h.uv - DVec2::new(0.25, 0.75)).length() < 1e-12, "{}", h.uv);
+    assert!((h.surface.uv - DVec2::new(0.25, 0.75)).length() < 1e-12, "{}", h.surface.uv);
     // Cube: each face centre lands in the centre of its cell of the cross.
     let cells = [(0, 1), (2, 1), (1, 0), (1, 2), (1, 1), (3, 1)]; // −x +x −y +y −z +z
     let w = World::from_shapes(&[cube(Transform::IDENTITY, 0)]);
@@ -166,20 +166,20 @@ fn uv_of_every_shape_per_spec() {
         n[face / 2] = if face % 2 == 1 { 1.0 } else { -1.0 };
         let h = hit(&w, ray(3.0 * n, -n));
         let want = DVec2::new((*c as f64 + 0.5) / 4.0, (*r as f64 + 0.5) / 3.0);
-        assert!((h.uv - want).length() < 1e-12, "face {face}: {}", h.uv);
+        assert!((h.surface.uv - want).length() < 1e-12, "face {face}: {}", h.surface.uv);
     }
     // +x face at (y, z) = (0.25, −0.25): u = (2 + (z/0.5 + 1)/2)/4, v = (1 + (y/0.5 + 1)/2)/3.
     let h = hit(&w, ray(DVec3::new(3.0, 0.25, -0.25), -DVec3::X));
-    assert!((h.uv - DVec2::new(2.25 / 4.0, 1.75 / 3.0)).length() < 1e-12, "{}", h.uv);
+    assert!((h.surface.uv - DVec2::new(2.25 / 4.0, 1.75 / 3.0)).length() < 1e-12, "{}", h.surface.uv);
     // Cylinder: side and both caps.
     let w = World::from_shapes(&[cylinder(Transform::IDENTITY, 0)]);
     let h = hit(&w, ray(DVec3::new(0.0, -3.0, 0.25), DVec3::Y));
     let want = DVec2::new(0.75, (-0.25 + 1.0) / 2.0);
-    assert!((h.uv - want).length() < 1e-12, "{}", h.uv);
+    assert!((h.surface.uv - want).length() < 1e-12, "{}", h.surface.uv);
     let h = hit(&w, ray(DVec3::new(0.25, -0.125, 3.0), -DVec3::Z));
-    assert!((h.uv - DVec2::new((3.0 - 0.5) / 4.0, (3.0 + 0.25) / 4.0)).length() < 1e-12, "{}", h.uv);
+    assert!((h.surface.uv - DVec2::new((3.0 - 0.5) / 4.0, (3.0 + 0.25) / 4.0)).length() < 1e-12, "{}", h.surface.uv);
     let h = hit(&w, ray(DVec3::new(0.25, -0.125, -3.0), DVec3::Z));
-    assert!((h.uv - DVec2::new((3.0 - 0.5) / 4.0, (1.0 - 0.25) / 4.0)).length() < 1e-12, "{}", h.uv);
+    assert!((h.surface.uv - DVec2::new((3.0 - 0.5) / 4.0, (1.0 - 0.25) / 4.0)).length() < 1e-12, "{}", h.surface.uv);
 }
 
 #[test]
@@ -195,7 +195,11 @@ fn unnormalised_directions_scale_t_only() {
         for scale in [1e-6, 3.0, 1e7] {
             let h = hit(&w, ray(DVec3::new(0.0, 0.1, 0.05), d * scale));
             assert!((h.t * scale - base.t).abs() < 1e-12 * base.t, "{d} × {scale}");
-            assert!(close(h.point, base.point) && close(h.normal, base.normal) && h.material == base.material);
+            assert!(
+                close(h.surface.point, base.surface.point)
+                    && close(h.surface.normal, base.surface.normal)
+                    && h.material == base.material
+            );
         }
     }
     // On the cylinder's side surface, parallel to its axis: enters through the cap rim.
@@ -212,8 +216,8 @@ fn normals_use_the_inverse_transpose() {
     let p = DVec3::new(2f64.sqrt(), 0.5f64.sqrt(), 0.0);
     let h = hit(&w, ray(p + DVec3::new(0.0, 3.0, 0.0), -DVec3::Y));
     let want = DVec3::new(p.x / 4.0, p.y, 0.0).normalize();
-    assert!(close(h.normal, want), "{} vs {want}", h.normal);
-    assert!(close(h.point, p));
+    assert!(close(h.surface.normal, want), "{} vs {want}", h.surface.normal);
+    assert!(close(h.surface.point, p));
 }
 
 // ---------------------------------------------------------------- CSG
@@ -330,7 +334,7 @@ fn csg_three_levels_deep() {
     let z = (1.69f64 - 0.81 - 0.81).sqrt();
     let h = hit(&w, ray(DVec3::new(10.0 + p.x, p.y, 10.0), down));
     assert!((h.t - (10.0 - z)).abs() < 1e-9 && h.material == MaterialId(1), "{h:?}");
-    assert!(close(h.normal, DVec3::new(0.9, 0.9, z) / 1.3));
+    assert!(close(h.surface.normal, DVec3::new(0.9, 0.9, z) / 1.3));
     // Occlusion agrees.
     assert!(w.occluded(&Ray::new(o, down, 9.6, 10.6)));
     assert!(!w.occluded(&Ray::new(o, down, 9.6, 10.4)));
@@ -439,16 +443,16 @@ fn spawned_rays_do_not_rehit_their_surface() {
                 let Some(h) = w.intersect(&ray(origin, dir)) else { continue };
                 tested += 1;
                 // Leaving outwards: nothing to hit on a convex shape.
-                let outward = if h.front_face { h.normal } else { -h.normal };
+                let outward = if h.surface.front_face { h.surface.normal } else { -h.surface.normal };
                 let mut out = random_dir(&mut rng);
                 if out.dot(outward) < 0.0 {
                     out = -out;
                 }
-                let o = offset_origin(h.point, h.scale, h.normal, out);
+                let o = offset_origin(h.surface.point, h.surface.scale, h.surface.normal, out);
                 let again = w.intersect(&ray(o, out));
                 assert!(again.is_none(), "{kind:?} {t:?}: re-hit {again:?} from {h:?}");
                 // Shadow ray to a point outside: not occluded.
-                let light = h.point + out * 5.0 * size;
+                let light = h.surface.point + out * 5.0 * size;
                 let o2 = offset_origin(light, light.abs().max_element(), -out, -out);
                 assert!(!w.occluded(&Ray::new(o, o2 - o, 0.0, 1.0)), "{kind:?}: self-shadow");
                 // Going in (solid shapes): the next hit is the far side, not this surface.
@@ -457,10 +461,10 @@ fn spawned_rays_do_not_rehit_their_surface() {
                     if inward.dot(outward) > -0.2 {
                         inward = (inward - outward * (inward.dot(outward) + 0.5)).normalize();
                     }
-                    let o = offset_origin(h.point, h.scale, h.normal, inward);
+                    let o = offset_origin(h.surface.point, h.surface.scale, h.surface.normal, inward);
                     let far = w.intersect(&ray(o, inward)).expect("the far side");
                     assert!(far.t > 1e-6 * size, "{t:?}: re-hit at t = {}", far.t);
-                    assert!(!far.front_face);
+                    assert!(!far.surface.front_face);
                 }
             }
             assert!(tested > 20, "{kind:?} {t:?}: only {tested} hits");
@@ -530,8 +534,8 @@ proptest! {
             prop_assert_eq!(fast.map(|h| h.t), slow, "{:?}", r);
             prop_assert_eq!(w.occluded(&r), slow.is_some());
             if let Some(h) = fast {
-                prop_assert!(h.normal.is_finite() && h.point.is_finite() && h.uv.is_finite());
-                prop_assert!(h.normal.dot(r.dir) <= 0.0);
+                prop_assert!(h.surface.normal.is_finite() && h.surface.point.is_finite() && h.surface.uv.is_finite());
+                prop_assert!(h.surface.normal.dot(r.dir) <= 0.0);
             }
         }
     }

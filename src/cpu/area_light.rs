@@ -689,11 +689,11 @@ mod tests {
                 let s = light.sample(x, u32::MAX, rng.next_f64(), rng.next_f64());
                 let ray = super::super::Ray::new(x, s.point - x, 0.0, 1.0 + 1e-9);
                 let Some(hit) = world.intersect(&ray) else { continue };
-                if (hit.point - s.point).length() > 1e-9 {
+                if (hit.surface.point - s.point).length() > 1e-9 {
                     continue; // the sample is hidden behind the shape's near side
                 }
                 assert_eq!(hit.shape as usize, shape);
-                let seen = scene.material(hit.material).emitted.color_at(hit.uv.x, hit.uv.y);
+                let seen = scene.material(hit.material).emitted.color_at(hit.surface.uv.x, hit.surface.uv.y);
                 assert_eq!(light.emission(&scene, &s), seen, "at {}", s.point);
                 checked += 1;
             }

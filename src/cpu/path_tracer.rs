@@ -50,7 +50,7 @@ pub fn path_radiance(
         let strata = VertexStrata::new(ctx.seed_word, pixel, sample, bounce, ctx.strata_bits);
         let xi = VertexDraws::draw(&mut stream(ctx.scene.tracer.rng, pixel, sample, bounce), &strata);
         let material = ctx.scene.material(hit.material);
-        let color = material.brdf.pigment().color_at(hit.uv.x, hit.uv.y);
+        let color = material.brdf.pigment().color_at(hit.surface.uv.x, hit.surface.uv.y);
         radiance += beta * emitted(ctx, settings, &prev, &hit, material);
         if bounce == settings.max_depth {
             break;
@@ -62,10 +62,12 @@ pub fn path_radiance(
                 radiance += beta * sample_light(ctx, &hit, &material.brdf, color, d, &xi, counters);
             }
         }
-        let Some(s) = sample_bsdf(&material.brdf, color, d, hit.normal, hit.front_face, xi.lobe, xi.direction) else {
+        let Some(s) =
+            sample_bsdf(&material.brdf, color, d, hit.surface.normal, hit.surface.front_face, xi.lobe, xi.direction)
+        else {
             break;
         };
-        if !hit.consistent(s.dir) {
+        if !hit.surface.consistent(s.dir) {
             break;
         }
         beta *= s.weight;
@@ -79,8 +81,13 @@ pub fn path_radiance(
         if beta.is_black() {
             break;
         }
-        prev = Previous { point: hit.point, shape: hit.shape, delta: s.delta, pdf: s.pdf };
-        ray = Ray::new(offset_origin(hit.point, hit.scale, hit.geometric, s.dir), s.dir, 0.0, f64::INFINITY);
+        prev = Previous { point: hit.surface.point, shape: hit.shape, delta: s.delta, pdf: s.pdf };
+        ray = Ray::new(
+            offset_origin(hit.surface.point, hit.surface.scale, hit.surface.geometric, s.dir),
+            s.dir,
+            0.0,
+            f64::INFINITY,
+        );
     }
     radiance
 }
@@ -104,15 +111,15 @@ pub fn power_heuristic(a: f64, b: f64) -> f64 {
 /// Emitted radiance at the hit, MIS-weighted when NEE could also have sampled it: an area
 /// light reached through a non-delta BSDF sample.
 fn emitted(ctx: &Context, settings: &PathTracerSettings, prev: &Previous, hit: &Hit, material: &Material) -> Color {
-    let le = material.emitted.color_at(hit.uv.x, hit.uv.y);
+    let le = material.emitted.color_at(hit.surface.uv.x, hit.surface.uv.y);
     if le.is_black() || !settings.nee || prev.delta {
         return le;
     }
     let Some(i) = ctx.lights.area_of_shape[hit.shape as usize] else {
         return le;
     };
-    let light_pdf =
-        ctx.lights.selection_pdf() * ctx.lights.area[i as usize].pdf(prev.point, prev.shape, hit.point, hit.geometric);
+    let light_pdf = ctx.lights.selection_pdf()
+        * ctx.lights.area[i as usize].pdf(prev.point, prev.shape, hit.surface.point, hit.surface.geometric);
     le * power_heuristic(prev.pdf, light_pdf)
 }
 
@@ -146,7 +153,8 @@ fn add_point_lights(
 ) {
     for light in &ctx.scene.point_lights {
         if let Some((dir, factor)) = point_light_factor(ctx, hit, light, brdf.transmits(), counters) {
-            *radiance += beta * (eval_bsdf(brdf, color, d, hit.normal, hit.front_face, dir) * light.color * factor);
+            *radiance += beta
+                * (eval_bsdf(brdf, color, d, hit.surface.normal, hit.surface.front_face, dir) * light.color * factor);
         }
     }
 }
@@ -177,20 +185,22 @@ fn sample_light(
     let Some(ls) = choose_and_sample_light(ctx, hit, xi) else {
         return Color::BLACK;
     };
-    let f = eval_bsdf(brdf, color, d, hit.normal, hit.front_face, ls.dir);
-    if f.is_black() || ls.radiance.is_black() || !hit.consistent(ls.dir) {
+    let f = eval_bsdf(brdf, color, d, hit.surface.normal, hit.surface.front_face, ls.dir);
+    if f.is_black() || ls.radiance.is_black() || !hit.surface.consistent(ls.dir) {
         return Color::BLACK;
     }
     let clear = match ls.end {
-        Some((y, ny, sy)) => ctx.segment_clear(hit.point, hit.scale, hit.geometric, y, Some((ny, sy)), counters),
-        None => ctx.direction_clear(hit.point, hit.scale, hit.geometric, ls.dir, counters),
+        Some((y, ny, sy)) => {
+            ctx.segment_clear(hit.surface.point, hit.surface.scale, hit.surface.geometric, y, Some((ny, sy)), counters)
+        }
+        None => ctx.direction_clear(hit.surface.point, hit.surface.scale, hit.surface.geometric, ls.dir, counters),
     };
     if !clear {
         return Color::BLACK;
     }
-    let weight = power_heuristic(ls.pdf, pdf_bsdf(brdf, d, hit.normal, hit.front_face, ls.dir));
+    let weight = power_heuristic(ls.pdf, pdf_bsdf(brdf, d, hit.surface.normal, hit.surface.front_face, ls.dir));
     // |cos|: a rough dielectric also receives light from behind (transmission).
-    f * ls.radiance * (hit.normal.dot(ls.dir).abs() * weight / ls.pdf)
+    f * ls.radiance * (hit.surface.normal.dot(ls.dir).abs() * weight / ls.pdf)
 }
 
 fn choose_and_sample_light(ctx: &Context, hit: &Hit, xi: &VertexDraws) -> Option<LightSample> {
@@ -199,8 +209,8 @@ fn choose_and_sample_light(ctx: &Context, hit: &Hit, xi: &VertexDraws) -> Option
     match ctx.lights.choose(xi.light)? {
         LightChoice::Area(i) => {
             let light = &ctx.lights.area[i as usize];
-            let lp = light.sample(hit.point, hit.shape, a, b);
-            let to = lp.point - hit.point;
+            let lp = light.sample(hit.surface.point, hit.shape, a, b);
+            let to = lp.point - hit.surface.point;
             let dist = to.length();
             if lp.pdf <= 0.0 || dist <= 0.0 {
                 return None;

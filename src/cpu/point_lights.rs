@@ -19,19 +19,19 @@ pub fn point_light_factor(
     two_sided: bool,
     counters: &mut Counters,
 ) -> Option<(DVec3, f64)> {
-    let to_light = light.position - hit.point;
+    let to_light = light.position - hit.surface.point;
     let dist = to_light.length();
     if dist <= 0.0 {
         return None;
     }
     let dir = to_light / dist;
-    let cos = hit.normal.dot(dir);
-    let in_front = cos > 0.0 && hit.geometric.dot(dir) > 0.0;
-    let behind = cos < 0.0 && hit.geometric.dot(dir) < 0.0;
+    let cos = hit.surface.normal.dot(dir);
+    let in_front = cos > 0.0 && hit.surface.geometric.dot(dir) > 0.0;
+    let behind = cos < 0.0 && hit.surface.geometric.dot(dir) < 0.0;
     if !(in_front || (two_sided && behind)) {
         return None;
     }
-    if !ctx.segment_clear(hit.point, hit.scale, hit.geometric, light.position, None, counters) {
+    if !ctx.segment_clear(hit.surface.point, hit.surface.scale, hit.surface.geometric, light.position, None, counters) {
         return None;
     }
     Some((dir, cos.abs() * light.falloff(dist)))

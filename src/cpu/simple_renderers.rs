@@ -22,7 +22,8 @@ pub fn flat_radiance(ctx: &Context, ray: &Ray, counters: &mut Counters) -> Color
         return ctx.scene.escape_radiance(ray.dir);
     };
     let m = ctx.scene.material(hit.material);
-    m.emitted.color_at(hit.uv.x, hit.uv.y) + m.brdf.pigment().color_at(hit.uv.x, hit.uv.y)
+    m.emitted.color_at(hit.surface.uv.x, hit.surface.uv.y)
+        + m.brdf.pigment().color_at(hit.surface.uv.x, hit.surface.uv.y)
 }
 
 /// Raytracer.jl's point-light shading: the ambient colour plus, for each visible light,
@@ -33,13 +34,14 @@ pub fn point_light_radiance(ctx: &Context, ray: &Ray, ambient: Color, counters: 
         return ctx.scene.escape_radiance(ray.dir);
     };
     let m = ctx.scene.material(hit.material);
-    let emitted = m.emitted.color_at(hit.uv.x, hit.uv.y);
-    let color = m.brdf.pigment().color_at(hit.uv.x, hit.uv.y);
+    let emitted = m.emitted.color_at(hit.surface.uv.x, hit.surface.uv.y);
+    let color = m.brdf.pigment().color_at(hit.surface.uv.x, hit.surface.uv.y);
     let mut radiance = ambient;
     for light in &ctx.scene.point_lights {
         // Raytracer.jl's model: only lights in front of the surface.
         if let Some((dir, factor)) = point_light_factor(ctx, &hit, light, false, counters) {
-            radiance += (emitted + eval_bsdf(&m.brdf, color, ray.dir.normalize(), hit.normal, hit.front_face, dir))
+            radiance += (emitted
+                + eval_bsdf(&m.brdf, color, ray.dir.normalize(), hit.surface.normal, hit.surface.front_face, dir))
                 * light.color
                 * factor;
         }

@@ -84,7 +84,7 @@ fn round_first_crossing(r: &RoundSphere, ray: &Ray) -> Option<Crossing> {
 ///
 /// let hit = world.intersect(&Ray::new(DVec3::ZERO, DVec3::X, 0.0, f64::INFINITY)).unwrap();
 /// assert_eq!((hit.t, hit.shape), (4.0, 0));
-/// assert_eq!(hit.normal, -DVec3::X);
+/// assert_eq!(hit.surface.normal, -DVec3::X);
 /// assert!(world.occluded(&Ray::new(DVec3::ZERO, -DVec3::Z, 0.0, 2.0)));
 /// assert!(!world.occluded(&Ray::new(DVec3::ZERO, -DVec3::Z, 0.0, 0.5)));
 /// ```
@@ -186,17 +186,7 @@ impl World {
             (Object::Mesh(m), Found::Mesh(c)) => (m.surface_hit(ray, c), m.material),
             _ => unreachable!("objects report their own kind of hit"),
         };
-        Some(Hit {
-            t: found.t(),
-            point: s.point,
-            scale: s.scale,
-            normal: s.normal,
-            geometric: s.geometric,
-            front_face: s.front_face,
-            uv: s.uv,
-            material,
-            shape: id,
-        })
+        Some(Hit { t: found.t(), surface: s, material, shape: id })
     }
 
     /// Whether anything lies on the ray with t in (tmin, tmax); stops at the first hit found.

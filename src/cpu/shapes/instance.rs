@@ -16,11 +16,14 @@ pub struct Instance {
     pub material: MaterialId,
 }
 
-/// World-space surface data at a crossing, oriented against the ray.
+/// World-space surface data at a crossing, oriented against the ray (what every kind of
+/// object reports, and the surface half of a closest hit, [`crate::cpu::Hit`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfaceHit {
+    /// World-space point (computed from the object-space hit, not `origin + t·dir`, for
+    /// accuracy).
     pub point: DVec3,
-    /// Error scale of `point` (`offset::error_scale`).
+    /// Error scale of `point` (`offset::error_scale`): what spawned rays offset by.
     pub scale: f64,
     /// Unit shading normal, on the side the ray comes from (`normal · dir ≤ 0` but for
     /// interpolated mesh normals at grazing angles).
@@ -28,9 +31,19 @@ pub struct SurfaceHit {
     /// Unit geometric normal with `geometric · dir ≤ 0`: it decides sidedness and offsets.
     /// Equal to `normal` but on smooth meshes.
     pub geometric: DVec3,
-    /// The outward normal faced the ray (`outward · dir < 0`).
+    /// The outward normal faced the ray (`outward · dir < 0`): the ray arrived from outside.
     pub front_face: bool,
+    /// Surface coordinates per SCENELANG.md.
     pub uv: DVec2,
+}
+
+impl SurfaceHit {
+    /// Whether a direction leaving the surface is on the same side of the geometric surface
+    /// as the shading normal says: interpolated normals must not send light through a
+    /// surface (or take it from behind one). Always true where the two normals are equal.
+    pub fn consistent(&self, dir: DVec3) -> bool {
+        (dir.dot(self.normal) > 0.0) == (dir.dot(self.geometric) > 0.0)
+    }
 }
 
 impl Instance {
