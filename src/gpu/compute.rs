@@ -190,8 +190,7 @@ impl Gpu {
         entry: &str,
         loops: Loops,
     ) -> Result<ComputeKernel, GpuError> {
-        let validated = validate_wgsl(label, source)?;
-        let module = &validated.module;
+        let ValidatedModule { module, .. } = validate_wgsl(label, source)?;
         let ep = module
             .entry_points
             .iter()
@@ -295,8 +294,13 @@ impl Gpu {
                 bind_group_layouts: &layout_refs,
                 immediate_size: 0,
             });
-            let descriptor =
-                wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source.into()) };
+            // naga's module, already parsed and validated above, rather than the WGSL text:
+            // wgpu would parse it again (a tenth of a warm start's CPU time) into the same
+            // module, so the SPIR-V, and with it Mesa's cache key, is the same either way.
+            let descriptor = wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
+            };
             let shader = match loops {
                 Loops::Bounded => self.device.create_shader_module(descriptor),
                 Loops::Unbounded => {
