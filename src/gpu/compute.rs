@@ -191,6 +191,19 @@ impl Gpu {
         loops: Loops,
     ) -> Result<ComputeKernel, GpuError> {
         let ValidatedModule { module, .. } = validate_wgsl(label, source)?;
+        self.kernel_from_module(label, module, entry, loops)
+    }
+
+    /// [`Gpu::kernel_with_loops`] from a module [`validate_wgsl`] has already parsed and
+    /// validated (a twin device compiling a kernel this process has built once: the parse
+    /// is not repeated, and the SPIR-V is the same).
+    pub(crate) fn kernel_from_module(
+        &self,
+        label: &str,
+        module: naga::Module,
+        entry: &str,
+        loops: Loops,
+    ) -> Result<ComputeKernel, GpuError> {
         let ep = module
             .entry_points
             .iter()

@@ -36,11 +36,12 @@ const MAX_DEVICES: usize = 8;
 /// finds its kernel in the cache takes 1–2 ms, one that compiles 0.05–1 s.
 const WARM_PROBE: Duration = Duration::from_millis(20);
 
-/// A kernel to compile ahead: the pipeline, and the WGSL and entry point a twin compiles
-/// it from.
+/// A kernel to compile ahead: the pipeline, and the WGSL (or, where the caller kept it,
+/// its already validated module) and entry point a twin compiles it from.
 pub(crate) struct Job<'a> {
     pub kernel: &'a ComputeKernel,
     pub source: &'a str,
+    pub module: Option<&'a naga::Module>,
     pub entry: &'a str,
 }
 
@@ -106,7 +107,11 @@ pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
                 let Some(twin) = gpu.twin() else { return };
                 while let Some(job) = take() {
                     // Failing here only moves the kernel's compilation to its first launch.
-                    let compiled = twin.kernel_with_loops(&job.kernel.label, job.source, job.entry, job.kernel.loops);
+                    let (label, loops) = (&job.kernel.label, job.kernel.loops);
+                    let compiled = match job.module {
+                        Some(module) => twin.kernel_from_module(label, module.clone(), job.entry, loops),
+                        None => twin.kernel_with_loops(label, job.source, job.entry, loops),
+                    };
                     if let Ok(kernel) = compiled {
                         let _ = launch_empty(&twin, &kernel);
                     }
@@ -165,8 +170,8 @@ mod tests {
     }
 
     /// Kernels compiled ahead (empty launches where this adapter is llvmpipe, and twins
-    /// where the first of those launches compiles for longer than `WARM_PROBE`) still do
-    /// their work: a uniform struct, a fixed-size and a runtime-sized storage array get
+    /// where the first of those launches compiles for longer than `WARM_PROBE`, from a kept
+    /// module or from the WGSL) still do their work: a uniform struct, a fixed-size and a runtime-sized storage array get
     /// their least sizes for the empty launches, then real buffers.
     #[test]
     fn kernels_compiled_ahead_run_as_compiled() {
@@ -187,8 +192,15 @@ mod tests {
              }",
         ];
         let kernels: Vec<ComputeKernel> = sources.iter().map(|s| gpu.compute_kernel("t", s, "main").unwrap()).collect();
-        let jobs: Vec<Job> =
-            kernels.iter().zip(&sources).map(|(kernel, source)| Job { kernel, source, entry: "main" }).collect();
+        // A twin compiles the first from its kept module, the second from its WGSL.
+        let kept = crate::gpu::validate_wgsl("t", sources[0]).unwrap().module;
+        let modules = [Some(&kept), None];
+        let jobs: Vec<Job> = kernels
+            .iter()
+            .zip(&sources)
+            .zip(modules)
+            .map(|((kernel, source), module)| Job { kernel, source, module, entry: "main" })
+            .collect();
         compile_ahead(&gpu, &jobs).unwrap();
         let v = gpu.storage_buffer("v", &[1u32, 2, 3, 4, 5]).unwrap();
         let p = gpu.uniform_buffer("p", &[3u32, 0, 0, 0]).unwrap();

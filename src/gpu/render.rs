@@ -548,14 +548,20 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
             None => missing.push((stage, assembled)),
         }
     }
-    let built: Vec<Result<(Stage, String, ComputeKernel), GpuError>> = std::thread::scope(|scope| {
+    // Where twins may compile some of them (llvmpipe), each kernel's validated module is
+    // kept for them, so that no WGSL is parsed twice (gpu::parallel_jit).
+    let keep_modules = parallel_jit::lazy_jit(&gpu.adapter_info) && missing.len() > 1;
+    type Built = (Stage, String, ComputeKernel, Option<naga::Module>);
+    let built: Vec<Result<Built, GpuError>> = std::thread::scope(|scope| {
         let handles: Vec<_> = missing
             .into_iter()
             .map(|(stage, assembled)| {
                 scope.spawn(move || {
                     let label = format!("{} stage (assembled)", stage.label());
-                    let k = gpu.kernel_with_loops(&label, &assembled.source, stage.entry().1, Loops::Unbounded)?;
-                    Ok((stage, assembled.source, k))
+                    let module = super::validate_wgsl(&label, &assembled.source)?.module;
+                    let kept = keep_modules.then(|| module.clone());
+                    let k = gpu.kernel_from_module(&label, module, stage.entry().1, Loops::Unbounded)?;
+                    Ok((stage, assembled.source, k, kept))
                 })
             })
             .collect();
@@ -570,10 +576,15 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
     // now, in parallel over more devices where that helps (gpu::parallel_jit).
     let jobs: Vec<parallel_jit::Job> = built
         .iter()
-        .map(|(stage, source, kernel)| parallel_jit::Job { kernel, source, entry: stage.entry().1 })
+        .map(|(stage, source, kernel, module)| parallel_jit::Job {
+            kernel,
+            source,
+            module: module.as_ref(),
+            entry: stage.entry().1,
+        })
         .collect();
     parallel_jit::compile_ahead(gpu, &jobs)?;
-    for (stage, source, kernel) in built {
+    for (stage, source, kernel, _) in built {
         kernels.insert(stage, cache.insert(&source, stage.entry().1, kernel));
     }
     // The stages that launch another stage's kernel.
