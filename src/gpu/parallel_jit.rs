@@ -171,8 +171,9 @@ mod tests {
 
     /// Kernels compiled ahead (empty launches where this adapter is llvmpipe, and twins
     /// where the first of those launches compiles for longer than `WARM_PROBE`, from a kept
-    /// module or from the WGSL) still do their work: a uniform struct, a fixed-size and a runtime-sized storage array get
-    /// their least sizes for the empty launches, then real buffers.
+    /// module or from the WGSL) still do their work: a uniform struct, a fixed-size and a
+    /// runtime-sized storage array get their least sizes for the empty launches, then real
+    /// buffers.
     #[test]
     fn kernels_compiled_ahead_run_as_compiled() {
         let Some(gpu) = crate::gpu::gpu_for_tests("kernels_compiled_ahead_run_as_compiled") else { return };
