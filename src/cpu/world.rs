@@ -3,7 +3,7 @@
 use crate::accel::{Bvh, Visit};
 use crate::cpu::csg::{CsgHit, CsgTree};
 use crate::cpu::mesh::{MeshCrossing, MeshObject};
-use crate::cpu::shapes::{sphere_roots, Crossing, Instance};
+use crate::cpu::shapes::{sphere_roots, Crossing, Instance, Span};
 use crate::cpu::{Hit, Ray};
 use crate::prepare::{all_round, MeshBvhs, RoundSphere, SceneBvh, CSG_DEFER_MAX};
 use crate::scene::{Scene, Shape};
@@ -63,7 +63,7 @@ impl Object {
 /// (`Instance::first_crossing`).
 fn round_first_crossing(r: &RoundSphere, ray: &Ray) -> Option<Crossing> {
     let (t0, t1) = sphere_roots(ray.origin - r.centre, ray.dir, r.radius2)?;
-    [t0, t1].into_iter().find(|t| *t > ray.tmin && *t < ray.tmax && t.is_finite()).map(|t| Crossing::new(t, 0))
+    Span { enter: Crossing::new(t0, 0), exit: Crossing::new(t1, 0) }.first_within(ray)
 }
 
 /// Every top-level shape of a scene with its transformations precomputed, the bounded ones

@@ -62,8 +62,7 @@ impl Instance {
 
     /// The first surface crossing with t in the open range (tmin, tmax).
     pub fn first_crossing(&self, ray: &Ray) -> Option<Crossing> {
-        let s = self.span(ray)?;
-        [s.enter, s.exit].into_iter().find(|c| c.t > ray.tmin && c.t < ray.tmax && c.t.is_finite())
+        self.span(ray)?.first_within(ray)
     }
 
     /// Surface point, normal and uv at crossing `c` of this ray. `flip` reverses the

@@ -16,6 +16,7 @@ mod sphere;
 
 use glam::{DVec2, DVec3};
 
+use crate::cpu::Ray;
 use crate::scene::ShapeKind;
 
 pub use cube::CUBE_FACE_LAYOUT;
@@ -47,6 +48,14 @@ impl Crossing {
 pub struct Span {
     pub enter: Crossing,
     pub exit: Crossing,
+}
+
+impl Span {
+    /// The first of its crossings with a finite t in the open range (tmin, tmax) of `ray`
+    /// (`span_first_crossing` in shaders/shapes.wgsl).
+    pub fn first_within(&self, ray: &Ray) -> Option<Crossing> {
+        [self.enter, self.exit].into_iter().find(|c| c.t > ray.tmin && c.t < ray.tmax && c.t.is_finite())
+    }
 }
 
 /// Object-space surface data at a crossing.
