@@ -646,58 +646,90 @@ fn path_tracer_matches_the_cpu() {
     assert_matches_cpu(&gpu, &path_traced_scene(true, Some(gradient)), None, 0.99);
 }
 
-/// Each BRDF kind's shading stage compiles only what its own materials use
-/// (`features::KindUse`): here the diffuse materials sit on a plane, a sphere and a
-/// cylinder, but light sampling reaches the checkered emission of a mirror cube (so the
-/// diffuse stage keeps the cube and checkers for the light alone); the mirror emits (its
-/// stage weighs emission against NEE: cube and sphere light densities); the glass emits
-/// nothing and samples no light (no light code at all). (Lights of uniform emission,
-/// without `TEXTURED_LIGHTS`, are every other path-traced test's.) The GPU still matches the CPU,
-/// and the specialised kernels give bitwise the full-featured kernels' image.
+/// Each shading kernel compiles only what its kinds' materials use (`features::KindUse`):
+/// here the diffuse materials sit on a plane, a sphere and a cylinder, but light sampling
+/// reaches the checkered emission of a mirror cube (so the diffuse stage keeps the cube and
+/// checkers for the light alone); the mirror emits (its stage weighs emission against NEE:
+/// cube and sphere light densities); the glass emits nothing and samples no light (alone,
+/// no light code at all). Mirror and glass share one kernel (`Stage::kernel_kinds`), which
+/// holds both kinds' shapes and pigments and nothing of the diffuse ones'. (Lights of
+/// uniform emission, without `TEXTURED_LIGHTS`, are every other path-traced test's.) The
+/// GPU still matches the CPU, and the specialised kernels give bitwise the full-featured
+/// kernels' image.
 #[test]
 fn each_brdf_kind_compiles_only_what_its_materials_use() {
     use lumen::gpu::features::FeatureSet;
     use lumen::gpu::layout::brdf_kind;
     use lumen::gpu::wavefront::Stage;
-    let mut b = SceneBuilder::new(24, 18);
-    let checkers = Pigment::Checkered { n: 4, on: Color::gray(0.8), off: Color::new(0.2, 0.3, 0.6) };
-    let floor = b.material(Material::new(Brdf::Diffuse { pigment: checkers.clone() }, Pigment::Uniform(Color::BLACK)));
-    let clay = b.diffuse(Color::new(0.7, 0.4, 0.3));
-    let lamp = common::emissive(&mut b, 0.2, 5.0);
-    let glowing_mirror = b.material(Material::new(
-        Brdf::Specular {
-            pigment: Pigment::Uniform(Color::gray(0.7)),
-            threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD,
-        },
-        Pigment::Checkered { n: 3, on: Color::new(3.0, 2.0, 1.0), off: Color::gray(0.5) },
-    ));
-    let glass = common::glass(&mut b);
-    b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), floor)
-        .sphere(Transform::translation(DVec3::new(4.0, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), clay)
-        .cylinder(Transform::translation(DVec3::new(5.0, -1.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), clay)
-        .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.8)) * Transform::scaling(DVec3::splat(0.3)), lamp)
-        .cube(
-            Transform::translation(DVec3::new(5.5, -0.3, 0.2)) * Transform::scaling(DVec3::new(0.3, 1.2, 1.0)),
-            glowing_mirror,
-        )
-        .sphere(Transform::translation(DVec3::new(3.2, -0.5, -0.5)) * Transform::scaling(DVec3::splat(0.5)), glass)
-        .camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
-        .renderer(pt(1, 5, 3, true))
-        .tracer(Tracer { samples_per_side: 2, rng: PcgSeed { state: 3, inc: 9 } });
-    let scene = b.build().unwrap();
+    let build = |mirror: bool, glass: bool| {
+        let mut b = SceneBuilder::new(24, 18);
+        let checkers = Pigment::Checkered { n: 4, on: Color::gray(0.8), off: Color::new(0.2, 0.3, 0.6) };
+        let floor =
+            b.material(Material::new(Brdf::Diffuse { pigment: checkers.clone() }, Pigment::Uniform(Color::BLACK)));
+        let clay = b.diffuse(Color::new(0.7, 0.4, 0.3));
+        let lamp = common::emissive(&mut b, 0.2, 5.0);
+        let glowing_mirror = b.material(Material::new(
+            Brdf::Specular {
+                pigment: Pigment::Uniform(Color::gray(0.7)),
+                threshold_angle_rad: DEFAULT_THRESHOLD_ANGLE_RAD,
+            },
+            Pigment::Checkered { n: 3, on: Color::new(3.0, 2.0, 1.0), off: Color::gray(0.5) },
+        ));
+        let glass_material = common::glass(&mut b);
+        b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), floor)
+            .sphere(Transform::translation(DVec3::new(4.0, 1.2, -0.4)) * Transform::scaling(DVec3::splat(0.6)), clay)
+            .cylinder(Transform::translation(DVec3::new(5.0, -1.6, -0.5)) * Transform::scaling(DVec3::splat(0.5)), clay)
+            .sphere(Transform::translation(DVec3::new(4.0, 1.0, 1.8)) * Transform::scaling(DVec3::splat(0.3)), lamp);
+        if mirror {
+            b.cube(
+                Transform::translation(DVec3::new(5.5, -0.3, 0.2)) * Transform::scaling(DVec3::new(0.3, 1.2, 1.0)),
+                glowing_mirror,
+            );
+        }
+        if glass {
+            b.sphere(
+                Transform::translation(DVec3::new(3.2, -0.5, -0.5)) * Transform::scaling(DVec3::splat(0.5)),
+                glass_material,
+            );
+        }
+        b.camera(Camera { aspect_ratio: 24.0 / 18.0, ..Camera::default() })
+            .renderer(pt(1, 5, 3, true))
+            .tracer(Tracer { samples_per_side: 2, rng: PcgSeed { state: 3, inc: 9 } });
+        b.build().unwrap()
+    };
+    let scene = build(true, true);
     let f = FeatureSet::of(&scene);
-    let names = |kind| Stage::Shade(kind).names(&f);
-    let has = |kind, all: &[&str]| all.iter().all(|n| names(kind).contains(n));
-    let lacks = |kind, any: &[&str]| !any.iter().any(|n| names(kind).contains(n));
-    assert!(has(brdf_kind::DIFFUSE, &["PLANE", "SPHERE", "CYLINDER", "CUBE", "PIGMENT_CHECKERED", "EMISSION", "NEE"]));
+    let names = |f: &FeatureSet, kind| Stage::Shade(kind).names(f);
+    let has = |f: &FeatureSet, kind, all: &[&str]| all.iter().all(|n| names(f, kind).contains(n));
+    let lacks = |f: &FeatureSet, kind, any: &[&str]| !any.iter().any(|n| names(f, kind).contains(n));
+    assert!(has(
+        &f,
+        brdf_kind::DIFFUSE,
+        &["PLANE", "SPHERE", "CYLINDER", "CUBE", "PIGMENT_CHECKERED", "EMISSION", "NEE"]
+    ));
     // The mirror's checkered emission is looked up where NEE samples it.
-    assert!(has(brdf_kind::DIFFUSE, &["TEXTURED_LIGHTS"]) && lacks(brdf_kind::SPECULAR, &["TEXTURED_LIGHTS"]));
+    assert!(has(&f, brdf_kind::DIFFUSE, &["TEXTURED_LIGHTS"]) && lacks(&f, brdf_kind::SPECULAR, &["TEXTURED_LIGHTS"]));
     // The mirror's emission at a hit is looked up at the hit's uv; the diffuse lamp's is uniform.
-    assert!(has(brdf_kind::SPECULAR, &["TEXTURED_EMISSION"]) && lacks(brdf_kind::DIFFUSE, &["TEXTURED_EMISSION"]));
-    assert!(has(brdf_kind::SPECULAR, &["CUBE", "PIGMENT_CHECKERED", "EMISSION", "AREA_LIGHTS", "CUBE_LIGHTS"]));
-    assert!(lacks(brdf_kind::SPECULAR, &["PLANE", "SPHERE", "CYLINDER"]));
-    assert!(has(brdf_kind::DIELECTRIC, &["SPHERE", "PIGMENT_UNIFORM"]));
+    assert!(
+        has(&f, brdf_kind::SPECULAR, &["TEXTURED_EMISSION"]) && lacks(&f, brdf_kind::DIFFUSE, &["TEXTURED_EMISSION"])
+    );
+    // Mirror and glass: one kernel with both kinds' shapes and pigments, no diffuse ones'.
+    assert_eq!(names(&f, brdf_kind::SPECULAR), names(&f, brdf_kind::DIELECTRIC));
+    let delta = ["CUBE", "SPHERE", "PIGMENT_CHECKERED", "PIGMENT_UNIFORM", "EMISSION", "AREA_LIGHTS", "CUBE_LIGHTS"];
+    assert!(has(&f, brdf_kind::SPECULAR, &delta));
+    assert!(lacks(&f, brdf_kind::SPECULAR, &["PLANE", "CYLINDER", "SHADOWS"]));
+    // Each alone: only its own materials' shapes, and the glass no light code at all.
+    let mirror = FeatureSet::of(&build(true, false));
+    assert!(has(
+        &mirror,
+        brdf_kind::SPECULAR,
+        &["CUBE", "PIGMENT_CHECKERED", "EMISSION", "AREA_LIGHTS", "CUBE_LIGHTS"]
+    ));
+    assert!(lacks(&mirror, brdf_kind::SPECULAR, &["PLANE", "SPHERE", "CYLINDER"]));
+    let glass = FeatureSet::of(&build(false, true));
+    assert!(has(&glass, brdf_kind::DIELECTRIC, &["SPHERE", "PIGMENT_UNIFORM"]));
     assert!(lacks(
+        &glass,
         brdf_kind::DIELECTRIC,
         &["PLANE", "CUBE", "CYLINDER", "PIGMENT_CHECKERED", "EMISSION", "AREA_LIGHTS", "NEE", "WF_RADIANCE_ADD"]
     ));

@@ -76,14 +76,16 @@ impl Stage {
     /// (docs/DESIGN.md "One kernel for the kinds that sample lights"), so they share one
     /// kernel, compiled once and launched once per kind over that kind's queue: the kind
     /// is the same in every lane of a launch, so the other kinds' code is skipped there.
-    /// Delta kinds (mirror, smooth glass) keep kernels of their own, which have no light
-    /// code. Empty for other stages.
+    /// The delta kinds (mirror, smooth glass), which sample no lights, share a second
+    /// kernel without light code, for the same reason: their stages are mostly the same
+    /// path-state, stream and surface code around a few lines of BSDF. Empty for other
+    /// stages.
     pub fn kernel_kinds(self, f: &FeatureSet) -> Vec<u32> {
         match self {
             Stage::Shade(kind) if casts_shadow_rays(kind) => {
                 shade_kinds(f).into_iter().filter(|&k| casts_shadow_rays(k)).collect()
             }
-            Stage::Shade(kind) => vec![kind],
+            Stage::Shade(_) => shade_kinds(f).into_iter().filter(|&k| !casts_shadow_rays(k)).collect(),
             _ => Vec::new(),
         }
     }
@@ -686,11 +688,10 @@ mod tests {
     }
 
     /// The kinds that sample lights share one kernel, with every such kind's code and one
-    /// copy of the light code; delta kinds keep kernels of their own without light code.
-    /// The shared kernel's stages assemble to the same source, which `stage_kernels`
-    /// compiles once.
+    /// copy of the light code; the delta kinds share another without light code. A shared
+    /// kernel's stages assemble to the same source, which `stage_kernels` compiles once.
     #[test]
-    fn kinds_that_sample_lights_share_one_kernel() {
+    fn kinds_that_sample_lights_share_one_kernel_and_delta_kinds_another() {
         let f = FeatureSet {
             sphere: true,
             bvh: true,
@@ -710,7 +711,12 @@ mod tests {
         for kind in shading {
             assert_eq!(Stage::Shade(kind).kernel_kinds(&f), shading.to_vec());
         }
-        assert_eq!(Stage::Shade(brdf_kind::SPECULAR).kernel_kinds(&f), vec![brdf_kind::SPECULAR]);
+        let delta = [brdf_kind::SPECULAR, brdf_kind::DIELECTRIC];
+        for kind in delta {
+            assert_eq!(Stage::Shade(kind).kernel_kinds(&f), delta.to_vec());
+        }
+        let mirror_only = FeatureSet { dielectric: false, ..f };
+        assert_eq!(Stage::Shade(brdf_kind::SPECULAR).kernel_kinds(&mirror_only), vec![brdf_kind::SPECULAR]);
         assert!(Stage::Intersect.kernel_kinds(&f).is_empty());
         let shared = Stage::Shade(brdf_kind::DIFFUSE).names(&f);
         for name in ["DIFFUSE", "CONDUCTOR", "PLASTIC", "NEE", "SHADOWS", "MICROFACET"] {
@@ -718,12 +724,14 @@ mod tests {
         }
         assert!(!shared.contains(&"SPECULAR") && !shared.contains(&"DIELECTRIC"), "{shared:?}");
         let mirror = Stage::Shade(brdf_kind::SPECULAR).names(&f);
-        assert!(mirror.contains(&"SPECULAR") && !mirror.contains(&"DIFFUSE"), "{mirror:?}");
+        assert!(mirror.contains(&"SPECULAR") && mirror.contains(&"DIELECTRIC"), "{mirror:?}");
+        assert!(!mirror.contains(&"DIFFUSE"), "{mirror:?}");
         // (NEE stays for the emission's MIS weight; no shadow rays.)
         assert!(!mirror.contains(&"SHADOWS") && !mirror.contains(&"MICROFACET"), "{mirror:?}");
         let source = |kind| crate::gpu::render::assemble_stage(&f, Stage::Shade(kind)).unwrap().source;
         assert_eq!(source(brdf_kind::DIFFUSE), source(brdf_kind::PLASTIC));
         assert_ne!(source(brdf_kind::DIFFUSE), source(brdf_kind::SPECULAR));
+        assert_eq!(source(brdf_kind::SPECULAR), source(brdf_kind::DIELECTRIC));
     }
 
     /// A shading stage skips a shape kind's uv where none of its materials on that kind
