@@ -23,6 +23,10 @@ pub struct Measurement {
     /// Rays traced, where the renderer counts them (the CPU does; the GPU kernel does not).
     pub rays: Option<u64>,
     pub non_finite_samples: u64,
+    /// CPU seconds of the whole process (every thread, the driver's included) during the
+    /// render call ([`process_cpu_seconds`](super::process_cpu_seconds)); `None` where not
+    /// known.
+    pub cpu_seconds: Option<f64>,
 }
 
 impl Measurement {
@@ -65,6 +69,19 @@ pub fn measure_with(
     progress: bool,
     kernel: Option<crate::gpu::features::FeatureSet>,
 ) -> anyhow::Result<Measurement> {
+    let cpu_before = super::process_cpu_seconds();
+    let mut m = render_on(device, scene, spp, progress, kernel)?;
+    m.cpu_seconds = cpu_before.zip(super::process_cpu_seconds()).map(|(a, b)| (b - a).max(0.0));
+    Ok(m)
+}
+
+fn render_on(
+    device: &OpenDevice,
+    scene: &Scene,
+    spp: u32,
+    progress: bool,
+    kernel: Option<crate::gpu::features::FeatureSet>,
+) -> anyhow::Result<Measurement> {
     match device {
         OpenDevice::Cpu => {
             let bar = if progress { Progress::Bar } else { Progress::Hidden };
@@ -81,6 +98,7 @@ pub fn measure_with(
                 samples: out.stats.samples,
                 rays: Some(out.stats.rays),
                 non_finite_samples: out.stats.non_finite_samples,
+                cpu_seconds: None,
             })
         }
         OpenDevice::Gpu { gpu, renderer } => {
@@ -99,6 +117,7 @@ pub fn measure_with(
                 samples: pixels * u64::from(out.spp_done) * paths_per_sample(scene),
                 rays: Some(out.rays),
                 non_finite_samples: out.non_finite_samples,
+                cpu_seconds: None,
             })
         }
     }
@@ -124,6 +143,10 @@ mod tests {
         assert_eq!((m.spp, m.samples), (4, 6 * 4 * 4));
         // OnOff traces exactly one camera ray per sample.
         assert_eq!(m.rays, Some(6 * 4 * 4));
+        // The render's own CPU time, where the platform tells it.
+        if let Some(c) = m.cpu_seconds {
+            assert!(c >= 0.0 && c.is_finite(), "{c}");
+        }
         assert_eq!(m.image.width(), 6);
         assert_eq!(Device::Gpu.to_string(), "gpu");
     }

@@ -1,6 +1,6 @@
 //! Measuring renderers: image error metrics, least-squares fits on log-log data, result
-//! tables (CSV and Markdown), a log-log plot written as PNG, the process's peak memory, and
-//! the machine the figures were measured on.
+//! tables (CSV and Markdown), a log-log plot written as PNG, the process's peak memory and
+//! CPU time, and the machine the figures were measured on.
 //!
 //! `lumen converge` and `lumen bench` are thin drivers over this module, so everything that
 //! turns numbers into conclusions (slopes, plateaus, efficiencies) is unit-tested here on
@@ -21,6 +21,7 @@
 //! assert!((fit_loglog(&spp, &err).unwrap().slope + 1.0).abs() < 1e-12);
 //! ```
 
+mod cpu_time;
 mod font;
 mod host;
 mod line_fit;
@@ -30,6 +31,7 @@ mod plot;
 mod table;
 
 pub use crate::memory::{format_bytes, peak_memory_bytes};
+pub use cpu_time::{cores_busy, process_cpu_seconds};
 pub use host::{machine_line, parse_cpuinfo, Host};
 pub use line_fit::{fit_line, fit_loglog, tail_flattens, LineFit};
 pub use measure::{measure, measure_with, open_devices, Device, Measurement, OpenDevice};

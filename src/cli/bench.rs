@@ -14,8 +14,8 @@ use glam::DVec3;
 use super::gpu_args::DeviceListArgs;
 use super::script_args::{SceneOverrides, ScriptArgs, SppArgs, MAX_SPP};
 use crate::analysis::{
-    fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, measure_with, peak_memory_bytes,
-    Device, Measurement, OpenDevice,
+    cores_busy, fit_line, fit_loglog, format_bytes, format_seconds, markdown_table, measure, measure_with,
+    peak_memory_bytes, Device, Measurement, OpenDevice,
 };
 use crate::color::Color;
 use crate::cpu::World;
@@ -321,6 +321,8 @@ struct Rounds {
     /// Samples per second of each round (`None`: timing noise swamped the difference).
     rates: Vec<Option<f64>>,
     rays: Vec<f64>,
+    /// Cores busy in each round (`Differential::cores_busy`).
+    cores: Vec<f64>,
     seconds: Vec<f64>,
     spp: u32,
     error: Option<String>,
@@ -340,7 +342,7 @@ fn round_ratios(gpu: &Rounds, cpu: &Rounds) -> Vec<f64> {
 }
 
 fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> String {
-    let headers = ["scene", "device", "size", "spp", "seconds", "samples/s", "rays/s", "peak memory"];
+    let headers = ["scene", "device", "size", "spp", "seconds", "samples/s", "rays/s", "cores busy", "peak memory"];
     let mut rows = Vec::new();
     let mut ratio_rows = Vec::new();
     for file in files {
@@ -353,6 +355,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                     name.clone(),
                     "-".into(),
                     format!("error: {e}"),
+                    "".into(),
                     "".into(),
                     "".into(),
                     "".into(),
@@ -376,6 +379,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                     Ok(diff) => {
                         r.rates.push(diff.per_sample().map(|t| 1.0 / t));
                         r.rays.extend(diff.rays_per_second());
+                        r.cores.extend(diff.cores_busy());
                         r.seconds.push(diff.more.seconds);
                         r.spp = diff.more.spp;
                     }
@@ -389,12 +393,13 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
         for (d, r) in devices.iter().zip(&runs) {
             let noise = || "n/a (timing noise)".to_string();
             let measured = match &r.error {
-                Some(msg) => [msg.clone(), String::new(), String::new(), String::new(), String::new()],
+                Some(msg) => [msg.clone(), String::new(), String::new(), String::new(), String::new(), String::new()],
                 None => [
                     r.spp.to_string(),
                     median(&r.seconds).map_or(String::new(), |s| format!("{s:.3}")),
                     median(&r.rates.iter().flatten().copied().collect::<Vec<_>>()).map_or_else(noise, si),
                     median(&r.rays).map_or_else(noise, si),
+                    median(&r.cores).map_or_else(|| "n/a".to_string(), |c| format!("{c:.2}")),
                     format_bytes(peak_memory_bytes()),
                 ],
             };
@@ -425,6 +430,8 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
         "### Scenes\n\nEach scene is rendered at 1 spp and at 1 + {} spp; seconds = the second render's wall time, \
              samples/s and rays/s = the extra samples (rays) over the extra time, which leaves out fixed costs (BVH \
              build, packing, kernel creation); both devices count every closest-hit and shadow ray they trace. \
+             Cores busy = the process's extra CPU seconds (every thread, the driver's included) over the extra \
+             time: on a software GPU, how much of the machine the kernels kept working. \
              Peak memory = VmHWM of the process so far.{rounds}\n\n{}",
         plan.spp,
         markdown_table(&headers, &rows)
@@ -446,6 +453,7 @@ struct Differential {
     extra_samples: f64,
     extra_seconds: f64,
     extra_rays: Option<f64>,
+    extra_cpu_seconds: Option<f64>,
 }
 
 impl Differential {
@@ -466,6 +474,7 @@ impl Differential {
             extra_samples: more.samples.saturating_sub(one.samples) as f64,
             extra_seconds: more.seconds - one.seconds,
             extra_rays: one.rays.zip(more.rays).map(|(a, b)| b.saturating_sub(a) as f64),
+            extra_cpu_seconds: one.cpu_seconds.zip(more.cpu_seconds).map(|(a, b)| b - a),
             more,
         })
     }
@@ -473,6 +482,11 @@ impl Differential {
     /// Seconds per radiance sample, `None` when timing noise swamped the difference.
     fn per_sample(&self) -> Option<f64> {
         (self.extra_seconds > 0.0 && self.extra_samples > 0.0).then(|| self.extra_seconds / self.extra_samples)
+    }
+
+    /// Cores kept busy by the extra samples: their CPU seconds over their wall seconds.
+    fn cores_busy(&self) -> Option<f64> {
+        cores_busy(self.extra_cpu_seconds, self.extra_seconds)
     }
 
     fn rays_per_second(&self) -> Option<f64> {
