@@ -82,10 +82,10 @@ impl Stage {
     /// stages.
     pub fn kernel_kinds(self, f: &FeatureSet) -> Vec<u32> {
         match self {
-            Stage::Shade(kind) if casts_shadow_rays(kind) => {
-                shade_kinds(f).into_iter().filter(|&k| casts_shadow_rays(k)).collect()
+            // The scene's kinds on this kind's side of the one rule: samples lights or not.
+            Stage::Shade(kind) => {
+                shade_kinds(f).into_iter().filter(|&k| casts_shadow_rays(k) == casts_shadow_rays(kind)).collect()
             }
-            Stage::Shade(_) => shade_kinds(f).into_iter().filter(|&k| !casts_shadow_rays(k)).collect(),
             _ => Vec::new(),
         }
     }
