@@ -223,7 +223,11 @@ fn constants_module(features: &FeatureSet) -> String {
     )
 }
 
-/// The kernel of `stage` for scenes with `features`, assembled and validated with naga.
+/// The kernel of `stage` for scenes with `features`, assembled but not yet validated: a
+/// render validates each kernel it has not cached once, on the thread that creates its
+/// pipeline ([`Assembled::validate`]), so that no source is parsed and validated twice
+/// (naga's validation of the largest kernel was a tenth of the time before its
+/// compilation could start).
 pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, GpuError> {
     let mut lib = shader_library();
     let generated = [
@@ -244,7 +248,6 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
     let assembled = lib
         .assemble(&roots, &names.iter().copied().collect())
         .map_err(|e| GpuError::Validation(format!("shader assembly of the {} stage: {e}", stage.label())))?;
-    assembled.validate()?;
     Ok(assembled)
 }
 
@@ -282,6 +285,9 @@ pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
 /// another stage's kernel (the kinds that sample lights) names that stage instead.
 pub fn kernel_listing(f: &FeatureSet) -> Result<String, GpuError> {
     let kernels: BTreeMap<Stage, Assembled> = assemble_stages(f)?.into_iter().collect();
+    for a in kernels.values() {
+        a.validate()?;
+    }
     let mut out = String::new();
     for stage in Stage::for_scene(f) {
         match kernels.get(&stage) {
@@ -558,7 +564,7 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
             .map(|(stage, assembled)| {
                 scope.spawn(move || {
                     let label = format!("{} stage (assembled)", stage.label());
-                    let module = super::validate_wgsl(&label, &assembled.source)?.module;
+                    let module = assembled.validate()?.module;
                     let kept = keep_modules.then(|| module.clone());
                     let k = gpu.kernel_from_module(&label, module, stage.entry().1, Loops::Unbounded)?;
                     Ok((stage, assembled.source, k, kept))
