@@ -13,7 +13,9 @@
 //! - Every feature named in a directive or a feature set must be one the library declares:
 //!   a typo is an error with file and line, not a silently missing feature.
 //!
-//! The result is validated with naga; errors are mapped back to the module file and line.
+//! [`Assembled::validate`] validates the result with naga (a render does so once per new
+//! kernel, on the thread that creates its pipeline); errors are mapped back to the module
+//! file and line.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;

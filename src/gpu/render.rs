@@ -252,8 +252,8 @@ pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, 
 }
 
 /// Every distinct kernel that renders scenes with `features`, by the stage it is assembled
-/// for: a stage that launches another stage's kernel ([`Stage::kernel_stage`], the kinds
-/// that sample lights) is not assembled again.
+/// for: a stage that launches another stage's kernel ([`Stage::kernel_stage`]: the shading
+/// kinds that share a kernel) is not assembled again.
 pub fn assemble_stages(features: &FeatureSet) -> Result<Vec<(Stage, Assembled)>, GpuError> {
     Stage::for_scene(features)
         .into_iter()
@@ -282,7 +282,8 @@ pub fn shader_source(scene: &Scene) -> Result<String, GpuError> {
 
 /// The assembled kernels of a render with features `f`, stage by stage (`lumen shader`):
 /// each stage's header (entry point and assembly features) and source; a stage that launches
-/// another stage's kernel (the kinds that sample lights) names that stage instead.
+/// another stage's kernel (shading kinds that share one) names that stage instead. Each kernel
+/// is validated first, so that nothing naga rejects is printed.
 pub fn kernel_listing(f: &FeatureSet) -> Result<String, GpuError> {
     let kernels: BTreeMap<Stage, Assembled> = assemble_stages(f)?.into_iter().collect();
     for a in kernels.values() {
