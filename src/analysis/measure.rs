@@ -106,6 +106,9 @@ fn render_on(
                 spp: Some(spp),
                 passes: PassOptions { progress, ..PassOptions::default() },
                 features: kernel,
+                // A short render sets up what a longer one of the scene uses (a twin
+                // device), so that a difference of two renders leaves fixed costs out.
+                twin: crate::gpu::render::TwinUse::Warm,
                 ..GpuRenderOptions::default()
             };
             let out = renderer.borrow_mut().render(gpu, scene, &opts)?;

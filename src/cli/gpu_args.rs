@@ -65,9 +65,10 @@ pub struct GpuArgs {
     /// depend on it.
     #[arg(long, value_enum, default_value_t = TablePlacement::Auto)]
     pub tables: TablePlacement,
-    /// On a software adapter (llvmpipe), render on one device only: by default a render of
-    /// several batches shares them with a second device on the same adapter, whose queue
-    /// fills the cores the first leaves idle between launches. Images do not depend on it.
+    /// On a software adapter (llvmpipe), render on one device only, with every core: by
+    /// default each llvmpipe device gets half the cores and a render of several batches
+    /// shares them with a second device on the same adapter, so that the two use the cores
+    /// side by side. Images do not depend on it.
     #[arg(long)]
     pub one_device: bool,
 }

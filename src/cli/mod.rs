@@ -52,6 +52,19 @@ pub enum Command {
     Bench(bench::BenchArgs),
 }
 
+impl Command {
+    /// Whether a GPU render of this command may run on two llvmpipe devices, which then
+    /// split the cores (`software_driver::split_cores_between_devices`): not a render on
+    /// one device (`--one-device`, or `--profile`, which times one device's launches).
+    fn renders_on_two_devices(&self) -> bool {
+        match self {
+            Command::Render(args) => !args.gpu.one_device && !args.profile,
+            Command::Converge(_) | Command::Bench(_) => true,
+            _ => false,
+        }
+    }
+}
+
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
@@ -77,6 +90,10 @@ pub fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return clap_exit(&e),
     };
+    // Still one thread (parsing starts none): the device split depends on the command.
+    if cli.command.renders_on_two_devices() {
+        software_driver::split_cores_between_devices();
+    }
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => report(&e),

@@ -25,6 +25,32 @@ pub const VECTOR_WIDTH_ENV: &str = "LP_NATIVE_VECTOR_WIDTH";
 /// The width lumen asks for, in bits.
 pub const VECTOR_WIDTH_BITS: &str = "128";
 
+/// llvmpipe's worker threads per device that split `cores` between two devices (the
+/// renderer's and its twin, `gpu::wavefront::devices_split_cores`): `cores / 2`, unless
+/// the user has set the variable (`inherited`) or there is only one core.
+pub fn threads_to_set(inherited: Option<&OsStr>, cores: usize) -> Option<String> {
+    (inherited.is_none() && cores >= 2).then(|| (cores / 2).to_string())
+}
+
+/// Gives each llvmpipe device half the cores ([`threads_to_set`]), so that a render's two
+/// devices run side by side instead of sharing every core: lavapipe runs one launch at a
+/// time, and its threads wait for each other between launches and in each launch's last
+/// workgroups, so one device with a thread per core kept 1.4-1.8 of two cores busy, while
+/// two single-threaded devices from the first round render `lumen bench`'s example scenes
+/// 1.0-1.9x as fast on the 2-core Zen 3 VM (BENCHMARKS.md "Two single-threaded devices").
+/// The cost: a render that uses one device (`--one-device`, `--profile`, a single batch)
+/// runs on half the cores, so those skip this. Hardware drivers never read the variable.
+///
+/// Must run while the process has one thread (it changes the environment) and before any
+/// GPU instance is created (llvmpipe reads the variable when a device is created).
+pub fn split_cores_between_devices() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads_env = crate::gpu::wavefront::THREADS_ENV;
+    if let Some(threads) = threads_to_set(std::env::var_os(threads_env).as_deref(), cores) {
+        std::env::set_var(threads_env, threads);
+    }
+}
+
 /// The value to set given the inherited one: none when the user has set the variable.
 pub fn vector_width_to_set(inherited: Option<&OsStr>) -> Option<&'static str> {
     inherited.is_none().then_some(VECTOR_WIDTH_BITS)
@@ -133,6 +159,20 @@ mod tests {
         info.name = format!("llvmpipe (LLVM 19.1.7, {bits} bits)");
         info.driver_info = format!("Mesa {mesa} (LLVM 19.1.7)");
         info
+    }
+
+    #[test]
+    fn two_devices_get_half_the_cores_unless_the_user_chose() {
+        assert_eq!(threads_to_set(None, 2).as_deref(), Some("1"));
+        assert_eq!(threads_to_set(None, 16).as_deref(), Some("8"));
+        assert_eq!(threads_to_set(None, 3).as_deref(), Some("1"));
+        assert_eq!(threads_to_set(None, 1), None);
+        assert_eq!(threads_to_set(Some(OsStr::new("4")), 16), None);
+        // What is set is what the renderer's rule reads as split.
+        for cores in 2..=64 {
+            let t = threads_to_set(None, cores).unwrap();
+            assert!(crate::gpu::wavefront::devices_split_cores(Some(&t), cores), "{cores} cores");
+        }
     }
 
     #[test]

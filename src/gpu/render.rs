@@ -13,7 +13,8 @@ use super::features::{FeatureSet, RendererKind};
 use super::pack::{pack, PackedScene};
 use super::parallel_jit;
 use super::tables::{Table, TableForms, TableLimits, TablePlacement};
-use super::wavefront::{self, run_rounds, twin, Plan, Stage, StageKernels, StopReason};
+use super::wavefront::twin::{self, TwinStart};
+use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
 use super::{
     Assembled, BindingKind, BoundResource, ComputeKernel, Gpu, GpuError, KernelCache, Loops, PassOptions, ShaderLibrary,
 };
@@ -113,10 +114,18 @@ pub struct GpuRenderOptions {
 /// When a render on llvmpipe shares its batches with a twin device (`wavefront::twin`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum TwinUse {
-    /// Where it pays: renders of a few batches or more, the twin started once a round's
-    /// timing leaves `wavefront::twin::TWIN_MIN_SECONDS` or more to render.
+    /// Where it pays: where the two devices split the cores
+    /// ([`devices_split_cores`](super::wavefront::devices_split_cores), as `lumen` sets
+    /// llvmpipe up), renders of two batches or more from their first round; elsewhere
+    /// renders of a few batches or more, the twin started once a round's timing leaves
+    /// `wavefront::twin::TWIN_MIN_SECONDS` or more to render.
     #[default]
     Auto,
+    /// As `Auto`, and where the devices split the cores the twin is set up (and kept in the
+    /// [`GpuRenderer`]) even for a render too short to share its batches: a benchmark's
+    /// short render, whose fixed costs must be those of the longer render it is
+    /// subtracted from (`analysis::measure`).
+    Warm,
     /// Never: this device renders every batch.
     Never,
     /// From the first batch of any render of two batches or more, the host waiting for the
@@ -473,9 +482,9 @@ impl GpuRenderer {
         let mut passes = opts.passes.clone();
         passes.time_limit = passes.time_limit.map(|limit| limit.saturating_sub(attempts.dropped));
         let mut twin_counters = None;
-        let with_twin = shares_with_twin(gpu, opts, &plan);
-        let plan = Plan { devices: if with_twin { 2 } else { 1 }, ..plan };
-        let acc = if with_twin {
+        let twin_start = twin_start(gpu, opts, &plan);
+        let plan = Plan { devices: if twin_start.is_some() { 2 } else { 1 }, ..plan };
+        let acc = if let Some(twin_start) = twin_start {
             // The batches go to this device and a twin, each serving them on a thread of
             // its own (wavefront::twin); the twin sets itself up meanwhile.
             let (mut host, feed) = twin::shared();
@@ -497,8 +506,10 @@ impl GpuRenderer {
                     feed.serve(&mut runner)
                 });
                 let twin = scope.spawn(move || twin_job.serve(gpu, feed));
-                if twin_first {
+                if twin_start == TwinStart::AtOnce {
                     host.start_twin();
+                }
+                if twin_first {
                     host.wait_for_twin();
                 }
                 let acc = run_rounds(&mut host, &plan, &passes);
@@ -606,30 +617,46 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
     Ok(StageKernels { kernels, compiled })
 }
 
-/// Least batches a render takes for a twin device to be ready to share them
-/// (`wavefront::twin`, which starts it only once enough time is left).
+/// Least batches a render takes for a twin device that starts only once enough time is
+/// left ([`TwinStart::AfterTiming`]) to be ready to share them.
 const TWIN_MIN_BATCHES: u64 = 4;
 
-/// Whether a render may share its batches with a twin device (`wavefront::twin`): only on
-/// llvmpipe through Vulkan (where a submission runs on the submitting thread, so the
+/// Whether and when a render shares its batches with a twin device (`wavefront::twin`):
+/// only on llvmpipe through Vulkan (where a submission runs on the submitting thread, so the
 /// driver's workers wait between launches), with two cores or more, unprofiled (a profile
-/// times one device's launches), unless [`TwinUse::Never`], and only for renders of at
-/// least [`TWIN_MIN_BATCHES`] batches (two with [`TwinUse::Always`]).
-fn shares_with_twin(gpu: &Gpu, opts: &GpuRenderOptions, plan: &Plan) -> bool {
+/// times one device's launches), unless [`TwinUse::Never`]. Where the two devices split
+/// the cores (`wavefront::devices_split_cores`) the twin starts with the first round of any
+/// render of two batches or more (of any render with [`TwinUse::Warm`]); elsewhere only
+/// renders of [`TWIN_MIN_BATCHES`] batches or more may start it, once enough time is left
+/// (two batches and at once with [`TwinUse::Always`]).
+fn twin_start(gpu: &Gpu, opts: &GpuRenderOptions, plan: &Plan) -> Option<TwinStart> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    twin_start_on(&gpu.adapter_info, opts, plan, cores, twin::this_process_splits_cores())
+}
+
+/// [`twin_start`] on an adapter described by `info`, with `cores` cores, the devices
+/// splitting them or not (`split`).
+fn twin_start_on(
+    info: &wgpu::AdapterInfo,
+    opts: &GpuRenderOptions,
+    plan: &Plan,
+    cores: usize,
+    split: bool,
+) -> Option<TwinStart> {
     let paths = u64::from(plan.width)
         * u64::from(plan.height)
         * u64::from(plan.total_spp)
         * u64::from(plan.paths_per_sample.max(1));
-    let least = match opts.twin {
-        TwinUse::Never => return false,
-        TwinUse::Auto => TWIN_MIN_BATCHES,
-        TwinUse::Always => 2,
+    let (least, start) = match opts.twin {
+        TwinUse::Never => return None,
+        TwinUse::Warm if split => (0, TwinStart::AtOnce),
+        TwinUse::Auto if split => (2, TwinStart::AtOnce),
+        TwinUse::Auto | TwinUse::Warm => (TWIN_MIN_BATCHES, TwinStart::AfterTiming),
+        TwinUse::Always => (2, TwinStart::AtOnce),
     };
-    !opts.profile
-        && cores >= 2
-        && parallel_jit::lazy_jit(&gpu.adapter_info)
-        && paths >= least * u64::from(plan.capacity)
+    let shares =
+        !opts.profile && cores >= 2 && parallel_jit::lazy_jit(info) && paths >= least * u64::from(plan.capacity);
+    shares.then_some(start)
 }
 
 /// What a twin device needs to render a scene's batches as this device does.
@@ -813,6 +840,57 @@ mod tests {
     use crate::gpu::features::{EnvKind, KindUse};
     use crate::gpu::tables::TableForm;
     use crate::sampling::Pcg32;
+
+    /// The twin's rule: on llvmpipe through Vulkan only, never profiled or with one core;
+    /// where the devices split the cores from the first round of two batches (of one with
+    /// `Warm`), elsewhere from four batches once timing allows; `Always` at once.
+    #[test]
+    fn when_a_render_starts_a_twin() {
+        let llvmpipe = wgpu::AdapterInfo {
+            name: "llvmpipe (LLVM 15.0.6, 128 bits)".into(),
+            ..wgpu::AdapterInfo::new(wgpu::DeviceType::Cpu, wgpu::Backend::Vulkan)
+        };
+        let hardware = wgpu::AdapterInfo {
+            name: "NVIDIA H200".into(),
+            ..wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan)
+        };
+        let capacity = 1000;
+        // `batches` batches' worth of paths.
+        let plan = |batches: u32| Plan {
+            width: 10,
+            height: 10,
+            sample_begin: 0,
+            total_spp: batches * 10,
+            paths_per_sample: 1,
+            capacity,
+            shadow_rays: 1,
+            devices: 1,
+        };
+        let with = |twin: TwinUse| GpuRenderOptions { twin, ..GpuRenderOptions::default() };
+        let (auto, warm, always, never) =
+            (with(TwinUse::Auto), with(TwinUse::Warm), with(TwinUse::Always), with(TwinUse::Never));
+        use TwinStart::{AfterTiming, AtOnce};
+        let on = |opts: &GpuRenderOptions, batches: u32, split: bool| {
+            twin_start_on(&llvmpipe, opts, &plan(batches), 2, split)
+        };
+        // Split cores: from the first round.
+        assert_eq!(on(&auto, 1, true), None);
+        assert_eq!(on(&auto, 2, true), Some(AtOnce));
+        assert_eq!(on(&warm, 1, true), Some(AtOnce));
+        // Shared cores: long renders only, once timing allows.
+        assert_eq!(on(&auto, 3, false), None);
+        assert_eq!(on(&auto, 4, false), Some(AfterTiming));
+        assert_eq!(on(&warm, 1, false), None);
+        assert_eq!(on(&warm, 4, false), Some(AfterTiming));
+        for split in [false, true] {
+            assert_eq!(on(&always, 2, split), Some(AtOnce));
+            assert_eq!(on(&never, 100, split), None);
+            let profiled = GpuRenderOptions { profile: true, ..auto.clone() };
+            assert_eq!(on(&profiled, 100, split), None);
+            assert_eq!(twin_start_on(&llvmpipe, &auto, &plan(100), 1, split), None);
+            assert_eq!(twin_start_on(&hardware, &warm, &plan(100), 16, split), None);
+        }
+    }
 
     /// Names of the functions reachable from the entry point (by naga's call statements).
     fn reachable_functions(module: &naga::Module) -> BTreeSet<String> {

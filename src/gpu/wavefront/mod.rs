@@ -30,6 +30,7 @@ pub use schedule::{
 pub(crate) use schedule::{run_rounds, Plan};
 
 pub use stages::{csg_queue, has_shadow_rays, Stage};
+pub use twin::{devices_split_cores, THREADS_ENV};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;

@@ -10,10 +10,14 @@
 //! all of them (DESIGN.md "Twin devices", BENCHMARKS.md).
 //!
 //! Each device runs whole batches on a thread of its own, taking them in order from one
-//! list; the host adds each batch's sums into the round as before. Opening the twin and
-//! creating its kernels takes about a quarter of a second of both cores, so the twin is
-//! started only once a round's timing says at least [`TWIN_MIN_SECONDS`] of batches are
-//! left: short renders never pay for it. Batches hold whole
+//! list; the host adds each batch's sums into the round as before. When each device has at
+//! most half the cores ([`devices_split_cores`]: `lumen` gives llvmpipe `LP_NUM_THREADS` =
+//! cores / 2), the two devices together use the cores once, without the waits of one
+//! device's threads between launches, and the twin starts with the first round
+//! ([`TwinStart::AtOnce`]). Otherwise both devices' threads share the cores, and the twin's
+//! start (opening it and creating its kernels, about a quarter of a second of both cores)
+//! ate the gain of short renders, so it starts only once a round's timing says at least
+//! [`TWIN_MIN_SECONDS`] of batches are left ([`TwinStart::AfterTiming`]). Batches hold whole
 //! pixels and both devices run the same kernels on the same driver, so a pixel's value does
 //! not depend on which device rendered it: the image is bitwise the one a single device
 //! makes.
@@ -34,6 +38,48 @@ type Done = (u64, Result<Vec<[f64; 3]>, GpuError>);
 /// Seconds of batches that must be left for the twin to start (its start-up costs about
 /// 0.25 s of both cores on the 2-core machine; it then saves up to a third of what is left).
 pub const TWIN_MIN_SECONDS: f64 = 1.5;
+
+/// When a render's twin starts (`gpu::render`'s rule, from [`devices_split_cores`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TwinStart {
+    /// With the first round: each device has half the cores or less.
+    AtOnce,
+    /// Once a round's timing leaves [`TWIN_MIN_SECONDS`] or more to render.
+    AfterTiming,
+}
+
+/// The variable llvmpipe reads when a device is created: its number of worker threads
+/// (unset: one per core; 0: none, the submitting thread runs the launches).
+pub const THREADS_ENV: &str = "LP_NUM_THREADS";
+
+/// Whether two llvmpipe devices, each with the threads `threads` ([`THREADS_ENV`]'s value)
+/// asks for, fit in `cores` without sharing one: then a twin costs the render no core time
+/// its own device would have used, and starts with the first round. On the 2-core Zen 3 VM
+/// two single-threaded devices from the first round rendered `lumen bench`'s example scenes
+/// 1.0-1.9x as fast as one two-threaded device (BENCHMARKS.md "Two single-threaded
+/// devices").
+///
+/// ```
+/// use lumen::gpu::wavefront::devices_split_cores;
+/// assert!(devices_split_cores(Some("1"), 2));
+/// assert!(!devices_split_cores(None, 2)); // llvmpipe's default: a thread per core
+/// assert!(!devices_split_cores(Some("2"), 2));
+/// ```
+pub fn devices_split_cores(threads: Option<&str>, cores: usize) -> bool {
+    let per_device = match threads.map(|t| t.trim().parse::<usize>()) {
+        Some(Ok(n)) => n.max(1),
+        // llvmpipe falls back to its default for a value it cannot read.
+        Some(Err(_)) | None => cores,
+    };
+    cores >= 2 && 2 * per_device <= cores
+}
+
+/// [`devices_split_cores`] for this process's environment and cores.
+pub(crate) fn this_process_splits_cores() -> bool {
+    let threads = std::env::var(THREADS_ENV).ok();
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    devices_split_cores(threads.as_deref(), cores)
+}
 
 /// The list of batches both devices take from, and where they put their sums.
 pub(crate) struct Feed {
