@@ -116,12 +116,13 @@ pub fn queue_shards(info: &wgpu::AdapterInfo) -> u32 {
         return 1;
     }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    llvmpipe_threads(std::env::var("LP_NUM_THREADS").ok().as_deref(), cores)
+    llvmpipe_threads(std::env::var(THREADS_ENV).ok().as_deref(), cores)
 }
 
 /// llvmpipe's worker threads for the `LP_NUM_THREADS` setting and `cores` (as Mesa's
-/// `lp_screen` counts them), at least 1: a shard per thread.
-fn llvmpipe_threads(setting: Option<&str>, cores: usize) -> u32 {
+/// `lp_screen` counts them), at least 1: a shard per thread, and what two devices must fit
+/// in the cores to split them (`twin::devices_split_cores`).
+pub(crate) fn llvmpipe_threads(setting: Option<&str>, cores: usize) -> u32 {
     let threads = match setting.map(str::trim).and_then(|s| s.parse::<u32>().ok()) {
         Some(n) => n,
         None => u32::try_from(cores).unwrap_or(u32::MAX),

@@ -64,13 +64,11 @@ pub const THREADS_ENV: &str = "LP_NUM_THREADS";
 /// assert!(devices_split_cores(Some("1"), 2));
 /// assert!(!devices_split_cores(None, 2)); // llvmpipe's default: a thread per core
 /// assert!(!devices_split_cores(Some("2"), 2));
+/// assert!(devices_split_cores(Some("0"), 2)); // no worker: the submitting thread
+/// assert!(devices_split_cores(None, 128)); // Mesa's 32 threads at most
 /// ```
 pub fn devices_split_cores(threads: Option<&str>, cores: usize) -> bool {
-    let per_device = match threads.map(|t| t.trim().parse::<usize>()) {
-        Some(Ok(n)) => n.max(1),
-        // llvmpipe falls back to its default for a value it cannot read.
-        Some(Err(_)) | None => cores,
-    };
+    let per_device = super::llvmpipe_threads(threads, cores) as usize;
     cores >= 2 && 2 * per_device <= cores
 }
 
