@@ -121,3 +121,28 @@ fn report(e: &anyhow::Error) -> ExitCode {
     }
     ExitCode::FAILURE
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Only commands that may render on two llvmpipe devices split the cores between them:
+    /// not `--one-device` or `--profile` renders (one device, which keeps every core), nor
+    /// commands that render nothing.
+    #[test]
+    fn which_commands_split_the_cores() {
+        let splits = |args: &[&str]| {
+            let cli = Cli::try_parse_from(std::iter::once("lumen").chain(args.iter().copied())).unwrap();
+            cli.command.renders_on_two_devices()
+        };
+        assert!(splits(&["render", "scene.sl"]));
+        assert!(splits(&["render", "scene.sl", "--device", "gpu"]));
+        assert!(!splits(&["render", "scene.sl", "--one-device"]));
+        assert!(!splits(&["render", "scene.sl", "--profile"]));
+        assert!(splits(&["bench"]));
+        assert!(splits(&["converge", "scene.sl"]));
+        assert!(!splits(&["check", "scene.sl"]));
+        assert!(!splits(&["shader", "scene.sl"]));
+        assert!(!splits(&["devices"]));
+    }
+}
