@@ -158,6 +158,6 @@ fn path_id(slot: u32) -> PathId {
     let r = slot - p * per_pixel;
     let i = div_small(r, n);
     let j = batch.sample_begin + i;
-    return PathId(batch.pixel_begin + p, j, j * n + r - i * n);
+    return PathId(batch.pixel_begin + p * batch.pixel_stride, j, j * n + r - i * n);
 }
 // #endif

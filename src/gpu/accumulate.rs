@@ -38,14 +38,15 @@ impl Accumulator {
         Ok(Self { width, height, total: total_sums, round, spp: 0, nonfinite: 0 })
     }
 
-    /// Adds the sums of the pixels `first..first + sums.len()` (row-major indices) to the
-    /// round in progress.
+    /// Adds the sums of the pixels `first + k · stride` for `k < sums.len()` (row-major
+    /// indices) to the round in progress.
     ///
     /// A non-finite sum (a kernel bug or an overflow) is dropped and counted rather than
     /// allowed to turn the pixel into NaN forever; see [`Self::nonfinite`].
-    pub fn add_pixels(&mut self, first: usize, sums: &[[f64; 3]]) {
-        assert!(first + sums.len() <= self.round.len(), "pixels outside the image");
-        for (dst, s) in self.round[first..first + sums.len()].iter_mut().zip(sums) {
+    pub fn add_pixels(&mut self, first: usize, stride: usize, sums: &[[f64; 3]]) {
+        let stride = stride.max(1);
+        assert!(sums.is_empty() || first + (sums.len() - 1) * stride < self.round.len(), "pixels outside the image");
+        for (dst, s) in self.round[first..].iter_mut().step_by(stride).zip(sums) {
             if s[0].is_finite() && s[1].is_finite() && s[2].is_finite() {
                 for c in 0..3 {
                     dst[c] += s[c];
@@ -108,10 +109,10 @@ mod tests {
     fn f64_accumulation_has_no_plateau() {
         // 2²⁴ + 1 in f32 is 2²⁴: an f32 running sum of ones would stop at 16_777_216.
         let mut acc = Accumulator::new(1, 1).unwrap();
-        acc.add_pixels(0, &[[16_777_216.0, 0.5, 0.0]]);
+        acc.add_pixels(0, 1, &[[16_777_216.0, 0.5, 0.0]]);
         acc.commit_round(1);
         for _ in 0..3 {
-            acc.add_pixels(0, &[[1.0, 0.5, 0.0]]);
+            acc.add_pixels(0, 1, &[[1.0, 0.5, 0.0]]);
             acc.commit_round(1);
         }
         assert_eq!(acc.sums()[0], [16_777_219.0, 2.0, 0.0]);
@@ -123,11 +124,11 @@ mod tests {
     fn pixel_runs_land_at_their_offsets_and_partial_rounds_are_discarded() {
         let mut acc = Accumulator::new(3, 2).unwrap();
         let px = |v: f64| [v, 2.0 * v, 3.0 * v];
-        acc.add_pixels(0, &[px(1.0), px(2.0)]);
-        acc.add_pixels(2, &[px(3.0), px(4.0), px(5.0), px(6.0)]);
+        acc.add_pixels(0, 1, &[px(1.0), px(2.0)]);
+        acc.add_pixels(2, 1, &[px(3.0), px(4.0), px(5.0), px(6.0)]);
         acc.commit_round(2);
         // A round cut short: must not leak into the result.
-        acc.add_pixels(1, &[px(100.0); 4]);
+        acc.add_pixels(1, 1, &[px(100.0); 4]);
         acc.discard_round();
         let img = acc.mean_image();
         for (i, p) in img.pixels().iter().enumerate() {
@@ -139,7 +140,7 @@ mod tests {
     #[test]
     fn nonfinite_sums_are_dropped_and_counted() {
         let mut acc = Accumulator::new(2, 1).unwrap();
-        acc.add_pixels(0, &[[f64::NAN, 0.0, 0.0], [1.0, 1.0, f64::INFINITY]]);
+        acc.add_pixels(0, 1, &[[f64::NAN, 0.0, 0.0], [1.0, 1.0, f64::INFINITY]]);
         acc.commit_round(1);
         assert_eq!(acc.nonfinite(), 2);
         assert!(acc.mean_image().pixels().iter().all(|p| *p == Rgb32::BLACK));

@@ -212,7 +212,9 @@ pub mod word_field {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct BatchUniform {
-    /// First pixel (row-major index) of the batch; a batch holds whole pixels.
+    /// The batch's pixels (row-major indices) are `pixel_begin + i · pixel_stride` for
+    /// `i < pixel_count`: a batch holds whole pixels, interleaved with the other batches of
+    /// its round where several devices share them (`schedule::batches`).
     pub pixel_begin: u32,
     pub pixel_count: u32,
     /// Camera samples `[sample_begin, sample_begin + samples)` of the round.
@@ -234,7 +236,9 @@ pub struct BatchUniform {
     /// Entries of a queue shard's region ([`Control::shard_slots`]): shard s of queue q
     /// starts at `(q · shards + s) · shard_slots` in `queues`.
     pub shard_slots: u32,
-    pub _pad: [u32; 2],
+    /// See `pixel_begin`.
+    pub pixel_stride: u32,
+    pub _pad: [u32; 1],
 }
 
 const BATCH_WGSL: &str = "struct Batch {
@@ -248,8 +252,8 @@ const BATCH_WGSL: &str = "struct Batch {
     shadow_rays: u32,
     zero: u32,
     shard_slots: u32,
+    pixel_stride: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 ";
 
@@ -493,6 +497,7 @@ mod tests {
             ("shadow_rays", std::mem::offset_of!(BatchUniform, shadow_rays)),
             ("zero", std::mem::offset_of!(BatchUniform, zero)),
             ("shard_slots", std::mem::offset_of!(BatchUniform, shard_slots)),
+            ("pixel_stride", std::mem::offset_of!(BatchUniform, pixel_stride)),
         ];
         for (m, (name, offset)) in members.iter().zip(rust) {
             assert_eq!((m.name.as_deref(), m.offset as usize), (Some(name), offset));
