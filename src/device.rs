@@ -113,11 +113,12 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 }
 
 /// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
-/// CPU renderer may be as fast or faster (on Mesa 25's Vulkan lavapipe, on a loaded host,
-/// the two are at parity on glass.sl and skybox.sl, the CPU slightly ahead on
-/// spheres_10k.sl, and the GPU leads elsewhere: BENCHMARKS.md "Rounds overlap again", and
-/// so on AMD Zen 3 and Zen 4 hosts, "An AMD Zen 3 host", "An AMD Zen 4 host"; other
-/// software adapters are unmeasured), except on an llvmpipe of Mesa 26.1 or later with
+/// CPU renderer comes close on some scenes (on Mesa 25's Vulkan lavapipe on a 2-core AMD
+/// Zen 3 VM, with lumen's two single-threaded devices and interleaved batches, the GPU led
+/// every example scene, spheres_10k.sl by only 0–17 %: BENCHMARKS.md "Two single-threaded
+/// devices"; before those, on that host and a Zen 4 one, the CPU was at parity or slightly
+/// ahead on spheres_10k.sl, glass.sl and skybox.sl: "An AMD Zen 3 host", "An AMD Zen 4
+/// host"; other software adapters are unmeasured), except on an llvmpipe of Mesa 26.1 or later with
 /// vectors wider than 256 bits, which ran every example scene 1.3–4.7× faster than the CPU
 /// renderer on the AVX-512 hosts measured (BENCHMARKS.md "512-bit vectors on Mesa 26.1",
 /// "An AMD Zen 4 host"). At 256 bits it does not always: on the Zen 3 host spheres_10k.sl
@@ -151,7 +152,7 @@ pub fn software_adapter_note(info: &wgpu::AdapterInfo) -> Option<String> {
     let outruns_the_cpu = crate::gpu::llvmpipe_prefers_wide_vectors(info)
         && crate::gpu::llvmpipe_vector_bits(info).is_some_and(|bits| bits > 256);
     if !outruns_the_cpu {
-        note.push_str("; lumen's own CPU renderer (--device cpu) is as fast or faster on some scenes");
+        note.push_str("; lumen's own CPU renderer (--device cpu) comes close on some scenes");
     }
     if info.backend == wgpu::Backend::Gl && crate::gpu::is_llvmpipe(info) {
         note.push_str(
