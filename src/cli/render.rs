@@ -293,7 +293,13 @@ fn render_on_gpu(
         passes: args.gpu.pass_options(),
         profile: args.profile,
         tables: args.gpu.tables,
-        twin: if args.gpu.one_device { TwinUse::Never } else { TwinUse::Auto },
+        // Animation frames set the twin up in the first frame even when a frame is one
+        // batch, so that every later frame shares its batches.
+        twin: match (args.gpu.one_device, args.frames.is_some()) {
+            (true, _) => TwinUse::Never,
+            (false, true) => TwinUse::Warm,
+            (false, false) => TwinUse::Auto,
+        },
         ..GpuRenderOptions::default()
     };
     let out = renderer.render(gpu, scene, &opts)?;

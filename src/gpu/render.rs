@@ -122,9 +122,10 @@ pub enum TwinUse {
     #[default]
     Auto,
     /// As `Auto`, and where the devices split the cores the twin is set up (and kept in the
-    /// [`GpuRenderer`]) even for a render too short to share its batches: a benchmark's
-    /// short render, whose fixed costs must be those of the longer render it is
-    /// subtracted from (`analysis::measure`).
+    /// [`GpuRenderer`]) and shares the batches even for a render of one batch: a
+    /// benchmark's short render, whose fixed costs must be those of the longer render it is
+    /// subtracted from (`analysis::measure`), and animation frames (`lumen render
+    /// --frames`), where the first frame's set-up serves every later frame.
     Warm,
     /// Never: this device renders every batch.
     Never,
