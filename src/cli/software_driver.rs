@@ -38,8 +38,9 @@ pub fn threads_to_set(inherited: Option<&OsStr>, cores: usize) -> Option<String>
 /// workgroups, so one device with a thread per core kept 1.4-1.8 of two cores busy, while
 /// two single-threaded devices from the first round render `lumen bench`'s example scenes
 /// 1.0-1.9x as fast on the 2-core Zen 3 VM (BENCHMARKS.md "Two single-threaded devices").
-/// The cost: a render that uses one device (`--one-device`, `--profile`, a single batch)
-/// runs on half the cores, so those skip this. Hardware drivers never read the variable.
+/// The cost: a render on one device runs on half the cores, so `--one-device` and
+/// `--profile` renders skip this (a render of one batch pays it). Hardware drivers never
+/// read the variable.
 ///
 /// Must run while the process has one thread (it changes the environment) and before any
 /// GPU instance is created (llvmpipe reads the variable when a device is created).

@@ -115,8 +115,15 @@ pub fn queue_shards(info: &wgpu::AdapterInfo) -> u32 {
     if !crate::gpu::is_llvmpipe(info) {
         return 1;
     }
+    this_process_llvmpipe().0
+}
+
+/// llvmpipe's worker threads per device in this process ([`llvmpipe_threads`] of
+/// [`THREADS_ENV`]) and the process's cores: what queue shards and the twin's start
+/// (`twin::this_process_splits_cores`) depend on.
+pub(crate) fn this_process_llvmpipe() -> (u32, usize) {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    llvmpipe_threads(std::env::var(THREADS_ENV).ok().as_deref(), cores)
+    (llvmpipe_threads(std::env::var(THREADS_ENV).ok().as_deref(), cores), cores)
 }
 
 /// llvmpipe's worker threads for the `LP_NUM_THREADS` setting and `cores` (as Mesa's

@@ -68,15 +68,18 @@ pub const THREADS_ENV: &str = "LP_NUM_THREADS";
 /// assert!(devices_split_cores(None, 128)); // Mesa's 32 threads at most
 /// ```
 pub fn devices_split_cores(threads: Option<&str>, cores: usize) -> bool {
-    let per_device = super::llvmpipe_threads(threads, cores) as usize;
-    cores >= 2 && 2 * per_device <= cores
+    threads_split_cores(super::llvmpipe_threads(threads, cores), cores)
+}
+
+/// Whether two devices of `per_device` threads fit in `cores` without sharing one.
+fn threads_split_cores(per_device: u32, cores: usize) -> bool {
+    cores >= 2 && 2 * per_device as usize <= cores
 }
 
 /// [`devices_split_cores`] for this process's environment and cores.
 pub(crate) fn this_process_splits_cores() -> bool {
-    let threads = std::env::var(THREADS_ENV).ok();
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    devices_split_cores(threads.as_deref(), cores)
+    let (per_device, cores) = super::this_process_llvmpipe();
+    threads_split_cores(per_device, cores)
 }
 
 /// The list of batches both devices take from, and where they put their sums.
