@@ -7,19 +7,41 @@
 // #if DIELECTRIC
 // #requires fresnel
 // #endif
-// #if CONDUCTOR
-// #requires conductor
-// #endif
-// #if ROUGH_DIELECTRIC
-// #requires rough_dielectric
-// #endif
-// #if PLASTIC
-// #requires plastic
+// #if MICROFACET
+// #requires microfacet
 // #endif
 // BSDF sampling, evaluation and densities in the world frame: mirrors cpu::bsdf, with the
-// microfacet kinds' local-frame code in conductor.wgsl, rough_dielectric.wgsl and
-// plastic.wgsl. `d` is the unit direction the incoming ray travels along, `n` the unit
-// normal facing it, `l` a light direction pointing away from the surface.
+// microfacet kinds' local-frame code in microfacet.wgsl. `d` is the unit direction the
+// incoming ray travels along, `n` the unit normal facing it, `l` a light direction pointing
+// away from the surface.
+
+// What a vertex's BSDF reads wherever it is sampled or evaluated, computed once per vertex:
+// d, n, the side, and for the microfacet kinds the local frame, o = −d in it and E(μo)
+// (microfacet.wgsl; the shading stage evaluates several directions per vertex).
+struct BsdfVertex {
+    d: vec3<f32>,
+    n: vec3<f32>,
+    front_face: bool,
+// #if MICROFACET
+    frame: Frame,
+    o: vec3<f32>,
+    e_o: f32,
+// #endif
+}
+
+fn bsdf_vertex(m: Material, d: vec3<f32>, n: vec3<f32>, front_face: bool) -> BsdfVertex {
+// #if MICROFACET
+    var v = BsdfVertex(d, n, front_face, Frame(vec3<f32>(0.0), vec3<f32>(0.0), n), vec3<f32>(0.0), 0.0);
+    if (is_microfacet(m)) {
+        v.frame = frame_of(n);
+        v.o = to_local(v.frame, -d);
+        v.e_o = microfacet_e_o(m, front_face, v.o);
+    }
+    return v;
+// #else
+    return BsdfVertex(d, n, front_face);
+// #endif
+}
 
 // #if PATHTRACER
 
@@ -86,8 +108,9 @@ fn sample_diffuse(color: vec3<f32>, n: vec3<f32>, xi0: f32, xi1: f32) -> BsdfSam
 // #endif
 
 // bsdf::sample_bsdf with the vertex's draws ξ3 (lobe), ξ4, ξ5 (direction).
-fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_face: bool, xi_lobe: f32, xi0: f32,
-               xi1: f32) -> BsdfSample {
+fn sample_bsdf(m: Material, color: vec3<f32>, v: BsdfVertex, xi_lobe: f32, xi0: f32, xi1: f32) -> BsdfSample {
+    let d = v.d;
+    let n = v.n;
 // #if SPECULAR
     if (m.brdf == BRDF_SPECULAR) {
         return BsdfSample(reflect(d, n), color, 0.0, true, true, false);
@@ -95,7 +118,7 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
 // #endif
 // #if DIELECTRIC
     if (m.brdf == BRDF_DIELECTRIC) {
-        return sample_dielectric(color, d, n, select(1.0 / m.ior, m.ior, front_face), xi_lobe);
+        return sample_dielectric(color, d, n, select(1.0 / m.ior, m.ior, v.front_face), xi_lobe);
     }
 // #endif
 // #if DIFFUSE
@@ -104,26 +127,15 @@ fn sample_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_
     }
 // #endif
 // #if CONDUCTOR
-    if (m.brdf == BRDF_CONDUCTOR) {
-        if (m.alpha == 0.0) {
-            return BsdfSample(reflect(d, n), color * conductor_fresnel(m, -dot(d, n)), 0.0, true, true, false);
-        }
-        let f = frame_of(n);
-        return world_sample(f, conductor_sample(m, to_local(f, -d), xi_lobe, xi0, xi1), color);
+    if (m.brdf == BRDF_CONDUCTOR && m.alpha == 0.0) {
+        return BsdfSample(reflect(d, n), color * conductor_fresnel(m, -dot(d, n)), 0.0, true, true, false);
     }
 // #endif
-// #if ROUGH_DIELECTRIC
-    if (m.brdf == BRDF_ROUGH_DIELECTRIC) {
-        let f = frame_of(n);
-        let s = rough_dielectric_sample(m, dielectric_side(m, front_face), to_local(f, -d), xi_lobe, xi0, xi1);
-        return world_sample(f, s, color);
-    }
-// #endif
-// #if PLASTIC
-    if (m.brdf == BRDF_PLASTIC) {
-        let f = frame_of(n);
-        // The smooth coat's delta weight is 1 (the pigment is the base's).
-        return world_sample(f, plastic_sample(m, to_local(f, -d), xi_lobe, xi0, xi1), vec3<f32>(1.0));
+// #if MICROFACET
+    if (is_microfacet(m)) {
+        // Only the smooth coat returns a delta, whose weight is 1 (the pigment is the base's).
+        let s = microfacet_sample(m, v.front_face, v.o, v.e_o, xi_lobe, xi0, xi1);
+        return world_sample(v.frame, s, vec3<f32>(1.0));
     }
 // #endif
     return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true, false, false);
@@ -161,61 +173,25 @@ fn bsdf_transmits(m: Material) -> bool {
 
 // #endif
 
-// bsdf::eval_bsdf: f for light from `l` seen along −d (0 for delta BSDFs).
-fn eval_bsdf(m: Material, color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, front_face: bool, l: vec3<f32>)
-    -> vec3<f32> {
+// bsdf::eval_bsdf and, in the path tracer, bsdf::pdf_bsdf: f for light from `l` seen
+// along −d (xyz) and the density with which sample_bsdf produces l (w), both 0 for delta
+// BSDFs. One function for both, so that a microfacet kind finds its half vector, D and
+// Fresnel factor once for the two.
+fn eval_bsdf(m: Material, color: vec3<f32>, v: BsdfVertex, l: vec3<f32>) -> vec4<f32> {
 // #if DIFFUSE
     if (m.brdf == BRDF_DIFFUSE) {
-        return select(vec3<f32>(0.0), color * INV_PI, dot(n, l) > 0.0);
-    }
-// #endif
-// #if CONDUCTOR
-    if (m.brdf == BRDF_CONDUCTOR && m.alpha > 0.0) {
-        let f = frame_of(n);
-        return color * conductor_eval(m, to_local(f, -d), to_local(f, l));
-    }
-// #endif
-// #if ROUGH_DIELECTRIC
-    if (m.brdf == BRDF_ROUGH_DIELECTRIC) {
-        let f = frame_of(n);
-        return color * rough_dielectric_eval(m, dielectric_side(m, front_face), to_local(f, -d), to_local(f, l));
-    }
-// #endif
-// #if PLASTIC
-    if (m.brdf == BRDF_PLASTIC) {
-        let f = frame_of(n);
-        return plastic_eval(m, color, to_local(f, -d), to_local(f, l));
-    }
-// #endif
-    return vec3<f32>(0.0);
-}
-
+        let c = dot(v.n, l);
+        var pdf = 0.0;
 // #if PATHTRACER
-// bsdf::pdf_bsdf: the density with which sample_bsdf produces `l` (0 for delta BSDFs).
-fn pdf_bsdf(m: Material, d: vec3<f32>, n: vec3<f32>, front_face: bool, l: vec3<f32>) -> f32 {
-// #if DIFFUSE
-    if (m.brdf == BRDF_DIFFUSE) {
-        return cosine_hemisphere_pdf(dot(n, l));
+        pdf = cosine_hemisphere_pdf(c);
+// #endif
+        return vec4<f32>(select(vec3<f32>(0.0), color * INV_PI, c > 0.0), pdf);
     }
 // #endif
-// #if CONDUCTOR
-    if (m.brdf == BRDF_CONDUCTOR && m.alpha > 0.0) {
-        let f = frame_of(n);
-        return conductor_pdf(m, to_local(f, -d), to_local(f, l));
+// #if MICROFACET
+    if (is_microfacet(m)) {
+        return microfacet_eval(m, color, v.front_face, v.o, v.e_o, to_local(v.frame, l));
     }
 // #endif
-// #if ROUGH_DIELECTRIC
-    if (m.brdf == BRDF_ROUGH_DIELECTRIC) {
-        let f = frame_of(n);
-        return rough_dielectric_pdf(m, dielectric_side(m, front_face), to_local(f, -d), to_local(f, l));
-    }
-// #endif
-// #if PLASTIC
-    if (m.brdf == BRDF_PLASTIC) {
-        let f = frame_of(n);
-        return plastic_pdf(m, to_local(f, -d), to_local(f, l));
-    }
-// #endif
-    return 0.0;
+    return vec4<f32>(0.0);
 }
-// #endif

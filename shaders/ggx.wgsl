@@ -3,8 +3,8 @@
 // #requires finite
 // #endif
 // The GGX microfacet distribution in the local frame of the normal (z = n): optics::ggx in
-// f32 (D, Smith's height-correlated G2, visible-normal sampling by spherical caps and its
-// density), the energy rows of the compensation (optics::energy_tables::row_value) and
+// f32 (D, Smith's height-correlated G2 and G1, visible-normal sampling by spherical caps;
+// microfacet.wgsl forms their density from G1 and D), the energy rows of the compensation (optics::energy_tables::row_value) and
 // the local-frame sample shared by the microfacet kinds (cpu::microfacet).
 
 // A material's local frame: t, b and the normal n.
@@ -69,14 +69,6 @@ fn ggx_sample_visible(alpha: f32, o: vec3<f32>, u0: f32, u1: f32) -> vec3<f32> {
     let m = vec3<f32>(alpha * h.x, alpha * h.y, max(h.z, 0.0));
     let len = length(m);
     return select(vec3<f32>(0.0, 0.0, 1.0), m / len, len > 0.0);
-}
-
-// D_o(h) = G1(o) max(0, o·h) D(h) / cos θo.
-fn ggx_visible_pdf(alpha: f32, o: vec3<f32>, h: vec3<f32>) -> f32 {
-    if (o.z <= 0.0) {
-        return 0.0;
-    }
-    return ggx_g1(alpha, o) * max(dot(o, h), 0.0) * ggx_d(alpha, h) / o.z;
 }
 
 // A local-frame sample: direction, f·|cos|/pdf, pdf; `delta` for the smooth plastic coat.

@@ -75,7 +75,7 @@ fn radiance_point_light(ray: Ray) -> vec3<f32> {
 // #if POINT_LIGHTS
         if (cand.c.t >= OPEN) {
             let cos_theta = max(dot(hit.normal, s.l), 0.0);
-            let f = eval_bsdf(m, color, normalize(ray.dir), hit.normal, hit.front_face, s.l);
+            let f = eval_bsdf(m, color, bsdf_vertex(m, normalize(ray.dir), hit.normal, hit.front_face), s.l).xyz;
             result += (emitted + f) * s.radiance * cos_theta;
         }
 // #endif

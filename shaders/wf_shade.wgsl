@@ -161,11 +161,11 @@ fn shade_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
     if (bounce == settings.max_depth) {
         return;
     }
-    let d = normalize(ray.dir);
-    var s = sample_bsdf(m, color, d, hit.normal, hit.front_face, xi[3], xi[4], xi[5]);
+    let v = bsdf_vertex(m, normalize(ray.dir), hit.normal, hit.front_face);
+    var s = sample_bsdf(m, color, v, xi[3], xi[4], xi[5]);
     // The directions where this vertex evaluates its BSDF, all through the one call site of
-    // eval_bsdf and pdf_bsdf in the loop below (llvmpipe inlines every call: each call site
-    // would compile the whole BSDF again): at a non-delta vertex each point light in front
+    // eval_bsdf in the loop below (llvmpipe inlines every call: each call site would
+    // compile the whole BSDF again): at a non-delta vertex each point light in front
     // and the NEE light sample, which become shadow rays, then the sampled direction when
     // its lobe left f and the density to evaluate (s.pending).
     var point = 0u;
@@ -214,7 +214,8 @@ fn shade_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
         }
 // #endif
 // #endif
-        let f = eval_bsdf(m, color, d, hit.normal, hit.front_face, dir);
+        let f_pdf = eval_bsdf(m, color, v, dir);
+        let f = f_pdf.xyz;
 // #if POINT_LIGHTS
         if (k < point) {
             queue_shadow(slot, shadows, pl.ray, beta * (f * pl.radiance * abs(dot(hit.normal, pl.l))));
@@ -222,7 +223,7 @@ fn shade_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
             continue;
         }
 // #endif
-        let pdf = pdf_bsdf(m, d, hit.normal, hit.front_face, dir);
+        let pdf = f_pdf.w;
 // #if NEE
 // #if SHADOWS
         if (k == point && nee != 0u) {

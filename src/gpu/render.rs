@@ -23,7 +23,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 55] = [
+const MODULES: [(&str, &str); 53] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -55,9 +55,7 @@ const MODULES: [(&str, &str); 55] = [
     ("shaders/warp.wgsl", include_str!("../../shaders/warp.wgsl")),
     ("shaders/fresnel.wgsl", include_str!("../../shaders/fresnel.wgsl")),
     ("shaders/ggx.wgsl", include_str!("../../shaders/ggx.wgsl")),
-    ("shaders/conductor.wgsl", include_str!("../../shaders/conductor.wgsl")),
-    ("shaders/rough_dielectric.wgsl", include_str!("../../shaders/rough_dielectric.wgsl")),
-    ("shaders/plastic.wgsl", include_str!("../../shaders/plastic.wgsl")),
+    ("shaders/microfacet.wgsl", include_str!("../../shaders/microfacet.wgsl")),
     ("shaders/brdf.wgsl", include_str!("../../shaders/brdf.wgsl")),
     ("shaders/integrators.wgsl", include_str!("../../shaders/integrators.wgsl")),
     ("shaders/point_lights.wgsl", include_str!("../../shaders/point_lights.wgsl")),

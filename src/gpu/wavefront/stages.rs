@@ -440,12 +440,11 @@ impl Stage {
         if f.renderer == RendererKind::PathTracer && self != Stage::FirstHit {
             names.push("PATHTRACER");
         }
-        // A microfacet kind's sampled direction is evaluated in the shading stage's loop over
-        // directions (wf_shade.wgsl, BsdfSample::pending); other kinds sample in closed form.
-        if let Stage::Shade(kind) = self {
-            if microfacet_kind(kind) {
-                names.push("MICROFACET");
-            }
+        // The microfacet kinds' shared code (microfacet.wgsl, which brdf.wgsl dispatches to),
+        // wherever one of them is shaded; in the shading stage their sampled direction is
+        // evaluated in the loop over directions (wf_shade.wgsl, BsdfSample::pending).
+        if ["CONDUCTOR", "ROUGH_DIELECTRIC", "PLASTIC"].iter().any(|k| names.contains(k)) {
+            names.push("MICROFACET");
         }
         if names.contains(&"CSG") && csg_pool_private(f) {
             names.push("CSG_POOL_PRIVATE");
