@@ -29,12 +29,26 @@ struct BsdfVertex {
 // #endif
 }
 
+// #if MICROFACET
+// Whether the vertex samples in the local frame: a microfacet kind, or the diffuse one,
+// which shares their cosine lobe (sample_bsdf).
+fn bsdf_in_frame(m: Material) -> bool {
+// #if DIFFUSE
+    return is_microfacet(m) || m.brdf == BRDF_DIFFUSE;
+// #else
+    return is_microfacet(m);
+// #endif
+}
+// #endif
+
 fn bsdf_vertex(m: Material, d: vec3<f32>, n: vec3<f32>, front_face: bool) -> BsdfVertex {
 // #if MICROFACET
     var v = BsdfVertex(d, n, front_face, Frame(vec3<f32>(0.0), vec3<f32>(0.0), n), vec3<f32>(0.0), 0.0);
-    if (is_microfacet(m)) {
+    if (bsdf_in_frame(m)) {
         v.frame = frame_of(n);
         v.o = to_local(v.frame, -d);
+    }
+    if (is_microfacet(m)) {
         v.e_o = microfacet_e_o(m, front_face, v.o);
     }
     return v;
@@ -98,10 +112,9 @@ fn sample_dielectric(color: vec3<f32>, d: vec3<f32>, n: vec3<f32>, eta: f32, xi_
 // #endif
 
 // #if DIFFUSE
-fn sample_diffuse(color: vec3<f32>, n: vec3<f32>, xi0: f32, xi1: f32) -> BsdfSample {
-    let local = cosine_hemisphere(xi0, xi1);
-    let frame = onb(n);
-    let dir = normalize(frame.t * local.x + frame.b * local.y + n * local.z);
+// The cosine lobe's direction `local` (warp::cosine_hemisphere) in the frame (t, b, n).
+fn sample_diffuse(color: vec3<f32>, t: vec3<f32>, b: vec3<f32>, n: vec3<f32>, local: vec3<f32>) -> BsdfSample {
+    let dir = normalize(t * local.x + b * local.y + n * local.z);
     let pdf = cosine_hemisphere_pdf(local.z);
     return BsdfSample(dir, color, pdf, false, pdf > 0.0, false);
 }
@@ -121,22 +134,31 @@ fn sample_bsdf(m: Material, color: vec3<f32>, v: BsdfVertex, xi_lobe: f32, xi0: 
         return sample_dielectric(color, d, n, select(1.0 / m.ior, m.ior, v.front_face), xi_lobe);
     }
 // #endif
-// #if DIFFUSE
-    if (m.brdf == BRDF_DIFFUSE) {
-        return sample_diffuse(color, n, xi0, xi1);
-    }
-// #endif
 // #if CONDUCTOR
     if (m.brdf == BRDF_CONDUCTOR && m.alpha == 0.0) {
         return BsdfSample(reflect(d, n), color * conductor_fresnel(m, -dot(d, n)), 0.0, true, true, false);
     }
 // #endif
 // #if MICROFACET
-    if (is_microfacet(m)) {
-        // Only the smooth coat returns a delta, whose weight is 1 (the pigment is the base's).
+    if (bsdf_in_frame(m)) {
+        // One call site for every kind's cosine lobe and visible normals: a diffuse vertex
+        // (E(μo) = 0) draws the cosine lobe there.
         let s = microfacet_sample(m, v.front_face, v.o, v.e_o, xi_lobe, xi0, xi1);
+// #if DIFFUSE
+        if (m.brdf == BRDF_DIFFUSE) {
+            return sample_diffuse(color, v.frame.t, v.frame.b, n, s.dir);
+        }
+// #endif
+        // Only the smooth coat returns a delta, whose weight is 1 (the pigment is the base's).
         return world_sample(v.frame, s, vec3<f32>(1.0));
     }
+// #else
+// #if DIFFUSE
+    if (m.brdf == BRDF_DIFFUSE) {
+        let frame = onb(n);
+        return sample_diffuse(color, frame.t, frame.b, n, cosine_hemisphere(xi0, xi1));
+    }
+// #endif
 // #endif
     return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true, false, false);
 }
