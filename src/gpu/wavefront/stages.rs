@@ -70,22 +70,16 @@ impl Stage {
         }
     }
 
-    /// The BRDF kinds whose code a shading stage's kernel holds: its own, or, for a kind that
-    /// samples lights, every such kind of the scene. Those kinds' kernels would each hold
-    /// the same light sampling, MIS and shadow-ray code, about half of a shading kernel
-    /// (docs/DESIGN.md "One kernel for the kinds that sample lights"), so they share one
+    /// The BRDF kinds whose code a shading stage's kernel holds: every kind of the scene.
+    /// Kernels of their own would each hold the same path-state, stream, surface, pigment
+    /// and (for the kinds that sample lights) light code, most of a shading kernel, around
+    /// a few lines of BSDF (docs/DESIGN.md "One shading kernel"), so the kinds share one
     /// kernel, compiled once and launched once per kind over that kind's queue: the kind
     /// is the same in every lane of a launch, so the other kinds' code is skipped there.
-    /// The delta kinds (mirror, smooth glass), which sample no lights, share a second
-    /// kernel without light code, for the same reason: their stages are mostly the same
-    /// path-state, stream and surface code around a few lines of BSDF. Empty for other
-    /// stages.
+    /// Empty for other stages.
     pub fn kernel_kinds(self, f: &FeatureSet) -> Vec<u32> {
         match self {
-            // The scene's kinds on this kind's side of the one rule: samples lights or not.
-            Stage::Shade(kind) => {
-                shade_kinds(f).into_iter().filter(|&k| casts_shadow_rays(k) == casts_shadow_rays(kind)).collect()
-            }
+            Stage::Shade(_) => shade_kinds(f),
             _ => Vec::new(),
         }
     }
@@ -143,7 +137,11 @@ impl Stage {
             }
             Stage::Csg => vec![Batch, Control, Queues, Paths, Words, DeferredRefs, CsgPool],
             Stage::Escape => vec![Batch, Control, Queues, Paths, Words],
-            Stage::Shade(kind) if casts_shadow_rays(kind) && has_shadow_rays(f) => {
+            // A kernel's buffers are those of all its kinds (Stage::kernel_kinds).
+            Stage::Shade(kind)
+                if (casts_shadow_rays(kind) || self.kernel_kinds(f).into_iter().any(casts_shadow_rays))
+                    && has_shadow_rays(f) =>
+            {
                 vec![Batch, Control, Queues, Paths, Words, Shadow]
             }
             Stage::Shade(_) => vec![Batch, Control, Queues, Paths, Words],
@@ -677,20 +675,21 @@ mod tests {
         assert!(stages.contains(&Stage::Shade(brdf_kind::ROUGH_DIELECTRIC)));
         let rough = Stage::Shade(brdf_kind::ROUGH_DIELECTRIC).names(&both);
         assert!(rough.contains(&"DIELECTRIC") && rough.contains(&"ROUGH_DIELECTRIC"), "{rough:?}");
-        // Diffuse and rough glass both sample lights: one kernel, which holds smooth glass's
-        // code for the rough stage; beside smooth glass alone, diffuse holds no glass code.
+        // One shading kernel, which holds smooth glass's code for the rough stage, or beside
+        // smooth glass alone for its own stage, without GGX.
         assert_eq!(Stage::Shade(brdf_kind::DIFFUSE).names(&both), rough);
-        assert!(!Stage::Shade(brdf_kind::DIFFUSE).names(&alone).contains(&"DIELECTRIC"));
+        let diffuse = Stage::Shade(brdf_kind::DIFFUSE).names(&alone);
+        assert!(diffuse.contains(&"DIELECTRIC") && !diffuse.contains(&"MICROFACET"), "{diffuse:?}");
         assert!(Stage::Intersect.names(&both).contains(&"SMOOTH_GLASS_AS_ROUGH"));
         let with_csg = FeatureSet { csg: true, csg_trees: 1, csg_max_leaves: 2, ..both };
         assert!(csg_queue(&with_csg) && Stage::Csg.names(&with_csg).contains(&"SMOOTH_GLASS_AS_ROUGH"));
     }
 
-    /// The kinds that sample lights share one kernel, with every such kind's code and one
-    /// copy of the light code; the delta kinds share another without light code. A shared
-    /// kernel's stages assemble to the same source, which `stage_kernels` compiles once.
+    /// Every kind shares one shading kernel, with every kind's code and one copy of the
+    /// light code: its stages assemble to the same source, which `stage_kernels` compiles
+    /// once, and bind the same buffers (the shadow rays', which the delta kinds never write).
     #[test]
-    fn kinds_that_sample_lights_share_one_kernel_and_delta_kinds_another() {
+    fn every_kind_shares_one_shading_kernel() {
         let f = FeatureSet {
             sphere: true,
             bvh: true,
@@ -706,31 +705,30 @@ mod tests {
             renderer: RendererKind::PathTracer,
             ..FeatureSet::default()
         };
-        let shading = [brdf_kind::DIFFUSE, brdf_kind::CONDUCTOR, brdf_kind::PLASTIC];
-        for kind in shading {
-            assert_eq!(Stage::Shade(kind).kernel_kinds(&f), shading.to_vec());
+        let kinds =
+            [brdf_kind::DIFFUSE, brdf_kind::SPECULAR, brdf_kind::DIELECTRIC, brdf_kind::CONDUCTOR, brdf_kind::PLASTIC];
+        let mut sorted = kinds.to_vec();
+        sorted.sort();
+        for kind in kinds {
+            assert_eq!(Stage::Shade(kind).kernel_kinds(&f), sorted);
+            assert_eq!(Stage::Shade(kind).buffers(&f), Stage::Shade(brdf_kind::DIFFUSE).buffers(&f));
         }
-        let delta = [brdf_kind::SPECULAR, brdf_kind::DIELECTRIC];
-        for kind in delta {
-            assert_eq!(Stage::Shade(kind).kernel_kinds(&f), delta.to_vec());
-        }
-        let mirror_only = FeatureSet { dielectric: false, ..f };
+        assert!(Stage::Shade(brdf_kind::SPECULAR).buffers(&f).contains(&StateBuffer::Shadow));
+        let mirror_only = FeatureSet { dielectric: false, diffuse: false, conductor: false, plastic: false, ..f };
         assert_eq!(Stage::Shade(brdf_kind::SPECULAR).kernel_kinds(&mirror_only), vec![brdf_kind::SPECULAR]);
+        assert!(!Stage::Shade(brdf_kind::SPECULAR).buffers(&mirror_only).contains(&StateBuffer::Shadow));
         assert!(Stage::Intersect.kernel_kinds(&f).is_empty());
-        let shared = Stage::Shade(brdf_kind::DIFFUSE).names(&f);
-        for name in ["DIFFUSE", "CONDUCTOR", "PLASTIC", "NEE", "SHADOWS", "MICROFACET"] {
+        let shared = Stage::Shade(brdf_kind::SPECULAR).names(&f);
+        for name in ["DIFFUSE", "SPECULAR", "DIELECTRIC", "CONDUCTOR", "PLASTIC", "NEE", "SHADOWS", "MICROFACET"] {
             assert!(shared.contains(&name), "{name} missing from {shared:?}");
         }
-        assert!(!shared.contains(&"SPECULAR") && !shared.contains(&"DIELECTRIC"), "{shared:?}");
-        let mirror = Stage::Shade(brdf_kind::SPECULAR).names(&f);
-        assert!(mirror.contains(&"SPECULAR") && mirror.contains(&"DIELECTRIC"), "{mirror:?}");
-        assert!(!mirror.contains(&"DIFFUSE"), "{mirror:?}");
-        // (NEE stays for the emission's MIS weight; no shadow rays.)
+        // A mirror alone samples no lights: no shadow rays, no microfacet code.
+        let mirror = Stage::Shade(brdf_kind::SPECULAR).names(&mirror_only);
         assert!(!mirror.contains(&"SHADOWS") && !mirror.contains(&"MICROFACET"), "{mirror:?}");
         let source = |kind| crate::gpu::render::assemble_stage(&f, Stage::Shade(kind)).unwrap().source;
-        assert_eq!(source(brdf_kind::DIFFUSE), source(brdf_kind::PLASTIC));
-        assert_ne!(source(brdf_kind::DIFFUSE), source(brdf_kind::SPECULAR));
-        assert_eq!(source(brdf_kind::SPECULAR), source(brdf_kind::DIELECTRIC));
+        for kind in kinds {
+            assert_eq!(source(kind), source(brdf_kind::DIFFUSE));
+        }
     }
 
     /// A shading stage skips a shape kind's uv where none of its materials on that kind
