@@ -148,7 +148,9 @@ def main() -> int:
     t_start = time.perf_counter()
     print(f"# {time.strftime('%a %b %d %H:%M:%S UTC %Y', time.gmtime())}, lumen {a.lumen}, "
           f"mitsuba {mi.__version__}, load average {os.getloadavg()[0]:.2f}")
-    tmp = Path(tempfile.mkdtemp(prefix="mitsuba_vs_lumen_"))
+    # Removed with everything in it when the script ends (its finaliser runs at exit).
+    tmp_dir = tempfile.TemporaryDirectory(prefix="mitsuba_vs_lumen_")
+    tmp = Path(tmp_dir.name)
 
     # 1. Conventions at low depth.
     print(f"\n## 1. Depth convention, {a.check_width}x{a.check_width}, {a.check_spp} spp (means R, G, B)")

@@ -27,7 +27,7 @@ pub enum Stage {
     /// Rays that hit nothing: environment radiance, MIS-weighted.
     Escape,
     /// One path vertex at a surface of one BRDF kind (`Material::brdf`), over that kind's
-    /// queue. The kinds that sample lights share one kernel ([`Stage::kernel_kinds`]).
+    /// queue. Every kind of a scene launches one shared kernel ([`Stage::kernel_kinds`]).
     Shade(u32),
     /// Shadow rays, any-hit, with their deferred contributions.
     Shadow,
