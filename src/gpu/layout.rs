@@ -86,7 +86,7 @@ pub mod brdf_kind {
     pub const ROUGH_DIELECTRIC: u32 = 4;
     /// Diffuse base under a dielectric coat, rough or smooth.
     pub const PLASTIC: u32 = 5;
-    /// Number of kinds (one shading queue and kernel each).
+    /// Number of kinds (one shading queue each; a scene's kinds share one kernel).
     pub const COUNT: u32 = 6;
 
     /// The kind of `brdf`: the one mapping, for the packer and the kernels' features.

@@ -139,8 +139,7 @@ impl Stage {
             Stage::Escape => vec![Batch, Control, Queues, Paths, Words],
             // A kernel's buffers are those of all its kinds (Stage::kernel_kinds).
             Stage::Shade(kind)
-                if (casts_shadow_rays(kind) || self.kernel_kinds(f).into_iter().any(casts_shadow_rays))
-                    && has_shadow_rays(f) =>
+                if self.kernel_kinds(f).into_iter().chain([kind]).any(casts_shadow_rays) && has_shadow_rays(f) =>
             {
                 vec![Batch, Control, Queues, Paths, Words, Shadow]
             }
@@ -441,7 +440,7 @@ impl Stage {
         // The microfacet kinds' shared code (microfacet.wgsl, which brdf.wgsl dispatches to),
         // wherever one of them is shaded; in the shading stage their sampled direction is
         // evaluated in the loop over directions (wf_shade.wgsl, BsdfSample::pending).
-        if ["CONDUCTOR", "ROUGH_DIELECTRIC", "PLASTIC"].iter().any(|k| names.contains(k)) {
+        if (0..brdf_kind::COUNT).any(|k| microfacet_kind(k) && names.contains(&kind_name(k))) {
             names.push("MICROFACET");
         }
         if names.contains(&"CSG") && csg_pool_private(f) {
