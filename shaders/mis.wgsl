@@ -1,4 +1,7 @@
 // #requires wf_path bindings
+// #if WF_RADIANCE_ADD
+// #requires words_get
+// #endif
 // #if NEE
 // #requires lights
 // #endif
@@ -31,7 +34,7 @@ fn load_previous(slot: u32, beta: vec4<f32>) -> Previous {
     let delta = beta.w < 0.0;
     var w = vec4<u32>(0u);
     if (!delta) {
-        w = words[field(W_PREV, slot)];
+        w = words_get(field(W_PREV, slot));
     }
     return Previous(bitcast<vec3<f32>>(w.xyz), w.w, delta, beta.w);
 }

@@ -1,6 +1,6 @@
 // #requires wf_classify csg
 // #if WF_SHADOW_CSG
-// #requires wf_shadow_ray
+// #requires wf_shadow_ray paths_get paths_set
 // #endif
 // CSG stage: the trees a query deferred (in the order it met them, as cpu::World evaluates
 // them). Launched twice per bounce over two queues, one of them empty each time
@@ -35,7 +35,7 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     var best = no_candidate();
 // #if WF_SHADOW_CSG
     let ri = field(F_RADIANCE, slot);
-    var radiance = paths[ri].xyz;
+    var radiance = paths_get(ri).xyz;
 // #endif
     for (var q = 0u; q < queries; q++) {
         var ray: Ray;
@@ -84,7 +84,7 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     }
 // #if WF_SHADOW_CSG
     if (shadows) {
-        paths[ri] = vec4<f32>(radiance, 0.0);
+        paths_set(ri, vec4<f32>(radiance, 0.0));
         return;
     }
 // #endif

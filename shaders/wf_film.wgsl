@@ -1,4 +1,4 @@
-// #requires wf_path finite
+// #requires wf_path finite paths_get film_set
 // Film stage: one invocation per pixel of the batch sums its paths' radiance in a fixed
 // order (camera sample j, then path i), whatever order the queues ran them in, so images
 // are bitwise reproducible: the pixel's value is the sum over its camera samples of the
@@ -29,7 +29,7 @@ fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var j = 0u; j < batch.samples; j++) {
         var sample_sum = vec3<f32>(0.0);
         for (var i = 0u; i < n; i++) {
-            var value = paths[field(F_RADIANCE, first + j * n + i)].xyz;
+            var value = paths_get(field(F_RADIANCE, first + j * n + i)).xyz;
             if (non_finite(value)) {
                 bad++;
                 value = vec3<f32>(0.0);
@@ -49,6 +49,6 @@ fn film_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (bad > 0u) {
         atomicAdd(&control[CTRL_NAN], bad);
     }
-    film[2u * p] = vec4<f32>(sum, 0.0);
-    film[2u * p + 1u] = vec4<f32>(err, 0.0);
+    film_set(2u * p, vec4<f32>(sum, 0.0));
+    film_set(2u * p + 1u, vec4<f32>(err, 0.0));
 }

@@ -1,4 +1,4 @@
-// #requires wf_path camera integrators wf_counting
+// #requires wf_path camera integrators wf_counting paths_set
 // The first-hit integrators (OnOff, Flat, PointLight) in one stage: their work per camera
 // sample is one closest-hit query and a few shadow rays, too little to gain from queues.
 // One invocation per camera sample writes its estimate to the path's radiance.
@@ -24,6 +24,6 @@ fn first_hit_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
 // #if POINTLIGHT
     let value = radiance_point_light(ray);
 // #endif
-    paths[field(F_RADIANCE, slot)] = vec4<f32>(value, 0.0);
+    paths_set(field(F_RADIANCE, slot), vec4<f32>(value, 0.0));
     flush_rays_traced(slot);
 }

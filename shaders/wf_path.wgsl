@@ -1,9 +1,15 @@
 // #requires wavefront
 // #if WF_RAY_LOAD
-// #requires ray
+// #requires ray paths_get
 // #endif
 // #if WF_RAY_STORE
-// #requires ray
+// #requires ray paths_set
+// #endif
+// #if WF_RADIANCE_ADD
+// #requires paths_get paths_set
+// #endif
+// #if WF_BETA_LOAD
+// #requires paths_get
 // #endif
 // #if WF_QUEUED
 // #requires divide
@@ -109,7 +115,7 @@ fn wf_push(q: u32, slot: u32) {
 fn add_radiance(slot: u32, e: vec3<f32>) {
     if (any(e != vec3<f32>(0.0))) {
         let i = field(F_RADIANCE, slot);
-        paths[i] = vec4<f32>(paths[i].xyz + e, 0.0);
+        paths_set(i, vec4<f32>(paths_get(i).xyz + e, 0.0));
     }
 }
 // #endif
@@ -121,7 +127,7 @@ fn add_radiance(slot: u32, e: vec3<f32>) {
 fn load_beta(slot: u32, bounce: u32) -> vec4<f32> {
     var beta = vec4<f32>(1.0, 1.0, 1.0, -1.0);
     if (bounce != 0u) {
-        beta = paths[field(F_BETA, slot)];
+        beta = paths_get(field(F_BETA, slot));
     }
     return beta;
 }
@@ -129,16 +135,16 @@ fn load_beta(slot: u32, bounce: u32) -> vec4<f32> {
 
 // #if WF_RAY_LOAD
 fn load_ray(slot: u32) -> Ray {
-    let o = paths[field(F_RAY_ORIGIN, slot)];
-    let d = paths[field(F_RAY_DIR, slot)];
+    let o = paths_get(field(F_RAY_ORIGIN, slot));
+    let d = paths_get(field(F_RAY_DIR, slot));
     return Ray(o.xyz, d.xyz, o.w, d.w);
 }
 // #endif
 
 // #if WF_RAY_STORE
 fn store_ray(slot: u32, ray: Ray) {
-    paths[field(F_RAY_ORIGIN, slot)] = vec4<f32>(ray.origin, ray.tmin);
-    paths[field(F_RAY_DIR, slot)] = vec4<f32>(ray.dir, ray.tmax);
+    paths_set(field(F_RAY_ORIGIN, slot), vec4<f32>(ray.origin, ray.tmin));
+    paths_set(field(F_RAY_DIR, slot), vec4<f32>(ray.dir, ray.tmax));
 }
 // #endif
 

@@ -1,4 +1,7 @@
-// #requires mis random strata pigment brdf offset constants wf_hit
+// #requires mis random strata pigment brdf offset constants wf_hit paths_set
+// #if AREA_LIGHTS
+// #requires words_set
+// #endif
 // #if POINT_LIGHTS
 // #requires point_lights
 // #endif
@@ -264,10 +267,10 @@ fn shade_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
         return;
     }
     // A delta vertex is marked by a negative density (load_previous).
-    paths[field(F_BETA, slot)] = vec4<f32>(beta, select(s.pdf, -1.0, s.delta));
+    paths_set(field(F_BETA, slot), vec4<f32>(beta, select(s.pdf, -1.0, s.delta)));
 // #if AREA_LIGHTS
     // Only emission MIS at the next hit reads the previous point and object (pt_emitted).
-    words[field(W_PREV, slot)] = vec4<u32>(bitcast<vec3<u32>>(hit.point), hit.object);
+    words_set(field(W_PREV, slot), vec4<u32>(bitcast<vec3<u32>>(hit.point), hit.object));
 // #endif
     store_ray(slot, Ray(offset_origin(hit.point, hit.scale, hit.geometric, s.dir), s.dir, 0.0, OPEN));
     wf_push(Q_RAY + ((bounce + 1u) & 1u), slot);

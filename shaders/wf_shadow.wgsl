@@ -1,4 +1,4 @@
-// #requires wf_path world wf_shadow_ray
+// #requires wf_path world wf_shadow_ray paths_get paths_set
 // #if WF_COUNT
 // #requires wf_counting
 // #endif
@@ -22,7 +22,7 @@ fn shadow_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
 // #endif
 // #endif
     let ri = field(F_RADIANCE, slot);
-    var radiance = paths[ri].xyz;
+    var radiance = paths_get(ri).xyz;
 // #if CSG_QUEUE
     var pending = false;
 // #endif
@@ -55,7 +55,7 @@ fn shadow_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
         }
 // #endif
     }
-    paths[ri] = vec4<f32>(radiance, 0.0);
+    paths_set(ri, vec4<f32>(radiance, 0.0));
 // #if CSG_QUEUE
     if (pending) {
         wf_push(Q_SHADOW_CSG, slot);

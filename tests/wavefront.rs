@@ -71,6 +71,19 @@ fn mixed_scene(renderer: Renderer) -> Scene {
     b.build().unwrap()
 }
 
+/// [`mixed_scene`] under each renderer, the path tracer as `path_tracer`.
+fn mixed_scenes(path_tracer: Renderer) -> Vec<Scene> {
+    [
+        path_tracer,
+        Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
+        Renderer::Flat { background: Color::gray(0.2) },
+        Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) },
+    ]
+    .into_iter()
+    .map(mixed_scene)
+    .collect()
+}
+
 /// Paths of 1,000 shells × 60 bounces (more than 65,535 loop iterations each, which
 /// llvmpipe's limiter cut in the megakernel even when run alone) and 600 × 30 (cut in
 /// company): in the wavefront each invocation runs one query, so every path is exact.
@@ -177,6 +190,41 @@ fn queue_shards_give_the_same_bits() {
                 assert_eq!(out.rays, outs[0].rays, "{name}, batches of {batch}: {shards} shards");
             }
         }
+    }
+}
+
+/// The path state and the storage tables held in 64-bit words (`GpuRenderOptions::
+/// wide_words`, DESIGN.md "Wide words") are the same bytes as in 32-bit words, read and
+/// written through the same accessors: every renderer, CSG trees met by closest-hit and
+/// shadow rays, textures, rough materials, meshes and a mesh light (their BVH and triangle
+/// tables in storage buffers where the adapter's placement leaves them there) give the same
+/// bits and ray counts either way. Where the device cannot hold 64-bit words (no 64-bit
+/// integers, or an adapter lumen does not widen for) the render uses 32-bit words whatever
+/// it asks.
+#[test]
+fn wide_and_narrow_words_give_the_same_bits() {
+    let Some(gpu) = gpu_for_tests("wide_and_narrow_words_give_the_same_bits") else { return };
+    let can_widen = lumen::gpu::wavefront::wide_words(&gpu);
+    if lumen::gpu::is_llvmpipe(&gpu.adapter_info) {
+        assert!(can_widen, "lavapipe has 64-bit integers: its renders hold their words wide");
+    }
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut scenes = mixed_scenes(pt(3, 5, true));
+    for name in ["csg.sl", "glass.sl", "meshes.sl", "materials.sl"] {
+        scenes.push(common::thumbnail(&root.join("scenes").join(name), 12, 8));
+    }
+    for (k, scene) in scenes.iter().enumerate() {
+        let render_with = |wide: bool| {
+            let opts = GpuRenderOptions { wide_words: Some(wide), ..GpuRenderOptions::fixed_passes(Some(4), 4) };
+            let out = render(&gpu, scene, &opts).unwrap();
+            assert_eq!((out.spp_done, out.non_finite_samples), (4, 0), "scene {k}");
+            out
+        };
+        let (narrow, wide) = (render_with(false), render_with(true));
+        assert!(!narrow.wide_words);
+        assert_eq!(wide.wide_words, can_widen, "scene {k}");
+        assert!(bits(&wide.image) == bits(&narrow.image), "scene {k}: 64-bit words change the image");
+        assert_eq!(wide.rays, narrow.rays, "scene {k}");
     }
 }
 
@@ -447,15 +495,7 @@ fn uniform_and_storage_tables_give_the_same_bits() {
             .renderer(pt(2, 4, true));
         b.build().unwrap()
     };
-    let mut scenes: Vec<Scene> = [
-        pt(2, 4, true),
-        Renderer::OnOff { on: Color::WHITE, off: Color::BLACK },
-        Renderer::Flat { background: Color::gray(0.2) },
-        Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) },
-    ]
-    .into_iter()
-    .map(mixed_scene)
-    .collect();
+    let mut scenes = mixed_scenes(pt(2, 4, true));
     scenes.extend([csg, many, textured]);
     // Triangle meshes (their triangles and bottom-level BVHs), a mesh light, an image sky,
     // a checkered floor and rough metal and plastic: scenes/meshes.sl in miniature.

@@ -51,6 +51,13 @@ pub struct ValidatedModule {
     pub info: naga::valid::ModuleInfo,
 }
 
+/// What naga's validation allows: its defaults and 64-bit integers, which only the kernels
+/// of a render with `FeatureSet::wide_words` use, on a device opened with them (wgpu checks
+/// each module against its device's features again).
+const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::MULTISAMPLED_SHADING
+    .union(naga::valid::Capabilities::CUBE_ARRAY_TEXTURES)
+    .union(naga::valid::Capabilities::SHADER_INT64);
+
 /// Parses and validates WGSL with naga; errors carry a rendered excerpt of the source.
 ///
 /// ```
@@ -62,8 +69,7 @@ pub struct ValidatedModule {
 pub fn validate_wgsl(label: &str, source: &str) -> Result<ValidatedModule, GpuError> {
     let module = naga::front::wgsl::parse_str(source)
         .map_err(|e| GpuError::Shader { label: label.into(), message: e.emit_to_string_with_path(source, label) })?;
-    let mut validator =
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
+    let mut validator = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), CAPABILITIES);
     let info = validator
         .validate(&module)
         .map_err(|e| GpuError::Shader { label: label.into(), message: e.emit_to_string_with_path(source, label) })?;

@@ -454,10 +454,13 @@ impl Gpu {
         let limits = adapter.limits();
         let desc = wgpu::DeviceDescriptor {
             label: Some("lumen"),
-            // Only to keep compiled pipelines across runs, and timestamps for profiled
-            // renders (`GpuRenderOptions::profile`), where the adapter offers them.
+            // Only to keep compiled pipelines across runs, timestamps for profiled renders
+            // (`GpuRenderOptions::profile`) and, on llvmpipe, 64-bit integers for the path
+            // state's words (`wavefront::wide_words`), where the adapter offers them.
             required_features: adapter.features()
-                & (wgpu::Features::PIPELINE_CACHE | super::wavefront::profile::FEATURES),
+                & (wgpu::Features::PIPELINE_CACHE
+                    | super::wavefront::profile::FEATURES
+                    | super::wavefront::wide_words_features(&adapter_info)),
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,

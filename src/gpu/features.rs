@@ -246,6 +246,12 @@ pub struct FeatureSet {
     /// adapter ([`crate::gpu::wavefront::queue_shards`]); [`FeatureSet::of`] leaves 0,
     /// which counts as 1. The image is the same.
     pub queue_shards: u32,
+    /// The path state's buffers of 16-byte words held as 64-bit words (`vec2<u64>`): on
+    /// llvmpipe, where every such word is a per-lane access with a bounds check and a
+    /// branch (DESIGN.md "Wide words"). Chosen per render for the device
+    /// ([`crate::gpu::wavefront::wide_words`]); [`FeatureSet::of`] leaves it off. The
+    /// image is the same.
+    pub wide_words: bool,
     /// Per BRDF kind (indexed by `layout::brdf_kind`), what the materials of that kind need
     /// in their shading stage: the shapes they sit on, their pigments, whether one emits.
     pub shade_use: [KindUse; BRDF_KINDS],
@@ -519,6 +525,7 @@ impl FeatureSet {
             nee: path,
             tables: self.tables,
             queue_shards: self.queue_shards,
+            wide_words: self.wide_words,
             shade_use: [KindUse::ALL; BRDF_KINDS],
             light_use: KindUse::ALL,
         }
@@ -643,6 +650,10 @@ impl FeatureSet {
         "POINTLIGHT",
         "PATHTRACER",
     ];
+
+    /// The feature names a shader may test that the device decides (beyond the tables'
+    /// forms, [`super::tables::Table::feature`]): `WIDE_WORDS`, [`Self::wide_words`].
+    pub const DEVICE_NAMES: [&'static str; 1] = ["WIDE_WORDS"];
 
     /// The names of the `// #if NAME` blocks enabled for this set.
     pub fn names(&self) -> Vec<&'static str> {

@@ -107,6 +107,10 @@ pub struct GpuRenderOptions {
     /// Shards per queue of the wavefront renderer (`None`: [`wavefront::queue_shards`] of
     /// the adapter; `wavefront::Control`). The image is the same.
     pub queue_shards: Option<u32>,
+    /// Whether the path state is held in 64-bit words (`None`: [`wavefront::wide_words`] of
+    /// the device; `Some(true)` where the device lacks 64-bit integers is ignored). The
+    /// image is the same.
+    pub wide_words: Option<bool>,
 }
 
 /// When a render on llvmpipe shares its batches with a twin device (`wavefront::twin`).
@@ -167,13 +171,16 @@ pub struct GpuRenderOutput {
     pub stop: StopReason,
     /// Features the kernels were compiled for (the scene's, or the override), leaving out
     /// the choices made for the adapter: the table placement, which is [`Self::tables`],
-    /// and the queue shards, [`Self::queue_shards`].
+    /// the queue shards, [`Self::queue_shards`], and the words, [`Self::wide_words`].
     pub features: FeatureSet,
     /// The tables the kernels read from uniform buffers and textures (chosen for the
     /// adapter).
     pub tables: TableForms,
     /// Shards per queue ([`GpuRenderOptions::queue_shards`]).
     pub queue_shards: u32,
+    /// Whether the path state and the storage tables were held in 64-bit words
+    /// ([`GpuRenderOptions::wide_words`]).
+    pub wide_words: bool,
     /// Batches run (each a launch of every stage for a run of whole pixels).
     pub batches: u64,
     /// Path slots per batch.
@@ -193,7 +200,13 @@ pub struct GpuRenderOutput {
 pub fn shader_library() -> ShaderLibrary {
     use super::tables::Table;
     let tables = Table::ALL.map(Table::feature).into_iter().chain(Table::ALL.map(Table::texture_feature));
-    let names: Vec<&str> = FeatureSet::ALL_NAMES.iter().chain(&Stage::NAMES).copied().chain(tables).collect();
+    let names: Vec<&str> = FeatureSet::ALL_NAMES
+        .iter()
+        .chain(&Stage::NAMES)
+        .chain(&FeatureSet::DEVICE_NAMES)
+        .copied()
+        .chain(tables)
+        .collect();
     let mut lib = ShaderLibrary::new(&names);
     for (file, src) in &MODULES {
         lib.add(file, src).unwrap_or_else(|e| panic!("built-in shader {file} is malformed: {e}"));
@@ -238,17 +251,21 @@ fn constants_module(features: &FeatureSet) -> String {
 /// compilation could start).
 pub fn assemble_stage(features: &FeatureSet, stage: Stage) -> Result<Assembled, GpuError> {
     let mut lib = shader_library();
+    let buffers = stage.buffers(features);
     let generated = [
         ("<generated tags>", super::layout::tags_wgsl()),
         ("<generated constants>", constants_module(features)),
         ("<generated scene tables>", super::tables::tables_wgsl().to_string()),
         (
             "<generated wavefront state>",
-            wavefront::wavefront_module(&stage.buffers(features), wavefront::Control::new(features.queue_shards)),
+            wavefront::wavefront_module(&buffers, wavefront::Control::new(features.queue_shards), features.wide_words),
         ),
         ("<generated unrolled lists>", super::traversal::unrolled_wgsl(features)),
     ];
-    for (name, text) in &generated {
+    let mut accessors = wavefront::accessor_modules(&buffers, features.wide_words);
+    accessors.extend(wavefront::wide_word_modules());
+    let generated = generated.iter().map(|(name, text)| (*name, text.as_str()));
+    for (name, text) in generated.chain(accessors.iter().map(|(name, text)| (name.as_str(), text.as_str()))) {
         lib.add(name, text).map_err(|e| GpuError::Validation(e.to_string()))?;
     }
     let names: Vec<&str> = stage.names(features);
@@ -411,6 +428,8 @@ impl GpuRenderer {
             TableLimits::of(&gpu.limits, &gpu.adapter_info),
         );
         f.queue_shards = opts.queue_shards.unwrap_or_else(|| wavefront::queue_shards(&gpu.adapter_info));
+        let can_widen = wavefront::wide_words(gpu);
+        f.wide_words = can_widen && opts.wide_words.unwrap_or(can_widen);
         let job = RenderJob { scene, packed, opts, start };
         let mut attempts = Attempts::default();
         let walked = f;
@@ -538,8 +557,9 @@ impl GpuRenderer {
             kernels_compiled,
             non_finite_samples: counters.non_finite + acc.nonfinite,
             stop: acc.stop,
-            features: FeatureSet { tables: TableForms::NONE, queue_shards: 0, ..f },
+            features: FeatureSet { tables: TableForms::NONE, queue_shards: 0, wide_words: false, ..f },
             queue_shards: f.queue_shards.max(1),
+            wide_words: f.wide_words,
             tables: f.tables,
             batches: acc.batches,
             batch_paths: runner.capacity(),
@@ -1101,6 +1121,9 @@ mod tests {
                 // Queues in shards (llvmpipe's threads), and in one.
                 assert_minimal(&FeatureSet { queue_shards: 3, ..all });
                 assert_minimal(&FeatureSet { queue_shards: 2, ..none });
+                // 64-bit words, for the path state and for the storage tables.
+                assert_minimal(&FeatureSet { wide_words: true, tables: TableForms::NONE, ..all });
+                assert_minimal(&FeatureSet { wide_words: true, ..none });
                 // A tree too large for private memory, whose queries give up after their
                 // walk budget, or go on with the sweeps.
                 for csg_sweeps in [false, true] {

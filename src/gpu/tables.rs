@@ -498,15 +498,28 @@ fn generate_tables_wgsl() -> String {
             let value = if elem == "u32" { word } else { format!("bitcast<f32>({word})") };
             format!("    return {value};\n")
         } else {
-            texture_element(&layout, t, name, elem)
+            element_from_texels(&layout, t, elem, &|i| texel_load(name, i))
         };
         out += &format!(
             "// #else\n// #if {}\n@group(1) @binding({b}) var {name}: texture_2d<u32>;\n\nfn {f}(k: u32) -> {elem} {{\n{texture_read}}}\n",
             t.texture_feature()
         );
+        out += "// #else\n";
+        // 16-byte elements in 64-bit words where the render holds its words wide (DESIGN.md
+        // "Wide words"); the u32 and f32 tables gain nothing from them.
+        let wide = t.packed().is_none();
+        if wide {
+            let read = element_from_texels(&layout, t, elem, &|i| format!("words_of({name}[{i}])"));
+            out += &format!(
+                "// #if WIDE_WORDS\n// #requires words_of\n@group(1) @binding({b}) var<storage, read> {name}: array<vec2<u64>>;\n\nfn {f}(k: u32) -> {elem} {{\n{read}}}\n// #else\n"
+            );
+        }
         out += &format!(
-            "// #else\n@group(1) @binding({b}) var<storage, read> {name}: array<{elem}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k];\n}}\n"
+            "@group(1) @binding({b}) var<storage, read> {name}: array<{elem}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k];\n}}\n"
         );
+        if wide {
+            out += "// #endif\n";
+        }
         out += "// #endif\n// #endif\n";
         for _ in t.declared_when() {
             out += "// #endif\n";
@@ -515,13 +528,15 @@ fn generate_tables_wgsl() -> String {
     out
 }
 
-/// The body of a texture accessor of struct or vec4 table `t`: element k's texels, then
-/// the element built from their words.
-fn texture_element(layout: &naga::Module, t: Table, name: &str, elem: &str) -> String {
+/// The body of an accessor of struct or vec4 table `t` that reads its element k as 16-byte
+/// words (a texture's texels, or pairs of 64-bit words): each word (a `vec4<u32>`, loaded
+/// by the WGSL that `load` gives for its index expression), then the element built from
+/// them.
+fn element_from_texels(layout: &naga::Module, t: Table, elem: &str, load: &dyn Fn(&str) -> String) -> String {
     let texels = t.stride() / 16;
     let mut body = format!("    let base = k * {texels}u;\n");
     for i in 0..texels {
-        body += &format!("    let t{i} = {};\n", texel_load(name, &format!("base + {i}u")));
+        body += &format!("    let t{i} = {};\n", load(&format!("base + {i}u")));
     }
     let value = if elem == "vec4<f32>" {
         "bitcast<vec4<f32>>(t0)".to_string()

@@ -7,7 +7,10 @@
 //!   counters.
 //! - `queues` (`array<u32>`): queue q holds path slots at `q·capacity ..`.
 //! - `paths` (`array<vec4<f32>>`) and `words` (`array<vec4<u32>>`): structure-of-arrays path
-//!   state, field f of slot s at `f·capacity + s` ([`path_field`], [`word_field`]).
+//!   state, field f of slot s at `f·capacity + s` ([`path_field`], [`word_field`]). These,
+//!   `shadow` and `film` are read and written through generated accessors (`paths_get(i)`,
+//!   `paths_set(i, v)`), which on llvmpipe hold the same bytes as `array<vec2<u64>>`
+//!   ([`FeatureSet::wide_words`]).
 //! - `shadow` (`array<vec4<f32>>`): per path, `batch.shadow_rays` shadow rays of three vec4 each.
 //! - `deferred_refs` (`array<u32>`): per path, the CSG trees its closest-hit query met.
 //! - `film` (`array<vec4<f32>>`): per pixel of the batch, the sum of its camera samples.
@@ -322,8 +325,9 @@ impl StateBuffer {
         }
     }
 
-    /// Its WGSL declaration.
-    fn declaration(self) -> String {
+    /// Its WGSL declaration; with `wide` (the render's [`FeatureSet::wide_words`]) the
+    /// buffers of 16-byte words are declared as 64-bit words ([`Self::words_declaration`]).
+    fn declaration(self, wide: bool) -> String {
         let name = self.declaration_name();
         let ty = match self {
             StateBuffer::Batch => return format!("@group(0) @binding({}) var<uniform> batch: Batch;", self.binding()),
@@ -334,13 +338,98 @@ impl StateBuffer {
                 "array<atomic<u32>>"
             }
             StateBuffer::Queues | StateBuffer::DeferredRefs => "array<u32>",
-            StateBuffer::Paths | StateBuffer::Shadow | StateBuffer::Film => "array<vec4<f32>>",
-            StateBuffer::Words => "array<vec4<u32>>",
             // `CsgPoolEntry` is declared by the csg module, the only one that binds this.
             StateBuffer::CsgPool => "array<CsgPoolEntry>",
+            StateBuffer::Paths | StateBuffer::Shadow | StateBuffer::Film => {
+                return self.words_declaration("vec4<f32>", wide);
+            }
+            StateBuffer::Words => return self.words_declaration("vec4<u32>", wide),
         };
         format!("@group(0) @binding({}) var<storage, read_write> {name}: {ty};", self.binding())
     }
+
+    /// The declaration of a buffer of 16-byte words of type `elem` (`paths`, `words`,
+    /// `shadow`, `film`), which the stages read and write only through its accessors
+    /// ([`accessor_modules`]). With `wide` it is declared as `array<vec2<u64>>`, the same
+    /// bytes in half as many words.
+    fn words_declaration(self, elem: &str, wide: bool) -> String {
+        let (b, name) = (self.binding(), self.declaration_name());
+        let elem = if wide { "vec2<u64>" } else { elem };
+        format!("@group(0) @binding({b}) var<storage, read_write> {name}: array<{elem}>;")
+    }
+
+    /// The type of an element of a buffer of 16-byte words, as its accessors see it.
+    fn word_element(self) -> Option<&'static str> {
+        match self {
+            StateBuffer::Paths | StateBuffer::Shadow | StateBuffer::Film => Some("vec4<f32>"),
+            StateBuffer::Words => Some("vec4<u32>"),
+            _ => None,
+        }
+    }
+}
+
+/// The generated accessors of the buffers of 16-byte words among `buffers` (`paths`,
+/// `words`, `shadow`, `film`), as (file name, source) of one module per function: for
+/// `paths`, `paths_get(i) -> vec4<f32>` provided as module `paths_get` and `paths_set(i,
+/// v)` as `paths_set`, so a stage holds only the accessors its modules `// #requires`. With
+/// `wide` ([`FeatureSet::wide_words`]) they split and join 64-bit words
+/// ([`wide_word_modules`]; DESIGN.md "Wide words"): llvmpipe accesses a storage buffer
+/// at a lane-dependent index word by word and lane by lane, each word with its own bounds
+/// check and branch, so an element costs two such accesses instead of four.
+pub fn accessor_modules(buffers: &[StateBuffer], wide: bool) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for b in buffers {
+        let Some(elem) = b.word_element() else { continue };
+        let name = b.declaration_name();
+        let (read, write) = match (wide, elem) {
+            (false, _) => (format!("{name}[i]"), format!("{name}[i] = v")),
+            (true, "vec4<u32>") => (format!("words_of({name}[i])"), format!("{name}[i] = wide_of(v)")),
+            (true, _) => (
+                format!("bitcast<vec4<f32>>(words_of({name}[i]))"),
+                format!("{name}[i] = wide_of(bitcast<vec4<u32>>(v))"),
+            ),
+        };
+        let requires = |helper: &str| format!("// #requires wavefront{}\n", if wide { helper } else { "" });
+        out.push((
+            format!("<generated {name}_get>"),
+            format!(
+                "// #provides {name}_get\n{}fn {name}_get(i: u32) -> {elem} {{\n    return {read};\n}}\n",
+                requires(" words_of")
+            ),
+        ));
+        out.push((
+            format!("<generated {name}_set>"),
+            format!(
+                "// #provides {name}_set\n{}fn {name}_set(i: u32, v: {elem}) {{\n    {write};\n}}\n",
+                requires(" wide_of")
+            ),
+        ));
+    }
+    out
+}
+
+/// The two conversions of 64-bit words (DESIGN.md "Wide words"), as (file name, source) of
+/// a module each, `words_of` and `wide_of`, which the wide accessors ([`accessor_modules`])
+/// and the scene tables' wide form (`gpu::tables`) require: 16 bytes as two 64-bit words
+/// (`vec2<u64>`) to four 32-bit ones and back, in a few vector instructions. Word 2k + 1 is
+/// the high half of 64-bit word k (little-endian, as every host llvmpipe runs on), so the
+/// bytes are those of the `vec4<u32>`: the host's uploads, clears and read-backs do not
+/// change.
+pub fn wide_word_modules() -> [(String, String); 2] {
+    [
+        (
+            "<generated words_of>".into(),
+            "// #provides words_of\nfn words_of(w: vec2<u64>) -> vec4<u32> {\n    \
+             return vec4<u32>(u32(w.x & 0xfffffffflu), u32(w.x >> 32u), u32(w.y & 0xfffffffflu), u32(w.y >> 32u));\n}\n"
+                .into(),
+        ),
+        (
+            "<generated wide_of>".into(),
+            "// #provides wide_of\nfn wide_of(u: vec4<u32>) -> vec2<u64> {\n    \
+             return vec2<u64>(u64(u.x) | (u64(u.y) << 32u), u64(u.z) | (u64(u.w) << 32u));\n}\n"
+                .into(),
+        ),
+    ]
 }
 
 /// The buffer that holds queue `q`'s launch arguments. Each stage pushes only to queues of
@@ -432,9 +521,9 @@ pub fn csg_pool_entries(f: &FeatureSet) -> u64 {
 }
 
 /// The generated `wavefront` module for a stage that binds `buffers`: every constant above,
-/// the `Batch` struct and the declarations of those buffers, with the control buffer laid
-/// out as `control`.
-pub fn wavefront_module(buffers: &[StateBuffer], control: Control) -> String {
+/// the `Batch` struct and the declarations of those buffers (of 64-bit words with `wide`,
+/// [`FeatureSet::wide_words`]), with the control buffer laid out as `control`.
+pub fn wavefront_module(buffers: &[StateBuffer], control: Control, wide: bool) -> String {
     let mut s =
         String::from("// #provides wavefront\n// The wavefront state, generated by src/gpu/wavefront/contract.rs.\n");
     let consts: [(&str, u32); 21] = [
@@ -466,7 +555,7 @@ pub fn wavefront_module(buffers: &[StateBuffer], control: Control) -> String {
     s.push_str(&control_wgsl(control));
     s.push_str(BATCH_WGSL);
     for b in buffers {
-        s.push_str(&b.declaration());
+        s.push_str(&b.declaration(wide));
         s.push('\n');
     }
     s.push_str(&launch_args_wgsl(buffers));
@@ -481,7 +570,7 @@ mod tests {
     fn batch_struct_matches_rust_and_buffers_have_distinct_bindings() {
         // The pool's element type lives in the csg module (checked with it, in gpu::render).
         let alone: Vec<StateBuffer> = StateBuffer::ALL.into_iter().filter(|b| *b != StateBuffer::CsgPool).collect();
-        let src = wavefront_module(&alone, Control::new(2));
+        let src = wavefront_module(&alone, Control::new(2), false);
         let v = crate::gpu::validate_wgsl("wavefront", &src).unwrap();
         let ty = v.module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Batch")).unwrap().1;
         let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("Batch is not a struct") };

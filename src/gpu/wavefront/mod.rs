@@ -23,7 +23,7 @@ mod schedule;
 mod stages;
 pub(crate) mod twin;
 
-pub use contract::{queue, wavefront_module, BatchUniform, Control, StateBuffer};
+pub use contract::{accessor_modules, queue, wavefront_module, wide_word_modules, BatchUniform, Control, StateBuffer};
 pub use schedule::{
     ctrlc_flag, Accumulated, PassOptions, StopReason, MAX_PATHS_PER_PIXEL_PER_ROUND, MAX_SPP_PER_ROUND,
 };
@@ -116,6 +116,26 @@ pub fn queue_shards(info: &wgpu::AdapterInfo) -> u32 {
         return 1;
     }
     this_process_llvmpipe().0
+}
+
+/// The device features a render's path state in 64-bit words needs
+/// (`FeatureSet::wide_words`), requested where they pay: on llvmpipe, which accesses a
+/// storage buffer at a lane-dependent index one word of one lane at a time, each with a
+/// bounds check and a branch, so 64-bit words halve those accesses (DESIGN.md "Wide
+/// words"). A hardware GPU loads a 16-byte element per lane in one instruction either way.
+pub fn wide_words_features(info: &wgpu::AdapterInfo) -> wgpu::Features {
+    if crate::gpu::is_llvmpipe(info) {
+        wgpu::Features::SHADER_INT64
+    } else {
+        wgpu::Features::empty()
+    }
+}
+
+/// Whether a render on `gpu` holds its path state in 64-bit words: where
+/// [`wide_words_features`] asks for 64-bit integers and the device has them.
+pub fn wide_words(gpu: &crate::gpu::Gpu) -> bool {
+    let wanted = wide_words_features(&gpu.adapter_info);
+    !wanted.is_empty() && gpu.device.features().contains(wanted)
 }
 
 /// llvmpipe's worker threads per device in this process ([`llvmpipe_threads`] of

@@ -372,6 +372,10 @@ impl Stage {
         }
         // Where the tables are read from (their bindings are declared only where used).
         names.extend(f.tables.for_stage(self.hot()).names());
+        // The tables' 16-byte elements in storage buffers as 64-bit words.
+        if f.wide_words {
+            names.push(FeatureSet::DEVICE_NAMES[0]);
+        }
         if !scene.contains(&"GEOMETRY") {
             // Nothing to intersect: no spans or traversal helpers to call.
             names.retain(|n| !["SPANS", "TRAVERSE"].contains(n));
