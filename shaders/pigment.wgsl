@@ -44,10 +44,12 @@ fn pigment_color(index: u32, uv: vec2<f32>) -> vec3<f32> {
     let p = pigment_at(index);
 // #if PIGMENT_CHECKERED
     if (p.kind == PIGMENT_CHECKERED) {
-        let n = f32(p.n);
-        let iu = i32(floor(uv.x * n));
-        let iv = i32(floor(uv.y * n));
-        if (((iu + iv) & 1) == 0) {
+        // The parities of ⌊u·n⌋ and ⌊v·n⌋ in float arithmetic, exact on every f32 integer
+        // (halving and flooring one are exact): as the CPU's i64 cells, without llvmpipe's
+        // per-lane float-to-int conversions (float_index.wgsl).
+        let cell = floor(uv * f32(p.n));
+        let parity = cell - 2.0 * floor(cell * 0.5);
+        if (parity.x + parity.y != 1.0) {
             return p.a.xyz;
         }
         return p.b.xyz;
