@@ -123,6 +123,14 @@ pub fn queue_shards(info: &wgpu::AdapterInfo) -> u32 {
 /// storage buffer at a lane-dependent index one word of one lane at a time, each with a
 /// bounds check and a branch, so 64-bit words halve those accesses (DESIGN.md "Wide
 /// words"). A hardware GPU loads a 16-byte element per lane in one instruction either way.
+///
+/// ```
+/// let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
+/// info.name = "NVIDIA H100".into();
+/// assert!(lumen::gpu::wavefront::wide_words_features(&info).is_empty());
+/// info.name = "llvmpipe (LLVM 15.0.6, 128 bits)".into();
+/// assert_eq!(lumen::gpu::wavefront::wide_words_features(&info), wgpu::Features::SHADER_INT64);
+/// ```
 pub fn wide_words_features(info: &wgpu::AdapterInfo) -> wgpu::Features {
     if crate::gpu::is_llvmpipe(info) {
         wgpu::Features::SHADER_INT64
