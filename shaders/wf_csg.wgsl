@@ -88,5 +88,5 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
         return;
     }
 // #endif
-    classify(slot, best);
+    classify(slot, best, false);
 }

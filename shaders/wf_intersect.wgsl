@@ -26,18 +26,16 @@ fn intersect_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
     let ray = load_ray(slot);
 // #if CSG_QUEUE
     let best = traverse(ray, false);
-    if (deferred.count > 0u) {
+    let to_csg = deferred.count > 0u;
+    if (to_csg) {
         let base = deferred_record(slot, 0u);
         deferred_refs[base] = deferred.count;
         for (var k = 0u; k < deferred.count; k++) {
             deferred_refs[base + 1u + k] = deferred.refs[k];
         }
-        store_hit(slot, best);
-        wf_push(Q_CSG, slot);
-        return;
     }
-    classify(slot, best);
+    classify(slot, best, to_csg);
 // #else
-    classify(slot, world_first(ray, false));
+    classify(slot, world_first(ray, false), false);
 // #endif
 }
