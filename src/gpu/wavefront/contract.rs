@@ -340,21 +340,20 @@ impl StateBuffer {
             StateBuffer::Queues | StateBuffer::DeferredRefs => "array<u32>",
             // `CsgPoolEntry` is declared by the csg module, the only one that binds this.
             StateBuffer::CsgPool => "array<CsgPoolEntry>",
-            StateBuffer::Paths | StateBuffer::Shadow | StateBuffer::Film => {
-                return self.words_declaration("vec4<f32>", wide);
+            StateBuffer::Paths | StateBuffer::Words | StateBuffer::Shadow | StateBuffer::Film => {
+                return self.words_declaration(wide);
             }
-            StateBuffer::Words => return self.words_declaration("vec4<u32>", wide),
         };
         format!("@group(0) @binding({}) var<storage, read_write> {name}: {ty};", self.binding())
     }
 
-    /// The declaration of a buffer of 16-byte words of type `elem` (`paths`, `words`,
-    /// `shadow`, `film`), which the stages read and write only through its accessors
+    /// The declaration of a buffer of 16-byte words ([`Self::word_element`]: `paths`,
+    /// `words`, `shadow`, `film`), which the stages read and write only through its accessors
     /// ([`accessor_modules`]). With `wide` it is declared as `array<vec2<u64>>`, the same
     /// bytes in half as many words.
-    fn words_declaration(self, elem: &str, wide: bool) -> String {
+    fn words_declaration(self, wide: bool) -> String {
         let (b, name) = (self.binding(), self.declaration_name());
-        let elem = if wide { "vec2<u64>" } else { elem };
+        let elem = if wide { "vec2<u64>" } else { self.word_element().unwrap_or("vec4<u32>") };
         format!("@group(0) @binding({b}) var<storage, read_write> {name}: array<{elem}>;")
     }
 
