@@ -486,13 +486,29 @@ fn generate_tables_wgsl() -> String {
         if let Some(what) = t.packed() {
             out += &format!("// {name}: {what}.\n");
         }
+        // 16-byte elements in 64-bit words where the render holds its words wide (DESIGN.md
+        // "Wide words"), in the uniform and the storage form alike: llvmpipe gathers a
+        // lane-dependent uniform load and checks its bounds word by word too. The u32 and f32
+        // tables, read a word at a time, gain nothing from them.
+        let wide = t.packed().is_none();
+        let wide_read = |array: &str| element_from_texels(&layout, t, elem, &|i| format!("words_of({array}[{i}])"));
         let uniform_elem = if t.packed().is_some() { vec4 } else { elem };
         let uniform_read = if t.packed().is_some() { format!("{name}[k >> 2u][k & 3u]") } else { format!("{name}[k]") };
+        out += &format!("// #if {}\n", t.feature());
+        if wide {
+            let words = t.uniform_length() * t.stride() / 16;
+            out += &format!(
+                "// #if WIDE_WORDS\n// #requires words_of\n@group(1) @binding({b}) var<uniform> {name}: array<vec2<u64>, {words}>;\n\nfn {f}(k: u32) -> {elem} {{\n{}}}\n// #else\n",
+                wide_read(name)
+            );
+        }
         out += &format!(
-            "// #if {}\n@group(1) @binding({b}) var<uniform> {name}: array<{uniform_elem}, {}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {uniform_read};\n}}\n",
-            t.feature(),
+            "@group(1) @binding({b}) var<uniform> {name}: array<{uniform_elem}, {}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {uniform_read};\n}}\n",
             t.length_constant()
         );
+        if wide {
+            out += "// #endif\n";
+        }
         let texture_read = if t.packed().is_some() {
             let word = format!("{}[k & 3u]", texel_load(name, "k >> 2u"));
             let value = if elem == "u32" { word } else { format!("bitcast<f32>({word})") };
@@ -505,13 +521,10 @@ fn generate_tables_wgsl() -> String {
             t.texture_feature()
         );
         out += "// #else\n";
-        // 16-byte elements in 64-bit words where the render holds its words wide (DESIGN.md
-        // "Wide words"); the u32 and f32 tables gain nothing from them.
-        let wide = t.packed().is_none();
         if wide {
-            let read = element_from_texels(&layout, t, elem, &|i| format!("words_of({name}[{i}])"));
             out += &format!(
-                "// #if WIDE_WORDS\n// #requires words_of\n@group(1) @binding({b}) var<storage, read> {name}: array<vec2<u64>>;\n\nfn {f}(k: u32) -> {elem} {{\n{read}}}\n// #else\n"
+                "// #if WIDE_WORDS\n// #requires words_of\n@group(1) @binding({b}) var<storage, read> {name}: array<vec2<u64>>;\n\nfn {f}(k: u32) -> {elem} {{\n{}}}\n// #else\n",
+                wide_read(name)
             );
         }
         out += &format!(
@@ -758,16 +771,28 @@ mod tests {
     /// The texture accessors rebuild each struct from the words at its members' offsets
     /// (shaders/layout.wgsl, checked against Rust by layout's tests): a BVH node is two
     /// texels, the corner in the first three words of the first, the grid in the second's.
+    /// The wide forms read the same words as pairs of 64-bit words, from a uniform array of
+    /// the same bytes as the narrow one.
     #[test]
     fn texture_accessors_read_members_at_their_offsets() {
         let wgsl = tables_wgsl();
-        let node = wgsl
+        // A struct table's accessor in its forms: uniform wide and narrow, texture, storage
+        // wide and narrow.
+        let forms: Vec<&str> = wgsl
             .split("fn bvh_node_at(k: u32) -> QuantizedNode {")
-            .nth(2)
-            .expect("texture form")
-            .split("\n}")
-            .next()
-            .unwrap();
+            .skip(1)
+            .map(|f| f.split("\n}").next().unwrap())
+            .collect();
+        assert_eq!(forms.len(), 5, "{forms:?}");
+        let node = forms[2];
+        let uniform_words = Table::BvhNodes.uniform_length() * Table::BvhNodes.stride() / 16;
+        assert_eq!(uniform_words * 16, UNIFORM_TABLE_BYTES);
+        let wide_uniform = format!("var<uniform> bvh_nodes: array<vec2<u64>, {uniform_words}>;");
+        assert!(wgsl.contains(&wide_uniform), "{wide_uniform}");
+        for wide in [forms[0], forms[3]] {
+            assert!(wide.contains("let t1 = words_of(bvh_nodes[base + 1u]);"), "{wide}");
+            assert!(wide.contains("vec3<u32>(t1.x, t1.y, t1.z), t1.w);"), "{wide}");
+        }
         assert!(node.contains("let base = k * 2u;"), "{node}");
         assert!(
             node.contains(
