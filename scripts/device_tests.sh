@@ -51,6 +51,7 @@ run)
     mkdir -p "$out"
     : > "$out/summary.txt"
     bin=$(mktemp -d)
+    trap 'rm -rf "$bin"' EXIT
     tar -C "$bin" -xJf "$pack/tests.tar.xz" || exit 1
     built=$(cat "$bin/built_in")
     root=$PWD

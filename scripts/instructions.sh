@@ -51,6 +51,7 @@ render)
     ;;
 cold)
     cache=$(mktemp -d)
+    trap 'rm -f "$out"; rm -rf "$cache"' EXIT
     MESA_SHADER_CACHE_DIR=$cache LUMEN_PIPELINE_CACHE=0 LUMEN_PARALLEL_JIT=0 valgrind --tool=cachegrind \
         --cache-sim=no --cachegrind-out-file="$out" "$bin" render "$scene" --device gpu --width 8 --spp 1 \
         -o "$out.png" >/dev/null 2>&1
