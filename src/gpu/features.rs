@@ -246,11 +246,11 @@ pub struct FeatureSet {
     /// adapter ([`crate::gpu::wavefront::queue_shards`]); [`FeatureSet::of`] leaves 0,
     /// which counts as 1. The image is the same.
     pub queue_shards: u32,
-    /// The path state's buffers of 16-byte elements, and the struct and vec4 tables left in
-    /// storage buffers, held as 64-bit words (`vec2<u64>`): on llvmpipe, where every word is
-    /// a per-lane access with a bounds check and a branch (DESIGN.md "Wide words"). Chosen per render for the device
-    /// ([`crate::gpu::wavefront::wide_words`]); [`FeatureSet::of`] leaves it off. The
-    /// image is the same.
+    /// The path state's buffers of 16-byte elements, and the struct and vec4 tables in
+    /// storage and uniform buffers, held as 64-bit words (`vec2<u64>`): on llvmpipe, where
+    /// every word is a per-lane access with a bounds check (DESIGN.md "Wide words"). Chosen
+    /// per render for the device ([`crate::gpu::wavefront::wide_words`]); [`FeatureSet::of`]
+    /// leaves it off. The image is the same.
     pub wide_words: bool,
     /// Per BRDF kind (indexed by `layout::brdf_kind`), what the materials of that kind need
     /// in their shading stage: the shapes they sit on, their pigments, whether one emits.

@@ -107,9 +107,9 @@ pub struct GpuRenderOptions {
     /// Shards per queue of the wavefront renderer (`None`: [`wavefront::queue_shards`] of
     /// the adapter; `wavefront::Control`). The image is the same.
     pub queue_shards: Option<u32>,
-    /// Whether the path state is held in 64-bit words (`None`: [`wavefront::wide_words`] of
-    /// the device; `Some(true)` where the device lacks 64-bit integers is ignored). The
-    /// image is the same.
+    /// Whether the path state and the struct tables are held in 64-bit words (`None`:
+    /// [`wavefront::wide_words`] of the device; `Some(true)` where the device lacks 64-bit
+    /// integers is ignored). The image is the same.
     pub wide_words: Option<bool>,
 }
 
@@ -178,8 +178,8 @@ pub struct GpuRenderOutput {
     pub tables: TableForms,
     /// Shards per queue ([`GpuRenderOptions::queue_shards`]).
     pub queue_shards: u32,
-    /// Whether the path state and the storage tables were held in 64-bit words
-    /// ([`GpuRenderOptions::wide_words`]).
+    /// Whether the path state and the storage and uniform struct tables were held in 64-bit
+    /// words ([`GpuRenderOptions::wide_words`]).
     pub wide_words: bool,
     /// Batches run (each a launch of every stage for a run of whole pixels).
     pub batches: u64,

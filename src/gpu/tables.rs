@@ -489,26 +489,31 @@ fn generate_tables_wgsl() -> String {
         // 16-byte elements in 64-bit words where the render holds its words wide (DESIGN.md
         // "Wide words"), in the uniform and the storage form alike: llvmpipe gathers a
         // lane-dependent uniform load and checks its bounds word by word too. The u32 and f32
-        // tables, read a word at a time, gain nothing from them.
-        let wide = t.packed().is_none();
-        let wide_read = |array: &str| element_from_texels(&layout, t, elem, &|i| format!("words_of({array}[{i}])"));
+        // tables, read a word at a time, gain nothing from them. `buffer_form` gives a buffer
+        // form's declaration and accessor: `narrow` alone, or under `WIDE_WORDS` an array of
+        // `vec2<u64>` in address space `space` (of `length`, e.g. ", 4096"; "" for a
+        // runtime-sized one) with the accessor rebuilding the element from its words.
+        let buffer_form = |space: &str, length: &str, narrow: String| {
+            if t.packed().is_some() {
+                return narrow;
+            }
+            let read = element_from_texels(&layout, t, elem, &|i| format!("words_of({name}[{i}])"));
+            format!(
+                "// #if WIDE_WORDS\n// #requires words_of\n@group(1) @binding({b}) var<{space}> {name}: array<vec2<u64>{length}>;\n\nfn {f}(k: u32) -> {elem} {{\n{read}}}\n// #else\n{narrow}// #endif\n"
+            )
+        };
         let uniform_elem = if t.packed().is_some() { vec4 } else { elem };
         let uniform_read = if t.packed().is_some() { format!("{name}[k >> 2u][k & 3u]") } else { format!("{name}[k]") };
+        let words = t.uniform_length() * t.stride() / 16;
         out += &format!("// #if {}\n", t.feature());
-        if wide {
-            let words = t.uniform_length() * t.stride() / 16;
-            out += &format!(
-                "// #if WIDE_WORDS\n// #requires words_of\n@group(1) @binding({b}) var<uniform> {name}: array<vec2<u64>, {words}>;\n\nfn {f}(k: u32) -> {elem} {{\n{}}}\n// #else\n",
-                wide_read(name)
-            );
-        }
-        out += &format!(
-            "@group(1) @binding({b}) var<uniform> {name}: array<{uniform_elem}, {}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {uniform_read};\n}}\n",
-            t.length_constant()
+        out += &buffer_form(
+            "uniform",
+            &format!(", {words}"),
+            format!(
+                "@group(1) @binding({b}) var<uniform> {name}: array<{uniform_elem}, {}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {uniform_read};\n}}\n",
+                t.length_constant()
+            ),
         );
-        if wide {
-            out += "// #endif\n";
-        }
         let texture_read = if t.packed().is_some() {
             let word = format!("{}[k & 3u]", texel_load(name, "k >> 2u"));
             let value = if elem == "u32" { word } else { format!("bitcast<f32>({word})") };
@@ -521,18 +526,13 @@ fn generate_tables_wgsl() -> String {
             t.texture_feature()
         );
         out += "// #else\n";
-        if wide {
-            out += &format!(
-                "// #if WIDE_WORDS\n// #requires words_of\n@group(1) @binding({b}) var<storage, read> {name}: array<vec2<u64>>;\n\nfn {f}(k: u32) -> {elem} {{\n{}}}\n// #else\n",
-                wide_read(name)
-            );
-        }
-        out += &format!(
-            "@group(1) @binding({b}) var<storage, read> {name}: array<{elem}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k];\n}}\n"
+        out += &buffer_form(
+            "storage, read",
+            "",
+            format!(
+                "@group(1) @binding({b}) var<storage, read> {name}: array<{elem}>;\n\nfn {f}(k: u32) -> {elem} {{\n    return {name}[k];\n}}\n"
+            ),
         );
-        if wide {
-            out += "// #endif\n";
-        }
         out += "// #endif\n// #endif\n";
         for _ in t.declared_when() {
             out += "// #endif\n";

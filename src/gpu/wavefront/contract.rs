@@ -353,7 +353,7 @@ impl StateBuffer {
     /// bytes in half as many words.
     fn words_declaration(self, wide: bool) -> String {
         let (b, name) = (self.binding(), self.declaration_name());
-        let elem = if wide { "vec2<u64>" } else { self.word_element().unwrap_or("vec4<u32>") };
+        let elem = if wide { "vec2<u64>" } else { self.word_element().expect("a buffer of 16-byte words") };
         format!("@group(0) @binding({b}) var<storage, read_write> {name}: array<{elem}>;")
     }
 

@@ -372,7 +372,7 @@ impl Stage {
         }
         // Where the tables are read from (their bindings are declared only where used).
         names.extend(f.tables.for_stage(self.hot()).names());
-        // The tables' 16-byte elements in storage buffers as 64-bit words.
+        // The path state's and the buffer tables' 16-byte elements as 64-bit words.
         if f.wide_words {
             names.push(FeatureSet::DEVICE_NAMES[0]);
         }
