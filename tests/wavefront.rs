@@ -193,12 +193,12 @@ fn queue_shards_give_the_same_bits() {
     }
 }
 
-/// The path state and the storage tables held in 64-bit words (`GpuRenderOptions::
-/// wide_words`, DESIGN.md "Wide words") are the same bytes as in 32-bit words, read and
-/// written through the same accessors: every renderer, CSG trees met by closest-hit and
-/// shadow rays, textures, rough materials, meshes and a mesh light (their BVH and triangle
-/// tables in storage buffers where the adapter's placement leaves them there) give the same
-/// bits and ray counts either way. Where the device cannot hold 64-bit words (no 64-bit
+/// The path state and the struct tables (in uniform and storage buffers) held in 64-bit
+/// words (`GpuRenderOptions::wide_words`, DESIGN.md "Wide words") are the same bytes as in
+/// 32-bit words, read and written through the same accessors: every renderer, CSG trees met
+/// by closest-hit and shadow rays, textures, rough materials, meshes and a mesh light (their
+/// BVH and triangle tables in storage buffers where the adapter's placement leaves them
+/// there) give the same bits and ray counts either way. Where the device cannot hold 64-bit words (no 64-bit
 /// integers, or an adapter lumen does not widen for) the render uses 32-bit words whatever
 /// it asks.
 #[test]
