@@ -90,9 +90,6 @@ pub struct ComputeKernel {
     pub binding_bytes: Vec<Vec<u64>>,
     /// `@workgroup_size` of the entry point.
     pub workgroup_size: [u32; 3],
-    /// How its loops were compiled (a twin device compiles it the same way, so that both
-    /// produce the same SPIR-V and share Mesa's cache entry).
-    pub(crate) loops: Loops,
 }
 
 /// How naga compiles a kernel's loops (wgpu's `ShaderRuntimeChecks::force_loop_bounding`).
@@ -346,7 +343,7 @@ impl Gpu {
             if let Some(cache) = &self.pipeline_cache {
                 let _ = cache.save();
             }
-            ComputeKernel { label: label.into(), pipeline, layouts, bindings, binding_bytes, workgroup_size, loops }
+            ComputeKernel { label: label.into(), pipeline, layouts, bindings, binding_bytes, workgroup_size }
         })
     }
 

@@ -1,11 +1,11 @@
-//! A scene's new kernels compiled in parallel on llvmpipe (Mesa's lavapipe).
+//! A scene's new kernels created, and on llvmpipe (Mesa's lavapipe) compiled, in parallel.
 //!
 //! llvmpipe keeps only the NIR when a pipeline is created and compiles a kernel with LLVM at
 //! its first launch, on the one thread that runs the device's queue: however many threads
 //! create the pipelines, a scene's kernels compile one after another in its first round
 //! (DESIGN.md "Parallel kernel compilation"). The code it compiles goes to Mesa's on-disk
 //! shader cache, keyed by the kernel's NIR, where every device of the driver looks first.
-//! So before the first round each new kernel is launched once over an empty grid, which
+//! So each new kernel is launched once over an empty grid before the first round, which
 //! compiles it and runs nothing, from several devices at once: this device and its *twins*
 //! (more devices on the same adapter, each with a queue thread of its own) take kernels
 //! from one list, largest first, and what a twin compiles reaches this device through the
@@ -13,8 +13,16 @@
 //! which finishes the cache's writes), so the first round finds their code; a kernel not
 //! found there is compiled again at its first launch: time lost, never a different result.
 //!
-//! A twin first waits up to `WARM_PROBE` for this device's first launch: when that ends so
-//! soon, the cache was warm and the twin is not opened.
+//! Pipelines first, then compilation: creating a pipeline on a device waits while that
+//! device compiles a kernel (a pipeline begun during a 0.34-s compilation ended with it), so
+//! this thread and one helper per further core first create all of this device's
+//! pipelines, largest first, from one list; a pool as large as the cores, rather than a
+//! thread per kernel, ends them sooner (the largest is not left to finish alone) and makes
+//! a warm start 20 % shorter. Then this thread launches them, largest first, and each
+//! helper, once this device's first launch has run for `WARM_PROBE` (a launch that finds
+//! its kernel in a warm cache ends sooner, and then a twin would only cost its opening),
+//! opens a twin and takes kernels from the same list. On other adapters, which compile
+//! when a pipeline is created, only the first phase runs.
 //!
 //! Twins only where they can help: llvmpipe through Vulkan, more than one core, at least two
 //! new kernels, and Mesa's shader cache not switched off (`MESA_SHADER_CACHE_DISABLE`);
@@ -23,26 +31,28 @@
 //! render starts wherever it runs and is timed as such (`GpuRenderOutput::kernel_seconds`).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Barrier, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
-use super::compute::{BindingKind, BoundResource, ComputeKernel, MIN_BUFFER_BYTES};
+use super::compute::{BindingKind, BoundResource, ComputeKernel, Loops, MIN_BUFFER_BYTES};
 use super::device::{Gpu, GpuError};
 
 /// Most devices compiling at once (this one included): each twin is a driver instance
 /// with its own threads and memory.
 const MAX_DEVICES: usize = 8;
 
-/// How long a twin waits for this device's first launch before opening: a launch that
+/// How long this device's first launch must run before helpers open twins: a launch that
 /// finds its kernel in the cache takes 1–2 ms, one that compiles 0.05–1 s.
 const WARM_PROBE: Duration = Duration::from_millis(20);
 
-/// A kernel to compile ahead: the pipeline, and the WGSL (or, where the caller kept it,
-/// its already validated module) and entry point a twin compiles it from.
+/// A kernel to create: its label, WGSL (its length orders the list), entry point and loops.
+/// The module comes from the `validate` function given with the list, called once per
+/// kernel whoever creates it first.
 pub(crate) struct Job<'a> {
-    pub kernel: &'a ComputeKernel,
+    pub label: String,
     pub source: &'a str,
-    pub module: Option<&'a naga::Module>,
     pub entry: &'a str,
+    pub loops: Loops,
 }
 
 /// Whether a Mesa boolean environment variable is set to true (as Mesa reads it).
@@ -74,57 +84,178 @@ fn twins_for(info: &wgpu::AdapterInfo, jobs: usize, cores: usize) -> usize {
     cores.min(jobs).min(MAX_DEVICES).saturating_sub(1)
 }
 
-/// Compiles `jobs` (kernels of `gpu`) before their first real launch where the device
-/// compiles lazily, in parallel over twins of `gpu` where that helps (see the module
-/// documentation); does nothing elsewhere. Errors are this device's: a twin that fails
-/// only gives its share back.
-pub(crate) fn compile_ahead(gpu: &Gpu, jobs: &[Job]) -> Result<(), GpuError> {
-    if !lazy_jit(&gpu.adapter_info) {
-        return Ok(());
+/// One kernel's progress: its pipeline on this device once created, and the validated
+/// module kept for twins.
+#[derive(Default)]
+struct Slot {
+    kernel: Option<ComputeKernel>,
+    module: Option<naga::Module>,
+}
+
+/// The state the threads of [`create_kernels`] share.
+struct Schedule<'a, V> {
+    gpu: &'a Gpu,
+    jobs: &'a [Job<'a>],
+    validate: &'a V,
+    /// Job indices, largest source first.
+    order: Vec<usize>,
+    slots: Vec<Mutex<Slot>>,
+    /// Positions in `order` of the next pipeline to create and of the next kernel to
+    /// compile (on this device or a twin).
+    next_pipeline: AtomicUsize,
+    next: AtomicUsize,
+    /// Whether twins may open (and so whether modules are kept for them).
+    twins: bool,
+    /// When this device's first launch started, and whether it has ended.
+    first_started: OnceLock<Instant>,
+    first_done: AtomicBool,
+    /// Set when this thread is done (or failed): helpers waiting for the probe stop.
+    finished: AtomicBool,
+}
+
+impl<V: Fn(usize) -> Result<naga::Module, GpuError> + Sync> Schedule<'_, V> {
+    /// Job `i`'s pipeline on this device, created unless someone already has; the module
+    /// is kept for twins. A failure leaves the slot empty (the caller that needs the kernel
+    /// reports it).
+    fn ensure(&self, i: usize) -> Result<(), GpuError> {
+        let mut slot = self.slots[i].lock().unwrap_or_else(|e| e.into_inner());
+        self.fill(i, &mut slot)
     }
+
+    fn fill(&self, i: usize, slot: &mut Slot) -> Result<(), GpuError> {
+        if slot.kernel.is_none() {
+            let job = &self.jobs[i];
+            let module = match slot.module.take() {
+                Some(m) => m,
+                None => (self.validate)(i)?,
+            };
+            let kept = self.twins.then(|| module.clone());
+            slot.kernel = Some(self.gpu.kernel_from_module(&job.label, module, job.entry, job.loops)?);
+            slot.module = kept;
+        }
+        Ok(())
+    }
+
+    /// Creates this device's pipelines, largest first, with the other threads: a device
+    /// cannot create a pipeline while it compiles a kernel (lavapipe holds the device for
+    /// the launch), so every pipeline is made before the first launch. A failure leaves its
+    /// slot empty, for the final sweep to report.
+    fn create_pipelines(&self) {
+        loop {
+            let k = self.next_pipeline.fetch_add(1, Ordering::Relaxed);
+            let Some(&i) = self.order.get(k) else { return };
+            let _ = self.ensure(i);
+        }
+    }
+
+    /// [`Schedule::create_pipelines`], then waits for the other threads to end theirs. A
+    /// panic is caught before the wait, which would otherwise never end for the others (its
+    /// kernel's slot stays empty, and the final sweep meets it again on this thread).
+    fn create_pipelines_then_wait(&self, made: &Barrier) {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.create_pipelines()));
+        made.wait();
+    }
+
+    /// This thread, once every pipeline is made: launches the kernels from the front of the
+    /// list where the device compiles lazily.
+    fn compile_here(&self) -> Result<(), GpuError> {
+        loop {
+            let k = self.next.fetch_add(1, Ordering::Relaxed);
+            let Some(&i) = self.order.get(k) else { return Ok(()) };
+            let slot = self.slots[i].lock().unwrap_or_else(|e| e.into_inner());
+            let Some(kernel) = slot.kernel.as_ref() else { continue };
+            let _ = self.first_started.set(Instant::now());
+            let result = launch_empty(self.gpu, kernel);
+            self.first_done.store(true, Ordering::Release);
+            result?;
+        }
+    }
+
+    /// A helper, once every pipeline is made: waits for this device's first launch to show
+    /// the cache cold, then serves as a twin, taking kernels from the same list as this
+    /// thread; failing there only moves a kernel's compilation to its first launch.
+    fn compile_on_twin(&self) {
+        while !self.cold() {
+            if self.finished.load(Ordering::Acquire) || self.first_done.load(Ordering::Acquire) {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let Some(twin) = self.gpu.twin() else { return };
+        loop {
+            let k = self.next.fetch_add(1, Ordering::Relaxed);
+            let Some(&i) = self.order.get(k) else { return };
+            let module = self.slots[i].lock().unwrap_or_else(|e| e.into_inner()).module.clone();
+            let job = &self.jobs[i];
+            let Some(module) = module else { continue };
+            if let Ok(kernel) = twin.kernel_from_module(&job.label, module, job.entry, job.loops) {
+                let _ = launch_empty(&twin, &kernel);
+            }
+        }
+    }
+
+    /// Whether this device's first launch has run long enough to be compiling.
+    fn cold(&self) -> bool {
+        self.twins
+            && !self.first_done.load(Ordering::Acquire)
+            && self.first_started.get().is_some_and(|t| t.elapsed() >= WARM_PROBE)
+    }
+}
+
+/// Creates the kernels of `jobs` on `gpu` (job i's module from `validate(i)`) and, where the
+/// device compiles lazily, compiles them before their first real launch, in parallel over
+/// twins of `gpu` where that helps (see the module documentation). The kernels come back in
+/// the order of `jobs`; errors are this device's, each job's own (a twin that fails only
+/// gives its share back).
+pub(crate) fn create_kernels<V>(gpu: &Gpu, jobs: &[Job], validate: &V) -> Result<Vec<ComputeKernel>, GpuError>
+where
+    V: Fn(usize) -> Result<naga::Module, GpuError> + Sync,
+{
+    let lazy = lazy_jit(&gpu.adapter_info);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let twins = twins_for(&gpu.adapter_info, jobs.len(), cores);
+    let helpers = if twins > 0 { twins } else { cores.min(jobs.len()).saturating_sub(1) };
     // Largest source first: the last kernel to finish decides when all are done.
-    let mut order: Vec<&Job> = jobs.iter().collect();
-    order.sort_by_key(|j| std::cmp::Reverse(j.source.len()));
-    let next = AtomicUsize::new(0);
-    let take = || order.get(next.fetch_add(1, Ordering::Relaxed)).copied();
-    let take = &take;
-    let first_done = AtomicBool::new(false);
-    let first_done = &first_done;
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(jobs[i].source.len()));
+    let schedule = Schedule {
+        gpu,
+        jobs,
+        validate,
+        order,
+        slots: jobs.iter().map(|_| Mutex::default()).collect(),
+        next_pipeline: AtomicUsize::new(0),
+        next: AtomicUsize::new(0),
+        twins: twins > 0,
+        first_started: OnceLock::new(),
+        first_done: AtomicBool::new(false),
+        finished: AtomicBool::new(false),
+    };
+    let schedule = &schedule;
+    let pipelines_made = &Barrier::new(helpers + 1);
     std::thread::scope(|scope| {
-        for _ in 0..twins {
+        for _ in 0..helpers {
             scope.spawn(move || {
-                // A warm cache answers this device's first launch (the largest kernel) in a
-                // few milliseconds, and then a twin would only cost its opening (~30 ms).
-                let probe = Instant::now();
-                while !first_done.load(Ordering::Acquire) && probe.elapsed() < WARM_PROBE {
-                    std::thread::sleep(Duration::from_millis(1));
-                }
-                if first_done.load(Ordering::Acquire) {
-                    return;
-                }
-                let Some(twin) = gpu.twin() else { return };
-                while let Some(job) = take() {
-                    // Failing here only moves the kernel's compilation to its first launch.
-                    let (label, loops) = (&job.kernel.label, job.kernel.loops);
-                    let compiled = match job.module {
-                        Some(module) => twin.kernel_from_module(label, module.clone(), job.entry, loops),
-                        None => twin.kernel_with_loops(label, job.source, job.entry, loops),
-                    };
-                    if let Ok(kernel) = compiled {
-                        let _ = launch_empty(&twin, &kernel);
-                    }
+                schedule.create_pipelines_then_wait(pipelines_made);
+                if schedule.twins {
+                    schedule.compile_on_twin();
                 }
             });
         }
-        while let Some(job) = take() {
-            let result = launch_empty(gpu, job.kernel);
-            first_done.store(true, Ordering::Release);
-            result?;
-        }
-        Ok(())
-    })
+        schedule.create_pipelines_then_wait(pipelines_made);
+        let result = if lazy { schedule.compile_here() } else { Ok(()) };
+        schedule.finished.store(true, Ordering::Release);
+        result
+    })?;
+    // Every kernel a twin took has its pipeline here unless creating it failed: then this
+    // thread tries again, which reports the error.
+    let mut kernels = Vec::with_capacity(jobs.len());
+    for (i, slot) in schedule.slots.iter().enumerate() {
+        let mut slot = slot.lock().unwrap_or_else(|e| e.into_inner());
+        schedule.fill(i, &mut slot)?;
+        kernels.push(slot.kernel.take().ok_or_else(|| GpuError::Internal("kernel not created".into()))?);
+    }
+    Ok(kernels)
 }
 
 /// Launches `kernel` over an empty grid, which makes llvmpipe compile it: every binding
@@ -169,14 +300,14 @@ mod tests {
         wgpu::AdapterInfo { name: name.into(), ..wgpu::AdapterInfo::new(device_type, wgpu::Backend::Vulkan) }
     }
 
-    /// Kernels compiled ahead (empty launches where this adapter is llvmpipe, and twins
-    /// where the first of those launches compiles for longer than `WARM_PROBE`, from a kept
-    /// module or from the WGSL) still do their work: a uniform struct, a fixed-size and a
-    /// runtime-sized storage array get their least sizes for the empty launches, then real
-    /// buffers.
+    /// Kernels created in parallel (and, on llvmpipe, compiled ahead: empty launches here,
+    /// and twins where the first of those compiles for longer than `WARM_PROBE`) come back
+    /// in the order of their jobs, whichever thread made them, and do their work: a uniform
+    /// struct, a fixed-size and a runtime-sized storage array get their least sizes for the
+    /// empty launches, then real buffers.
     #[test]
-    fn kernels_compiled_ahead_run_as_compiled() {
-        let Some(gpu) = crate::gpu::gpu_for_tests("kernels_compiled_ahead_run_as_compiled") else { return };
+    fn kernels_created_in_parallel_run_as_compiled() {
+        let Some(gpu) = crate::gpu::gpu_for_tests("kernels_created_in_parallel_run_as_compiled") else { return };
         let sources = [
             "struct P { k: vec4<u32> }
              @group(0) @binding(0) var<uniform> p: P;
@@ -191,18 +322,25 @@ mod tests {
              fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                  if (id.x < arrayLength(&v)) { v[id.x] = v[id.x] + table[id.x % 4u]; }
              }",
+            "@group(0) @binding(0) var<storage, read_write> v: array<u32>;
+             @compute @workgroup_size(64)
+             fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+                 if (id.x < arrayLength(&v)) { v[id.x] = v[id.x] + 1u; }
+             }",
         ];
-        let kernels: Vec<ComputeKernel> = sources.iter().map(|s| gpu.compute_kernel("t", s, "main").unwrap()).collect();
-        // A twin compiles the first from its kept module, the second from its WGSL.
-        let kept = crate::gpu::validate_wgsl("t", sources[0]).unwrap().module;
-        let modules = [Some(&kept), None];
-        let jobs: Vec<Job> = kernels
+        let jobs: Vec<Job> = sources
             .iter()
-            .zip(&sources)
-            .zip(modules)
-            .map(|((kernel, source), module)| Job { kernel, source, module, entry: "main" })
+            .enumerate()
+            .map(|(i, source)| Job { label: format!("t{i}"), source, entry: "main", loops: Loops::Bounded })
             .collect();
-        compile_ahead(&gpu, &jobs).unwrap();
+        let validations = AtomicUsize::new(0);
+        let kernels = create_kernels(&gpu, &jobs, &|i: usize| {
+            validations.fetch_add(1, Ordering::Relaxed);
+            crate::gpu::validate_wgsl("t", sources[i]).map(|v| v.module)
+        })
+        .unwrap();
+        assert_eq!(validations.into_inner(), 3, "each WGSL is validated once");
+        assert_eq!(kernels.iter().map(|k| k.label.as_str()).collect::<Vec<_>>(), ["t0", "t1", "t2"]);
         let v = gpu.storage_buffer("v", &[1u32, 2, 3, 4, 5]).unwrap();
         let p = gpu.uniform_buffer("p", &[3u32, 0, 0, 0]).unwrap();
         let table = gpu.storage_buffer("table", &[10u32, 20, 30, 40]).unwrap();
@@ -211,9 +349,35 @@ mod tests {
         let g0 = kernels[1].bind_group(&gpu, 0, &[&table]).unwrap();
         let g1 = kernels[1].bind_group(&gpu, 1, &[&v]).unwrap();
         gpu.dispatch(&kernels[1], &[&g0, &g1], kernels[1].workgroups_for([5, 1, 1])).unwrap();
-        assert_eq!(gpu.read_buffer::<u32>(&v, 5).unwrap(), [13, 26, 39, 52, 25]);
+        let g = kernels[2].bind_group(&gpu, 0, &[&v]).unwrap();
+        gpu.dispatch(&kernels[2], &[&g], kernels[2].workgroups_for([5, 1, 1])).unwrap();
+        assert_eq!(gpu.read_buffer::<u32>(&v, 5).unwrap(), [14, 27, 40, 53, 26]);
         assert_eq!(kernels[1].binding_bytes, [vec![16], vec![4]]);
         assert_eq!(kernels[0].binding_bytes, [vec![16, 4]]);
+    }
+
+    /// A kernel that fails is this device's error, whichever thread met it first, and no
+    /// thread waits for a launch that never comes: the largest kernel (the first this
+    /// thread takes) failing, a smaller one failing, and a list of one.
+    #[test]
+    fn a_failing_kernel_is_reported() {
+        let Some(gpu) = crate::gpu::gpu_for_tests("a_failing_kernel_is_reported") else { return };
+        let good = "@group(0) @binding(0) var<storage, read_write> v: array<u32>;
+             @compute @workgroup_size(64)
+             fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+                 if (id.x < arrayLength(&v)) { v[id.x] = 2u * v[id.x]; }
+             }";
+        let long_bad = "@compute @workgroup_size(64) fn main() { let x: u32 = undefined_name_of_some_length; }";
+        let bad = "fn main() { nonsense }";
+        for sources in [vec![good, long_bad, good], vec![good, bad, good, good], vec![bad]] {
+            let jobs: Vec<Job> = sources
+                .iter()
+                .map(|source| Job { label: "t".into(), source, entry: "main", loops: Loops::Bounded })
+                .collect();
+            let result =
+                create_kernels(&gpu, &jobs, &|i: usize| crate::gpu::validate_wgsl("t", sources[i]).map(|v| v.module));
+            assert!(matches!(result, Err(GpuError::Shader { .. })), "{:?}", result.map(|k| k.len()));
+        }
     }
 
     /// Twins only for llvmpipe, with cores and kernels to share; never more than the

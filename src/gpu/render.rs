@@ -15,9 +15,7 @@ use super::parallel_jit;
 use super::tables::{Table, TableForms, TableLimits, TablePlacement};
 use super::wavefront::twin::{self, TwinStart};
 use super::wavefront::{self, run_rounds, Plan, Stage, StageKernels, StopReason};
-use super::{
-    Assembled, BindingKind, BoundResource, ComputeKernel, Gpu, GpuError, KernelCache, Loops, PassOptions, ShaderLibrary,
-};
+use super::{Assembled, BindingKind, BoundResource, Gpu, GpuError, KernelCache, Loops, PassOptions, ShaderLibrary};
 use crate::image::HdrImage;
 use crate::scene::Scene;
 
@@ -585,44 +583,21 @@ fn stage_kernels(cache: &mut KernelCache, gpu: &Gpu, features: &FeatureSet) -> R
             None => missing.push((stage, assembled)),
         }
     }
-    // Where twins may compile some of them (llvmpipe), each kernel's validated module is
-    // kept for them, so that no WGSL is parsed twice (gpu::parallel_jit).
-    let keep_modules = parallel_jit::lazy_jit(&gpu.adapter_info) && missing.len() > 1;
-    type Built = (Stage, String, ComputeKernel, Option<naga::Module>);
-    let built: Vec<Result<Built, GpuError>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = missing
-            .into_iter()
-            .map(|(stage, assembled)| {
-                scope.spawn(move || {
-                    let label = format!("{} stage (assembled)", stage.label());
-                    let module = assembled.validate()?.module;
-                    let kept = keep_modules.then(|| module.clone());
-                    let k = gpu.kernel_from_module(&label, module, stage.entry().1, Loops::Unbounded)?;
-                    Ok((stage, assembled.source, k, kept))
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|_| Err(GpuError::Internal("kernel compilation panicked".into()))))
-            .collect()
-    });
-    let built = built.into_iter().collect::<Result<Vec<_>, _>>()?;
-    let compiled = built.len();
-    // llvmpipe compiles a kernel at its first launch, one at a time: compile the new ones
-    // now, in parallel over more devices where that helps (gpu::parallel_jit).
-    let jobs: Vec<parallel_jit::Job> = built
+    // Pipelines created (and on llvmpipe compiled) in parallel, each WGSL parsed once
+    // (gpu::parallel_jit).
+    let jobs: Vec<parallel_jit::Job> = missing
         .iter()
-        .map(|(stage, source, kernel, module)| parallel_jit::Job {
-            kernel,
-            source,
-            module: module.as_ref(),
+        .map(|(stage, assembled)| parallel_jit::Job {
+            label: format!("{} stage (assembled)", stage.label()),
+            source: &assembled.source,
             entry: stage.entry().1,
+            loops: Loops::Unbounded,
         })
         .collect();
-    parallel_jit::compile_ahead(gpu, &jobs)?;
-    for (stage, source, kernel, _) in built {
-        kernels.insert(stage, cache.insert(&source, stage.entry().1, kernel));
+    let built = parallel_jit::create_kernels(gpu, &jobs, &|i: usize| missing[i].1.validate().map(|v| v.module))?;
+    let compiled = built.len();
+    for ((stage, assembled), kernel) in missing.iter().zip(built) {
+        kernels.insert(*stage, cache.insert(&assembled.source, stage.entry().1, kernel));
     }
     // The stages that launch another stage's kernel.
     for stage in Stage::for_scene(features) {
