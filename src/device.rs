@@ -113,12 +113,12 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 }
 
 /// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
-/// CPU renderer comes close on some scenes (on Mesa 25's Vulkan lavapipe on a 2-core AMD
-/// Zen 3 VM, with lumen's two single-threaded devices and interleaved batches, the GPU led
-/// every example scene, spheres_10k.sl by only 0–17 %: BENCHMARKS.md "Two single-threaded
-/// devices"; before those, on that host and a Zen 4 one, the CPU was at parity or slightly
-/// ahead on spheres_10k.sl, glass.sl and skybox.sl: "An AMD Zen 3 host", "An AMD Zen 4
-/// host"; other software adapters are unmeasured), except on an llvmpipe of Mesa 26.1 or later with
+/// CPU renderer comes close on some scenes (on Mesa 25's Vulkan lavapipe at lumen's 128
+/// bits the GPU led every example scene, by the least on spheres_10k.sl, skybox.sl and
+/// glass.sl: medians 1.37–2.61× on a 2-core AMD Zen 3 VM, 1.29–2.74× on a 2-core Intel Xeon
+/// VM; BENCHMARKS.md "Wide uniform tables", "An Intel host, and kernel creation's
+/// timeline"; at slow hours of the Zen 3 VM spheres_10k.sl had read 0.95–1.14× before the
+/// wide words; other software adapters are unmeasured), except on an llvmpipe of Mesa 26.1 or later with
 /// vectors wider than 256 bits, which ran every example scene 1.3–4.7× faster than the CPU
 /// renderer on the AVX-512 hosts measured (BENCHMARKS.md "512-bit vectors on Mesa 26.1",
 /// "An AMD Zen 4 host"). At 256 bits it does not always: on the Zen 3 host spheres_10k.sl
