@@ -182,7 +182,8 @@ impl<V: Fn(usize) -> Result<naga::Module, GpuError> + Sync> Schedule<'_, V> {
             std::thread::sleep(Duration::from_millis(1));
         }
         let Some(twin) = self.gpu.twin() else { return };
-        loop {
+        // Once this thread is done every kernel is taken, or it failed and the rest is moot.
+        while !self.finished.load(Ordering::Acquire) {
             let k = self.next.fetch_add(1, Ordering::Relaxed);
             let Some(&i) = self.order.get(k) else { return };
             let module = self.slots[i].lock().unwrap_or_else(|e| e.into_inner()).module.clone();
