@@ -42,7 +42,8 @@ use super::device::{Gpu, GpuError};
 const MAX_DEVICES: usize = 8;
 
 /// How long this device's first launch must run before helpers open twins: a launch that
-/// finds its kernel in the cache takes 1–2 ms, one that compiles 0.05–1 s.
+/// finds its kernel in the cache takes 1–8 ms (the largest kernel, read from the cache
+/// first), one that compiles 0.05–1 s.
 const WARM_PROBE: Duration = Duration::from_millis(20);
 
 /// A kernel to create: its label, WGSL (its length orders the list), entry point and loops.
