@@ -31,7 +31,7 @@
 //! render starts wherever it runs and is timed as such (`GpuRenderOutput::kernel_seconds`).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Barrier, Mutex, OnceLock};
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use super::compute::{BindingKind, BoundResource, ComputeKernel, Loops, MIN_BUFFER_BYTES};
@@ -110,7 +110,8 @@ struct Schedule<'a, V> {
     /// When this device's first launch started, and whether it has ended.
     first_started: OnceLock<Instant>,
     first_done: AtomicBool,
-    /// Set when this thread is done (or failed): helpers waiting for the probe stop.
+    /// Set when this thread's part ends, however it ends: helpers waiting for the probe, or
+    /// serving on a twin, stop.
     finished: AtomicBool,
 }
 
@@ -147,14 +148,6 @@ impl<V: Fn(usize) -> Result<naga::Module, GpuError> + Sync> Schedule<'_, V> {
             let Some(&i) = self.order.get(k) else { return };
             let _ = self.ensure(i);
         }
-    }
-
-    /// [`Schedule::create_pipelines`], then waits for the other threads to end theirs. A
-    /// panic is caught before the wait, which would otherwise never end for the others (its
-    /// kernel's slot stays empty, and the final sweep meets it again on this thread).
-    fn create_pipelines_then_wait(&self, made: &Barrier) {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.create_pipelines()));
-        made.wait();
     }
 
     /// This thread, once every pipeline is made: launches the kernels from the front of the
@@ -204,6 +197,15 @@ impl<V: Fn(usize) -> Result<naga::Module, GpuError> + Sync> Schedule<'_, V> {
     }
 }
 
+/// Sets its flag when dropped: the end of this thread's part, however it ends.
+struct Finish<'a>(&'a AtomicBool);
+
+impl Drop for Finish<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
+    }
+}
+
 /// Creates the kernels of `jobs` on `gpu` (job i's module from `validate(i)`) and, where the
 /// device compiles lazily, compiles them before their first real launch, in parallel over
 /// twins of `gpu` where that helps (see the module documentation). The kernels come back in
@@ -234,20 +236,34 @@ where
         finished: AtomicBool::new(false),
     };
     let schedule = &schedule;
-    let pipelines_made = &Barrier::new(helpers + 1);
+    // Helpers that have made their last pipeline: this thread launches nothing before all
+    // have (a helper's panic is caught first, its kernel left for the final sweep).
+    let helpers_done = &AtomicUsize::new(0);
     std::thread::scope(|scope| {
+        // However this thread leaves (an error, a panic), helpers waiting for its first
+        // launch, or taking kernels on a twin, stop.
+        let _finish = Finish(&schedule.finished);
+        let mut spawned = 0;
         for _ in 0..helpers {
-            scope.spawn(move || {
-                schedule.create_pipelines_then_wait(pipelines_made);
+            let helper = move || {
+                let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| schedule.create_pipelines()));
+                helpers_done.fetch_add(1, Ordering::Release);
                 if schedule.twins {
                     schedule.compile_on_twin();
                 }
-            });
+            };
+            // A thread the system refuses is one helper fewer.
+            spawned += usize::from(std::thread::Builder::new().spawn_scoped(scope, helper).is_ok());
         }
-        schedule.create_pipelines_then_wait(pipelines_made);
-        let result = if lazy { schedule.compile_here() } else { Ok(()) };
-        schedule.finished.store(true, Ordering::Release);
-        result
+        schedule.create_pipelines();
+        while helpers_done.load(Ordering::Acquire) < spawned {
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        if lazy {
+            schedule.compile_here()
+        } else {
+            Ok(())
+        }
     })?;
     // Every kernel a twin took has its pipeline here unless creating it failed: then this
     // thread tries again, which reports the error.
