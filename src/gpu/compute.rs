@@ -198,8 +198,9 @@ impl Gpu {
     }
 
     /// [`Gpu::kernel_with_loops`] from a module [`validate_wgsl`] has already parsed and
-    /// validated (a twin device compiling a kernel this process has built once: the parse
-    /// is not repeated, and the SPIR-V is the same).
+    /// validated: lumen's stage kernels, each validated once and made from copies of its
+    /// module on this device and on twin devices (`parallel_jit`), whose SPIR-V is then the
+    /// same.
     pub(crate) fn kernel_from_module(
         &self,
         label: &str,
