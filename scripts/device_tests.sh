@@ -24,7 +24,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 pack=target/devcarry
 # Integration test binaries that use the GPU, then the library's unit tests.
-suites=(gpu_render wavefront gpu_specialised stability meshes shards converge gpu_infra)
+suites=(gpu_render wavefront gpu_specialised gpu_random_scenes stability meshes shards converge gpu_infra)
 
 case "${1:-}" in
 pack)

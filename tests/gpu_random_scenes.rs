@@ -1,0 +1,295 @@
+//! Random scenes on both renderers. The example scenes and the hand-made ones of
+//! `gpu_render.rs` reach a few dozen combinations of lumen's features, but the GPU's kernels
+//! are assembled per scene from only the features it uses (shape kinds, CSG, meshes, BRDF
+//! kinds, textured and emissive pigments, light kinds, environments, renderers), so a
+//! combination no test renders could compile a kernel that misses a piece, or that takes a
+//! branch another combination never does. Here seeded proptest strategies write valid
+//! SceneLang scripts that mix those features at random, and each scene must:
+//!
+//! - render bit for bit the same with its own specialised kernels as with the full-featured
+//!   kernels of its renderer (`FeatureSet::full_for`, as `gpu_specialised.rs` does for the
+//!   example scenes): specialisation only removes code that the scene never runs;
+//! - agree with the f64 CPU reference pixel by pixel (the same random numbers for the same
+//!   pixel, sample and bounce), within the tolerance below, with no NaN or infinity.
+//!
+//! The seed and the case count are fixed, so CI renders the same scenes every run;
+//! `LUMEN_RANDOM_SCENES_SEED=n` and `LUMEN_RANDOM_SCENES=k` (cases) hunt further. A failure
+//! prints the script, which `lumen render --device gpu` and `--device cpu` reproduce from
+//! `scenes/` (meshes and `sky.hdr` are read from there). Skips without a GPU adapter (fails
+//! instead with LUMEN_REQUIRE_GPU=1).
+
+mod common;
+
+use std::path::Path;
+
+use common::{agreement, Tolerance};
+use lumen::cpu::{render as cpu_render, Progress, RenderOptions};
+use lumen::gpu::features::FeatureSet;
+use lumen::gpu::gpu_for_tests;
+use lumen::gpu::render::{GpuRenderOptions, GpuRenderer};
+use lumen::scenelang::{load_str, LoadOptions};
+use proptest::prelude::*;
+use proptest::strategy::ValueTree;
+use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+
+/// Camera samples per pixel of every render.
+const SPP: u32 = 2;
+
+/// A number with two decimals in [lo, hi].
+fn num(lo: f64, hi: f64) -> impl Strategy<Value = String> {
+    (lo..=hi).prop_map(|v| format!("{v:.2}"))
+}
+
+fn colour(lo: f64, hi: f64) -> impl Strategy<Value = String> {
+    (num(lo, hi), num(lo, hi), num(lo, hi)).prop_map(|(r, g, b)| format!("<{r}, {g}, {b}>"))
+}
+
+/// A reflectance pigment: uniform, checkered or the sky image as a texture.
+fn pigment() -> impl Strategy<Value = String> {
+    prop_oneof![
+        4 => colour(0.05, 0.95).prop_map(|c| format!("Pigment.Uniform({c})")),
+        2 => (1u32..8, colour(0.05, 0.95), colour(0.05, 0.95))
+            .prop_map(|(n, a, b)| format!("Pigment.Checkered(.N {n}, .color_on {a}, .color_off {b})")),
+        1 => prop::sample::select(vec!["nearest", "bilinear"])
+            .prop_map(|f| format!("Pigment.Image(.image sky, .filter \"{f}\")")),
+    ]
+}
+
+/// GGX roughness: smooth half of the time.
+fn roughness() -> impl Strategy<Value = String> {
+    prop_oneof![Just("0".to_string()), num(0.02, 1.0)]
+}
+
+fn brdf() -> impl Strategy<Value = String> {
+    prop_oneof![
+        4 => pigment().prop_map(|p| format!("Brdf.Diffuse({p})")),
+        1 => pigment().prop_map(|p| format!("Brdf.Specular({p})")),
+        2 => (num(1.2, 1.8), roughness()).prop_map(|(ior, r)| format!("Brdf.Dielectric(.ior {ior}, .roughness {r})")),
+        1 => (pigment(), roughness()).prop_map(|(p, r)| format!("Brdf.Conductor(.pigment {p}, .roughness {r})")),
+        1 => (prop::sample::select(vec!["Au", "Ag", "Cu", "Al"]), roughness())
+            .prop_map(|(m, r)| format!("Brdf.Conductor(.metal \"{m}\", .roughness {r})")),
+        1 => (pigment(), num(1.3, 1.7), roughness())
+            .prop_map(|(p, ior, r)| format!("Brdf.Plastic(.pigment {p}, .ior {ior}, .roughness {r})")),
+    ]
+}
+
+/// A material; a quarter of them emit (an eighth of those through a checkered pigment).
+fn material() -> impl Strategy<Value = String> {
+    let emission = prop_oneof![
+        12 => Just(String::new()),
+        3 => colour(1.0, 6.0).prop_map(|c| format!(", .emitted_radiance Pigment.Uniform({c})")),
+        1 => (1u32..6, colour(1.0, 6.0))
+            .prop_map(|(n, c)| format!(", .emitted_radiance Pigment.Checkered(.N {n}, .color_on {c}, .color_off <0, 0, 0>)")),
+    ];
+    (brdf(), emission).prop_map(|(b, e)| format!("Material(.brdf {b}{e})"))
+}
+
+/// A placement in the box the camera looks at, |x|, |y| ≤ 1.5 and 0 ≤ z ≤ 1.5, at a size of
+/// a fraction of it, turned about two axes.
+fn placement() -> impl Strategy<Value = String> {
+    let scale = prop_oneof![
+        num(0.4, 1.0).prop_map(|s| format!("SCALE {s}")),
+        (num(0.3, 1.0), num(0.3, 1.0), num(0.3, 1.0)).prop_map(|(x, y, z)| format!("SCALE({x}, {y}, {z})")),
+    ];
+    (num(-1.5, 1.5), num(-1.5, 1.5), num(0.0, 1.5), 0u32..360, 0u32..360, scale)
+        .prop_map(|(x, y, z, a, b, s)| format!("TRANSLATE({x}, {y}, {z}) * ROTATE(.Z {a} * .X {b}) * {s}"))
+}
+
+fn material_name() -> impl Strategy<Value = String> {
+    (0u32..4).prop_map(|i| format!("m{i}"))
+}
+
+fn primitive() -> impl Strategy<Value = String> {
+    (prop::sample::select(vec!["Sphere", "Cube", "Cylinder"]), material_name(), placement())
+        .prop_map(|(k, m, t)| format!("Shape.{k}(.material {m}, .transformation {t})"))
+}
+
+/// A CSG operand: a primitive near the tree's origin (so that the operands overlap).
+fn operand() -> impl Strategy<Value = String> {
+    (
+        prop::sample::select(vec!["Sphere", "Cube", "Cylinder"]),
+        material_name(),
+        num(-0.5, 0.5),
+        num(-0.5, 0.5),
+        0u32..90,
+    )
+        .prop_map(|(k, m, x, y, a)| {
+            format!("Shape.{k}(.material {m}, .transformation TRANSLATE({x}, {y}, 0) * ROTATE(.Z {a}) * SCALE 0.7)")
+        })
+}
+
+fn csg_node() -> impl Strategy<Value = String> {
+    (prop::sample::select(vec!["UNITE", "INTERSECT", "DIFF", "FUSE"]), prop::collection::vec(operand(), 2..4))
+        .prop_map(|(op, kids)| format!("{op}({})", kids.join(", ")))
+}
+
+fn csg() -> impl Strategy<Value = String> {
+    // A nested tree now and then (the outer node evaluates the inner one as a CSG operand).
+    let tree = prop_oneof![
+        3 => csg_node(),
+        1 => (prop::sample::select(vec!["UNITE", "INTERSECT", "DIFF", "FUSE"]), csg_node(), operand())
+            .prop_map(|(op, inner, leaf)| format!("{op}({inner}, {leaf})")),
+    ];
+    (tree, num(-1.2, 1.2), num(-1.2, 1.2), num(0.3, 1.2), 0u32..360).prop_map(|(t, x, y, z, a)| {
+        let end = t.len() - 1;
+        format!("{}, .transformation TRANSLATE({x}, {y}, {z}) * ROTATE(.Z {a}) * SCALE 0.8)", &t[..end])
+    })
+}
+
+fn mesh() -> impl Strategy<Value = String> {
+    (prop::sample::select(vec!["icosphere.ply", "torus_knot.obj", "panel.ply"]), material_name(), 0u32..2, placement())
+        .prop_map(|(f, m, smooth, t)| {
+            format!("Shape.Mesh(.file \"meshes/{f}\", .material {m}, .smooth {smooth}, .transformation {t})")
+        })
+}
+
+/// Ten to twenty small objects, so that the scene's objects are walked through a BVH rather
+/// than tested as a list: round spheres only (tested in the world) or mixed kinds.
+fn cluster() -> impl Strategy<Value = String> {
+    let kind = prop_oneof![3 => Just("Sphere"), 1 => Just("Cube"), 1 => Just("Cylinder")];
+    let object = (kind, material_name(), num(-1.5, 1.5), num(-1.5, 1.5), num(0.0, 1.5), num(0.1, 0.3)).prop_map(
+        |(k, m, x, y, z, r)| format!("Shape.{k}(.material {m}, .transformation TRANSLATE({x}, {y}, {z}) * SCALE {r})"),
+    );
+    let round =
+        (material_name(), num(-1.5, 1.5), num(-1.5, 1.5), num(0.0, 1.5), num(0.1, 0.3)).prop_map(|(m, x, y, z, r)| {
+            format!("Shape.Sphere(.material {m}, .transformation TRANSLATE({x}, {y}, {z}) * SCALE {r})")
+        });
+    prop_oneof![
+        prop::collection::vec(round, 10..20).prop_map(|v| v.join("\n    ")),
+        prop::collection::vec(object, 10..20).prop_map(|v| v.join("\n    ")),
+    ]
+}
+
+fn shape() -> impl Strategy<Value = String> {
+    prop_oneof![6 => primitive(), 3 => csg(), 3 => mesh(), 1 => cluster()]
+}
+
+fn point_light() -> impl Strategy<Value = String> {
+    (num(-2.0, 2.0), num(-2.0, 2.0), num(1.5, 4.0), colour(0.5, 3.0), num(0.5, 3.0))
+        .prop_map(|(x, y, z, c, r)| format!("Light(.position {{{x}, {y}, {z}}}, .color {c}, .linear_radius {r})"))
+}
+
+fn camera() -> impl Strategy<Value = String> {
+    prop_oneof![
+        3 => (num(1.0, 2.0), num(-3.6, -2.6), num(-0.5, 0.5), num(1.0, 2.0), num(8.0, 20.0)).prop_map(
+            |(d, x, y, z, tilt)| format!(
+                "Camera.Perspective(.aspect_ratio 1.333, .screen_distance {d}, .transformation TRANSLATE({x}, {y}, {z}) * ROTATE(.Y {tilt}))"
+            )
+        ),
+        1 => num(1.2, 2.5).prop_map(|s| format!(
+            "Camera.Orthogonal(.aspect_ratio 1.333, .transformation TRANSLATE(-4, 0, 0.8) * SCALE {s})"
+        )),
+    ]
+}
+
+fn renderer() -> impl Strategy<Value = String> {
+    prop_oneof![
+        6 => (1u32..3, 1u32..6, 1u32..4, 0u32..2).prop_map(|(n, d, r, nee)| format!(
+            "Renderer.PathTracer(.n {n}, .max_depth {d}, .roulette_depth {r}, .nee {nee})"
+        )),
+        1 => colour(0.0, 0.5).prop_map(|c| format!("Renderer.Flat(.background_color {c})")),
+        1 => Just("Renderer.OnOff()".to_string()),
+        1 => (colour(0.0, 0.3), colour(0.0, 0.2))
+            .prop_map(|(b, a)| format!("Renderer.PointLight(.background_color {b}, .ambient_color {a})")),
+    ]
+}
+
+fn environment() -> impl Strategy<Value = String> {
+    prop_oneof![
+        1 => Just(String::new()),
+        2 => colour(0.1, 1.0).prop_map(|c| format!("Environment.Uniform(.color {c})")),
+        2 => (colour(0.1, 1.0), colour(0.1, 1.0), colour(0.0, 0.5))
+            .prop_map(|(z, h, n)| format!("Environment.Gradient(.zenith {z}, .horizon {h}, .nadir {n})")),
+        3 => (num(0.3, 1.5), 0u32..360)
+            .prop_map(|(i, r)| format!("Environment.Image(.image sky, .intensity {i}, .rotation {r})")),
+    ]
+}
+
+/// A whole script: four materials, one to four shapes (primitives, CSG trees, meshes), a
+/// floor three times in four, up to two point lights, at 16×12 pixels.
+fn script() -> impl Strategy<Value = String> {
+    (
+        prop::collection::vec(material(), 4),
+        prop::collection::vec(shape(), 1..5),
+        prop::option::weighted(0.75, material_name()),
+        prop::collection::vec(point_light(), 0..3),
+        camera(),
+        renderer(),
+        environment(),
+        (0u64..1 << 40, 0u64..1 << 40),
+    )
+        .prop_map(|(materials, shapes, floor, lights, camera, renderer, env, (state, inc))| {
+            let mut spawn = shapes;
+            if let Some(m) = floor {
+                spawn.push(format!("Shape.Plane(.material {m})"));
+            }
+            spawn.extend(lights);
+            let set: Vec<String> = materials.iter().enumerate().map(|(i, m)| format!("m{i} {m}")).collect();
+            format!(
+                "SET\n    sky LOAD \"sky.hdr\"\n    {}\nSPAWN\n    {}\nUSING\n    {camera}\n    Image(16, 12)\n    {renderer}\n    Tracer(.samples_per_side 1, .rng Pcg(.state {state}, .inc {inc}))\n    {env}\n",
+                set.join("\n    "),
+                spawn.join("\n    "),
+            )
+        })
+}
+
+fn env_number(name: &str, default: u64) -> u64 {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+#[test]
+fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
+    let Some(gpu) = gpu_for_tests("random_scenes_agree_with_the_cpu_and_the_full_kernels") else { return };
+    let seed = env_number("LUMEN_RANDOM_SCENES_SEED", 1);
+    let cases = env_number("LUMEN_RANDOM_SCENES", 24);
+    let mut key = [0u8; 32];
+    key[..8].copy_from_slice(&seed.to_le_bytes());
+    let mut runner = TestRunner::new_with_rng(Config::default(), TestRng::from_seed(RngAlgorithm::ChaCha, &key));
+    let scenes_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let strategy = script();
+    let mut renderer = GpuRenderer::new();
+    let opts = GpuRenderOptions::fixed_passes(Some(SPP), SPP);
+    let mut failures = Vec::new();
+    let mut mostly_lit = 0;
+    for case in 0..cases {
+        let text = strategy.new_tree(&mut runner).expect("strategy").current();
+        let name = format!("random scene {case} (seed {seed})");
+        let scene = load_str(&text, &name, &scenes_dir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{name} does not load: {e}\n{text}"));
+        let spec = FeatureSet::of(&scene);
+        let gpu_own = renderer.render(&gpu, &scene, &opts).unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+        let full = GpuRenderOptions { features: Some(spec.full_for()), ..opts.clone() };
+        let gpu_full = renderer.render(&gpu, &scene, &full).unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+        let cpu = cpu_render(&scene, &RenderOptions { spp: Some(SPP), ..RenderOptions::default() }, Progress::Hidden);
+        let a = agreement(&gpu_own.image, &cpu.image);
+        let differing = gpu_own
+            .image
+            .pixels()
+            .iter()
+            .zip(gpu_full.image.pixels())
+            .filter(|(p, q)| [p.r, p.g, p.b].map(f32::to_bits) != [q.r, q.g, q.b].map(f32::to_bits))
+            .count();
+        let lit = cpu.image.pixels().iter().filter(|p| p.r + p.g + p.b > 0.0).count();
+        if 2 * lit >= cpu.image.pixels().len() {
+            mostly_lit += 1;
+        }
+        println!("{name}: {a}; {differing} pixels differ from the full kernels'; {lit} pixels not black");
+        let mut why = Vec::new();
+        if differing > 0 {
+            why.push(format!("{differing} pixels differ between the specialised and the full kernels"));
+        }
+        if gpu_own.non_finite_samples > 0 {
+            why.push(format!("{} non-finite GPU samples", gpu_own.non_finite_samples));
+        }
+        if let Err(e) = a.check(Tolerance::share(0.95)) {
+            why.push(format!("GPU vs CPU: {e}"));
+        }
+        if !why.is_empty() {
+            failures.push(format!("{name}: {}\n{text}", why.join("; ")));
+        }
+    }
+    println!("{} kernel sets compiled for {cases} scenes", renderer.kernels_compiled());
+    // The comparisons prove little on black images: most scenes must show something.
+    assert!(2 * mostly_lit >= cases, "only {mostly_lit} of {cases} scenes are at least half lit");
+    assert!(failures.is_empty(), "{} of {cases} random scenes failed:\n\n{}", failures.len(), failures.join("\n\n"));
+}
