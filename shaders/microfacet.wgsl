@@ -247,10 +247,12 @@ fn microfacet_eval(m: Material, color: vec3<f32>, front: bool, o: vec3<f32>, e_o
 // #endif
 // #if PLASTIC
     if (m.brdf == BRDF_PLASTIC) {
-        // The base under the coat, internal reflectance r_i = m.lobe.x.
+        // The base under the coat, internal reflectance r_i = m.lobe.x, its albedo clamped
+        // to [0, 1] (optics::compensation::plastic_base_albedo).
         let r_i = m.lobe.x;
         scale = m.lobe.y;
-        tint = color * (1.0 - r_i) / (1.0 - color * r_i);
+        let rho = clamp(color, vec3<f32>(0.0), vec3<f32>(1.0));
+        tint = rho * (1.0 - r_i) / (1.0 - rho * r_i);
         f = vec3<f32>(1.0);
     }
 // #endif

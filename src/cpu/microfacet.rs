@@ -367,6 +367,27 @@ mod tests {
         assert!(ss < 0.9, "{ss}");
     }
 
+    /// A plastic base brighter than white (an HDR image as its pigment) reflects as a white
+    /// one: without the clamp ρ = 3 under an η = 1.7 coat (r_i ≈ 0.69) made the base's term
+    /// negative, and ρ = 1/r_i infinite. Hand values: ρ (1 − r_i)/(1 − ρ r_i) is 1 at ρ = 1
+    /// and 0 at ρ = 0, whatever r_i.
+    #[test]
+    fn a_plastic_base_above_white_reflects_as_white() {
+        use crate::optics::compensation::plastic_base_albedo;
+        for internal in [0.0, 0.4, 0.69, 0.95] {
+            assert!((plastic_base_albedo(1.0, internal) - 1.0).abs() < 1e-15);
+            assert_eq!(plastic_base_albedo(0.0, internal), 0.0);
+            for rho in [1.0 + 1e-9, 1.0 / internal.max(1e-3), 3.0, 1e30] {
+                assert_eq!(plastic_base_albedo(rho, internal), plastic_base_albedo(1.0, internal), "ρ {rho}");
+            }
+        }
+        let (o, i) = (view(0.6), view(0.3) * DVec3::new(-1.0, 1.0, 1.0));
+        for r in [None, Some(0.3)] {
+            let bright = plastic_eval(r, 1.7, Color::gray(3.0), o, i);
+            assert!(bright.r > 0.0 && bright == plastic_eval(r, 1.7, Color::WHITE, o, i), "{bright:?}");
+        }
+    }
+
     /// χ² of each sampler against its density, over several roughnesses and angles.
     #[test]
     fn sampling_matches_density_chi_square() {

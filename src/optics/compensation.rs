@@ -94,7 +94,12 @@ pub fn plastic_coat(t: &EnergyTables, alpha: Option<f64>, eta: f64) -> PlasticCo
     PlasticCoat { internal: 1.0 - (1.0 - avg) / (eta * eta), base: ms_scale(avg) }
 }
 
-/// The diffuse base's factor ρ (1 − r_i)/(1 − ρ r_i) for one channel.
+/// The diffuse base's factor ρ (1 − r_i)/(1 − ρ r_i) for one channel, ρ clamped to [0, 1]:
+/// the series of the light bounced between base and coat, Σ (ρ r_i)ⁿ, diverges at ρ r_i ≥ 1,
+/// where the closed form turns infinite and then negative (an HDR image as the base's
+/// pigment reaches that: negative pixels on both devices before the clamp, found by
+/// `tests/gpu_random_scenes.rs`). A base cannot reflect more than it receives.
 pub fn plastic_base_albedo(rho: f64, internal: f64) -> f64 {
+    let rho = rho.clamp(0.0, 1.0);
     rho * (1.0 - internal) / (1.0 - rho * internal)
 }
