@@ -1,4 +1,4 @@
-// #requires wf_classify csg
+// #requires wf_classify csg nearest
 // #if WF_SHADOW_CSG
 // #requires wf_shadow_ray paths_get paths_set
 // #endif
@@ -63,14 +63,14 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
         ray = load_ray(slot);
         best = load_hit(slot);
 // #endif
-        ray.tmax = min(ray.tmax, best.c.t);
+        ray.tmax = min(ray.tmax, end_past(best.c.t));
         let count = deferred_refs[record];
         for (var k = 0u; k < count; k++) {
             let r = deferred_refs[record + 1u + k];
             let cand = csg_first(r & ~CSG_NODE_BIT, ray, r);
-            if (cand.c.t < ray.tmax) {
+            if (cand.c.t < ray.tmax && replaces(cand, best)) {
                 best = cand;
-                ray.tmax = cand.c.t;
+                ray.tmax = end_past(cand.c.t);
                 if (shadows) {
                     break;
                 }

@@ -1,4 +1,7 @@
 // #requires shapes constants
+// #if GEOMETRY
+// #requires nearest
+// #endif
 // #if OBJECT_LIST
 // #requires unrolled
 // #endif
@@ -198,12 +201,12 @@ fn bvh_pop(w: ptr<function, BvhWalk>, tmax: f32) -> bool {
 // #endif
 
 // #if GEOMETRY
-// Keeps `cand` when it is crossed nearer than anything so far: it becomes `best` and
-// shortens the ray.
+// Keeps `cand` when it is the closest so far (nearest.wgsl's rule): it becomes `best` and
+// shortens the ray to just past it.
 fn keep_nearer(cand: Candidate, ray: ptr<function, Ray>, best: ptr<function, Candidate>) -> bool {
-    if (cand.c.t < (*ray).tmax) {
+    if (cand.c.t < (*ray).tmax && replaces(cand, *best)) {
         *best = cand;
-        (*ray).tmax = cand.c.t;
+        (*ray).tmax = end_past(cand.c.t);
         return true;
     }
     return false;
@@ -331,13 +334,13 @@ fn traverse(ray_in: Ray, any_hit: bool) -> Candidate {
 fn evaluate_deferred(ray_in: Ray, best_in: Candidate, any_hit: bool) -> Candidate {
     var ray = ray_in;
     var best = best_in;
-    ray.tmax = min(ray.tmax, best.c.t);
+    ray.tmax = min(ray.tmax, end_past(best.c.t));
     for (var k = 0u; k < deferred.count; k++) {
         let r = deferred.refs[k];
         let cand = csg_first(r & ~CSG_NODE_BIT, ray, r);
-        if (cand.c.t < ray.tmax) {
+        if (cand.c.t < ray.tmax && replaces(cand, best)) {
             best = cand;
-            ray.tmax = cand.c.t;
+            ray.tmax = end_past(cand.c.t);
             if (any_hit) {
                 return best;
             }

@@ -8,6 +8,32 @@ use crate::cpu::{Hit, Ray};
 use crate::prepare::{all_round, MeshBvhs, RoundSphere, SceneBvh, CSG_DEFER_MAX};
 use crate::scene::{Scene, Shape};
 
+/// Whether a crossing at `t` of top-level shape `id` replaces the closest one so far (at
+/// `best_t`, of shape `best`): nearer, or as near and earlier in the scene. The second rule
+/// makes the hit independent of the order objects are tested in where surfaces of two
+/// shapes coincide (the coplanar tops of two boxes of equal height): a BVH walk meets them
+/// in an order that depends on the ray, the GPU's object list in scene order; with "first
+/// met wins" the two disagreed there (`tests/gpu_random_scenes.rs` found it). The GPU's
+/// `replaces` (shaders/world.wgsl) is the same rule.
+fn replaces(t: f64, id: u32, best_t: f64, best: u32) -> bool {
+    t < best_t || (t == best_t && id < best)
+}
+
+/// The next f64 above `t` (finite): where a query's range ends once its closest hit is at t,
+/// so that a crossing at the same t is still met (as `f64::next_up`, which is newer than
+/// lumen's minimum Rust; the GPU's `end_past` in shaders/nearest.wgsl).
+fn end_past(t: f64) -> f64 {
+    match t.partial_cmp(&0.0) {
+        Some(std::cmp::Ordering::Greater) => f64::from_bits(t.to_bits() + 1),
+        Some(std::cmp::Ordering::Less) => f64::from_bits(t.to_bits() - 1),
+        _ => f64::from_bits(1),
+    }
+}
+
+/// Relative margin past the closest hit within which the BVH still enters boxes, so that a
+/// shape tied with it is tested (`replaces`); one box test's rounding is far below it.
+const TIE_CULL_SLACK: f64 = 1.0 + 1.0 / (1u64 << 40) as f64;
+
 /// One top-level shape, prepared. Primitives (the common case) stay inline for locality.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
@@ -137,16 +163,24 @@ impl World {
         &self.geometry.unbounded
     }
 
-    /// The closest hit with t in the open range (tmin, tmax).
+    /// The closest hit with t in the open range (tmin, tmax): the least t, and of crossings
+    /// at the same t the shape's that comes first in the scene, whatever order the
+    /// traversal meets them in (where surfaces of two shapes coincide; DESIGN.md "Closest
+    /// hit among objects").
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let mut best: Option<(u32, Found)> = None;
         let mut tmax = ray.tmax;
         let mut test = |id: u32, tmax: &mut f64| {
-            let r = Ray { tmax: *tmax, ..*ray };
-            if let Some(f) = self.objects[id as usize].closest(&r) {
-                *tmax = f.t();
-                best = Some((id, f));
-                return Visit::Closer(f.t());
+            // Once something is hit, a crossing at its t still has to be seen (a tie).
+            let end = if best.is_some() { end_past(*tmax) } else { *tmax };
+            if let Some(f) = self.objects[id as usize].closest(&Ray { tmax: end, ..*ray }) {
+                if best.is_none_or(|(b, found)| replaces(f.t(), id, found.t(), b)) {
+                    *tmax = f.t();
+                    best = Some((id, f));
+                    // Boxes are culled a little beyond it, so that a tie's box is entered
+                    // even where its slab distance rounds above the tie's t.
+                    return Visit::Closer(f.t() * TIE_CULL_SLACK);
+                }
             }
             Visit::Continue
         };
@@ -167,7 +201,9 @@ impl World {
             }
         }
         let mut t = tmax;
-        self.geometry.bvh.traverse(ray.origin, ray.dir, ray.tmin, tmax, |id| {
+        // (tmax < ray.tmax once a plane was hit: its ties are to be met in the BVH too.)
+        let cull = if tmax < ray.tmax { tmax * TIE_CULL_SLACK } else { tmax };
+        self.geometry.bvh.traverse(ray.origin, ray.dir, ray.tmin, cull, |id| {
             if defer(id) {
                 Visit::Continue
             } else {

@@ -21,7 +21,7 @@ use crate::scene::Scene;
 
 /// Every WGSL module the renderer is assembled from (`shaders/smoke.wgsl` and
 /// `shaders/loop_limiter.wgsl` are not).
-const MODULES: [(&str, &str); 53] = [
+const MODULES: [(&str, &str); 54] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
@@ -37,6 +37,7 @@ const MODULES: [(&str, &str); 53] = [
     ("shaders/triangle.wgsl", include_str!("../../shaders/triangle.wgsl")),
     ("shaders/mesh.wgsl", include_str!("../../shaders/mesh.wgsl")),
     ("shaders/shapes.wgsl", include_str!("../../shaders/shapes.wgsl")),
+    ("shaders/nearest.wgsl", include_str!("../../shaders/nearest.wgsl")),
     ("shaders/csg.wgsl", include_str!("../../shaders/csg.wgsl")),
     ("shaders/world.wgsl", include_str!("../../shaders/world.wgsl")),
     ("shaders/camera.wgsl", include_str!("../../shaders/camera.wgsl")),
