@@ -8,7 +8,10 @@
 //!
 //! - render bit for bit the same with its own specialised kernels as with the full-featured
 //!   kernels of its renderer (`FeatureSet::full_for`, as `gpu_specialised.rs` does for the
-//!   example scenes): specialisation only removes code that the scene never runs;
+//!   example scenes): specialisation only removes code that the scene never runs (to 1e-5
+//!   where the two traverse differently, list against walk: see the comparison);
+//! - render bit for bit the same with one of the settings `GpuRenderOptions` documents as
+//!   leaving the image unchanged (table placement, queue shards, 32-bit path words);
 //! - agree with the f64 CPU reference pixel by pixel (the same random numbers for the same
 //!   pixel, sample and bounce): 95 % of the pixels within 1e-3, the others adding at most
 //!   2 % of the image, the means within 1 % (`Tolerance::share(0.95)`), with no NaN or
@@ -31,6 +34,7 @@ use lumen::cpu::{render as cpu_render, Progress, RenderOptions};
 use lumen::gpu::features::FeatureSet;
 use lumen::gpu::gpu_for_tests;
 use lumen::gpu::render::{GpuRenderOptions, GpuRenderer};
+use lumen::gpu::tables::TablePlacement;
 use lumen::scenelang::{load_str, LoadOptions};
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
@@ -39,7 +43,7 @@ use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 /// Camera samples per pixel of every render.
 const SPP: u32 = 2;
 /// The scenes CI renders: the strategies' first CASES scenes of SEED.
-const SEED: u64 = 2;
+const SEED: u64 = 5;
 const CASES: u64 = 24;
 
 /// A number with two decimals in [lo, hi].
@@ -217,8 +221,12 @@ fn camera() -> impl Strategy<Value = String> {
                 "Camera.Perspective(.aspect_ratio 1.333, .screen_distance {d}, .transformation TRANSLATE({x}, {y}, {z}) * ROTATE(.Y {tilt}))"
             )
         ),
-        1 => num(1.2, 2.5).prop_map(|s| format!(
-            "Camera.Orthogonal(.aspect_ratio 1.333, .transformation TRANSLATE(-4, 0, 0.8) * SCALE {s})"
+        // Tilted as the perspective camera is: parallel rays straight along x, through a
+        // glass slab, leave it along x again, exactly on the sky image's middle row
+        // boundary, where f32 and f64 round to either side (a whole region of one texel
+        // against the other, not a bug).
+        1 => (num(1.2, 2.5), num(8.0, 20.0)).prop_map(|(s, tilt)| format!(
+            "Camera.Orthogonal(.aspect_ratio 1.333, .transformation TRANSLATE(-4, 0, 0.8) * ROTATE(.Y {tilt}) * SCALE {s})"
         )),
     ]
 }
@@ -273,6 +281,22 @@ fn script() -> impl Strategy<Value = String> {
         })
 }
 
+/// Scene `case`'s second comparison: a setting that `GpuRenderOptions` documents as leaving
+/// the image the same (each table in storage buffers, uniform buffers or textures; one
+/// queue shard or three; 32-bit words), which the scene must then render bit for bit as its
+/// own kernels do.
+fn invariant(case: u64) -> (&'static str, GpuRenderOptions) {
+    let opts = GpuRenderOptions::fixed_passes(Some(SPP), SPP);
+    match case % 6 {
+        0 => ("tables in storage buffers", GpuRenderOptions { tables: TablePlacement::Storage, ..opts }),
+        1 => ("tables in uniform buffers", GpuRenderOptions { tables: TablePlacement::Uniform, ..opts }),
+        2 => ("tables in textures", GpuRenderOptions { tables: TablePlacement::Texture, ..opts }),
+        3 => ("one queue shard", GpuRenderOptions { queue_shards: Some(1), ..opts }),
+        4 => ("three queue shards", GpuRenderOptions { queue_shards: Some(3), ..opts }),
+        _ => ("32-bit path words", GpuRenderOptions { wide_words: Some(false), ..opts }),
+    }
+}
+
 fn env_number(name: &str, default: u64) -> u64 {
     std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
@@ -299,27 +323,45 @@ fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
             .unwrap_or_else(|e| panic!("{name} does not load: {e}\n{text}"));
         let spec = FeatureSet::of(&scene);
         let gpu_own = renderer.render(&gpu, &scene, &opts).unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
-        let full = GpuRenderOptions { features: Some(spec.full_for()), ..opts.clone() };
-        let gpu_full = renderer.render(&gpu, &scene, &full).unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+        let mut why = Vec::new();
+        // The full kernels, then one of the settings documented not to change the image.
+        let (label, other) = invariant(case);
+        for (label, other) in
+            [("the full kernels", GpuRenderOptions { features: Some(spec.full_for()), ..opts.clone() }), (label, other)]
+        {
+            let out = renderer.render(&gpu, &scene, &other).unwrap_or_else(|e| panic!("{name}, {label}: {e}\n{text}"));
+            // Bit for bit, but where the full kernels walk the BVH and the scene's own test
+            // its objects as a list (a full kernel holds the meshes' code, and lists hold no
+            // meshes): two traversals compile to different code, and llvmpipe fuses some
+            // multiply-adds differently in them, which moved a channel by an ulp (scene 14
+            // of seed 1 before the strategies last changed); agreement to 1e-5 there.
+            let same_code = out.features.lists_objects() == gpu_own.features.lists_objects();
+            let agree = |a: f32, b: f32| {
+                if same_code {
+                    a.to_bits() == b.to_bits()
+                } else {
+                    (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1e-3)
+                }
+            };
+            let differing = gpu_own
+                .image
+                .pixels()
+                .iter()
+                .zip(out.image.pixels())
+                .filter(|(p, q)| !(agree(p.r, q.r) && agree(p.g, q.g) && agree(p.b, q.b)))
+                .count();
+            if differing > 0 {
+                why.push(format!("{differing} pixels differ with {label}"));
+            }
+        }
         let cpu = cpu_render(&scene, &RenderOptions { spp: Some(SPP), ..RenderOptions::default() }, Progress::Hidden);
         let a = agreement(&gpu_own.image, &cpu.image);
-        let differing = gpu_own
-            .image
-            .pixels()
-            .iter()
-            .zip(gpu_full.image.pixels())
-            .filter(|(p, q)| [p.r, p.g, p.b].map(f32::to_bits) != [q.r, q.g, q.b].map(f32::to_bits))
-            .count();
         reached.extend(gpu_own.features.names());
         let lit = cpu.image.pixels().iter().filter(|p| p.r + p.g + p.b > 0.0).count();
         if 2 * lit >= cpu.image.pixels().len() {
             mostly_lit += 1;
         }
-        println!("{name}: {a}; {differing} pixels differ from the full kernels'; {lit} pixels not black");
-        let mut why = Vec::new();
-        if differing > 0 {
-            why.push(format!("{differing} pixels differ between the specialised and the full kernels"));
-        }
+        println!("{name}: {a}; {lit} pixels not black; {label}");
         if gpu_own.non_finite_samples > 0 {
             why.push(format!("{} non-finite GPU samples", gpu_own.non_finite_samples));
         }
