@@ -15,12 +15,12 @@ fn scene_order(object: u32) -> u32 {
     return object;
 }
 
-// Whether `cand` replaces `best` as the closest candidate (t = OPEN: no crossing).
+// Whether `cand`, a crossing within the query's range, replaces `best` as the closest
+// candidate. The range ends at end_past(best's t) once there is a best, so cand's t is at
+// most best's, and a t that is not less is equal: one order comparison decides (on llvmpipe
+// every listed object's test holds a copy of this, so it is kept to two comparisons).
 fn replaces(cand: Candidate, best: Candidate) -> bool {
-    if (cand.c.t != best.c.t) {
-        return cand.c.t < best.c.t;
-    }
-    return cand.c.t < OPEN && scene_order(cand.object) < scene_order(best.object);
+    return cand.c.t < best.c.t || scene_order(cand.object) < scene_order(best.object);
 }
 
 // Where a query's range ends once its closest crossing so far is at `t` (> 0): the next
