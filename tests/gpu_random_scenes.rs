@@ -332,9 +332,9 @@ fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
             let out = renderer.render(&gpu, &scene, &other).unwrap_or_else(|e| panic!("{name}, {label}: {e}\n{text}"));
             // Bit for bit, but where the full kernels walk the BVH and the scene's own test
             // its objects as a list (a full kernel holds the meshes' code, and lists hold no
-            // meshes): two traversals compile to different code, and llvmpipe fuses some
-            // multiply-adds differently in them, which moved a channel by an ulp (scene 14
-            // of seed 1 before the strategies last changed); agreement to 1e-5 there.
+            // meshes): the two traversals compile to different code, and there scene 14 of
+            // seed 1 moved a channel of two pixels by an ulp (rounding: multiply-adds that
+            // LLVM fuses in one kernel and not the other); agreement to 1e-5 there.
             let same_code = out.features.lists_objects() == gpu_own.features.lists_objects();
             let agree = |a: f32, b: f32| {
                 if same_code {

@@ -14,7 +14,7 @@ use crate::scene::{Scene, Shape};
 /// shapes coincide (the coplanar tops of two boxes of equal height): a BVH walk meets them
 /// in an order that depends on the ray, the GPU's object list in scene order; with "first
 /// met wins" the two disagreed there (`tests/gpu_random_scenes.rs` found it). The GPU's
-/// `replaces` (shaders/world.wgsl) is the same rule.
+/// `replaces` (shaders/nearest.wgsl) is the same rule.
 fn replaces(t: f64, id: u32, best_t: f64, best: u32) -> bool {
     t < best_t || (t == best_t && id < best)
 }
