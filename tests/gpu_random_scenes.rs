@@ -310,8 +310,8 @@ fn script() -> impl Strategy<Value = String> {
 /// the image the same (each table in storage buffers, uniform buffers or textures; one
 /// queue shard or three; 32-bit words), which the scene must then render bit for bit as its
 /// own kernels do.
-fn invariant(case: u64) -> (&'static str, GpuRenderOptions) {
-    let opts = GpuRenderOptions::fixed_passes(Some(SPP), SPP);
+fn invariant(case: u64, opts: &GpuRenderOptions) -> (&'static str, GpuRenderOptions) {
+    let opts = opts.clone();
     match case % 6 {
         0 => ("tables in storage buffers", GpuRenderOptions { tables: TablePlacement::Storage, ..opts }),
         1 => ("tables in uniform buffers", GpuRenderOptions { tables: TablePlacement::Uniform, ..opts }),
@@ -350,7 +350,7 @@ fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
         let gpu_own = renderer.render(&gpu, &scene, &opts).unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
         let mut why = Vec::new();
         // The full kernels, then one of the settings documented not to change the image.
-        let (label, other) = invariant(case);
+        let (label, other) = invariant(case, &opts);
         for (label, other) in
             [("the full kernels", GpuRenderOptions { features: Some(spec.full_for()), ..opts.clone() }), (label, other)]
         {

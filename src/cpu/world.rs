@@ -9,14 +9,15 @@ use crate::prepare::{all_round, MeshBvhs, RoundSphere, SceneBvh, CSG_DEFER_MAX};
 use crate::scene::{Scene, Shape};
 
 /// Whether a crossing at `t` of top-level shape `id` replaces the closest one so far (at
-/// `best_t`, of shape `best`): nearer, or as near and earlier in the scene. The second rule
+/// `best_t`, of shape `best`): nearer, or as near and earlier in the scene. The query's
+/// range ends at `end_past(best_t)`, so t ≤ best_t, and a t that is not less is equal: the
+/// GPU's `replaces` (shaders/nearest.wgsl) reads the same. The second rule
 /// makes the hit independent of the order objects are tested in where surfaces of two
 /// shapes coincide (the coplanar tops of two boxes of equal height): a BVH walk meets them
 /// in an order that depends on the ray, the GPU's object list in scene order; with "first
-/// met wins" the two disagreed there (`tests/gpu_random_scenes.rs` found it). The GPU's
-/// `replaces` (shaders/nearest.wgsl) is the same rule.
+/// met wins" the two disagreed there (`tests/gpu_random_scenes.rs` found it).
 fn replaces(t: f64, id: u32, best_t: f64, best: u32) -> bool {
-    t < best_t || (t == best_t && id < best)
+    t < best_t || id < best
 }
 
 /// The next f64 above `t` (finite): where a query's range ends once its closest hit is at t,
