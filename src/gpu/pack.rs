@@ -27,7 +27,9 @@ use crate::optics::ggx::alpha_of;
 use crate::prepare::image_distribution;
 use crate::prepare::pixel_samples::PixelSamples;
 use crate::prepare::AreaLight;
-use crate::scene::{Brdf, CsgOp, Environment, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform};
+use crate::scene::{
+    Brdf, CsgOp, Environment, MeshInstance, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform,
+};
 
 /// A scene ready for upload: every buffer of `shaders/bindings.wgsl`.
 #[derive(Debug, Clone)]
@@ -98,6 +100,10 @@ pub enum PackError {
         part_text(*.part)
     )]
     OutOfRange { shape: usize, part: Option<usize>, what: &'static str, magnitude: f64 },
+    /// A mesh file's vertex or texture coordinate beyond f32's range (the GPU stores the
+    /// triangles in object space as f32; the file is finite in f64, so it loads).
+    #[error("mesh {file}: a {what} reaches {magnitude:e}, beyond f32's range (±3.4e38) that the GPU stores meshes in")]
+    MeshOutOfRange { file: String, what: &'static str, magnitude: f64 },
 }
 
 fn part_text(part: Option<usize>) -> String {
@@ -231,6 +237,7 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         object_ref[i] = match s {
             Shape::Mesh(m) => {
                 check_range(i, "mesh instance", &m.transform)?;
+                check_mesh_range(m)?;
                 let mut shape = packed_shape(ShapeKind::Cube, &m.transform, m.material.0, area_of_shape[i]);
                 shape.kind = layout::shape_kind::MESH;
                 let flags = if m.shades_smooth() { layout::mesh_bits::SMOOTH } else { 0 }
@@ -530,16 +537,36 @@ fn shifted_shape(s: &Shape, shift: &Transform) -> Shape {
     }
 }
 
-/// Refuses a shape (top-level index `shape`) whose camera-frame object-to-world transform
-/// has an entry beyond f32's range. A shape too *small* for f32 (its inverse overflows) is
-/// kept: its rays become non-finite in object space and miss, as they would at the
-/// resolution f32 has for any coordinate it could be seen from.
-/// Refuses top-level shape `shape` when `to_world` (of it, or of a part called `what`) is
-/// beyond f32.
+/// Refuses top-level shape `shape` when `to_world` (of it, or of a part called `what`), in
+/// the camera frame, has an entry beyond f32's range. A shape too *small* for f32 (its
+/// inverse overflows) is kept: its rays become non-finite in object space and miss, as they
+/// would at the resolution f32 has for any coordinate it could be seen from.
 fn check_range(shape: usize, what: &'static str, to_world: &Transform) -> Result<(), PackError> {
     let magnitude = to_world.matrix().to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if magnitude > f64::from(f32::MAX) {
         return Err(PackError::OutOfRange { shape, part: None, what, magnitude });
+    }
+    Ok(())
+}
+
+/// Refuses a mesh instance whose vertex or texture coordinates (in object space, as the GPU
+/// stores them, or its vertices placed in the camera frame) are beyond f32's range: cast,
+/// they would be ±∞, and the triangles vanish or the textures go NaN without a word.
+/// (Normals are unit vectors by then.)
+fn check_mesh_range(m: &MeshInstance) -> Result<(), PackError> {
+    let extent = |b: crate::scene::Aabb| b.min.abs().max(b.max.abs()).max_element();
+    let position = extent(m.mesh.bounds());
+    let placed = extent(m.mesh.bounds().transformed(&m.transform));
+    let uv = m.mesh.uvs().map_or(0.0, |uvs| uvs.iter().fold(0.0, |a, uv| uv.abs().max_element().max(a)));
+    let coordinates = [
+        ("vertex coordinate", position),
+        ("texture coordinate", uv),
+        ("vertex coordinate in the camera frame", placed),
+    ];
+    for (what, magnitude) in coordinates {
+        if magnitude > f64::from(f32::MAX) {
+            return Err(PackError::MeshOutOfRange { file: m.name.to_string(), what, magnitude });
+        }
     }
     Ok(())
 }
@@ -956,6 +983,43 @@ mod tests {
         let err = pack(&b.build().unwrap(), None).unwrap_err();
         assert!(matches!(err, PackError::OutOfRange { shape: 1, part: Some(1), what: "cube", .. }), "{err}");
         assert!(err.to_string().starts_with("shape 2 in spawn order, part 2 of its top-level UNITE (cube)"), "{err}");
+    }
+
+    #[test]
+    fn a_mesh_beyond_f32_range_is_a_clear_error() {
+        use crate::scene::mesh::{MeshParts, TriangleMesh};
+        use glam::DVec2;
+        // One triangle whose second vertex or texture coordinate, or that vertex placed by
+        // the instance, is finite in f64 (so the file loads) but ±∞ as f32 (found while
+        // writing tests/fuzz_cli.rs's mesh files: the GPU drew the scene without it).
+        let scene = |vertex: f64, uv: f64, scale: f64| {
+            let parts = MeshParts {
+                positions: vec![DVec3::ZERO, DVec3::new(vertex, 0.0, 1.0), DVec3::Y],
+                uvs: Some(vec![DVec2::ZERO, DVec2::new(uv, 0.0), DVec2::Y]),
+                triangles: vec![[0, 1, 2]],
+                ..MeshParts::default()
+            };
+            let mesh = std::sync::Arc::new(TriangleMesh::from_parts("far.obj", parts).unwrap());
+            let mut b = SceneBuilder::new(4, 4);
+            let m = b.diffuse(Color::gray(0.5));
+            let placed = Transform::scaling(DVec3::splat(scale));
+            b.sphere(Transform::IDENTITY, m).shape(Shape::mesh(mesh, "far.obj", placed, m, false));
+            b.build().unwrap()
+        };
+        assert!(pack(&scene(3e38, -3e38, 1.0), None).is_ok(), "3e38 fits f32");
+        let cases = [
+            (1e39, 0.5, 1.0, "vertex coordinate"),
+            (1.0, -1e39, 1.0, "texture coordinate"),
+            (1e29, 0.5, 1e10, "vertex coordinate in the camera frame"),
+        ];
+        for (vertex, uv, scale, what) in cases {
+            let err = pack(&scene(vertex, uv, scale), None).unwrap_err();
+            assert!(matches!(&err, PackError::MeshOutOfRange { file, what: w, .. } if file == "far.obj" && *w == what));
+            assert!(
+                err.to_string().starts_with(&format!("mesh far.obj: a {what} reaches 1e39, beyond f32's")),
+                "{err}"
+            );
+        }
     }
 
     #[test]
