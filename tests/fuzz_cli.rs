@@ -1,8 +1,9 @@
 //! Hostile-input harness (issue 16): seeded proptest strategies over SceneLang (token soup,
 //! generated scripts, mutated scripts), image files (PFM, PNG, Radiance HDR and OpenEXR
-//! headers and bodies, read by `lumen tonemap` and as image pigments) and command lines,
-//! each run through the real `lumen` binary in its own directory, under a 4 GiB address
-//! space limit and a per-run timeout. Every run must end in success or a clean error:
+//! headers and bodies, read by `lumen tonemap` and as image pigments), mesh files (OBJ and
+//! PLY, ASCII and binary, rendered and checked) and command lines, each run through the
+//! real `lumen` binary in its own directory, under a 4 GiB address space limit and a
+//! per-run timeout. Every run must end in success or a clean error:
 //!
 //! - no panic text (`panicked at`, the `RUST_BACKTRACE` note) on stdout or stderr;
 //! - no death by a signal (an abort on a failed allocation included) and no timeout;
@@ -12,9 +13,9 @@
 //!
 //! The case counts are fixed and the seed too, so a run is reproducible and fits about two
 //! minutes of CI; `LUMEN_FUZZ_SCALE=k` multiplies the counts, `LUMEN_FUZZ_SEED=n` changes
-//! the seed. The classes include issue 16's reproducers ([`issue_16_classes`]). A failing
-//! case is shrunk (proptest's value
-//! trees, bounded) and printed with its files.
+//! the seed, `LUMEN_FUZZ_CLASS=text` runs only the classes whose name holds `text`. The
+//! classes include issue 16's reproducers ([`issue_16_classes`]). A failing case is shrunk
+//! (proptest's value trees, bounded) and printed with its files.
 //! The test prints the "Hostile input" table of docs/STABILITY.md:
 //!
 //! ```text
@@ -732,6 +733,259 @@ USING Camera.Perspective() Image(3, 2) Renderer.PathTracer(.n 1, .max_depth 2) T
         })
 }
 
+// ----------------------------------------------------------------------------- meshes
+
+/// A mesh coordinate: ordinary mostly, one in 300 extreme, subnormal or not finite (a file
+/// holds dozens: most files load, and some carry one).
+fn coordinate() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        299 => -2.0f64..2.0,
+        1 => prop::sample::select(vec![
+            0.0, -0.0, 5e-324, 1e-40, 1e30, -1e30, 3.5e38, 1e300, f64::MAX, f64::NAN, f64::INFINITY, f64::NEG_INFINITY,
+        ]),
+    ]
+}
+
+/// A face corner's vertex index as written (1-based, as OBJ; PLY subtracts 1): in range
+/// mostly, one in 100 0, negative (OBJ's relative indices), past the end or beyond 32 bits.
+fn corner() -> impl Strategy<Value = i64> {
+    prop_oneof![
+        99 => 1i64..=7,
+        1 => prop::sample::select(vec![0, -1, -4, -9, 9, 1 << 31, (1 << 32) + 1, -(1 << 40), i64::MAX, i64::MIN]),
+    ]
+}
+
+/// The parts of a small mesh: 7-9 vertices (each with a normal and a uv), 1-5 faces of
+/// 3-5 corners, now and then of 0-6 (too few: dropped; more: fanned).
+fn mesh_parts() -> impl Strategy<Value = (Vec<[f64; 8]>, Vec<Vec<i64>>)> {
+    let vertex = prop::array::uniform8(coordinate());
+    let face = prop_oneof![12 => prop::collection::vec(corner(), 3..6), 1 => prop::collection::vec(corner(), 0..7)];
+    (prop::collection::vec(vertex, 7..10), prop::collection::vec(face, 1..6))
+}
+
+/// Damage to a mesh file one time in four (most files then load, and reach the renderer).
+fn mesh_damage() -> impl Strategy<Value = Vec<Damage>> {
+    prop_oneof![3 => Just(Vec::new()), 1 => damage()]
+}
+
+/// An OBJ file: `v` (sometimes with w or a colour), `vt`, `vn` and `f` in its four index
+/// forms, among the statements lumen ignores or blanks and some it does not know.
+fn obj_file() -> impl Strategy<Value = Vec<u8>> {
+    let benign = vec![
+        "o part",
+        "g a b",
+        "usemtl red",
+        "mtllib missing.mtl",
+        "s off",
+        "# comment",
+        "l 1 2 3",
+        "p 1",
+        "vp 0.5",
+        "curv 0 1 1 2",
+        "bogus 1 2",
+        "",
+        "\t",
+    ];
+    let bad = vec!["v", "f", "vt", "vn 1", "v 1 2 3 0", "f 1/2/3/4 1 2"];
+    let extra = prop_oneof![8 => prop::sample::select(benign), 1 => prop::sample::select(bad)];
+    (mesh_parts(), prop::collection::vec(extra, 0..4), 0usize..4, 0usize..3, any::<bool>()).prop_map(
+        |((vertices, faces), extras, form, vertex_extra, crlf)| {
+            let mut lines = Vec::new();
+            for v in &vertices {
+                let tail = match vertex_extra {
+                    0 => String::new(),
+                    1 => format!(" {}", v[6]),
+                    _ => format!(" {} {} {}", v[3], v[4], v[5]),
+                };
+                lines.push(format!("v {} {} {}{tail}", v[0], v[1], v[2]));
+                lines.push(format!("vt {} {}", v[6], v[7]));
+                lines.push(format!("vn {} {} {}", v[3], v[4], v[5]));
+            }
+            for f in &faces {
+                let corners: Vec<String> = f
+                    .iter()
+                    .map(|&i| match form {
+                        0 => format!("{i}"),
+                        1 => format!("{i}/{i}"),
+                        2 => format!("{i}//{i}"),
+                        _ => format!("{i}/{i}/{i}"),
+                    })
+                    .collect();
+                lines.push(format!("f {}", corners.join(" ")));
+            }
+            for (k, e) in extras.iter().enumerate() {
+                let at = (k * 7) % (lines.len() + 1);
+                lines.insert(at, e.to_string());
+            }
+            lines.join(if crlf { "\r\n" } else { "\n" }).into_bytes()
+        },
+    )
+}
+
+/// One PLY scalar in `ty`, in the header's encoding (numbers cast as `as` casts them).
+fn ply_scalar(b: &mut Vec<u8>, ty: &str, v: f64, encoding: &str) {
+    macro_rules! put {
+        ($t:ty) => {{
+            let x = v as $t;
+            match encoding {
+                "ascii" => b.extend(format!("{x} ").into_bytes()),
+                "binary_big_endian" => b.extend(x.to_be_bytes()),
+                _ => b.extend(x.to_le_bytes()),
+            }
+        }};
+    }
+    match ty {
+        "char" | "int8" => put!(i8),
+        "uchar" | "uint8" => put!(u8),
+        "short" | "int16" => put!(i16),
+        "ushort" | "uint16" => put!(u16),
+        "int" | "int32" => put!(i32),
+        "uint" | "uint32" => put!(u32),
+        "float" | "float32" => put!(f32),
+        _ => put!(f64),
+    }
+}
+
+/// A PLY file, ASCII or binary of either byte order: scalar types of every width for the
+/// coordinates, normals and uvs present or not (under the uv names lumen knows), face lists
+/// of any count and index type, an element lumen skips, and now and then declared counts
+/// that do not match the body (0, 1, 3, 2³¹, 2³²−1), or a format or type PLY lacks.
+fn ply_file() -> impl Strategy<Value = Vec<u8>> {
+    let either = |usual: Vec<&'static str>, rare: Vec<&'static str>| prop_oneof![12 => prop::sample::select(usual), 1 => prop::sample::select(rare)];
+    let encoding = either(vec!["ascii", "binary_little_endian", "binary_big_endian"], vec!["binary", "ascii 2.0"]);
+    let coord_ty = either(vec!["float", "double", "float32", "int", "uchar", "short", "char"], vec!["bogus", "list"]);
+    let count_ty = either(vec!["uchar", "ushort", "uint", "char", "int"], vec!["float", "double"]);
+    let index_ty = either(vec!["int", "uint", "short", "ushort", "uchar", "int32", "uint32"], vec!["double", "x"]);
+    let declared = prop_oneof![
+        20 => Just(None),
+        1 => prop::sample::select(vec![0u64, 1, 3, 4294967295, 2147483648]).prop_map(Some),
+    ];
+    let uv_names =
+        prop::sample::select(vec![None, Some(("u", "v")), Some(("s", "t")), Some(("texture_u", "texture_v"))]);
+    (
+        mesh_parts(),
+        (encoding, coord_ty, count_ty, index_ty),
+        (declared.clone(), declared),
+        (any::<bool>(), uv_names, any::<bool>(), any::<bool>()),
+    )
+        .prop_map(
+            |(
+                (vertices, faces),
+                (encoding, coord_ty, count_ty, index_ty),
+                (nv, nf),
+                (normals, uv, skipped, faces_first),
+            )| {
+                let format = if encoding.contains(' ') { encoding.to_string() } else { format!("{encoding} 1.0") };
+                let h = format!("ply\nformat {format}\ncomment fuzz\n");
+                let mut vertex_props = vec!["x", "y", "z"];
+                if normals {
+                    vertex_props.extend(["nx", "ny", "nz"]);
+                }
+                if let Some((u, v)) = uv {
+                    vertex_props.extend([u, v]);
+                }
+                let vertex_header = {
+                    let mut s = format!("element vertex {}\n", nv.unwrap_or(vertices.len() as u64));
+                    for p in &vertex_props {
+                        s += &format!("property {coord_ty} {p}\n");
+                    }
+                    s
+                };
+                let face_header = format!(
+                    "element face {}\nproperty list {count_ty} {index_ty} vertex_indices\n",
+                    nf.unwrap_or(faces.len() as u64)
+                );
+                let skipped_header = "element edge 2\nproperty int vertex1\nproperty int vertex2\n";
+                let enc = encoding.split(' ').next().unwrap();
+                let mut vertex_body = Vec::new();
+                for v in &vertices {
+                    let values = [v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]];
+                    let picked = if normals {
+                        &values[..]
+                    } else {
+                        &[values[0], values[1], values[2], values[6], values[7]][..]
+                    };
+                    for &x in &picked[..vertex_props.len()] {
+                        ply_scalar(&mut vertex_body, coord_ty, x, enc);
+                    }
+                    if enc == "ascii" {
+                        vertex_body.push(b'\n');
+                    }
+                }
+                let mut face_body = Vec::new();
+                for f in &faces {
+                    ply_scalar(&mut face_body, count_ty, f.len() as f64, enc);
+                    for &i in f {
+                        ply_scalar(&mut face_body, index_ty, (i - 1) as f64, enc);
+                    }
+                    if enc == "ascii" {
+                        face_body.push(b'\n');
+                    }
+                }
+                let mut skipped_body = Vec::new();
+                for k in 0..2 {
+                    ply_scalar(&mut skipped_body, "int", k as f64, enc);
+                    ply_scalar(&mut skipped_body, "int", (k + 1) as f64, enc);
+                    if enc == "ascii" {
+                        skipped_body.push(b'\n');
+                    }
+                }
+                let mut sections = vec![(vertex_header, vertex_body), (face_header, face_body)];
+                if faces_first {
+                    sections.reverse();
+                }
+                if skipped {
+                    sections.insert(1, (skipped_header.to_string(), skipped_body));
+                }
+                let mut b = h.into_bytes();
+                for (header, _) in &sections {
+                    b.extend(header.as_bytes());
+                }
+                b.extend(b"end_header\n");
+                for (_, body) in sections {
+                    b.extend(body);
+                }
+                b
+            },
+        )
+}
+
+/// A mesh file (OBJ or PLY, named by its extension, now and then the other's or in upper
+/// case), damaged or not, rendered on the CPU (once or as two instances, emissive or not,
+/// smooth or flat) or checked.
+fn mesh_case() -> impl Strategy<Value = Case> {
+    let file = prop_oneof![obj_file().prop_map(|b| (b, "obj")), ply_file().prop_map(|b| (b, "ply"))];
+    let name = prop_oneof![12 => Just("own"), 1 => Just("OWN"), 1 => Just("other")];
+    (file, name, mesh_damage(), any::<bool>(), any::<bool>(), 0u32..2, any::<bool>()).prop_map(
+        |((bytes, ext), name, dmg, emissive, twice, smooth, check)| {
+            let file = match name {
+                "own" => format!("m.{ext}"),
+                "OWN" => format!("m.{}", ext.to_uppercase()),
+                _ => format!("m.{}", if ext == "obj" { "ply" } else { "obj" }),
+            };
+            let emission = if emissive { ", .emitted_radiance <2, 2, 2>" } else { "" };
+            let mesh = |x: i32| {
+                format!(
+                    "Shape.Mesh(.file \"{file}\", .material m, .smooth {smooth}, .transformation TRANSLATE({x}, 0, 0))"
+                )
+            };
+            let mut script =
+                format!("SET m Material(.brdf Brdf.Diffuse(<0.5, 0.5, 0.5>){emission})\nSPAWN {}\n", mesh(3));
+            if twice {
+                script += &format!("SPAWN {}\n", mesh(5));
+            }
+            script += "USING Camera.Perspective() Image(3, 2) Renderer.PathTracer(.n 1, .max_depth 2) Tracer()\n      \
+                       Environment.Uniform(.color <1, 1, 1>)\n";
+            let mut case = render_case(script.into_bytes(), vec!["-o".into(), "out.pfm".into()]);
+            if check {
+                case.args = vec!["check".into(), "s.sl".into()];
+            }
+            case.files.push((file, damaged(bytes, &dmg)));
+            case
+        },
+    )
+}
+
 // ---------------------------------------------------------------------- command lines
 
 /// Command lines: a subcommand, then flags of every subcommand with hostile values and
@@ -963,10 +1217,15 @@ fn hostile_inputs_end_in_success_or_a_clean_error() {
             (script(), edits(), outputs()).prop_map(|(s, e, o)| render_case(apply(&s, &e), o)).boxed(),
         ),
         ("image files (PFM, PNG, HDR, EXR)", 3000, image_case().boxed()),
+        ("mesh files (OBJ, PLY)", 2000, mesh_case().boxed()),
         ("command lines", 3000, command_line().boxed()),
     ];
     let mut classes = classes;
     classes.extend(issue_16_classes());
+    // `LUMEN_FUZZ_CLASS=text` runs only the classes whose name holds it (a hunt in one).
+    if let Ok(only) = std::env::var("LUMEN_FUZZ_CLASS") {
+        classes.retain(|(class, ..)| class.contains(only.as_str()));
+    }
     let mut rows = Vec::new();
     let mut failures = Vec::new();
     for (class, cases, strategy) in classes {
