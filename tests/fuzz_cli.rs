@@ -566,6 +566,15 @@ fn render_case(script: Vec<u8>, extra: Vec<String>) -> Case {
     Case { files: vec![("s.sl".into(), script), ("img.pfm".into(), texture())], args, stdout_closed: false }
 }
 
+/// `case` rendered on the GPU instead (where there is none, `--device gpu` is a clean
+/// error, and the class proves nothing: CI has lavapipe).
+fn on_the_gpu(mut case: Case) -> Case {
+    if let Some(i) = case.args.iter().position(|a| a == "--device") {
+        case.args[i + 1] = "gpu".into();
+    }
+    case
+}
+
 fn outputs() -> impl Strategy<Value = Vec<String>> {
     prop::collection::vec(prop::sample::select(vec!["out.pfm", "out.exr", "out.hdr", "out.png", "out.jpg"]), 1..3)
         .prop_map(|o| o.into_iter().flat_map(|o| ["-o".to_string(), o.to_string()]).collect())
@@ -1218,6 +1227,12 @@ fn hostile_inputs_end_in_success_or_a_clean_error() {
         ),
         ("image files (PFM, PNG, HDR, EXR)", 3000, image_case().boxed()),
         ("mesh files (OBJ, PLY)", 2000, mesh_case().boxed()),
+        (
+            "SceneLang scripts (generated) on the GPU",
+            100,
+            (script(), outputs()).prop_map(|(s, o)| on_the_gpu(render_case(s.into_bytes(), o))).boxed(),
+        ),
+        ("mesh files (OBJ, PLY) on the GPU", 100, mesh_case().prop_map(on_the_gpu).boxed()),
         ("command lines", 3000, command_line().boxed()),
     ];
     let mut classes = classes;
