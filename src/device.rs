@@ -115,7 +115,7 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
 /// What lumen tells a user who renders on a software adapter (`None` on hardware): that the
 /// CPU renderer comes close on some scenes (on Mesa 25's Vulkan lavapipe at lumen's 128
 /// bits the GPU led every example scene, by the least on spheres_10k.sl, skybox.sl and
-/// glass.sl: medians 1.37–2.61× on a 2-core AMD Zen 3 VM, 1.27–2.82× on a 2-core Intel Xeon
+/// glass.sl: medians 1.37–2.61× on a 2-core AMD Zen 3 VM, 1.27–2.90× on a 2-core Intel Xeon
 /// VM; BENCHMARKS.md "Wide uniform tables", "An Intel host, and kernel creation's
 /// timeline", "Random scenes, the closest-hit rule and the goals"; at slow hours of the Zen 3 VM spheres_10k.sl had read 0.95–1.14× before the
 /// wide words; other software adapters are unmeasured), except on an llvmpipe of Mesa 26.1 or later with
