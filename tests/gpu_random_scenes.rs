@@ -23,7 +23,8 @@
 //! The seed and the case count are fixed, so CI renders the same scenes every run, and
 //! between them they enable every `#if` name a scene decides (`FeatureSet::ALL_NAMES`);
 //! `LUMEN_RANDOM_SCENES_SEED=n` and `LUMEN_RANDOM_SCENES=k` (cases) hunt further. A failure
-//! prints the script and its sample count: saved in `scenes/` (it reads meshes and `sky.hdr`
+//! prints the script and its sample count (and the scene's own triangle soup, if it has
+//! one, with the path the script names): saved in `scenes/` (it reads meshes and `sky.hdr`
 //! from there), `lumen render --spp N` with `--device gpu` and `--device cpu` reproduces it. Skips without a GPU
 //! adapter (fails instead with LUMEN_REQUIRE_GPU=1).
 
@@ -53,7 +54,7 @@ use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 /// before it counts.
 const MIN_SHARE: f64 = 0.9;
 /// The scenes CI renders: the strategies' first CASES scenes of SEED.
-const SEED: u64 = 4;
+const SEED: u64 = 2;
 const CASES: u64 = 24;
 
 /// A number with two decimals in [lo, hi].
@@ -218,10 +219,88 @@ fn csg() -> impl Strategy<Value = String> {
     })
 }
 
+/// A mesh: one of scenes/meshes, or half of the time the scene's own triangle soup
+/// ([`soup`]).
 fn mesh() -> impl Strategy<Value = String> {
-    (prop::sample::select(vec!["icosphere.ply", "torus_knot.obj", "panel.ply"]), material_name(), 0u32..2, placement())
-        .prop_map(|(f, m, smooth, t)| {
-            format!("Shape.Mesh(.file \"meshes/{f}\", .material {m}, .smooth {smooth}, .transformation {t})")
+    let file = prop_oneof![
+        prop::sample::select(vec!["meshes/icosphere.ply", "meshes/torus_knot.obj", "meshes/panel.ply"]),
+        Just(SOUP),
+    ];
+    (file, material_name(), 0u32..2, placement()).prop_map(|(f, m, smooth, t)| {
+        format!("Shape.Mesh(.file \"{f}\", .material {m}, .smooth {smooth}, .transformation {t})")
+    })
+}
+
+/// What a script writes for its triangle soup's file; the test writes the soup to a
+/// temporary directory and puts the path there.
+const SOUP: &str = "SOUP";
+
+/// A scene's own OBJ triangle soup, in the unit cube: loose triangles (each with its own
+/// uvs), a 4×4 height field (neighbours share their edges' end points exactly), exact duplicates of loose triangles with
+/// other uvs (coincident faces within one mesh: which one a ray reports must agree), and
+/// slivers (a vertex within 1e-3 of the opposite edge's midpoint); per-vertex normals of
+/// any direction (some against the facet, some near zero, which makes the mesh flat) or
+/// none.
+fn soup() -> impl Strategy<Value = String> {
+    let coord = || -0.5f64..0.5;
+    let loose = (prop::array::uniform9(coord()), prop::array::uniform6(0.0f64..1.0));
+    (
+        prop::collection::vec(loose, 2..12),
+        prop::collection::vec(-0.2f64..0.2, 16),
+        (0usize..4, prop::array::uniform6(0.0f64..1.0)),
+        prop::collection::vec((prop::array::uniform6(coord()), -1e-3f64..1e-3), 0..3),
+        prop::option::weighted(0.6, prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 16)),
+    )
+        .prop_map(|(loose, heights, (copies, other_uvs), slivers, normals)| {
+            // Triangles as corner lists of (position, uv).
+            let mut tris: Vec<[([f64; 3], [f64; 2]); 3]> = Vec::new();
+            for (p, uv) in &loose {
+                tris.push([0, 1, 2].map(|k| ([p[3 * k], p[3 * k + 1], p[3 * k + 2]], [uv[2 * k], uv[2 * k + 1]])));
+            }
+            for (p, _) in loose.iter().take(copies) {
+                tris.push(
+                    [0, 1, 2]
+                        .map(|k| ([p[3 * k], p[3 * k + 1], p[3 * k + 2]], [other_uvs[2 * k], other_uvs[2 * k + 1]])),
+                );
+            }
+            let grid = |i: usize, j: usize| {
+                ([i as f64 / 3.0 - 0.5, j as f64 / 3.0 - 0.5, heights[4 * i + j]], [i as f64 / 3.0, j as f64 / 3.0])
+            };
+            for i in 0..3 {
+                for j in 0..3 {
+                    tris.push([grid(i, j), grid(i + 1, j), grid(i + 1, j + 1)]);
+                    tris.push([grid(i, j), grid(i + 1, j + 1), grid(i, j + 1)]);
+                }
+            }
+            for (p, off) in &slivers {
+                let (a, b) = ([p[0], p[1], p[2]], [p[3], p[4], p[5]]);
+                let mid = [0, 1, 2].map(|k| 0.5 * (a[k] + b[k]) + off);
+                tris.push([(a, [0.0, 0.0]), (b, [1.0, 0.0]), (mid, [0.5, 1.0])]);
+            }
+            let mut text = String::new();
+            for t in &tris {
+                for (p, uv) in t {
+                    text += &format!("v {} {} {}\nvt {} {}\n", p[0], p[1], p[2], uv[0], uv[1]);
+                }
+            }
+            if let Some(ns) = &normals {
+                for k in 0..3 * tris.len() {
+                    let n = ns[k % ns.len()];
+                    text += &format!("vn {} {} {}\n", n[0], n[1], n[2]);
+                }
+            }
+            for t in 0..tris.len() {
+                let corner = |k: usize| {
+                    let i = 3 * t + k + 1;
+                    if normals.is_some() {
+                        format!("{i}/{i}/{i}")
+                    } else {
+                        format!("{i}/{i}")
+                    }
+                };
+                text += &format!("f {} {} {}\n", corner(0), corner(1), corner(2));
+            }
+            text
         })
 }
 
@@ -316,13 +395,18 @@ fn renderer() -> impl Strategy<Value = String> {
     ]
 }
 
+/// An environment. The image's rotation has two decimals: with whole degrees, parallel
+/// rays (the orthogonal camera) off a mirror face turned by whole degrees can all leave
+/// along one direction exactly on a texel column's boundary (seed 2's scene 7: faces turned
+/// by 77° and 271°, the sky by 336°, so 2·348° ≡ 336°, u = 0.5 exactly), where f32 and f64
+/// round to opposite columns: a whole region of one texel against its neighbour, not a bug.
 fn environment() -> impl Strategy<Value = String> {
     prop_oneof![
         1 => Just(String::new()),
         2 => colour(0.1, 1.0).prop_map(|c| format!("Environment.Uniform(.color {c})")),
         2 => (colour(0.1, 1.0), colour(0.1, 1.0), colour(0.0, 0.5))
             .prop_map(|(z, h, n)| format!("Environment.Gradient(.zenith {z}, .horizon {h}, .nadir {n})")),
-        3 => (num(0.3, 1.5), 0u32..360)
+        3 => (num(0.3, 1.5), num(0.0, 359.99))
             .prop_map(|(i, r)| format!("Environment.Image(.image sky, .intensity {i}, .rotation {r})")),
     ]
 }
@@ -424,12 +508,25 @@ fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
     let mut runner = TestRunner::new_with_rng(Config::default(), TestRng::from_seed(RngAlgorithm::ChaCha, &key));
     let scenes_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let strategy = script();
+    let soups = soup();
+    let soup_dir = tempfile::tempdir().expect("temporary directory");
+    let mut with_soup = 0;
     let mut renderer = GpuRenderer::new();
     let mut failures = Vec::new();
     let mut mostly_lit = 0;
     let mut reached = BTreeSet::new();
     for case in 0..cases {
-        let text = strategy.new_tree(&mut runner).expect("strategy").current();
+        let mut text = strategy.new_tree(&mut runner).expect("strategy").current();
+        // The scene's own triangle soup, where it uses one (printed with a failure).
+        let mut soup_text = String::new();
+        if text.contains(SOUP) {
+            with_soup += 1;
+            soup_text = soups.new_tree(&mut runner).expect("soup").current();
+            let path = soup_dir.path().join(format!("soup{case}.obj"));
+            std::fs::write(&path, &soup_text).expect("write the soup");
+            text = text.replace(&format!("\"{SOUP}\""), &format!("{:?}", path.display().to_string()));
+            soup_text = format!("\n{} holds:\n{soup_text}", path.display());
+        }
         // 1-4 samples per pixel, in one round or one round per sample (the host's f64 sums
         // of the rounds' f32 films).
         let spp = 1 + runner.rng().next_u32() % 4;
@@ -438,16 +535,18 @@ fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
         let cpu_opts = RenderOptions { spp: Some(spp), ..RenderOptions::default() };
         let name = format!("random scene {case} (seed {seed}, {spp} spp in rounds of {per_round})");
         let scene = load_str(&text, &name, &scenes_dir, &LoadOptions::default())
-            .unwrap_or_else(|e| panic!("{name} does not load: {e}\n{text}"));
+            .unwrap_or_else(|e| panic!("{name} does not load: {e}\n{text}{soup_text}"));
         let spec = FeatureSet::of(&scene);
-        let gpu_own = renderer.render(&gpu, &scene, &opts).unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+        let gpu_own = renderer.render(&gpu, &scene, &opts).unwrap_or_else(|e| panic!("{name}: {e}\n{text}{soup_text}"));
         let mut why = Vec::new();
         // The full kernels, then one of the settings documented not to change the image.
         let (label, other) = invariant(case, &opts);
         for (label, other) in
             [("the full kernels", GpuRenderOptions { features: Some(spec.full_for()), ..opts.clone() }), (label, other)]
         {
-            let out = renderer.render(&gpu, &scene, &other).unwrap_or_else(|e| panic!("{name}, {label}: {e}\n{text}"));
+            let out = renderer
+                .render(&gpu, &scene, &other)
+                .unwrap_or_else(|e| panic!("{name}, {label}: {e}\n{text}{soup_text}"));
             // Bit for bit, but where the full kernels walk the BVH and the scene's own test
             // its objects as a list (a full kernel holds the meshes' code, and lists hold no
             // meshes): the two traversals compile to different code, and there scene 14 of
@@ -490,7 +589,8 @@ fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
             // (scene 206 of seed 10: means 1.02 % apart at 16×12, 0.0003 % at 64×48).
             let mut large = scene.clone();
             (large.width, large.height) = (4 * scene.width, 4 * scene.height);
-            let g = renderer.render(&gpu, &large, &opts).unwrap_or_else(|e| panic!("{name} at 4×: {e}\n{text}"));
+            let g =
+                renderer.render(&gpu, &large, &opts).unwrap_or_else(|e| panic!("{name} at 4×: {e}\n{text}{soup_text}"));
             let c = cpu_render(&large, &cpu_opts, Progress::Hidden);
             if let Err(e) = agreement(&g.image, &c.image).check(Tolerance::share(MIN_SHARE)) {
                 let (w, h) = (scene.width, scene.height);
@@ -498,10 +598,13 @@ fn random_scenes_agree_with_the_cpu_and_the_full_kernels() {
             }
         }
         if !why.is_empty() {
-            failures.push(format!("{name}: {}\n{text}", why.join("; ")));
+            failures.push(format!("{name}: {}\n{text}{soup_text}", why.join("; ")));
         }
     }
-    println!("{} kernel sets compiled for {cases} scenes", renderer.kernels_compiled());
+    println!(
+        "{} kernel sets compiled for {cases} scenes, {with_soup} with their own triangle soup",
+        renderer.kernels_compiled()
+    );
     let missed: Vec<&str> = FeatureSet::ALL_NAMES.iter().copied().filter(|n| !reached.contains(n)).collect();
     println!("kernel features no scene reached: {missed:?}");
     // The default run reaches every feature a scene decides, so a change of the strategies
