@@ -236,11 +236,11 @@ fn mesh() -> impl Strategy<Value = String> {
 const SOUP: &str = "SOUP";
 
 /// A scene's own OBJ triangle soup, in the unit cube: loose triangles (each with its own
-/// uvs), a 4×4 height field (neighbours share their edges' end points exactly), exact duplicates of loose triangles with
-/// other uvs (coincident faces within one mesh: which one a ray reports must agree), and
-/// slivers (a vertex within 1e-3 of the opposite edge's midpoint); per-vertex normals of
-/// any direction (some against the facet, some near zero, which makes the mesh flat) or
-/// none.
+/// uvs), a 4×4 height field (neighbours share their edges' end points exactly), exact
+/// duplicates of loose triangles with other uvs (coincident faces within one mesh: which
+/// one a ray reports must agree), and slivers (a vertex within 1e-3 of the opposite edge's
+/// midpoint); per-vertex normals of any direction (many against their facet, whose
+/// samples through it are dropped) or none.
 fn soup() -> impl Strategy<Value = String> {
     let coord = || -0.5f64..0.5;
     let loose = (prop::array::uniform9(coord()), prop::array::uniform6(0.0f64..1.0));
