@@ -27,9 +27,7 @@ use crate::optics::ggx::alpha_of;
 use crate::prepare::image_distribution;
 use crate::prepare::pixel_samples::PixelSamples;
 use crate::prepare::AreaLight;
-use crate::scene::{
-    Brdf, CsgOp, Environment, MeshInstance, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform,
-};
+use crate::scene::{Brdf, CsgOp, Environment, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform};
 
 /// A scene ready for upload: every buffer of `shaders/bindings.wgsl`.
 #[derive(Debug, Clone)]
@@ -237,7 +235,11 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         object_ref[i] = match s {
             Shape::Mesh(m) => {
                 check_range(i, "mesh instance", &m.transform)?;
-                check_mesh_range(m)?;
+                check_mesh_range(
+                    &m.name,
+                    "vertex coordinate in the camera frame",
+                    extent(m.mesh.bounds().transformed(&m.transform)),
+                )?;
                 let mut shape = packed_shape(ShapeKind::Cube, &m.transform, m.material.0, area_of_shape[i]);
                 shape.kind = layout::shape_kind::MESH;
                 let flags = if m.shades_smooth() { layout::mesh_bits::SMOOTH } else { 0 }
@@ -378,8 +380,18 @@ const UNCOMPENSATED: [f64; CONDUCTOR_NODES] = [1.0; CONDUCTOR_NODES];
 /// address of its `Arc`).
 fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, PackedMesh>, PackError> {
     let bvhs = crate::prepare::MeshBvhs::of(shapes);
+    let mut names = HashMap::new();
+    for s in shapes {
+        if let Shape::Mesh(m) = s {
+            names.entry(Arc::as_ptr(&m.mesh) as usize).or_insert(&*m.name);
+        }
+    }
     let mut roots = HashMap::new();
     for mesh in &bvhs.meshes {
+        let file = names[&(Arc::as_ptr(mesh) as usize)];
+        check_mesh_range(file, "vertex coordinate", extent(mesh.bounds()))?;
+        let uv = mesh.uvs().map_or(0.0, |uvs| uvs.iter().fold(0.0, |a, uv| uv.abs().max_element().max(a)));
+        check_mesh_range(file, "texture coordinate", uv)?;
         let Some(bvh) = bvhs.get(mesh) else { continue };
         let node_base = count_u32("BVH nodes", p.bvh_nodes.len())?;
         let tri_base = count_u32("triangles", p.tri_positions.len() / layout::TRI_POSITION_VEC4S as usize)?;
@@ -549,26 +561,21 @@ fn check_range(shape: usize, what: &'static str, to_world: &Transform) -> Result
     Ok(())
 }
 
-/// Refuses a mesh instance whose vertex or texture coordinates (in object space, as the GPU
-/// stores them, or its vertices placed in the camera frame) are beyond f32's range: cast,
-/// they would be ±∞, and the triangles vanish or the textures go NaN without a word.
-/// (Normals are unit vectors by then.)
-fn check_mesh_range(m: &MeshInstance) -> Result<(), PackError> {
-    let extent = |b: crate::scene::Aabb| b.min.abs().max(b.max.abs()).max_element();
-    let position = extent(m.mesh.bounds());
-    let placed = extent(m.mesh.bounds().transformed(&m.transform));
-    let uv = m.mesh.uvs().map_or(0.0, |uvs| uvs.iter().fold(0.0, |a, uv| uv.abs().max_element().max(a)));
-    let coordinates = [
-        ("vertex coordinate", position),
-        ("texture coordinate", uv),
-        ("vertex coordinate in the camera frame", placed),
-    ];
-    for (what, magnitude) in coordinates {
-        if magnitude > f64::from(f32::MAX) {
-            return Err(PackError::MeshOutOfRange { file: m.name.to_string(), what, magnitude });
-        }
+/// Refuses mesh `file` when a coordinate of `what` reaches `magnitude` beyond f32's range:
+/// cast, it would be ±∞, and the triangles vanish or the textures go NaN without a word.
+/// Checked once per distinct mesh in object space, as the GPU stores it (vertices and
+/// texture coordinates; normals are unit vectors by then), and for each instance with its
+/// vertices placed in the camera frame.
+fn check_mesh_range(file: &str, what: &'static str, magnitude: f64) -> Result<(), PackError> {
+    if magnitude > f64::from(f32::MAX) {
+        return Err(PackError::MeshOutOfRange { file: file.to_string(), what, magnitude });
     }
     Ok(())
+}
+
+/// The largest |coordinate| of a box.
+fn extent(b: crate::scene::Aabb) -> f64 {
+    b.min.abs().max(b.max.abs()).max_element()
 }
 
 fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32) -> layout::Shape {
