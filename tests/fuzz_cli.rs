@@ -1,9 +1,9 @@
 //! Hostile-input harness (issue 16): seeded proptest strategies over SceneLang (token soup,
 //! generated scripts, mutated scripts), image files (PFM, PNG, Radiance HDR and OpenEXR
 //! headers and bodies, read by `lumen tonemap` and as image pigments), mesh files (OBJ and
-//! PLY, ASCII and binary, rendered and checked) and command lines, each run through the
-//! real `lumen` binary in its own directory, under a 4 GiB address space limit and a
-//! per-run timeout. Every run must end in success or a clean error:
+//! PLY, ASCII and binary, rendered and checked) and command lines (of CPU and of GPU
+//! renders), each run through the real `lumen` binary in its own directory, under a 4 GiB
+//! address space limit and a per-run timeout. Every run must end in success or a clean error:
 //!
 //! - no panic text (`panicked at`, the `RUST_BACKTRACE` note) on stdout or stderr;
 //! - no death by a signal (an abort on a failed allocation included) and no timeout;
@@ -1000,8 +1000,8 @@ fn mesh_case() -> impl Strategy<Value = Case> {
 /// Command lines: a subcommand, then flags of every subcommand with hostile values and
 /// paths (an existing script and image, missing files, a directory; `merge` gets them as
 /// parts, none of them a lumen render). `converge`, `bench`
-/// and `devices` are left out (they measure the machine's devices and take seconds), as
-/// are GPU devices. Sizes, sample and frame counts stay small: a huge size is issue 16's
+/// and `devices` are left out (they measure the machine's devices and take seconds); GPU
+/// renders are [`gpu_command_line`]'s. Sizes, sample and frame counts stay small: a huge size is issue 16's
 /// "huge Image sizes" item (fixed elsewhere), and billions of samples are a long render,
 /// not an error.
 fn command_line() -> impl Strategy<Value = Case> {
@@ -1061,6 +1061,57 @@ fn command_line() -> impl Strategy<Value = Case> {
         }
         let script = "SET r 0.5\nSPAWN Shape.Sphere(.transformation TRANSLATE(.X 3) * SCALE r)\n\
                       USING Camera.Perspective() Image(4, 3) Renderer.Flat() Tracer()\n";
+        Case {
+            files: vec![("s.sl".into(), script.as_bytes().to_vec()), ("img.pfm".into(), texture())],
+            args,
+            stdout_closed: false,
+        }
+    })
+}
+
+/// Command lines of GPU renders: `render --device gpu` with the flags that shape a GPU
+/// render (table placement, batch size, one device or two, the adapter's name, a time
+/// limit, profiling, shards and sample ranges) given hostile values, beside the sizes,
+/// sample counts and outputs of [`command_line`]. The scene uses an image pigment, glass
+/// and a mirror, so the tables and kernels these flags place are really there.
+fn gpu_command_line() -> impl Strategy<Value = Case> {
+    let small = prop::sample::select(vec!["0", "1", "2", "5", "40", "-1", "x", "1.5"]);
+    let flag = prop_oneof![
+        prop::sample::select(vec!["auto", "uniform", "texture", "storage", "Storage", "x", ""])
+            .prop_map(|v| vec!["--tables".into(), v.to_string()]),
+        prop::sample::select(vec!["0", "1", "63", "64", "65", "4194240", "4194241", "18446744073709551615", "-1", "x"])
+            .prop_map(|v| vec!["--batch-paths".into(), v.to_string()]),
+        Just(vec!["--one-device".into()]),
+        Just(vec!["--profile".into()]),
+        prop::sample::select(vec!["llvmpipe", "LLVMPIPE", "pipe", "nvidia", "", "é", "x"])
+            .prop_map(|v| vec!["--adapter".into(), v.to_string()]),
+        prop::sample::select(vec!["0", "1e-9", "0.001", "1", "-1", "nan", "inf", "1e308", "x"])
+            .prop_map(|v| vec!["--time-limit".into(), v.to_string()]),
+        prop::sample::select(vec!["0:1", "1:0", "0:0", "1:3", "0:4294967295", "3:4", "a:b"])
+            .prop_map(|v| vec!["--samples".into(), v.to_string()]),
+        prop::sample::select(vec!["0/1", "0/2", "1/2", "2/2", "0/0", "0/4294967295", "a/b"])
+            .prop_map(|v| vec!["--shard".into(), v.to_string()]),
+        small.clone().prop_map(|v| vec!["--width".into(), v.to_string()]),
+        small.clone().prop_map(|v| vec!["--height".into(), v.to_string()]),
+        prop::sample::select(vec!["0", "1", "3", "4", "9", "-1", "x"])
+            .prop_map(|v| vec!["--spp".into(), v.to_string()]),
+        prop::sample::select(vec!["0", "18446744073709551615", "x"]).prop_map(|v| vec!["--seed".into(), v.to_string()]),
+        Just(vec!["--no-nee".into()]),
+        prop::sample::select(vec!["out.png", "out.pfm", "out.exr", "out.hdr", "missing/out.exr", "."])
+            .prop_map(|o| vec!["-o".into(), o.to_string()]),
+    ];
+    prop::collection::vec(flag, 0..5).prop_map(|flags| {
+        let mut args: Vec<String> = ["render", "s.sl", "--device", "gpu"].map(String::from).into();
+        args.extend(flags.into_iter().flatten());
+        let script = "SET glass Material(.brdf Brdf.Dielectric(.ior 1.5))\n\
+                      SET mirror Material(.brdf Brdf.Specular(.pigment <0.9, 0.9, 0.9>))\n\
+                      SET pic Material(.brdf Brdf.Diffuse(.pigment Pigment.Image(.image Image(\"img.pfm\"))))\n\
+                      SPAWN Shape.Sphere(.material glass, .transformation TRANSLATE(.X 3))\n\
+                      SPAWN Shape.Cube(.material mirror, .transformation TRANSLATE(.X 4, .Y 1.5))\n\
+                      SPAWN Shape.Plane(.material pic, .transformation TRANSLATE(.Z -1))\n\
+                      SPAWN Light(.position {0, 0, 3}, .color <1, 1, 1>)\n\
+                      USING Camera.Perspective() Image(4, 3) \
+                      Renderer.PathTracer(.max_depth 4, .background_color <0.2, 0.3, 0.5>) Tracer()\n";
         Case {
             files: vec![("s.sl".into(), script.as_bytes().to_vec()), ("img.pfm".into(), texture())],
             args,
@@ -1234,6 +1285,7 @@ fn hostile_inputs_end_in_success_or_a_clean_error() {
         ),
         ("mesh files (OBJ, PLY) on the GPU", 100, mesh_case().prop_map(on_the_gpu).boxed()),
         ("command lines", 3000, command_line().boxed()),
+        ("command lines on the GPU", 100, gpu_command_line().boxed()),
     ];
     let mut classes = classes;
     classes.extend(issue_16_classes());
