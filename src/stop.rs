@@ -28,6 +28,8 @@ pub fn ctrlc_flag() -> Arc<AtomicBool> {
         let f = Arc::clone(&flag);
         let installed = ctrlc::set_handler(move || {
             if f.swap(true, Ordering::SeqCst) {
+                // Outputs being written are dropped, not left half-written or as temporaries.
+                let _held = crate::image::abandon_writes();
                 eprintln!("\ninterrupted twice: exiting");
                 std::process::exit(130);
             }

@@ -1,5 +1,6 @@
 //! The `lumen` binary under hostile conditions (issue 16): standard output full or closed,
-//! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer.
+//! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer, a second Ctrl-C
+//! while the outputs are written.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -229,4 +230,68 @@ fn an_output_in_a_missing_directory_fails_before_the_work() {
         assert!(!err.contains("samples per pixel") && !err.contains("warming up"), "{args:?} worked first: {err}");
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "only tiny.sl is left");
+}
+
+/// A second Ctrl-C exits at once, also while the outputs are being written: each output is
+/// then whole or absent, never half-written, and no temporary file is left (the writes in
+/// progress are abandoned first: `image::abandon_writes`). The second signal is sent the
+/// moment a temporary file appears, so it meets a write in progress.
+#[cfg(unix)]
+#[test]
+fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
+    use std::io::{BufRead, BufReader};
+    let scene = "SPAWN Shape.Sphere(.material Material(.brdf Brdf.Diffuse(Pigment.Checkered(64))))\n\
+                 USING Camera.Perspective() Image(32, 24) Renderer.Flat() Tracer()\n";
+    let outputs = ["a.exr", "b.png", "c.pfm", "d.hdr"];
+    let mut caught = 0;
+    for _ in 0..5 {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("s.sl"), scene).unwrap();
+        let names = || -> Vec<String> {
+            std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect()
+        };
+        let mut child = lumen(dir.path())
+            .args(["render", "s.sl", "--device", "cpu", "--width", "2400", "--height", "1800", "--spp", "1"])
+            .args(outputs.iter().flat_map(|o| ["-o", o]))
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The summary line comes after the render and before the first write.
+        let mut err = BufReader::new(child.stderr.take().unwrap());
+        let mut text = String::new();
+        while !text.contains("samples per pixel") {
+            assert!(err.read_line(&mut text).unwrap() > 0, "no summary line: {text}");
+        }
+        let pid = child.id() as libc::pid_t;
+        // SAFETY: kill(2) on our own child, which has not been waited for.
+        unsafe { libc::kill(pid, libc::SIGINT) };
+        let seen = loop {
+            if let Some(tmp) = names().into_iter().find(|n| n.ends_with(".lumen.tmp")) {
+                break Some(tmp);
+            }
+            if child.try_wait().unwrap().is_some() {
+                break None;
+            }
+        };
+        unsafe { libc::kill(pid, libc::SIGINT) };
+        let status = child.wait().unwrap();
+        std::io::Read::read_to_string(&mut err, &mut text).unwrap();
+        let left = names();
+        assert!(!left.iter().any(|n| n.ends_with(".tmp")), "{left:?} after {seen:?}\n{text}");
+        for name in outputs {
+            let path = dir.path().join(name);
+            if path.exists() {
+                let img = lumen::image::read_image(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+                assert_eq!((img.width(), img.height()), (2400, 1800), "{name}");
+            }
+        }
+        // Caught mid-write: the output whose temporary file was seen is absent.
+        let target = seen.as_deref().and_then(|t| t.strip_prefix('.')).and_then(|t| t.split_once(".lumen.tmp"));
+        if let Some(target) = target.and_then(|(t, _)| t.rsplit_once('.')).map(|(t, _)| t) {
+            if status.code() == Some(130) && !left.iter().any(|n| n == target) {
+                caught += 1;
+            }
+        }
+    }
+    assert!(caught > 0, "no second Ctrl-C met a write in progress in 5 tries");
 }

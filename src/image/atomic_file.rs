@@ -3,7 +3,55 @@
 
 use std::fs::File;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+/// The temporary files of the process's writes in progress, for [`abandon_writes`].
+static WRITES: Writes = Writes(Mutex::new(Vec::new()));
+
+/// A register of temporary files. A write holds its lock only while it creates and
+/// registers its file, and while it renames and unregisters it, so whoever holds the lock
+/// sees every temporary file there is, and no write starts or ends meanwhile.
+struct Writes(Mutex<Vec<PathBuf>>);
+
+impl Writes {
+    fn lock(&self) -> MutexGuard<'_, Vec<PathBuf>> {
+        // Each change under the lock is one push or one removal: a panic cannot leave the
+        // list half-changed.
+        self.0.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn write(&self, path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+        let dir = directory_of(path);
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let mut tmp = {
+            let mut pending = self.lock();
+            let tmp = tempfile::Builder::new()
+                .prefix(&format!(".{name}."))
+                .suffix(".lumen.tmp")
+                .make_in(dir, |p| File::options().write(true).create_new(true).open(p))?;
+            pending.push(tmp.path().to_path_buf());
+            tmp
+        };
+        let written = tmp.as_file_mut().write_all(bytes).and_then(|()| tmp.as_file().sync_all());
+        let mut pending = self.lock();
+        if let Some(i) = pending.iter().position(|p| p == tmp.path()) {
+            pending.swap_remove(i);
+        }
+        // On failure the temporary file is dropped, which removes it.
+        written?;
+        tmp.persist(path).map_err(|e| e.error)?;
+        Ok(())
+    }
+
+    fn abandon(&self) -> MutexGuard<'_, Vec<PathBuf>> {
+        let mut pending = self.lock();
+        for path in pending.drain(..) {
+            let _ = std::fs::remove_file(path);
+        }
+        pending
+    }
+}
 
 /// Writes `bytes` to a temporary file in `path`'s directory, flushes it to disk, then
 /// renames it over `path`. On any error the temporary file is removed and `path` is left
@@ -24,17 +72,26 @@ use std::path::Path;
 /// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 /// ```
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = directory_of(path);
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".lumen.tmp")
-        .make_in(dir, |p| File::options().write(true).create_new(true).open(p))?;
-    tmp.as_file_mut().write_all(bytes)?;
-    tmp.as_file().sync_all()?;
-    // On failure the returned file is dropped, which removes it.
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    WRITES.write(path, bytes)
+}
+
+/// Held by [`abandon_writes`]: while it lives, no [`write_atomically`] starts or finishes.
+#[must_use = "writes resume when the guard is dropped"]
+pub struct WritesAbandoned {
+    _held: MutexGuard<'static, Vec<PathBuf>>,
+}
+
+/// Removes the temporary files of the [`write_atomically`] calls in progress and keeps any
+/// write from starting or finishing while the returned guard lives: for an exit that skips
+/// destructors (a second Ctrl-C), which would otherwise leave a writer's temporary file
+/// behind. Every output is then either whole or absent.
+///
+/// ```no_run
+/// let _held = lumen::image::abandon_writes();
+/// std::process::exit(130);
+/// ```
+pub fn abandon_writes() -> WritesAbandoned {
+    WritesAbandoned { _held: WRITES.abandon() }
 }
 
 /// Checks what can be checked of a later [`write_atomically`] to `path` without writing:
@@ -95,6 +152,53 @@ mod tests {
         // A missing directory is reported as the OS reports it.
         let e = write_atomically(&dir.path().join("none/a.bin"), b"x").unwrap_err();
         assert_eq!(e.kind(), ErrorKind::NotFound);
+    }
+
+    /// A write in progress when the process exits at once (the guard of `abandon` held)
+    /// leaves nothing: its temporary file is removed and it cannot rename it after. A
+    /// register of the test's own, so that other tests' writes in this process go on.
+    #[test]
+    fn abandoned_writes_leave_no_temporary_file() {
+        let writes = Writes(Mutex::new(Vec::new()));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.bin");
+        let bytes = vec![7u8; 16 << 20];
+        let files = || -> Vec<String> {
+            std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect()
+        };
+        let mut caught = false;
+        for _ in 0..20 {
+            if caught {
+                break;
+            }
+            let _ = std::fs::remove_file(&path);
+            std::thread::scope(|s| {
+                let writer = s.spawn(|| writes.write(&path, &bytes));
+                // Abandon the write once its temporary file exists (or it has finished).
+                let held = loop {
+                    let started = !writes.lock().is_empty();
+                    if started || writer.is_finished() {
+                        break writes.abandon();
+                    }
+                    std::thread::yield_now();
+                };
+                // Here the process would exit; the writer cannot finish meanwhile.
+                std::thread::sleep(std::time::Duration::from_millis(20));
+                let now = files();
+                assert!(now.is_empty() || now == ["big.bin"], "{now:?}");
+                caught |= now.is_empty();
+                drop(held);
+                // Let go, the writer's rename of its removed file fails, and nothing is left.
+                let result = writer.join().unwrap();
+                assert_eq!(result.is_ok(), path.exists(), "{result:?}");
+                if let Ok(b) = std::fs::read(&path) {
+                    assert_eq!(b.len(), bytes.len());
+                }
+            });
+            assert!(writes.lock().is_empty());
+            assert!(files().iter().all(|n| n == "big.bin"), "{:?}", files());
+        }
+        assert!(caught, "no write was caught in progress in 20 tries");
     }
 
     /// What `check_destination` refuses is what `write_atomically` would fail on, and it
