@@ -494,6 +494,33 @@ mod cli {
         assert_eq!(files(&cache), usize::from(supported), "one cache file iff the device supports it");
         let second = render("b.pfm", Some(&cache));
         assert_eq!(first.pixels(), second.pixels());
+        // A damaged file only costs the compile time it would have saved: cut, extended,
+        // overwritten, a byte flipped (the envelope's checksum refuses it before the driver
+        // sees it), or whole but naming another device in wgpu's header (wgpu refuses that
+        // even with `fallback`; the cache then starts empty). Each run rewrites it whole.
+        if supported {
+            let file = std::fs::read_dir(&cache).unwrap().next().unwrap().unwrap().path();
+            let good = std::fs::read(&file).unwrap();
+            let data = lumen::gpu::pipeline_cache::unwrap(&good).expect("a whole cache file").to_vec();
+            let mut other_device = data.clone();
+            other_device[20] ^= 0x5a; // in wgpu's adapter key (its header's bytes 17-31)
+            let mut flipped = good.clone();
+            flipped[40] ^= 1;
+            let damaged = [
+                good[..good.len() / 2].to_vec(),
+                [good.clone(), vec![0; 9]].concat(),
+                vec![0xA5; good.len()],
+                flipped,
+                lumen::gpu::pipeline_cache::wrap(&other_device),
+                data,
+            ];
+            for (k, bytes) in damaged.iter().enumerate() {
+                std::fs::write(&file, bytes).unwrap();
+                let again = render(&format!("damaged{k}.pfm"), Some(&cache));
+                assert_eq!(first.pixels(), again.pixels(), "damaged file {k}");
+                assert!(lumen::gpu::pipeline_cache::unwrap(&std::fs::read(&file).unwrap()).is_some(), "{k}");
+            }
+        }
         render("c.pfm", Some(Path::new("0")));
         assert_eq!(files(&xdg.join("lumen")), 0, "disabled, yet written");
         // Unset, it defaults to $XDG_CACHE_HOME/lumen.
