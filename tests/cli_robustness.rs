@@ -295,3 +295,19 @@ fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
     }
     assert!(caught > 0, "no second Ctrl-C met a write in progress in 5 tries");
 }
+
+/// `WGPU_BACKEND` naming no backend this machine has leaves wgpu no adapter: the error
+/// says that variable is why, not that a driver is missing.
+#[test]
+fn a_wgpu_backend_with_no_adapter_is_named_in_the_error() {
+    let dir = scene_dir();
+    let o = lumen(dir.path())
+        .args(["render", "tiny.sl", "--device", "gpu", "-o", "t.pfm"])
+        .env("WGPU_BACKEND", "nonsense")
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("no GPU adapter found (WGPU_BACKEND=\"nonsense\" limits the backends tried"), "{err}");
+    assert!(!dir.path().join("t.pfm").exists());
+}

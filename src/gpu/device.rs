@@ -18,9 +18,7 @@ pub const LOOP_LIMITER_PROBE_TRIPS: u32 = 70_000;
 /// Everything that can go wrong on the GPU side, as values rather than panics.
 #[derive(Debug, Error)]
 pub enum GpuError {
-    #[error(
-        "no GPU adapter found (install a Vulkan, Metal or DX12 driver; on Linux Mesa's lavapipe works without a GPU)"
-    )]
+    #[error("no GPU adapter found ({})", no_adapter_hint())]
     NoAdapter,
     #[error("no GPU adapter matches {wanted:?}; available adapters: {}", list_or_none(.available))]
     AdapterNotFound { wanted: String, available: Vec<String> },
@@ -50,6 +48,17 @@ pub enum GpuError {
     /// sweeps: the render starts again with them (`gpu::render`; never returned from it).
     #[error("a CSG query exceeded the walk budget of kernels without sweeps")]
     CsgSweepsNeeded,
+}
+
+/// What to do about [`GpuError::NoAdapter`]: install a driver, or, where `WGPU_BACKEND`
+/// limits the backends wgpu tries (an unknown name leaves none), unset it.
+fn no_adapter_hint() -> String {
+    match std::env::var("WGPU_BACKEND") {
+        Ok(v) if !v.trim().is_empty() => {
+            format!("WGPU_BACKEND={v:?} limits the backends tried: unset it, or name vulkan, metal, dx12 or gl")
+        }
+        _ => "install a Vulkan, Metal or DX12 driver; on Linux Mesa's lavapipe works without a GPU".to_string(),
+    }
 }
 
 fn list_or_none(names: &[String]) -> String {
