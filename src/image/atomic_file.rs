@@ -22,6 +22,7 @@ impl Writes {
     }
 
     fn write(&self, path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+        refuse_special_file(path)?;
         let dir = directory_of(path);
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let mut tmp = {
@@ -56,6 +57,11 @@ impl Writes {
 /// Writes `bytes` to a temporary file in `path`'s directory, flushes it to disk, then
 /// renames it over `path`. On any error the temporary file is removed and `path` is left
 /// as it was. Errors are the plain OS errors (the caller names `path`).
+///
+/// Where `path` is a symbolic link, the link is replaced by the new file and the file it
+/// named is left as it was (as `sed -i` does): following it would write wherever the link
+/// points, which in a shared directory is someone else's choice. A FIFO, device or socket
+/// at `path` is refused (`InvalidInput`) rather than replaced by a regular file.
 ///
 /// The temporary file is `tempfile`'s (`.NAME.XXXXXX.lumen.tmp`: hidden, named after the
 /// target so a file left by a killed process says where it came from, random so that
@@ -118,7 +124,21 @@ pub fn check_destination(path: &Path) -> std::io::Result<()> {
     if path.is_dir() {
         return Err(Error::new(ErrorKind::IsADirectory, "it is a directory"));
     }
-    Ok(())
+    refuse_special_file(path)
+}
+
+/// An error where `path` is a FIFO, a device or a socket (not followed through a symbolic
+/// link: the link is what a write replaces).
+fn refuse_special_file(path: &Path) -> std::io::Result<()> {
+    let Ok(meta) = std::fs::symlink_metadata(path) else { return Ok(()) };
+    let ty = meta.file_type();
+    if ty.is_file() || ty.is_dir() || ty.is_symlink() {
+        return Ok(());
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        "it is not a regular file (a FIFO, device or socket), which an image does not replace",
+    ))
 }
 
 /// The directory a file at `path` goes in (`.` for a bare name).
@@ -231,5 +251,35 @@ mod tests {
         }
         // A bare file name goes in the working directory, which exists.
         assert!(check_destination(Path::new("out.png")).is_ok());
+    }
+
+    /// A symbolic link is replaced by the new file (its old target stays as it was), a
+    /// dangling one too; a FIFO is refused before and at the write, and stays a FIFO.
+    #[cfg(unix)]
+    #[test]
+    fn links_are_replaced_and_special_files_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("target.png");
+        std::fs::write(&target, b"old").unwrap();
+        for (link, to) in [("link.png", target.as_path()), ("dangling.png", Path::new("missing.png"))] {
+            let link = dir.path().join(link);
+            std::os::unix::fs::symlink(to, &link).unwrap();
+            check_destination(&link).unwrap();
+            write_atomically(&link, b"new").unwrap();
+            assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_file());
+            assert_eq!(std::fs::read(&link).unwrap(), b"new");
+        }
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        assert!(!dir.path().join("missing.png").exists());
+        let fifo = dir.path().join("fifo.png");
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o644) }, 0);
+        for e in [check_destination(&fifo).unwrap_err(), write_atomically(&fifo, b"x").unwrap_err()] {
+            assert_eq!(e.kind(), ErrorKind::InvalidInput);
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+        }
+        assert!(!std::fs::symlink_metadata(&fifo).unwrap().file_type().is_file());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 4);
     }
 }
