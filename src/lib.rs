@@ -17,6 +17,7 @@ pub mod image;
 pub mod memory;
 pub mod optics;
 pub mod prepare;
+pub mod regular_file;
 pub mod sampling;
 pub mod scene;
 pub mod scenelang;

@@ -3,8 +3,9 @@
 //! pixel), check a time limit between rounds and drop an unfinished round on Ctrl-C, so
 //! every pixel of a result has the same number of samples.
 
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Why a progressive render returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -30,6 +31,9 @@ pub fn ctrlc_flag() -> Arc<AtomicBool> {
             if f.swap(true, Ordering::SeqCst) {
                 // Outputs being written are dropped, not left half-written or as temporaries.
                 let _held = crate::image::abandon_writes();
+                for dir in forced_exit_removals().drain(..) {
+                    let _ = std::fs::remove_dir_all(dir);
+                }
                 eprintln!("\ninterrupted twice: exiting");
                 std::process::exit(130);
             }
@@ -41,4 +45,16 @@ pub fn ctrlc_flag() -> Arc<AtomicBool> {
         flag
     })
     .clone()
+}
+
+fn forced_exit_removals() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    static DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    DIRS.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Asks for directory `dir` to be removed (with its contents) should a second Ctrl-C end
+/// the process, which skips destructors: for what the process made for itself and removes
+/// on a normal exit (the private `XDG_RUNTIME_DIR` of `cli::headless`).
+pub fn remove_at_forced_exit(dir: PathBuf) {
+    forced_exit_removals().push(dir);
 }

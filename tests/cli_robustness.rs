@@ -234,8 +234,9 @@ fn an_output_in_a_missing_directory_fails_before_the_work() {
 
 /// A second Ctrl-C exits at once, also while the outputs are being written: each output is
 /// then whole or absent, never half-written, and no temporary file is left (the writes in
-/// progress are abandoned first: `image::abandon_writes`). The second signal is sent the
-/// moment a temporary file appears, so it meets a write in progress.
+/// progress are abandoned first: `image::abandon_writes`), nor the private runtime
+/// directory. The second signal is sent the moment a temporary file appears, so it meets a
+/// write in progress.
 #[cfg(unix)]
 #[test]
 fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
@@ -250,9 +251,12 @@ fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
         let names = || -> Vec<String> {
             std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect()
         };
+        // Without XDG_RUNTIME_DIR the process makes a private one (cli::headless), here.
         let mut child = lumen(dir.path())
             .args(["render", "s.sl", "--device", "cpu", "--width", "2400", "--height", "1800", "--spp", "1"])
             .args(outputs.iter().flat_map(|o| ["-o", o]))
+            .env_remove("XDG_RUNTIME_DIR")
+            .env("TMPDIR", dir.path())
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
@@ -278,6 +282,7 @@ fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
         std::io::Read::read_to_string(&mut err, &mut text).unwrap();
         let left = names();
         assert!(!left.iter().any(|n| n.ends_with(".tmp")), "{left:?} after {seen:?}\n{text}");
+        assert!(!left.iter().any(|n| n.starts_with("lumen-runtime-")), "{left:?}\n{text}");
         for name in outputs {
             let path = dir.path().join(name);
             if path.exists() {
@@ -310,4 +315,84 @@ fn a_wgpu_backend_with_no_adapter_is_named_in_the_error() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("no GPU adapter found (WGPU_BACKEND=\"nonsense\" limits the backends tried"), "{err}");
     assert!(!dir.path().join("t.pfm").exists());
+}
+
+/// An endless script (`/dev/zero`) is refused once it passes the size limit, with a clear
+/// error, instead of being read until memory runs out.
+#[cfg(unix)]
+#[test]
+fn an_endless_script_is_refused_at_the_size_limit() {
+    let dir = scene_dir();
+    let o = lumen(dir.path()).args(["check", "/dev/zero"]).output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("/dev/zero") && err.contains("cannot read script: it is larger than 1024 MiB"), "{err}");
+}
+
+/// Files read whole (images to tone-map or merge, a mesh, the pipeline cache) that are not
+/// regular files are refused at once: a FIFO without a writer hung the read, and an
+/// endless device (a `.pfm` link to `/dev/zero`) was read until memory ran out.
+#[cfg(unix)]
+#[test]
+fn special_files_are_refused_not_read() {
+    use std::time::{Duration, Instant};
+    let dir = scene_dir();
+    let d = dir.path();
+    std::os::unix::fs::symlink("/dev/zero", d.join("zero.pfm")).unwrap();
+    let fifo = |name: &str| {
+        let c = std::ffi::CString::new(d.join(name).to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o644) }, 0);
+    };
+    fifo("part.exr");
+    fifo("mesh.obj");
+    std::fs::write(
+        d.join("mesh.sl"),
+        "SPAWN Shape.Mesh(.file \"mesh.obj\")\nUSING Camera.Perspective() Image(4, 3) Renderer.Flat() Tracer()\n",
+    )
+    .unwrap();
+    let cache = d.join("cache");
+    std::fs::create_dir(&cache).unwrap();
+    // The first render writes the pipeline cache's file (where the device has one); the
+    // loop then turns it into a FIFO, which the second render must not wait on.
+    let commands: [(&[&str], &str); 5] = [
+        (&["tonemap", "zero.pfm", "t.png"], "cannot read zero.pfm: it is not a regular file"),
+        (&["merge", "part.exr", "-o", "m.exr"], "cannot read part.exr: it is not a regular file"),
+        (&["render", "mesh.sl", "--device", "cpu", "-o", "m.pfm"], "mesh.obj"),
+        (&["render", "tiny.sl", "--width", "8", "-o", "c.pfm"], ""),
+        (&["render", "tiny.sl", "--width", "8", "-o", "d.pfm"], ""),
+    ];
+    for (args, says) in commands {
+        let mut child = lumen(d)
+            .args(args)
+            .env("LUMEN_PIPELINE_CACHE", &cache)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            if start.elapsed() > Duration::from_secs(60) {
+                let _ = child.kill();
+                panic!("{args:?} hung");
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        if says.is_empty() {
+            assert!(o.status.success(), "{args:?}: {err}");
+        } else {
+            assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+            assert!(err.contains(says), "{args:?}: {err}");
+        }
+        // A cache file written is replaced by a FIFO of its name.
+        if let Some(Ok(entry)) = std::fs::read_dir(&cache).unwrap().next() {
+            if entry.file_type().unwrap().is_file() {
+                let name = entry.file_name().into_string().unwrap();
+                std::fs::remove_file(entry.path()).unwrap();
+                fifo(&format!("cache/{name}"));
+            }
+        }
+    }
 }

@@ -58,6 +58,7 @@ pub fn ensure_runtime_dir() -> PrivateRuntimeDir {
         // `create` fails if the path exists, so a directory planted by someone else is never used.
         if std::fs::DirBuilder::new().mode(0o700).create(&dir).is_ok() {
             std::env::set_var(RUNTIME_DIR_ENV, &dir);
+            crate::stop::remove_at_forced_exit(dir.clone());
             return PrivateRuntimeDir(Some(dir));
         }
     }

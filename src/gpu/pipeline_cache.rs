@@ -52,7 +52,7 @@ impl DiskPipelineCache {
             return None;
         }
         let path = dir.join(wgpu::util::pipeline_cache_key(info)?);
-        let file = std::fs::read(&path).ok();
+        let file = crate::regular_file::read(&path).ok();
         let data = file.as_deref().and_then(unwrap);
         let create = |data: Option<&[u8]>| {
             // SAFETY: the data is only ever what `PipelineCache::get_data` returned for an

@@ -99,7 +99,7 @@ pub struct WriteReport {
 /// ```
 pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
     let format = ImageFormat::from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|cause| ImageError::Read { path: path.to_owned(), cause })?;
+    let bytes = crate::regular_file::read(path).map_err(|cause| ImageError::Read { path: path.to_owned(), cause })?;
     let decode_err = |message: String| ImageError::Decode { path: path.to_owned(), format: format.name(), message };
     let img = match format {
         ImageFormat::Pfm => decode_pfm(&bytes).map_err(|cause| ImageError::Pfm { path: path.to_owned(), cause })?,
@@ -132,7 +132,7 @@ pub fn read_render_part(path: &Path) -> Result<(HdrImage, RenderMetadata), Image
             message: format!("a {} file cannot carry lumen's render metadata; shards must be .exr", format.name()),
         });
     }
-    let bytes = std::fs::read(path).map_err(|cause| ImageError::Read { path: path.to_owned(), cause })?;
+    let bytes = crate::regular_file::read(path).map_err(|cause| ImageError::Read { path: path.to_owned(), cause })?;
     let (img, attrs) = decode_exr_with_attributes(&bytes).map_err(|e| exr_error(path, e))?;
     check_size(img.width(), img.height()).map_err(|cause| ImageError::Size { path: path.to_owned(), cause })?;
     let meta = RenderMetadata::from_attributes(&attrs)

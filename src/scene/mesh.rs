@@ -89,7 +89,7 @@ impl TriangleMesh {
             let extension = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
             return Err(MeshError::new(name, MeshErrorKind::UnknownExtension { extension }));
         };
-        let bytes = std::fs::read(path).map_err(|e| MeshError::io(&name, &e))?;
+        let bytes = crate::regular_file::read(path).map_err(|e| MeshError::io(&name, &e))?;
         Self::from_bytes(&name, format, &bytes)
     }
 

@@ -76,11 +76,24 @@ pub struct LoadOptions {
     pub vars: Vec<String>,
 }
 
-/// Loads the script at `path`; DUMP output goes to stdout.
+/// The largest script [`load_file`] reads: far above any scene within
+/// [`crate::scene::MAX_PRIMITIVES`] (10,000 spheres take 0.7 MB), far below what an endless
+/// source (`/dev/zero`, a runaway pipe) would fill memory with before failing.
+pub const MAX_SCRIPT_BYTES: u64 = 1 << 30;
+
+/// Loads the script at `path` (a file, or a pipe such as `<(...)`); DUMP output goes to
+/// stdout.
 pub fn load_file(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneLangError> {
+    use std::io::Read;
     let name = path.display().to_string();
-    let source = std::fs::read_to_string(path)
-        .map_err(|e| SceneLangError::whole_file(&name, ErrorKind::Io, format!("cannot read script: {e}")))?;
+    let fail = |why: String| SceneLangError::whole_file(&name, ErrorKind::Io, format!("cannot read script: {why}"));
+    let mut source = String::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_SCRIPT_BYTES + 1).read_to_string(&mut source))
+        .map_err(|e| fail(e.to_string()))?;
+    if source.len() as u64 > MAX_SCRIPT_BYTES {
+        return Err(fail(format!("it is larger than {} MiB", MAX_SCRIPT_BYTES >> 20)));
+    }
     let base = path.parent().unwrap_or(Path::new("."));
     load_str(&source, &name, base, opts)
 }
