@@ -592,6 +592,42 @@ mod cli {
         }
     }
 
+    /// An ffmpeg that fails after writing part of the video (a stand-in on PATH) leaves no
+    /// video and no temporary file: the error names the video, the frames stay.
+    #[cfg(unix)]
+    #[test]
+    fn a_failed_video_assembly_leaves_no_partial_video() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let bin = dir.path().join("bin");
+        std::fs::create_dir(&bin).unwrap();
+        let fake = bin.join("ffmpeg");
+        // `-version` succeeds; an assembly writes half a file at its last argument and fails.
+        std::fs::write(
+            &fake,
+            "#!/bin/sh\n[ \"$1\" = -version ] && exit 0\nfor a; do last=$a; done\necho partial > \"$last\"\nexit 1\n",
+        )
+        .unwrap();
+        std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let work = dir.path().join("work");
+        std::fs::create_dir(&work).unwrap();
+        std::fs::write(work.join("anim.sl"), SCRIPT).unwrap();
+        let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+        let out = crate::common::lumen_command()
+            .current_dir(&work)
+            .env("PATH", path)
+            .args(["render", "anim.sl", "--device", "cpu", "--frames", "0:1:2", "-o", "f.png"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains("cannot assemble f.mp4") && stderr.contains("ffmpeg failed"), "{stderr}");
+        let mut names: Vec<String> =
+            std::fs::read_dir(&work).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        names.sort();
+        assert_eq!(names, ["anim.sl", "f_0001.png", "f_0002.png"]);
+    }
+
     #[test]
     fn bad_arguments_fail_without_output() {
         let dir = tempfile::tempdir().unwrap();

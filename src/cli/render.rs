@@ -484,16 +484,22 @@ fn make_video(output: &Path, count: u32) -> anyhow::Result<()> {
     let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
     let pattern = output.with_file_name(format!("{stem}_%0{digits}d.{ext}"));
     let video = output.with_extension("mp4");
-    let status = Process::new("ffmpeg")
-        .args(["-y", "-loglevel", "error", "-framerate", &VIDEO_FPS.to_string(), "-start_number", "1", "-i"])
-        .arg(&pattern)
-        .args(["-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2"])
-        .arg(&video)
-        .status()
-        .context("cannot run ffmpeg")?;
-    if !status.success() {
-        bail!("ffmpeg failed ({status}) assembling {}", video.display());
-    }
+    // ffmpeg writes the temporary file of an atomic write (its name does not end in .mp4,
+    // hence `-f mp4`), so a failed or interrupted assembly leaves no partial video.
+    crate::image::produce_atomically(&video, |_, tmp| {
+        let status = Process::new("ffmpeg")
+            .args(["-y", "-loglevel", "error", "-framerate", &VIDEO_FPS.to_string(), "-start_number", "1", "-i"])
+            .arg(&pattern)
+            .args(["-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4"])
+            .arg(tmp)
+            .status()?;
+        if status.success() {
+            Ok(())
+        } else {
+            Err(std::io::Error::other(format!("ffmpeg failed ({status})")))
+        }
+    })
+    .with_context(|| format!("cannot assemble {}", video.display()))?;
     eprintln!("wrote {}", video.display());
     Ok(())
 }

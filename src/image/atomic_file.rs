@@ -22,6 +22,11 @@ impl Writes {
     }
 
     fn write(&self, path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+        self.produce(path, |tmp, _| tmp.write_all(bytes))
+    }
+
+    /// [`produce_atomically`] in this register.
+    fn produce(&self, path: &Path, make: impl FnOnce(&mut File, &Path) -> std::io::Result<()>) -> std::io::Result<()> {
         refuse_special_file(path)?;
         let dir = directory_of(path);
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
@@ -34,7 +39,8 @@ impl Writes {
             pending.push(tmp.path().to_path_buf());
             tmp
         };
-        let written = tmp.as_file_mut().write_all(bytes).and_then(|()| tmp.as_file().sync_all());
+        let tmp_path = tmp.path().to_path_buf();
+        let written = make(tmp.as_file_mut(), &tmp_path).and_then(|()| tmp.as_file().sync_all());
         let mut pending = self.lock();
         if let Some(i) = pending.iter().position(|p| p == tmp.path()) {
             pending.swap_remove(i);
@@ -79,6 +85,32 @@ impl Writes {
 /// ```
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     WRITES.write(path, bytes)
+}
+
+/// [`write_atomically`] for content that `make` produces into the temporary file, by any
+/// means: through the open file it is given, or through the file's path (for another
+/// program to write, as `cli::render`'s video assembly has ffmpeg do). An error from
+/// `make` removes the temporary file and leaves `path` as it was.
+///
+/// ```
+/// use std::io::Write;
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("a.txt");
+/// lumen::image::produce_atomically(&path, |f, _| f.write_all(b"made")).unwrap();
+/// assert_eq!(std::fs::read(&path).unwrap(), b"made");
+/// let b = dir.path().join("b.txt");
+/// let failed = lumen::image::produce_atomically(&b, |_, tmp| {
+///     std::fs::write(tmp, b"half")?;
+///     Err(std::io::Error::other("the producer failed"))
+/// });
+/// assert!(failed.is_err());
+/// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+/// ```
+pub fn produce_atomically(
+    path: &Path,
+    make: impl FnOnce(&mut File, &Path) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    WRITES.produce(path, make)
 }
 
 /// Held by [`abandon_writes`]: while it lives, no [`write_atomically`] starts or finishes.
