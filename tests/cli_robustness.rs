@@ -396,3 +396,37 @@ fn special_files_are_refused_not_read() {
         }
     }
 }
+
+/// An output the file system will not take (here past `RLIMIT_FSIZE`, as a full disk
+/// would) is one error line naming the file once, and nothing is left: no image, no
+/// temporary file. The outputs before it are whole.
+#[cfg(unix)]
+#[test]
+fn an_output_the_disk_refuses_is_one_clear_error_and_no_file() {
+    use std::os::unix::process::CommandExt;
+    let dir = scene_dir();
+    let mut cmd = lumen(dir.path());
+    cmd.args(["render", "tiny.sl", "--device", "cpu", "--width", "64", "-o", "small.png", "-o", "big.pfm"]);
+    // SAFETY: only async-signal-safe calls (signal, setrlimit) between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            // Past the limit a write fails with EFBIG instead of raising SIGXFSZ.
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let rl = libc::rlimit { rlim_cur: 20_000, rlim_max: 20_000 };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &rl) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let o = cmd.output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let errors: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
+    assert_eq!(errors, ["error: cannot write big.pfm: File too large (os error 27)"], "{err}");
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    names.sort();
+    assert_eq!(names, ["small.png", "tiny.sl"], "{err}");
+    lumen::image::read_image(&dir.path().join("small.png")).unwrap();
+}

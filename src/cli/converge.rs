@@ -91,7 +91,7 @@ fn reference(args: &ConvergeArgs, scene: &Scene, max_spp: u32) -> anyhow::Result
     let m = measure(&OpenDevice::Cpu, &ref_scene, spp, true).map_err(|e| anyhow!("{e}"))?;
     eprintln!("reference: {} ({} spp)", format_seconds(m.seconds), spp);
     let path = args.output.join("reference.pfm");
-    write_image(&path, &m.image, &ToneMap::default()).with_context(|| format!("cannot write {}", path.display()))?;
+    write_image(&path, &m.image, &ToneMap::default())?;
     Ok((m.image, format!("CPU, {spp} spp, independent seed ({:.1} s)", m.seconds)))
 }
 

@@ -415,7 +415,8 @@ fn render_one(
     let meta = RenderMetadata::new(taken, fingerprint(&scene, total), &out.device, out.seconds);
     let writing = Instant::now();
     for o in outputs {
-        write_image_with(o, &out.image, tm, Some(&meta)).with_context(|| format!("cannot write {}", o.display()))?;
+        // Every image error names the file (image::ImageError).
+        write_image_with(o, &out.image, tm, Some(&meta))?;
         eprintln!("wrote {}", o.display());
     }
     if args.profile {
