@@ -10,7 +10,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use clap::Args;
 
 use crate::color::Rgb32;
@@ -127,8 +127,8 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
             meta.ranges_text()
         );
     }
-    write_image_with(&args.output, &image, &ToneMap::default(), Some(&meta))
-        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    // Every image error names the file (image::ImageError).
+    write_image_with(&args.output, &image, &ToneMap::default(), Some(&meta))?;
     eprintln!(
         "merged {} parts ({} samples per pixel: {}) into {}",
         parts.len(),
