@@ -104,8 +104,8 @@ pub fn open_devices(devices: &[Device], adapter: &AdapterChoice) -> Vec<OpenDevi
             Device::Cpu => out.push(OpenDevice::Cpu),
             Device::Gpu => match Gpu::new(adapter) {
                 Ok(g) => out.push(OpenDevice::gpu(g)),
-                Err(GpuError::NoAdapter) => eprintln!("warning: skipping device gpu: no GPU adapter"),
-                Err(e) => eprintln!("warning: skipping device gpu: {e}"),
+                Err(GpuError::NoAdapter) => crate::diag!("warning: skipping device gpu: no GPU adapter"),
+                Err(e) => crate::diag!("warning: skipping device gpu: {e}"),
             },
         }
     }
@@ -169,7 +169,7 @@ pub fn software_adapter_note(info: &wgpu::AdapterInfo) -> Option<String> {
 pub fn open_device(choice: DeviceChoice, adapter: &AdapterChoice) -> Result<OpenDevice, GpuError> {
     let gpu_device = |g: Gpu| {
         if let Some(note) = software_adapter_note(&g.adapter_info) {
-            eprintln!("{note}");
+            crate::diag!("{note}");
         }
         OpenDevice::gpu(g)
     };
@@ -180,8 +180,8 @@ pub fn open_device(choice: DeviceChoice, adapter: &AdapterChoice) -> Result<Open
             Ok(g) => Ok(gpu_device(g)),
             Err(e @ GpuError::AdapterNotFound { .. }) => Err(e),
             Err(e) => {
-                eprintln!("warning: {e}");
-                eprintln!("warning: rendering on the CPU reference renderer instead (slower; --device cpu says so)");
+                crate::diag!("warning: {e}");
+                crate::diag!("warning: rendering on the CPU reference renderer instead (slower; --device cpu says so)");
                 Ok(OpenDevice::Cpu)
             }
         },

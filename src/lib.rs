@@ -6,6 +6,25 @@
 //! - [`sampling`]: PCG32 and the per-(pixel, sample, bounce) stream rule;
 //! - [`image`]: HDR images, tone mapping, PFM/EXR/HDR/PNG files.
 
+// Diagnostics go through `diag!`, never `eprintln!` (below).
+#![warn(clippy::print_stderr)]
+
+/// Writes a line to standard error as `eprintln!` does, but never panics: `eprintln!`
+/// panics when standard error cannot be written (redirected to a full disk, a pipe whose
+/// reader left), which would end a render whose outputs are fine. Diagnostics are best
+/// effort; results go to files or through `cli::output`, which reports its failures.
+///
+/// ```
+/// lumen::diag!("rendered {} samples", 16);
+/// ```
+#[macro_export]
+macro_rules! diag {
+    ($($arg:tt)*) => {{
+        use ::std::io::Write as _;
+        let _ = ::std::writeln!(::std::io::stderr(), $($arg)*);
+    }};
+}
+
 pub mod accel;
 pub mod analysis;
 pub mod cli;

@@ -34,13 +34,13 @@ pub fn ctrlc_flag() -> Arc<AtomicBool> {
                 for dir in forced_exit_removals().drain(..) {
                     let _ = std::fs::remove_dir_all(dir);
                 }
-                eprintln!("\ninterrupted twice: exiting");
+                crate::diag!("\ninterrupted twice: exiting");
                 std::process::exit(130);
             }
-            eprintln!("\ninterrupted: keeping the completed rounds (Ctrl-C again to quit now)");
+            crate::diag!("\ninterrupted: keeping the completed rounds (Ctrl-C again to quit now)");
         });
         if let Err(e) = installed {
-            eprintln!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");
+            crate::diag!("warning: cannot install the Ctrl-C handler ({e}); Ctrl-C will not save partial renders");
         }
         flag
     })

@@ -430,3 +430,26 @@ fn an_output_the_disk_refuses_is_one_clear_error_and_no_file() {
     assert_eq!(names, ["small.png", "tiny.sl"], "{err}");
     lumen::image::read_image(&dir.path().join("small.png")).unwrap();
 }
+
+/// Standard error on a full disk or a pipe nobody reads: diagnostics are best effort, so
+/// a render still writes its image and succeeds, and a failing command still fails with
+/// status 1, never the panic status 101 (`eprintln!` panicked on such a stderr).
+#[cfg(unix)]
+#[test]
+fn an_unwritable_stderr_changes_no_outcome() {
+    let dir = scene_dir();
+    let stderrs: [fn(&Path) -> Stdio; 2] =
+        [|_| Stdio::from(File::options().write(true).open("/dev/full").expect("/dev/full")), |d| closed_pipe(d).into()];
+    for (k, make) in stderrs.iter().enumerate() {
+        let out = format!("ok{k}.pfm");
+        let o = lumen(dir.path())
+            .args(["render", "tiny.sl", "--device", "cpu", "-o", &out])
+            .stderr(make(dir.path()))
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "stderr {k}");
+        lumen::image::read_image(&dir.path().join(&out)).unwrap();
+        let o = lumen(dir.path()).args(["render", "missing.sl"]).stderr(make(dir.path())).output().unwrap();
+        assert_eq!(o.status.code(), Some(1), "stderr {k}");
+    }
+}

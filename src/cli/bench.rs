@@ -170,7 +170,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         bail!("none of the requested devices is available");
     }
     for d in &devices {
-        eprintln!("warming up {} ...", d.describe());
+        crate::diag!("warming up {} ...", d.describe());
         measure(d, &spheres_scene(1, 8, 8), 1, false).map_err(|e| anyhow!("{}: {e}", d.kind()))?;
     }
     let mut report = format!(
@@ -209,7 +209,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.output {
         crate::image::write_atomically(path, report.as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
-        eprintln!("wrote {}", path.display());
+        crate::diag!("wrote {}", path.display());
     }
     Ok(super::output::print(format_args!("{report}\n"))?)
 }
@@ -234,7 +234,7 @@ fn cold_kernels_table(files: &[PathBuf], plan: &Plan, args: &BenchArgs) -> anyho
         let mut seconds = Vec::new();
         let mut error = None;
         for round in 0..plan.repeat {
-            eprintln!("{name}: cold kernel creation (run {} of {}) ...", round + 1, plan.repeat);
+            crate::diag!("{name}: cold kernel creation (run {} of {}) ...", round + 1, plan.repeat);
             let cache = tempfile::tempdir().context("cannot create a directory for a cold shader cache")?;
             let mut child =
                 super::own_process::this_program().context("cannot find this program to start its cold runs")?;
@@ -264,7 +264,7 @@ fn cold_kernels_table(files: &[PathBuf], plan: &Plan, args: &BenchArgs) -> anyho
                     let err = String::from_utf8_lossy(&out.stderr);
                     let lines: Vec<&str> = err.lines().map(str::trim).filter(|l| !l.is_empty()).take(2).collect();
                     let said = if lines.is_empty() { "no output".to_string() } else { lines.join(" ") };
-                    eprintln!("warning: {name}: cold kernel creation failed: {said}");
+                    crate::diag!("warning: {name}: cold kernel creation failed: {said}");
                     error = Some(said);
                     break;
                 }
@@ -350,7 +350,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
         let scene = match plan.load_scene(file, plan.width, plan.height) {
             Ok(s) => s,
             Err(e) => {
-                eprintln!("warning: skipping {name}: {e}");
+                crate::diag!("warning: skipping {name}: {e}");
                 rows.push(vec![
                     name.clone(),
                     "-".into(),
@@ -374,7 +374,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                 if r.error.is_some() {
                     continue;
                 }
-                eprintln!("{name} on {} (round {} of {}) ...", d.kind(), round + 1, plan.repeat);
+                crate::diag!("{name} on {} (round {} of {}) ...", d.kind(), round + 1, plan.repeat);
                 match Differential::run(d, &scene, plan.spp) {
                     Ok(diff) => {
                         r.rates.push(diff.per_sample().map(|t| 1.0 / t));
@@ -384,7 +384,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                         r.spp = diff.more.spp;
                     }
                     Err(e) => {
-                        eprintln!("warning: {name} on {}: {e}", d.kind());
+                        crate::diag!("warning: {name} on {}: {e}", d.kind());
                         r.error = Some(format!("error: {e}").replace('\n', " "));
                     }
                 }
@@ -507,7 +507,7 @@ fn scaling_table(devices: &[OpenDevice], plan: &Plan) -> anyhow::Result<String> 
         let build = start.elapsed().as_secs_f64();
         drop(world);
         for (d, (_, ns, ts)) in devices.iter().zip(series.iter_mut()) {
-            eprintln!("{n} spheres on {} ...", d.kind());
+            crate::diag!("{n} spheres on {} ...", d.kind());
             let diff = Differential::run(d, &scene, spp).with_context(|| format!("{n} spheres on {}", d.kind()))?;
             let t = diff.per_sample().unwrap_or(0.0);
             if t > 0.0 {
@@ -532,7 +532,9 @@ fn scaling_table(devices: &[OpenDevice], plan: &Plan) -> anyhow::Result<String> 
         out.push_str(&growth_line(*d, ns, ts));
         out.push('\n');
     }
-    eprint!("{}", out.lines().filter(|l| l.starts_with("- ")).map(|l| format!("{l}\n")).collect::<String>());
+    for line in out.lines().filter(|l| l.starts_with("- ")) {
+        crate::diag!("{line}");
+    }
     Ok(out)
 }
 
@@ -578,14 +580,14 @@ fn shaders_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> anyhow:
     for file in files {
         match plan.load_scene(file, plan.width, plan.height) {
             Ok(s) => scenes.push((name_of(file), s)),
-            Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),
+            Err(e) => crate::diag!("warning: skipping {}: {e}", name_of(file)),
         }
     }
     let mut rows = Vec::new();
     for (name, scene) in &scenes {
         let spec = FeatureSet::of(scene);
         for (kind, f) in [("specialised", spec), ("full-featured", spec.full_for())] {
-            eprintln!("{name}: {kind} kernel ...");
+            crate::diag!("{name}: {kind} kernel ...");
             let (bytes, lines, secs) = kernel_cost(gpu, &f).with_context(|| format!("{name}: {kind} kernel"))?;
             // The same differential method for both kernels; the override only swaps the kernel.
             let rate = Differential::run_with(device, scene, plan.spp, Some(f))
@@ -654,7 +656,7 @@ fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> any
     for file in files {
         match plan.load_scene(file, w, None) {
             Ok(s) => scenes.push((name_of(file), s)),
-            Err(e) => eprintln!("warning: skipping {}: {e}", name_of(file)),
+            Err(e) => crate::diag!("warning: skipping {}: {e}", name_of(file)),
         }
     }
     let headers = [
@@ -674,7 +676,7 @@ fn bvh_or_list_table(device: &OpenDevice, files: &[PathBuf], plan: &Plan) -> any
         if finite > LIST_MAX_OBJECTS || packed.features.mesh {
             continue;
         }
-        eprintln!("{name}: BVH or list ...");
+        crate::diag!("{name}: BVH or list ...");
         let (mut bvh, mut list) = (0.0f64, 0.0f64);
         // Compiles both kernels outside the timings.
         packed_rate(device, scene, 1, false)?;

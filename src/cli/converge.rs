@@ -83,13 +83,13 @@ fn reference(args: &ConvergeArgs, scene: &Scene, max_spp: u32) -> anyhow::Result
     }
     let spp = args.reference_spp.unwrap_or(max_spp.saturating_mul(REFERENCE_FACTOR).min(MAX_SPP));
     if spp < max_spp.saturating_mul(REFERENCE_FACTOR) {
-        eprintln!("warning: reference spp {spp} is under {REFERENCE_FACTOR}× the largest spp {max_spp}: its noise will flatten the curve");
+        crate::diag!("warning: reference spp {spp} is under {REFERENCE_FACTOR}× the largest spp {max_spp}: its noise will flatten the curve");
     }
     let mut ref_scene = scene.clone();
     ref_scene.tracer.rng.state ^= REFERENCE_SEED_MIX;
-    eprintln!("rendering the reference on the CPU at {spp} spp ...");
+    crate::diag!("rendering the reference on the CPU at {spp} spp ...");
     let m = measure(&OpenDevice::Cpu, &ref_scene, spp, true).map_err(|e| anyhow!("{e}"))?;
-    eprintln!("reference: {} ({} spp)", format_seconds(m.seconds), spp);
+    crate::diag!("reference: {} ({} spp)", format_seconds(m.seconds), spp);
     let path = args.output.join("reference.pfm");
     write_image(&path, &m.image, &ToneMap::default())?;
     Ok((m.image, format!("CPU, {spp} spp, independent seed ({:.1} s)", m.seconds)))
@@ -128,21 +128,21 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
     for device in &devices {
         // One discarded 1-spp render first, so one-off costs (driver start-up, kernel
         // creation, which the GPU renderer then caches) do not land on the first row.
-        eprintln!("warming up {} ...", device.kind());
+        crate::diag!("warming up {} ...", device.kind());
         measure(device, &scene, 1, false).map_err(|e| anyhow!("{}: {e}", device.kind()))?;
         for &s in &spp {
             let step = table.rows.len() + 1;
-            eprintln!("[{step}/{total}] {} at {s} spp ...", device.kind());
+            crate::diag!("[{step}/{total}] {} at {s} spp ...", device.kind());
             let m = measure(device, &scene, s, true).map_err(|e| anyhow!("{} at {s} spp: {e}", device.kind()))?;
             if m.non_finite_samples > 0 {
-                eprintln!("warning: {} NaN or infinite samples were counted as black", m.non_finite_samples);
+                crate::diag!("warning: {} NaN or infinite samples were counted as black", m.non_finite_samples);
             }
             if m.spp != s {
                 bail!("{} stopped after {} of {s} spp", device.kind(), m.spp);
             }
             let e =
                 ErrorMetrics::of(&m.image, &reference).ok_or_else(|| anyhow!("image and reference sizes differ"))?;
-            eprintln!(
+            crate::diag!(
                 "[{step}/{total}] {} {s} spp: {}  RMSE {:.4e}  relMSE {:.4e}",
                 device.kind(),
                 format_seconds(m.seconds),
@@ -227,7 +227,7 @@ fn write_results(
     plot.write_png(&png, 800, 560).with_context(|| format!("cannot write {}", png.display()))?;
     let svg = dir.join("converge.svg");
     plot.write_svg(&svg, 800, 560).with_context(|| format!("cannot write {}", svg.display()))?;
-    eprintln!("wrote {}, {}, {} and {}", csv.display(), md_path.display(), png.display(), svg.display());
+    crate::diag!("wrote {}, {}, {} and {}", csv.display(), md_path.display(), png.display(), svg.display());
     // Last: the files are written even when nobody reads standard output.
     Ok(out.print()?)
 }

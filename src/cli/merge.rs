@@ -121,7 +121,7 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
             .filter(|(a, b)| a < b)
             .map(|(a, b)| format!("{a}:{b}"))
             .collect();
-        eprintln!(
+        crate::diag!(
             "note: samples {} are missing from the parts; the image is the mean of {}",
             gaps.join(", "),
             meta.ranges_text()
@@ -129,7 +129,7 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
     }
     // Every image error names the file (image::ImageError).
     write_image_with(&args.output, &image, &ToneMap::default(), Some(&meta))?;
-    eprintln!(
+    crate::diag!(
         "merged {} parts ({} samples per pixel: {}) into {}",
         parts.len(),
         meta.spp(),

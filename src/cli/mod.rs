@@ -115,9 +115,9 @@ fn report(e: &anyhow::Error) -> ExitCode {
     if e.chain().any(|c| c.downcast_ref::<output::StdoutError>().is_some_and(output::StdoutError::is_broken_pipe)) {
         return ExitCode::from(output::BROKEN_PIPE_EXIT);
     }
-    eprintln!("error: {e}");
+    crate::diag!("error: {e}");
     for cause in e.chain().skip(1) {
-        eprintln!("  caused by: {cause}");
+        crate::diag!("  caused by: {cause}");
     }
     ExitCode::FAILURE
 }

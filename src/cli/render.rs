@@ -201,11 +201,11 @@ fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene, range: Sampl
         Err(e) if args.device == DeviceChoice::Auto => {
             match e {
                 GpuError::DeviceLost(_) | GpuError::OutOfMemory(_) | GpuError::Readback(_) => {
-                    eprintln!("warning: the GPU failed during the render: {e}")
+                    crate::diag!("warning: the GPU failed during the render: {e}")
                 }
-                _ => eprintln!("warning: the GPU cannot render this scene: {e}"),
+                _ => crate::diag!("warning: the GPU cannot render this scene: {e}"),
             }
-            eprintln!("warning: rendering on the CPU reference renderer instead, from the first sample");
+            crate::diag!("warning: rendering on the CPU reference renderer instead, from the first sample");
             render_on_cpu(scene, args, range)
         }
         other => other.map_err(|e| anyhow!("GPU render failed: {e}")),
@@ -217,7 +217,7 @@ fn render_on_cpu(scene: &Scene, args: &RenderArgs, range: SampleRange) -> anyhow
     let opts = RenderOptions { spp: args.spp.spp, samples: Some(range) };
     let out = cpu::render_limited(scene, &opts, &limits, Progress::Bar)?;
     let s = &out.stats;
-    eprintln!(
+    crate::diag!(
         "{}×{} {} on the CPU ({} threads): {} of {} samples per pixel, {} samples, {} rays in {:.2} s ({:.2} Mrays/s)",
         scene.width,
         scene.height,
@@ -232,7 +232,7 @@ fn render_on_cpu(scene: &Scene, args: &RenderArgs, range: SampleRange) -> anyhow
     );
     let stopped_early = report_stop(s.stop, s.spp);
     if args.profile {
-        eprintln!("note: --profile times GPU stages; this render ran on the CPU");
+        crate::diag!("note: --profile times GPU stages; this render ran on the CPU");
     }
     if s.spp == 0 {
         bail!("stopped before any sample was complete; nothing to write");
@@ -270,11 +270,11 @@ fn report_stop(stop: StopReason, spp_done: u64) -> bool {
     match stop {
         StopReason::Completed => false,
         StopReason::TimeLimit => {
-            eprintln!("note: stopped at the time limit with {spp_done} samples per pixel");
+            crate::diag!("note: stopped at the time limit with {spp_done} samples per pixel");
             true
         }
         StopReason::Interrupted => {
-            eprintln!("note: interrupted; keeping the {spp_done} samples per pixel of the completed rounds");
+            crate::diag!("note: interrupted; keeping the {spp_done} samples per pixel of the completed rounds");
             true
         }
     }
@@ -304,14 +304,14 @@ fn render_on_gpu(
     };
     let out = renderer.render(gpu, scene, &opts)?;
     match &out.profile {
-        Some(p) => eprintln!("GPU stages ({}):\n{}", gpu.adapter_info.name, p.table()),
+        Some(p) => crate::diag!("GPU stages ({}):\n{}", gpu.adapter_info.name, p.table()),
         None if args.profile => {
-            eprintln!("note: {} has no timestamp queries inside passes; --profile timed nothing", gpu.adapter_info.name)
+            crate::diag!("note: {} has no timestamp queries inside passes; --profile timed nothing", gpu.adapter_info.name)
         }
         None => {}
     }
     let samples = u64::from(scene.width) * u64::from(scene.height) * u64::from(out.spp_done) * paths_per_sample(scene);
-    eprintln!(
+    crate::diag!(
         "{}×{} {} on the GPU ({}): {} of {} samples per pixel, {} samples in {:.2} s ({:.2} Msamples/s; {}{})",
         scene.width,
         scene.height,
@@ -348,7 +348,7 @@ fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, 
     let part = Part::of(args)?;
     let exr = outputs.iter().any(|o| ImageFormat::from_path(o).is_ok_and(|f| f == ImageFormat::Exr));
     if matches!(part, Part::Samples(_) | Part::Shard { .. }) && args.frames.is_none() && !exr {
-        eprintln!("note: no .exr output: only EXR files record the sample range that `lumen merge` needs");
+        crate::diag!("note: no .exr output: only EXR files record the sample range that `lumen merge` needs");
     }
     if matches!(part, Part::Samples(_)) && args.frames.is_some() {
         bail!("--samples renders part of one image; with --frames, split the frames with --shard I/N");
@@ -408,7 +408,7 @@ fn render_one(
     let out = render_on(device, args, &scene, range)?;
     let rendered = started.elapsed().as_secs_f64();
     if out.non_finite_samples > 0 {
-        eprintln!("warning: {} NaN or infinite radiance samples were counted as black", out.non_finite_samples);
+        crate::diag!("warning: {} NaN or infinite radiance samples were counted as black", out.non_finite_samples);
     }
     // What was taken: the whole range, or its first `spp` samples when stopped early.
     let taken = SampleRange { begin: range.begin, end: range.begin + out.spp };
@@ -417,11 +417,11 @@ fn render_one(
     for o in outputs {
         // Every image error names the file (image::ImageError).
         write_image_with(o, &out.image, tm, Some(&meta))?;
-        eprintln!("wrote {}", o.display());
+        crate::diag!("wrote {}", o.display());
     }
     if args.profile {
         // The rest of the process's time: a render's own figure leaves these out.
-        eprintln!("process: render {rendered:.3} s, writing {:.3} s", writing.elapsed().as_secs_f64());
+        crate::diag!("process: render {rendered:.3} s, writing {:.3} s", writing.elapsed().as_secs_f64());
     }
     Ok(out.stopped_early)
 }
@@ -441,7 +441,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let loaded = started.elapsed().as_secs_f64();
     let device = open(&args)?;
     if args.profile {
-        eprintln!("process: scene {loaded:.3} s, device start-up {:.3} s", started.elapsed().as_secs_f64() - loaded);
+        crate::diag!("process: scene {loaded:.3} s, device start-up {:.3} s", started.elapsed().as_secs_f64() - loaded);
     }
     let Some(frames) = frames else {
         return render_one(&device, &args, args.script.time, &outputs, &tm, part, first).map(|_| ());
@@ -453,16 +453,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     for k in mine.begin..mine.end {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
-        eprintln!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
+        crate::diag!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
         // The shard applies to the frames: each frame takes all its samples.
         let loaded = if k == 0 { first.take() } else { None };
         if render_one(&device, &args, frames.time(k), &paths, &tm, Part::All, loaded)? {
-            eprintln!("note: stopping the animation after frame {}", k + 1);
+            crate::diag!("note: stopping the animation after frame {}", k + 1);
             return Ok(());
         }
     }
     if mine.len() < frames.count {
-        eprintln!(
+        crate::diag!(
             "note: frames {}..{} of {} rendered (shard); no video assembled",
             mine.begin + 1,
             mine.end,
@@ -477,7 +477,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
 /// Assembles the numbered LDR frames of `output` into `output`.mp4 with ffmpeg, if present.
 fn make_video(output: &Path, count: u32) -> anyhow::Result<()> {
     if Process::new("ffmpeg").arg("-version").output().is_err() {
-        eprintln!("note: ffmpeg is not on PATH; no video assembled");
+        crate::diag!("note: ffmpeg is not on PATH; no video assembled");
         return Ok(());
     }
     let digits = count.to_string().len().max(4);
@@ -501,7 +501,7 @@ fn make_video(output: &Path, count: u32) -> anyhow::Result<()> {
         }
     })
     .with_context(|| format!("cannot assemble {}", video.display()))?;
-    eprintln!("wrote {}", video.display());
+    crate::diag!("wrote {}", video.display());
     Ok(())
 }
 

@@ -49,7 +49,7 @@ pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     match &args.output {
         Some(path) => {
             write_atomically(path, text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
-            eprintln!("wrote {} ({} bytes, {} lines)", path.display(), text.len(), text.lines().count());
+            crate::diag!("wrote {} ({} bytes, {} lines)", path.display(), text.len(), text.lines().count());
         }
         None => super::output::print(&text)?,
     }

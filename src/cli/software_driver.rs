@@ -130,7 +130,7 @@ pub fn relaunch_if_wider_is_faster(info: &wgpu::AdapterInfo) {
     #[cfg(target_os = "linux")]
     {
         let err = relaunch(bits);
-        eprintln!("note: could not relaunch with {bits}-bit llvmpipe vectors ({err}); going on at 128 bits");
+        crate::diag!("note: could not relaunch with {bits}-bit llvmpipe vectors ({err}); going on at 128 bits");
     }
     // (Elsewhere no relaunch: llvmpipe through lavapipe is a Linux driver.)
     #[cfg(not(target_os = "linux"))]

@@ -106,7 +106,7 @@ pub fn run(args: TonemapArgs) -> Result<()> {
     let img = read_image(&args.input)?;
     let report = write_image(&args.output, &img, &tm)?;
     if report.non_finite > 0 {
-        eprintln!(
+        crate::diag!(
             "warning: {} of {} pixels in {} are NaN or infinite; they were written as black",
             report.non_finite,
             img.pixels().len(),
