@@ -29,13 +29,7 @@ pub fn ctrlc_flag() -> Arc<AtomicBool> {
         let f = Arc::clone(&flag);
         let installed = ctrlc::set_handler(move || {
             if f.swap(true, Ordering::SeqCst) {
-                // Outputs being written are dropped, not left half-written or as temporaries.
-                let _held = crate::image::abandon_writes();
-                for dir in forced_exit_removals().drain(..) {
-                    let _ = std::fs::remove_dir_all(dir);
-                }
-                crate::diag!("\ninterrupted twice: exiting");
-                std::process::exit(130);
+                forced_exit("\ninterrupted twice: exiting", 130);
             }
             crate::diag!("\ninterrupted: keeping the completed rounds (Ctrl-C again to quit now)");
         });
@@ -47,14 +41,50 @@ pub fn ctrlc_flag() -> Arc<AtomicBool> {
     .clone()
 }
 
+/// Ends the process at once with `status`, leaving nothing behind but whole outputs: the
+/// writes in progress are abandoned (their temporary files removed, and none starts or
+/// finishes meanwhile) and the directories of [`remove_at_forced_exit`] removed, since
+/// `exit` runs no destructors.
+fn forced_exit(message: &str, status: i32) -> ! {
+    let _held = crate::image::abandon_writes();
+    for dir in forced_exit_removals().drain(..) {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    crate::diag!("{message}");
+    std::process::exit(status);
+}
+
+/// Makes SIGTERM and SIGHUP (a scheduler's or a closed terminal's request to end) end the
+/// process as a second Ctrl-C does, with the status a shell reports for the signal
+/// (128 + its number), instead of by the signal's default action, which left a write's
+/// temporary file and the private runtime directory behind. Unlike Ctrl-C they do not
+/// keep the completed rounds: a job ended this way is ended. Starts a thread: call it once
+/// the process may have threads (`cli::main`, after its environment changes).
+#[cfg(unix)]
+pub fn exit_cleanly_on_termination() {
+    use signal_hook::consts::{SIGHUP, SIGTERM};
+    match signal_hook::iterator::Signals::new([SIGTERM, SIGHUP]) {
+        Ok(mut signals) => {
+            std::thread::spawn(move || {
+                if let Some(signal) = signals.forever().next() {
+                    let name = if signal == SIGTERM { "SIGTERM" } else { "SIGHUP" };
+                    forced_exit(&format!("\n{name}: exiting"), 128 + signal);
+                }
+            });
+        }
+        Err(e) => crate::diag!("warning: cannot handle SIGTERM and SIGHUP ({e}); they will end lumen untidily"),
+    }
+}
+
 fn forced_exit_removals() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     static DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
     DIRS.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Asks for directory `dir` to be removed (with its contents) should a second Ctrl-C end
-/// the process, which skips destructors: for what the process made for itself and removes
-/// on a normal exit (the private `XDG_RUNTIME_DIR` of `cli::headless`).
+/// Asks for directory `dir` to be removed (with its contents) should a second Ctrl-C or a
+/// termination signal end the process, which skips destructors: for what the process made
+/// for itself and removes on a normal exit (the private `XDG_RUNTIME_DIR` of
+/// `cli::headless`).
 pub fn remove_at_forced_exit(dir: PathBuf) {
     forced_exit_removals().push(dir);
 }

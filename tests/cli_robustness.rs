@@ -240,6 +240,24 @@ fn an_output_in_a_missing_directory_fails_before_the_work() {
 #[cfg(unix)]
 #[test]
 fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
+    signalled_while_writing(Some(libc::SIGINT), libc::SIGINT, 130);
+}
+
+/// SIGTERM and SIGHUP (a scheduler's or a closed terminal's end) leave as little as a
+/// second Ctrl-C does, with the status shells report for the signal.
+#[cfg(unix)]
+#[test]
+fn termination_signals_while_writing_leave_whole_outputs_or_none() {
+    signalled_while_writing(None, libc::SIGTERM, 143);
+    signalled_while_writing(None, libc::SIGHUP, 129);
+}
+
+/// Renders to four outputs, sends `first` (if any) once the render is done, then `then`
+/// the moment a write's temporary file appears, and checks what is left: whole outputs or
+/// none, no temporary file, no runtime directory, and at least one run in five caught
+/// mid-write (exit `status`, the output whose temporary file was seen absent).
+#[cfg(unix)]
+fn signalled_while_writing(first: Option<libc::c_int>, then: libc::c_int, status: i32) {
     use std::io::{BufRead, BufReader};
     let scene = "SPAWN Shape.Sphere(.material Material(.brdf Brdf.Diffuse(Pigment.Checkered(64))))\n\
                  USING Camera.Perspective() Image(32, 24) Renderer.Flat() Tracer()\n";
@@ -267,8 +285,10 @@ fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
             assert!(err.read_line(&mut text).unwrap() > 0, "no summary line: {text}");
         }
         let pid = child.id() as libc::pid_t;
-        // SAFETY: kill(2) on our own child, which has not been waited for.
-        unsafe { libc::kill(pid, libc::SIGINT) };
+        if let Some(signal) = first {
+            // SAFETY: kill(2) on our own child, which has not been waited for.
+            unsafe { libc::kill(pid, signal) };
+        }
         let seen = loop {
             if let Some(tmp) = names().into_iter().find(|n| n.ends_with(".lumen.tmp")) {
                 break Some(tmp);
@@ -277,8 +297,9 @@ fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
                 break None;
             }
         };
-        unsafe { libc::kill(pid, libc::SIGINT) };
-        let status = child.wait().unwrap();
+        // SAFETY: as above.
+        unsafe { libc::kill(pid, then) };
+        let exit = child.wait().unwrap();
         std::io::Read::read_to_string(&mut err, &mut text).unwrap();
         let left = names();
         assert!(!left.iter().any(|n| n.ends_with(".tmp")), "{left:?} after {seen:?}\n{text}");
@@ -293,12 +314,12 @@ fn a_second_ctrl_c_while_writing_leaves_whole_outputs_or_none() {
         // Caught mid-write: the output whose temporary file was seen is absent.
         let target = seen.as_deref().and_then(|t| t.strip_prefix('.')).and_then(|t| t.split_once(".lumen.tmp"));
         if let Some(target) = target.and_then(|(t, _)| t.rsplit_once('.')).map(|(t, _)| t) {
-            if status.code() == Some(130) && !left.iter().any(|n| n == target) {
+            if exit.code() == Some(status) && !left.iter().any(|n| n == target) {
                 caught += 1;
             }
         }
     }
-    assert!(caught > 0, "no second Ctrl-C met a write in progress in 5 tries");
+    assert!(caught > 0, "no signal {then} met a write in progress in 5 tries");
 }
 
 /// `WGPU_BACKEND` naming no backend this machine has leaves wgpu no adapter: the error

@@ -94,6 +94,9 @@ pub fn main() -> ExitCode {
     if cli.command.renders_on_two_devices() {
         software_driver::split_cores_between_devices();
     }
+    // After the environment changes above (this starts a thread).
+    #[cfg(unix)]
+    crate::stop::exit_cleanly_on_termination();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => report(&e),

@@ -306,7 +306,10 @@ fn render_on_gpu(
     match &out.profile {
         Some(p) => crate::diag!("GPU stages ({}):\n{}", gpu.adapter_info.name, p.table()),
         None if args.profile => {
-            crate::diag!("note: {} has no timestamp queries inside passes; --profile timed nothing", gpu.adapter_info.name)
+            crate::diag!(
+                "note: {} has no timestamp queries inside passes; --profile timed nothing",
+                gpu.adapter_info.name
+            )
         }
         None => {}
     }
