@@ -60,10 +60,22 @@ fn forced_exit(message: &str, status: i32) -> ! {
 /// temporary file and the private runtime directory behind. Unlike Ctrl-C they do not
 /// keep the completed rounds: a job ended this way is ended. Starts a thread: call it once
 /// the process may have threads (`cli::main`, after its environment changes).
+///
+/// A signal the process inherited as ignored stays ignored: `nohup` ignores SIGHUP so that
+/// a render outlives its terminal.
 #[cfg(unix)]
 pub fn exit_cleanly_on_termination() {
     use signal_hook::consts::{SIGHUP, SIGTERM};
-    match signal_hook::iterator::Signals::new([SIGTERM, SIGHUP]) {
+    let ignored = |signal: libc::c_int| {
+        // SAFETY: sigaction with a null new action only reads the current disposition.
+        let mut old: libc::sigaction = unsafe { std::mem::zeroed() };
+        unsafe { libc::sigaction(signal, std::ptr::null(), &mut old) == 0 && old.sa_sigaction == libc::SIG_IGN }
+    };
+    let signals: Vec<libc::c_int> = [SIGTERM, SIGHUP].into_iter().filter(|&s| !ignored(s)).collect();
+    if signals.is_empty() {
+        return;
+    }
+    match signal_hook::iterator::Signals::new(signals) {
         Ok(mut signals) => {
             std::thread::spawn(move || {
                 if let Some(signal) = signals.forever().next() {

@@ -252,6 +252,30 @@ fn termination_signals_while_writing_leave_whole_outputs_or_none() {
     signalled_while_writing(None, libc::SIGHUP, 129);
 }
 
+/// A SIGHUP inherited as ignored (`nohup`) stays ignored: the render goes on to its end.
+#[cfg(unix)]
+#[test]
+fn an_ignored_sighup_stays_ignored() {
+    use std::os::unix::process::CommandExt;
+    let dir = scene_dir();
+    let mut cmd = lumen(dir.path());
+    cmd.args(["render", "tiny.sl", "--device", "cpu", "--spp", "1000000", "--time-limit", "1", "-o", "n.pfm"]);
+    // SAFETY: only async-signal-safe calls (signal) between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::signal(libc::SIGHUP, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let child = cmd.stderr(Stdio::piped()).spawn().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    // SAFETY: kill(2) on our own child, which has not been waited for.
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGHUP) };
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    lumen::image::read_image(&dir.path().join("n.pfm")).unwrap();
+}
+
 /// Renders to four outputs, sends `first` (if any) once the render is done, then `then`
 /// the moment a write's temporary file appears, and checks what is left: whole outputs or
 /// none, no temporary file, no runtime directory, and at least one run in five caught
