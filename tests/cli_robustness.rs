@@ -252,21 +252,27 @@ fn termination_signals_while_writing_leave_whole_outputs_or_none() {
     signalled_while_writing(None, libc::SIGHUP, 129);
 }
 
+/// Starts `cmd` with `signal` ignored, as `nohup` does for SIGHUP.
+#[cfg(unix)]
+fn ignored_in_child(cmd: &mut Command, signal: libc::c_int) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: only an async-signal-safe call (signal) between fork and exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            libc::signal(signal, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+}
+
 /// A SIGHUP inherited as ignored (`nohup`) stays ignored: the render goes on to its end.
 #[cfg(unix)]
 #[test]
 fn an_ignored_sighup_stays_ignored() {
-    use std::os::unix::process::CommandExt;
     let dir = scene_dir();
     let mut cmd = lumen(dir.path());
     cmd.args(["render", "tiny.sl", "--device", "cpu", "--spp", "1000000", "--time-limit", "1", "-o", "n.pfm"]);
-    // SAFETY: only async-signal-safe calls (signal) between fork and exec.
-    unsafe {
-        cmd.pre_exec(|| {
-            libc::signal(libc::SIGHUP, libc::SIG_IGN);
-            Ok(())
-        });
-    }
+    ignored_in_child(&mut cmd, libc::SIGHUP);
     let child = cmd.stderr(Stdio::piped()).spawn().unwrap();
     std::thread::sleep(std::time::Duration::from_millis(300));
     // SAFETY: kill(2) on our own child, which has not been waited for.
@@ -452,11 +458,11 @@ fn an_output_the_disk_refuses_is_one_clear_error_and_no_file() {
     let dir = scene_dir();
     let mut cmd = lumen(dir.path());
     cmd.args(["render", "tiny.sl", "--device", "cpu", "--width", "64", "-o", "small.png", "-o", "big.pfm"]);
-    // SAFETY: only async-signal-safe calls (signal, setrlimit) between fork and exec.
+    // Past the limit a write fails with EFBIG instead of raising SIGXFSZ.
+    ignored_in_child(&mut cmd, libc::SIGXFSZ);
+    // SAFETY: only async-signal-safe calls (setrlimit) between fork and exec.
     unsafe {
         cmd.pre_exec(|| {
-            // Past the limit a write fails with EFBIG instead of raising SIGXFSZ.
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
             let rl = libc::rlimit { rlim_cur: 20_000, rlim_max: 20_000 };
             if libc::setrlimit(libc::RLIMIT_FSIZE, &rl) != 0 {
                 return Err(std::io::Error::last_os_error());
