@@ -69,9 +69,9 @@ pub struct SceneLangError {
     pub kind: ErrorKind,
     /// The script's name as given to the loader (a path, or `--vars`).
     pub file: String,
-    /// 1-based line of the culprit.
+    /// 1-based line of the culprit; 0 for an error about the whole file.
     pub line: usize,
-    /// 1-based column (in characters) of the culprit.
+    /// 1-based column (in characters) of the culprit; 0 for an error about the whole file.
     pub col: usize,
     pub message: String,
     /// Boxed to keep `Result<_, SceneLangError>` small.
@@ -171,8 +171,8 @@ impl SceneLangError {
         Self {
             kind,
             file: file.to_string(),
-            line: 1,
-            col: 1,
+            line: 0,
+            col: 0,
             message: message.into(),
             detail: Box::new(Detail { expected: None, note: None, source_line: String::new(), caret_len: 1 }),
         }
@@ -204,6 +204,16 @@ impl SceneLangError {
 
 impl fmt::Display for SceneLangError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line == 0 {
+            // About the whole file: no position, no excerpt.
+            write!(f, "{}: error: {}", self.file, self.message)?;
+            for (label, text) in [("expected", &self.detail.expected), ("note", &self.detail.note)] {
+                if let Some(t) = text {
+                    write!(f, "\n   = {label}: {t}")?;
+                }
+            }
+            return Ok(());
+        }
         writeln!(f, "{}:{}:{}: error: {}", self.file, self.line, self.col, self.message)?;
         let num = self.line.to_string();
         let pad = " ".repeat(num.len());
@@ -264,6 +274,17 @@ mod tests {
             e.to_string(),
             "x.sl:2:12: error: unexpected `>`\n 2 | SET b <1, 2>\n   |            ^\n   = expected: `,`"
         );
+    }
+
+    /// An error about the whole file (it cannot be read) names the file alone: no line,
+    /// column or excerpt, which would point at an empty first line.
+    #[test]
+    fn whole_file_errors_have_no_position() {
+        let e = SceneLangError::whole_file("s.sl", ErrorKind::Io, "cannot read script: gone");
+        assert_eq!(e.to_string(), "s.sl: error: cannot read script: gone");
+        assert_eq!((e.line, e.col), (0, 0));
+        let e = e.with_expected("a readable file");
+        assert_eq!(e.to_string(), "s.sl: error: cannot read script: gone\n   = expected: a readable file");
     }
 
     #[test]
