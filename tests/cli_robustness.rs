@@ -504,3 +504,24 @@ fn an_unwritable_stderr_changes_no_outcome() {
         assert_eq!(o.status.code(), Some(1), "stderr {k}");
     }
 }
+
+/// A size outside 1..=32768 is a usage error of every command that takes one, before any
+/// work (`bench` reported a 0-pixel size per scene and succeeded).
+#[test]
+fn sizes_out_of_range_are_usage_errors_for_every_command() {
+    let dir = scene_dir();
+    let commands: [&[&str]; 3] = [
+        &["render", "tiny.sl", "--device", "cpu"],
+        &["bench", "--device", "cpu", "--scenes", "tiny.sl", "--max-spheres", "0"],
+        &["converge", "tiny.sl", "--device", "cpu", "--spp", "1", "--reference-spp", "2"],
+    ];
+    for args in commands {
+        for (flag, value) in [("--width", "0"), ("--height", "32769")] {
+            let o = lumen(dir.path()).args(args).args([flag, value]).output().unwrap();
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{args:?} {flag} {value}: {err}");
+            assert!(err.contains(&format!("{value} is not in 1..=32768")), "{args:?}: {err}");
+        }
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "only tiny.sl is left");
+}

@@ -44,14 +44,20 @@ impl ScriptArgs {
 #[derive(Debug, Clone, Default, Args)]
 pub struct SceneOverrides {
     /// Image width in pixels. Given alone, the height follows from the camera's aspect ratio.
-    #[arg(long)]
+    #[arg(long, value_parser = image_side())]
     pub width: Option<u32>,
     /// Image height in pixels. Given alone, the width follows from the camera's aspect ratio.
-    #[arg(long)]
+    #[arg(long, value_parser = image_side())]
     pub height: Option<u32>,
     /// Replaces the state of the tracer's Pcg seed.
     #[arg(long)]
     pub seed: Option<u64>,
+}
+
+/// `--width` and `--height`: 1 to [`crate::scene::MAX_IMAGE_SIDE`], refused when parsed by
+/// every command alike (a `bench` run would otherwise report a 0-pixel size per scene).
+fn image_side() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=i64::from(crate::scene::MAX_IMAGE_SIDE))
 }
 
 impl SceneOverrides {
