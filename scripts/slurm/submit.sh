@@ -8,7 +8,9 @@
 # e.g. submit.sh scenes/cornell.sl 16 /shared/cornell /shared/cornell.exr --spp 4096 --device gpu
 # sbatch options (partition, account, GPUs per task…) come from the usual SBATCH_*
 # environment variables, e.g. SBATCH_PARTITION=gpu SBATCH_GPUS_PER_TASK=1. Logs go to
-# OUT_DIR/logs/. Paths must be visible from every node (a shared file system).
+# OUT_DIR/logs/. Paths must be visible from every node (a shared file system). A task that
+# Slurm ends (time limit, scancel: SIGTERM) exits with status 143 and leaves no partial
+# part; pass --time-limit SECONDS below the job's limit to keep what a task rendered.
 set -euo pipefail
 
 usage="usage: submit.sh SCENE SHARDS OUT_DIR OUTPUT.exr [lumen render options...]"
