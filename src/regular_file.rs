@@ -17,8 +17,12 @@ use std::path::Path;
 /// let path = dir.path().join("a.bin");
 /// std::fs::write(&path, b"bytes").unwrap();
 /// assert_eq!(lumen::regular_file::read(&path).unwrap(), b"bytes");
+/// assert!(lumen::regular_file::read(dir.path()).is_err()); // a directory
+/// # #[cfg(unix)]
+/// # {
 /// let e = lumen::regular_file::read(std::path::Path::new("/dev/zero")).unwrap_err();
 /// assert!(e.to_string().contains("not a regular file"));
+/// # }
 /// ```
 pub fn read(path: &Path) -> std::io::Result<Vec<u8>> {
     let meta = std::fs::metadata(path)?;
