@@ -957,3 +957,15 @@ fn named_metals_and_single_scattering() {
         assert_eq!(material(&again, i).brdf, material(&s, i).brdf, "{text}");
     }
 }
+
+/// A leading UTF-8 byte-order mark (Windows editors write one) is skipped: the script loads
+/// as without it, and columns on its first line count from after it.
+#[test]
+fn a_leading_byte_order_mark_is_skipped() {
+    let src = "SPAWN Shape.Sphere(.transformation TRANSLATE(.X 2))\nUSING Camera.Perspective() Image(4, 3) Renderer.Flat() Tracer()\n";
+    let with_bom = format!("\u{feff}{src}");
+    assert_eq!(load(&with_bom).unwrap(), load(src).unwrap());
+    check_err("\u{feff}SPAWN Shape.Sphere(.bogus 1)\n", ErrorKind::UnknownKeyword, 1, 20, ".bogus");
+    // Only a leading one: elsewhere it is a stray character, as before.
+    assert!(load(&format!("SPAWN Shape.Sphere()\n\u{feff}{src}")).is_err());
+}

@@ -145,6 +145,11 @@ pub fn abandon_writes() -> WritesAbandoned {
 /// ```
 pub fn check_destination(path: &Path) -> std::io::Result<()> {
     use std::io::{Error, ErrorKind};
+    // "out.png/" names a directory (a `Path` drops the separator from its file name, and
+    // the write's rename would then fail with "Not a directory", after the work).
+    if path.as_os_str().as_encoded_bytes().last().is_some_and(|&b| std::path::is_separator(b as char)) {
+        return Err(Error::new(ErrorKind::NotADirectory, "it ends with a path separator, so it names a directory"));
+    }
     let dir = directory_of(path);
     if !dir.is_dir() {
         return Err(if dir.exists() {
@@ -266,6 +271,7 @@ mod tests {
             (dir.path().join("none/a.png"), Err("does not exist")),
             (file.join("a.png"), Err("is not a directory")),
             (dir.path().to_path_buf(), Err("it is a directory")),
+            (dir.path().join("new.png/"), Err("ends with a path separator")),
         ];
         for (path, want) in cases {
             let checked = check_destination(&path);

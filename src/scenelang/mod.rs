@@ -121,6 +121,9 @@ pub fn load_str_with_output(
         it.cli_vars()?;
         vars = std::mem::take(&mut it.vars);
     }
+    // A leading byte-order mark (Windows editors write one) is not part of the script;
+    // lines and columns count from after it, as an editor shows them.
+    let source = source.strip_prefix('\u{feff}').unwrap_or(source);
     let mut it = Interp::new(source, name, opts.time, base_dir, out, vars);
     it.run()?;
     it.finish()
