@@ -1,13 +1,17 @@
 //! OpenEXR files through the `exr` crate.
 //!
-//! Reading takes the first layer with R, G and B channels at its largest resolution; any
-//! sample type (f16, f32, u32) is converted to f32 and other channels (alpha included)
-//! are ignored. Writing stores R, G, B as f32 with the crate's default lossless compression.
+//! Reading takes the first layer with R, G and B channels at its largest resolution, or,
+//! in a file without one, the first with a luminance channel Y (a grey image, read as
+//! R = G = B = Y, as a grey PNG is); any sample type (f16, f32, u32) is converted to f32
+//! and other channels (alpha included) are ignored. Writing stores R, G, B as f32 with the
+//! crate's default lossless compression.
 
 use std::io::Cursor;
 
 use exr::meta::attribute::{AttributeValue, Text};
-use exr::prelude::{read, Image, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
+use exr::prelude::{
+    read, Image, Layer, ReadChannels, ReadLayers, ReadSpecificChannel, SpecificChannels, Vec2, WritableImage,
+};
 
 use super::size::{check_size, SizeError};
 use super::HdrImage;
@@ -28,29 +32,65 @@ pub(crate) fn decode_exr(bytes: &[u8]) -> Result<HdrImage, ExrDecodeError> {
 /// The image and the header attributes lumen does not interpret itself (the image's and the
 /// first layer's `other` attributes, merged).
 pub(crate) fn decode_exr_with_attributes(bytes: &[u8]) -> Result<(HdrImage, Attributes), ExrDecodeError> {
-    let image = read()
+    let rgb = read()
         .no_deep_data()
         .largest_resolution_level()
-        .rgb_channels(
-            |size: Vec2<usize>, _| {
-                check_size(size.width(), size.height())
-                    .map_err(ExrDecodeError::Size)
-                    .and_then(|_| HdrImage::try_new(size.0, size.1).map_err(ExrDecodeError::Memory))
-            },
-            |img: &mut Result<HdrImage, ExrDecodeError>, pos: Vec2<usize>, (r, g, b): (f32, f32, f32)| {
-                if let Ok(img) = img {
-                    img.set(pos.x(), pos.y(), Rgb32::new(r, g, b));
-                }
-            },
-        )
+        .rgb_channels(new_image, |img: &mut Pixels, pos: Vec2<usize>, (r, g, b): (f32, f32, f32)| {
+            if let Ok(img) = img {
+                img.set(pos.x(), pos.y(), Rgb32::new(r, g, b));
+            }
+        })
         .first_valid_layer()
         .all_attributes()
         .non_parallel()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| ExrDecodeError::Other(e.to_string()))?;
+        .from_buffered(Cursor::new(bytes));
+    let (pixels, attrs) = match rgb {
+        Ok(image) => pixels_and_attributes(image),
+        Err(exr::error::Error::Invalid(why)) if why.contains("no layer") => {
+            // No RGB layer: a grey image's Y channel, else the RGB reader's error.
+            read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .specific_channels()
+                .required("Y")
+                .collect_pixels(new_image, |img: &mut Pixels, pos: Vec2<usize>, (y,): (f32,)| {
+                    if let Ok(img) = img {
+                        img.set(pos.x(), pos.y(), Rgb32::new(y, y, y));
+                    }
+                })
+                .first_valid_layer()
+                .all_attributes()
+                .non_parallel()
+                .from_buffered(Cursor::new(bytes))
+                .map(pixels_and_attributes)
+                .map_err(|e| match e {
+                    exr::error::Error::Invalid(_) if e.to_string().contains("no layer") => ExrDecodeError::Other(
+                        format!("{why}: the file has no layer with R, G and B channels, nor one with a Y channel"),
+                    ),
+                    e => ExrDecodeError::Other(e.to_string()),
+                })?
+        }
+        Err(e) => return Err(ExrDecodeError::Other(e.to_string())),
+    };
+    Ok((pixels?, attrs))
+}
+
+/// A read image's pixels, and its and its layer's `other` attributes, merged.
+fn pixels_and_attributes<C>(image: Image<Layer<SpecificChannels<Pixels, C>>>) -> (Pixels, Attributes) {
     let mut attrs = image.attributes.other;
     attrs.extend(image.layer_data.attributes.other);
-    Ok((image.layer_data.channel_data.pixels?, attrs))
+    (image.layer_data.channel_data.pixels, attrs)
+}
+
+/// What a layer is read into: the image, or why it could not be made.
+type Pixels = Result<HdrImage, ExrDecodeError>;
+
+/// The image a layer of `size` is read into, once its size passed the check (whatever
+/// channels the reader chose).
+fn new_image<C>(size: Vec2<usize>, _: &C) -> Pixels {
+    check_size(size.width(), size.height())
+        .map_err(ExrDecodeError::Size)
+        .and_then(|_| HdrImage::try_new(size.0, size.1).map_err(ExrDecodeError::Memory))
 }
 
 /// Header attributes by name.
@@ -98,6 +138,27 @@ mod tests {
         let img = decode_exr(&out.into_inner()).ok().unwrap();
         assert_eq!(img.get(1, 0), Rgb32::new(1.5, 0.0, 0.25));
         assert_eq!(img.get(0, 1), Rgb32::new(0.5, 1.0, 0.25));
+    }
+
+    /// A grey file (one Y channel, as ffmpeg's grayf32 or a luminance map) reads as
+    /// R = G = B = Y; a file with neither RGB nor Y says so.
+    #[test]
+    fn reads_a_luminance_only_file_as_grey() {
+        let channels = SpecificChannels::build()
+            .with_channel("Y")
+            .with_pixel_fn(|Vec2(x, y): Vec2<usize>| (f16::from_f32(x as f32 * 0.5 + y as f32),));
+        let mut out = Cursor::new(Vec::new());
+        Image::from_channels((3, 2), channels).write().non_parallel().to_buffered(&mut out).unwrap();
+        let img = decode_exr(&out.into_inner()).ok().unwrap();
+        assert_eq!(img.get(2, 1), Rgb32::new(2.0, 2.0, 2.0));
+        assert_eq!(img.get(1, 0), Rgb32::new(0.5, 0.5, 0.5));
+        let channels = SpecificChannels::build().with_channel("Z").with_pixel_fn(|_: Vec2<usize>| (1.0f32,));
+        let mut out = Cursor::new(Vec::new());
+        Image::from_channels((2, 2), channels).write().non_parallel().to_buffered(&mut out).unwrap();
+        match decode_exr(&out.into_inner()) {
+            Err(ExrDecodeError::Other(why)) => assert!(why.contains("nor one with a Y channel"), "{why}"),
+            _ => panic!("a file without RGB or Y decoded"),
+        }
     }
 
     #[test]
