@@ -23,6 +23,9 @@ use glam::{DVec2, DVec3};
 use super::{check_count, MeshError, MeshErrorKind, MeshLocation, MeshParts, TriangleMesh};
 
 pub(super) fn parse(name: &str, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
+    // A leading UTF-8 byte-order mark (Windows tools write one) would hide the first
+    // statement from tobj, silently dropping a vertex and shifting every index after it.
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let scan = prescan(name, bytes);
     if let Some((error, line_start)) = scan.error {
         // tobj reports a bad line above the pre-scan's first error first: file order.
@@ -245,6 +248,15 @@ mod tests {
         assert_eq!(m.dropped_degenerate(), 0);
         assert_eq!(m.bounds().min, DVec3::ZERO);
         assert_eq!(m.bounds().max, DVec3::new(1.0, 1.0, 0.0));
+    }
+
+    /// A leading byte-order mark is skipped: the first vertex stays (it was dropped, and
+    /// the face's last index was out of range).
+    #[test]
+    fn a_leading_byte_order_mark_is_skipped() {
+        let m = obj("\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        assert_eq!(m.vertex_count(), 3);
+        assert_eq!(m.positions()[0], DVec3::ZERO);
     }
 
     #[test]

@@ -29,6 +29,8 @@ const VERTEX_SLOTS: [&str; 8] = ["x", "y", "z", "nx", "ny", "nz", "u", "v"];
 const FACE_INDICES: &str = "indices";
 
 pub(super) fn parse(name: &str, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
+    // A leading UTF-8 byte-order mark (an editor's, before the text header) is skipped.
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let mut reader = Reader::new(Cursor::new(bytes));
     let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| parse_error(name, e, true))?;
     let layout = Layout::from_header(name, &header)?;
@@ -287,6 +289,15 @@ mod tests {
     }
 
     const XYZ_FLOAT: &str = "property float x\nproperty float y\nproperty float z\n";
+
+    /// A leading byte-order mark before the header is skipped (the magic word was refused).
+    #[test]
+    fn a_leading_byte_order_mark_is_skipped() {
+        let mut b = b"\xef\xbb\xbf".to_vec();
+        b.extend(header("ascii", XYZ_FLOAT, 3, "list uchar int vertex_indices", 1));
+        b.extend_from_slice(b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        assert_eq!(ply(&b).unwrap().triangles(), &[[0, 1, 2]]);
+    }
 
     #[test]
     fn ascii_with_normals_uvs_and_a_pentagon() {
