@@ -29,8 +29,16 @@ pub fn read(path: &Path) -> std::io::Result<Vec<u8>> {
     if meta.is_dir() {
         return Err(Error::new(ErrorKind::IsADirectory, "it is a directory"));
     }
-    if !meta.is_file() {
-        return Err(Error::new(ErrorKind::InvalidInput, "it is not a regular file (a FIFO, device or socket)"));
-    }
+    refuse_special(meta.file_type())?;
     std::fs::read(path)
+}
+
+/// The error for a FIFO, device or socket (`InvalidInput`); regular files, directories and
+/// symbolic links pass (callers that follow links ask about what they point at). Reading
+/// here and writing in `image::write_atomically` refuse the same kinds in the same words.
+pub(crate) fn refuse_special(ty: std::fs::FileType) -> std::io::Result<()> {
+    if ty.is_file() || ty.is_dir() || ty.is_symlink() {
+        return Ok(());
+    }
+    Err(Error::new(ErrorKind::InvalidInput, "it is not a regular file (a FIFO, device or socket)"))
 }

@@ -167,15 +167,7 @@ pub fn check_destination(path: &Path) -> std::io::Result<()> {
 /// An error where `path` is a FIFO, a device or a socket (not followed through a symbolic
 /// link: the link is what a write replaces).
 fn refuse_special_file(path: &Path) -> std::io::Result<()> {
-    let Ok(meta) = std::fs::symlink_metadata(path) else { return Ok(()) };
-    let ty = meta.file_type();
-    if ty.is_file() || ty.is_dir() || ty.is_symlink() {
-        return Ok(());
-    }
-    Err(std::io::Error::new(
-        std::io::ErrorKind::InvalidInput,
-        "it is not a regular file (a FIFO, device or socket), which an image does not replace",
-    ))
+    std::fs::symlink_metadata(path).map_or(Ok(()), |meta| crate::regular_file::refuse_special(meta.file_type()))
 }
 
 /// The directory a file at `path` goes in (`.` for a bare name).

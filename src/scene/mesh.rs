@@ -105,14 +105,14 @@ impl TriangleMesh {
     /// merge into one triangle set, materials (`mtllib`, `usemtl`) and polylines (`l`) are
     /// ignored.
     pub fn from_obj_bytes(name: &str, bytes: &[u8]) -> Result<Self, MeshError> {
-        obj::parse(name, bytes)
+        obj::parse(name, without_bom(bytes))
     }
 
     /// Parses a PLY file (ASCII, binary little- or big-endian): the `vertex` element's
     /// x, y, z (optionally nx, ny, nz and u, v / s, t / texture_u, texture_v), and the
     /// `face` element's `vertex_indices` (or `vertex_index`), fan-triangulated.
     pub fn from_ply_bytes(name: &str, bytes: &[u8]) -> Result<Self, MeshError> {
-        ply::parse(name, bytes)
+        ply::parse(name, without_bom(bytes))
     }
 
     /// Validates raw arrays into a mesh (see the type's invariants). Triangles with a
@@ -241,6 +241,13 @@ fn unit_normals(ns: &[DVec3], n: usize) -> Option<Vec<DVec3>> {
 /// handles them, and dropping them could open cracks.
 fn is_degenerate(tri: [u32; 3], a: DVec3, b: DVec3, c: DVec3) -> bool {
     tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || (b - a).cross(c - a) == DVec3::ZERO
+}
+
+/// `bytes` without a leading UTF-8 byte-order mark, which Windows tools write before text:
+/// tobj would read it as part of an unknown first statement (an OBJ lost its first vertex,
+/// every face index after it one vertex off) and a PLY header would not start with `ply`.
+fn without_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes)
 }
 
 #[cfg(test)]

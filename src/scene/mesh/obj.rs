@@ -23,9 +23,6 @@ use glam::{DVec2, DVec3};
 use super::{check_count, MeshError, MeshErrorKind, MeshLocation, MeshParts, TriangleMesh};
 
 pub(super) fn parse(name: &str, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
-    // A leading UTF-8 byte-order mark (Windows tools write one) would hide the first
-    // statement from tobj, silently dropping a vertex and shifting every index after it.
-    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let scan = prescan(name, bytes);
     if let Some((error, line_start)) = scan.error {
         // tobj reports a bad line above the pre-scan's first error first: file order.

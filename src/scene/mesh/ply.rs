@@ -29,8 +29,6 @@ const VERTEX_SLOTS: [&str; 8] = ["x", "y", "z", "nx", "ny", "nz", "u", "v"];
 const FACE_INDICES: &str = "indices";
 
 pub(super) fn parse(name: &str, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
-    // A leading UTF-8 byte-order mark (an editor's, before the text header) is skipped.
-    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let mut reader = Reader::new(Cursor::new(bytes));
     let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| parse_error(name, e, true))?;
     let layout = Layout::from_header(name, &header)?;
