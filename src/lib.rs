@@ -13,6 +13,8 @@
 /// panics when standard error cannot be written (redirected to a full disk, a pipe whose
 /// reader left), which would end a render whose outputs are fine. Diagnostics are best
 /// effort; results go to files or through `cli::output`, which reports its failures.
+/// Diagnostics quote input, so control characters in them are shown, not obeyed, and
+/// very long lines are shortened ([`printable::for_terminal`]).
 ///
 /// ```
 /// lumen::diag!("rendered {} samples", 16);
@@ -21,7 +23,8 @@
 macro_rules! diag {
     ($($arg:tt)*) => {{
         use ::std::io::Write as _;
-        let _ = ::std::writeln!(::std::io::stderr(), $($arg)*);
+        let text = ::std::format!($($arg)*);
+        let _ = ::std::writeln!(::std::io::stderr(), "{}", $crate::printable::for_terminal(&text));
     }};
 }
 
@@ -36,6 +39,7 @@ pub mod image;
 pub mod memory;
 pub mod optics;
 pub mod prepare;
+pub mod printable;
 pub mod regular_file;
 pub mod sampling;
 pub mod scene;

@@ -1,6 +1,7 @@
 //! The `lumen` binary under hostile conditions (issue 16): standard output full or closed,
 //! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer, a second Ctrl-C
-//! while the outputs are written.
+//! while the outputs are written, control characters and megabyte lines in what it quotes,
+//! every kind of line end.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -524,4 +525,77 @@ fn sizes_out_of_range_are_usage_errors_for_every_command() {
         }
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "only tiny.sl is left");
+}
+
+/// What lumen prints quotes its input, and a terminal obeys the control characters it is
+/// sent: a script's `ESC [ 2 J` cleared the screen when its line was quoted in an error.
+/// Now no control character but tab and newline reaches standard error or output (they are
+/// shown as U+2400-block pictures), and an error in a one-line script of a megabyte quotes
+/// a window around its culprit instead of the whole line.
+#[test]
+fn quoted_input_cannot_drive_the_terminal() {
+    let dir = scene_dir();
+    let obeyed = |bytes: &[u8]| bytes.iter().any(|&b| b < 0x20 && b != b'\n' && b != b'\t' || b == 0x7f);
+    // The culprit's line, the message (a file name) and a note all quote hostile bytes.
+    std::fs::write(dir.path().join("esc.sl"), "# \x1b]0;owned\x07 title\nSET x 1 \x1b[2J\x1b[31m\n").unwrap();
+    std::fs::write(dir.path().join("bell.sl"), "SET s LOAD \"\x07\x1b[2J.pfm\"\n").unwrap();
+    for (script, shown) in [("esc.sl", "2 | SET x 1 ␛[2J␛[31m"), ("bell.sl", "image file ␇␛[2J.pfm not found")]
+    {
+        let o = lumen(dir.path()).args(["check", script]).output().unwrap();
+        assert_eq!(o.status.code(), Some(1), "{script}");
+        assert!(!obeyed(&o.stderr), "{script}: {:?}", stderr(&o));
+        assert!(stderr(&o).contains(shown), "{script}: {}", stderr(&o));
+    }
+    // Standard output: `check` names a mesh by its file name.
+    let mesh = "tri\x1b[2J\u{202e}.obj";
+    std::fs::write(dir.path().join(mesh), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let script = SCENE.replace("SPAWN\n", &format!("SPAWN\n    Shape.Mesh(.file \"{mesh}\", .material red)\n"));
+    std::fs::write(dir.path().join("mesh.sl"), script).unwrap();
+    let o = lumen(dir.path()).args(["check", "mesh.sl"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(!obeyed(&o.stdout) && !out.contains('\u{202e}'), "{out}");
+    assert!(out.contains("tri␛[2J\u{fffd}.obj"), "{out}");
+    // A megabyte on one line, the culprit in its middle.
+    let names = |from: usize| (from..from + 60_000).map(|i| format!("a{i} 1 ")).collect::<String>();
+    let line = format!("SET {}?{}", names(0), names(60_000));
+    std::fs::write(dir.path().join("long.sl"), &line).unwrap();
+    let o = lumen(dir.path()).args(["check", "long.sl"]).output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(err.len() < 2_000, "{} bytes: {}", err.len(), &err[..2_000.min(err.len())]);
+    let col = line.find('?').unwrap() + 1;
+    assert!(err.contains(&format!("long.sl:1:{col}: ")), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    let at = lines.iter().position(|l| l.starts_with(" 1 | ")).expect("the excerpt");
+    let (text, caret) =
+        (lines[at].chars().skip(5).collect::<String>(), lines[at + 1].chars().skip(5).collect::<String>());
+    assert!(text.starts_with('…') && text.ends_with('…'), "{text}");
+    assert_eq!(
+        text.chars().nth(caret.find('^').unwrap()),
+        Some('?'),
+        "the caret is under the culprit:\n{text}\n{caret}"
+    );
+}
+
+/// A script's lines may end in `\n`, `\r\n` or classic Mac OS's lone `\r`: with the last, a
+/// comment ran to the end of the file and took the scene with it ("the script never sets
+/// the camera"), and every error was on line 1.
+#[test]
+fn every_line_end_loads_the_same_scene() {
+    let dir = scene_dir();
+    let commented = format!("# a comment\n{SCENE}");
+    let mut summaries = Vec::new();
+    for (name, end) in [("lf.sl", "\n"), ("crlf.sl", "\r\n"), ("cr.sl", "\r")] {
+        std::fs::write(dir.path().join(name), commented.replace('\n', end)).unwrap();
+        let o = lumen(dir.path()).args(["check", name]).output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        let summary = String::from_utf8(o.stdout).unwrap();
+        summaries.push(summary.replacen(name, "SCRIPT", 1));
+        let broken = commented.replace("red   Material", "red   Materail").replace('\n', end);
+        std::fs::write(dir.path().join(name), broken).unwrap();
+        let o = lumen(dir.path()).args(["check", name]).output().unwrap();
+        assert!(stderr(&o).contains(&format!("{name}:4:11: error: unknown type `Materail`")), "{name}: {}", stderr(&o));
+    }
+    assert!(summaries.iter().all(|s| *s == summaries[0]), "{summaries:?}");
 }

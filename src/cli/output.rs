@@ -23,10 +23,13 @@ impl StdoutError {
 }
 
 /// Writes `text` to standard output and flushes it, so a failure is reported here rather
-/// than lost when the process exits (std ignores errors of its final flush).
+/// than lost when the process exits (std ignores errors of its final flush). Control
+/// characters in it (a mesh's file name in `lumen check`'s summary) are shown, not
+/// obeyed ([`crate::printable::printable`]).
 pub fn print(text: impl fmt::Display) -> Result<(), StdoutError> {
+    let text = text.to_string();
     let mut out = io::stdout().lock();
-    write!(out, "{text}").and_then(|()| out.flush()).map_err(StdoutError)
+    write!(out, "{}", crate::printable::printable(&text)).and_then(|()| out.flush()).map_err(StdoutError)
 }
 
 /// Collects lines for one [`print()`]: commands build their whole result, then write it once.

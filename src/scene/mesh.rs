@@ -105,7 +105,7 @@ impl TriangleMesh {
     /// merge into one triangle set, materials (`mtllib`, `usemtl`) and polylines (`l`) are
     /// ignored.
     pub fn from_obj_bytes(name: &str, bytes: &[u8]) -> Result<Self, MeshError> {
-        obj::parse(name, without_bom(bytes))
+        obj::parse(name, &lone_cr_as_newline(without_bom(bytes)))
     }
 
     /// Parses a PLY file (ASCII, binary little- or big-endian): the `vertex` element's
@@ -248,6 +248,18 @@ fn is_degenerate(tri: [u32; 3], a: DVec3, b: DVec3, c: DVec3) -> bool {
 /// every face index after it one vertex off) and a PLY header would not start with `ply`.
 fn without_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes)
+}
+
+/// OBJ text with classic Mac OS line ends (a lone `\r`) turned into `\n`, which is all
+/// tobj splits lines at: it read such a file as one line, a vertex with every other
+/// statement as its numbers. `\r\n` is left alone (tobj trims the `\r`). PLY is not
+/// converted: its binary bodies hold any bytes, and its header must end in `\n`.
+fn lone_cr_as_newline(bytes: &[u8]) -> std::borrow::Cow<'_, [u8]> {
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    if !(0..bytes.len()).any(lone) {
+        return std::borrow::Cow::Borrowed(bytes);
+    }
+    std::borrow::Cow::Owned((0..bytes.len()).map(|i| if lone(i) { b'\n' } else { bytes[i] }).collect())
 }
 
 #[cfg(test)]

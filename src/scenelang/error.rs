@@ -84,8 +84,48 @@ struct Detail {
     expected: Option<String>,
     /// Extra context, such as where a name was first defined.
     note: Option<String>,
+    /// The offending line, or for a long one the part around the culprit (see [`excerpt`]).
     source_line: String,
+    /// Characters of `source_line` before the caret, and the caret's length.
+    caret_at: usize,
     caret_len: usize,
+}
+
+/// Longest source line an error shows whole, in characters; a longer one (a generated
+/// script on one line) shows this many around its culprit.
+pub(crate) const MAX_EXCERPT_CHARS: usize = 100;
+
+/// Characters of a cut line shown before the culprit, where there are as many.
+const EXCERPT_LEAD: usize = MAX_EXCERPT_CHARS / 3;
+
+/// The excerpt of `line` for a culprit at character `col0` spanning `len` characters:
+/// (text, characters before the caret, caret length). A line longer than
+/// [`MAX_EXCERPT_CHARS`] is cut to a window of that many characters with the culprit
+/// about a third of the way in (or the line's end in view), each cut marked `…`; the caret
+/// ends at the window's end.
+fn excerpt(line: &str, col0: usize, len: usize) -> (String, usize, usize) {
+    let chars = line.chars().count();
+    if chars <= MAX_EXCERPT_CHARS {
+        return (line.to_string(), col0, len);
+    }
+    let first = col0.saturating_sub(EXCERPT_LEAD).min(chars - MAX_EXCERPT_CHARS);
+    let end = first + MAX_EXCERPT_CHARS;
+    let mut text = String::new();
+    if first > 0 {
+        text.push('…');
+    }
+    text.extend(line.chars().skip(first).take(MAX_EXCERPT_CHARS));
+    if end < chars {
+        text.push('…');
+    }
+    let caret_at = col0 - first + usize::from(first > 0);
+    (text, caret_at, len.min(end.saturating_sub(col0)).max(1))
+}
+
+/// Whether `c` ends a line: `\n`, or a `\r` (the `\r` of `\r\n` ends the line's text, and
+/// a lone `\r` is the line end of classic Mac OS files).
+fn is_line_end(c: char) -> bool {
+    c == '\n' || c == '\r'
 }
 
 /// A byte range in the source being read.
@@ -116,9 +156,20 @@ pub struct LineIndex {
 }
 
 impl LineIndex {
+    /// Lines end at `\n`, `\r\n` or a lone `\r`.
     pub fn new(source: &str) -> Self {
-        let starts = std::iter::once(0).chain(source.match_indices('\n').map(|(i, _)| i + 1)).collect();
-        Self { starts }
+        let bytes = source.as_bytes();
+        let ends = bytes
+            .iter()
+            .enumerate()
+            .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n')))
+            .map(|(i, _)| i + 1);
+        Self { starts: std::iter::once(0).chain(ends).collect() }
+    }
+
+    /// Byte offset of the start of 1-based `line`.
+    fn start_of(&self, line: usize) -> usize {
+        self.starts[line - 1]
     }
 
     /// 1-based (line, column) of byte `offset` in `source` (the text this index was built
@@ -132,12 +183,6 @@ impl LineIndex {
     }
 }
 
-/// 1-based (line, column) of byte `offset` in `source`, for a single lookup (it reads the
-/// whole source; keep a [`LineIndex`] for many).
-pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
-    LineIndex::new(source).line_col(source, offset)
-}
-
 fn floor_char_boundary(s: &str, mut i: usize) -> usize {
     while i > 0 && !s.is_char_boundary(i) {
         i -= 1;
@@ -149,20 +194,21 @@ impl SceneLangError {
     /// Builds an error located at `span` of `source` (the text of `file`).
     pub fn at(source: &str, file: &str, span: Span, kind: ErrorKind, message: impl Into<String>) -> Self {
         let start = floor_char_boundary(source, span.start.min(source.len()));
-        let (line, col) = line_col(source, start);
-        let line_start = source[..start].rfind('\n').map_or(0, |i| i + 1);
-        let line_end = source[start..].find('\n').map_or(source.len(), |i| start + i);
-        let source_line = source[line_start..line_end].trim_end_matches('\r').to_string();
+        let lines = LineIndex::new(source);
+        let (line, col) = lines.line_col(source, start);
+        let line_start = lines.start_of(line);
+        let line_end = source[start..].find(is_line_end).map_or(source.len(), |i| start + i);
         // The caret covers the span's characters on this line (at least one).
         let span_end = floor_char_boundary(source, (start + span.len).min(line_end));
         let caret_len = source[start..span_end.max(start)].chars().count().max(1);
+        let (source_line, caret_at, caret_len) = excerpt(&source[line_start..line_end], col - 1, caret_len);
         Self {
             kind,
             file: file.to_string(),
             line,
             col,
             message: message.into(),
-            detail: Box::new(Detail { expected: None, note: None, source_line, caret_len }),
+            detail: Box::new(Detail { expected: None, note: None, source_line, caret_at, caret_len }),
         }
     }
 
@@ -174,7 +220,13 @@ impl SceneLangError {
             line: 0,
             col: 0,
             message: message.into(),
-            detail: Box::new(Detail { expected: None, note: None, source_line: String::new(), caret_len: 1 }),
+            detail: Box::new(Detail {
+                expected: None,
+                note: None,
+                source_line: String::new(),
+                caret_at: 0,
+                caret_len: 1,
+            }),
         }
     }
 
@@ -196,7 +248,9 @@ impl SceneLangError {
     pub fn note(&self) -> Option<&str> {
         self.detail.note.as_deref()
     }
-    /// The offending source line, without its newline.
+    /// The offending source line as the error shows it, without its line end: whole, or
+    /// for a line longer than 100 characters the 100 around the culprit, with `…` where it
+    /// was cut.
     pub fn source_line(&self) -> &str {
         &self.detail.source_line
     }
@@ -218,8 +272,13 @@ impl fmt::Display for SceneLangError {
         let num = self.line.to_string();
         let pad = " ".repeat(num.len());
         // Tabs keep their width in the caret line so the caret stays under the culprit.
-        let lead: String =
-            self.detail.source_line.chars().take(self.col - 1).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
+        let lead: String = self
+            .detail
+            .source_line
+            .chars()
+            .take(self.detail.caret_at)
+            .map(|c| if c == '\t' { '\t' } else { ' ' })
+            .collect();
         writeln!(f, " {num} | {}", self.detail.source_line)?;
         write!(f, " {pad} | {lead}{}", "^".repeat(self.detail.caret_len))?;
         if let Some(e) = &self.detail.expected {
@@ -289,7 +348,7 @@ mod tests {
 
     #[test]
     fn columns_count_characters_and_offsets_past_the_end_are_clamped() {
-        assert_eq!(line_col("é x", 3), (1, 3));
+        assert_eq!(LineIndex::new("é x").line_col("é x", 3), (1, 3));
         let e = SceneLangError::at("abc", "f", Span::new(99, 4), ErrorKind::Syntax, "m");
         assert_eq!((e.line, e.col), (1, 4));
     }
@@ -302,12 +361,71 @@ mod tests {
         let expect = [(0, (1, 1)), (2, (1, 3)), (3, (2, 1)), (4, (3, 1)), (6, (3, 2)), (7, (3, 3)), (8, (4, 1))];
         for (offset, lc) in expect {
             assert_eq!(idx.line_col(src, offset), lc, "offset {offset}");
-            assert_eq!(line_col(src, offset), lc, "offset {offset}");
         }
         // Inside a two-byte character: the column of that character; past the end: clamped.
         assert_eq!(idx.line_col(src, 5), (3, 1));
         assert_eq!(idx.line_col(src, 99), (4, 5));
         assert_eq!(LineIndex::new("").line_col("", 0), (1, 1));
+    }
+
+    /// `\n`, `\r\n` and a lone `\r` (classic Mac OS) each end a line, for line numbers
+    /// and for the excerpt, which never holds a line end.
+    #[test]
+    fn every_line_end_counts_once() {
+        for (src, starts) in [
+            ("a\nb\nc", vec![0, 2, 4]),
+            ("a\r\nb\r\nc", vec![0, 3, 6]),
+            ("a\rb\rc", vec![0, 2, 4]),
+            ("a\r\n\rb\n\r\nc\r", vec![0, 3, 4, 6, 8, 10]),
+        ] {
+            assert_eq!(LineIndex::new(src).starts, starts, "{src:?}");
+        }
+        for src in ["SET x 1\nSET y ?\nSET z 3", "SET x 1\r\nSET y ?\r\nSET z 3", "SET x 1\rSET y ?\rSET z 3"] {
+            let at = src.find('?').unwrap();
+            let e = SceneLangError::at(src, "f.sl", Span::new(at, 1), ErrorKind::Syntax, "unexpected `?`");
+            assert_eq!((e.line, e.col, e.source_line()), (2, 7, "SET y ?"), "{src:?}");
+            assert_eq!(e.to_string(), "f.sl:2:7: error: unexpected `?`\n 2 | SET y ?\n   |       ^", "{src:?}");
+        }
+        // A span that runs into the line end stops its caret there.
+        let e = SceneLangError::at("ab\r\ncd", "f", Span::new(0, 9), ErrorKind::Syntax, "m");
+        assert_eq!((e.source_line(), e.detail.caret_len), ("ab", 2));
+    }
+
+    /// A long line shows the 100 characters around its culprit, cuts marked `…`, the caret
+    /// under the culprit (its length clipped at the window's end); short lines show whole.
+    #[test]
+    fn long_lines_show_a_window_around_the_culprit() {
+        let shown = |src: &str, at: usize, len: usize| {
+            let e = SceneLangError::at(src, "f", Span::new(at, len), ErrorKind::Syntax, "m");
+            let text = e.to_string();
+            let lines: Vec<String> = text.lines().skip(1).map(|l| l[5..].to_string()).collect();
+            (lines[0].clone(), lines[1].clone())
+        };
+        let line: String = (0..1000).map(|i| char::from(b'a' + (i % 26) as u8)).collect();
+        // Culprit in the middle: 33 characters before it, cuts at both ends.
+        let (text, caret) = shown(&line, 500, 3);
+        assert_eq!(text, format!("…{}…", &line[467..567]));
+        assert_eq!(caret, format!("{}^^^", " ".repeat(34)));
+        assert_eq!(&text[3 + 33..3 + 36], &line[500..503], "the caret's characters");
+        // Near the start: no cut there.
+        let (text, caret) = shown(&line, 10, 1);
+        assert_eq!((text, caret), (format!("{}…", &line[..100]), format!("{}^", " ".repeat(10))));
+        // Near the end: the line's end in view, no cut there.
+        let (text, caret) = shown(&line, 990, 50);
+        assert_eq!((text, caret), (format!("…{}", &line[900..]), format!("{}{}", " ".repeat(91), "^".repeat(10))));
+        // A culprit longer than the window: the caret stops at the window's end.
+        let (_, caret) = shown(&line, 400, 500);
+        assert_eq!(caret, format!("{}{}", " ".repeat(34), "^".repeat(67)));
+        // Exactly the limit: whole, no marks.
+        let (text, _) = shown(&line[..MAX_EXCERPT_CHARS], 99, 1);
+        assert_eq!(text, &line[..MAX_EXCERPT_CHARS]);
+        // Characters, not bytes: a window of 100 two-byte characters, tabs kept before the caret.
+        let wide = format!("\t{}", "é".repeat(999));
+        let e = SceneLangError::at(&wide, "f", Span::new(1 + 2 * 500, 2), ErrorKind::Syntax, "m");
+        assert_eq!((e.col, e.source_line().chars().count()), (502, 102));
+        assert!(e.to_string().ends_with(&format!(" |  {}^", " ".repeat(33))), "{e}");
+        let e = SceneLangError::at(&wide, "f", Span::new(1, 2), ErrorKind::Syntax, "m");
+        assert!(e.to_string().ends_with(" | \t^"), "{e}");
     }
 
     #[test]

@@ -147,7 +147,9 @@ impl<'a> Lexer<'a> {
             let trimmed = r.trim_start();
             self.pos += r.len() - trimmed.len();
             if trimmed.starts_with('#') {
-                self.pos += trimmed.find('\n').unwrap_or(trimmed.len());
+                // A comment ends with its line, whichever line end the file uses (`\n`,
+                // `\r\n`, or classic Mac OS's lone `\r`, which the whitespace skip eats).
+                self.pos += trimmed.find(['\n', '\r']).unwrap_or(trimmed.len());
             } else {
                 return;
             }
@@ -426,5 +428,22 @@ mod tests {
         assert_eq!(toks("\"abc").unwrap_err().kind, ErrorKind::UnterminatedString);
         assert_eq!(toks("$1 + 2").unwrap_err().kind, ErrorKind::UnterminatedExpression);
         assert_eq!(toks("@").unwrap_err().kind, ErrorKind::Syntax);
+    }
+
+    /// A comment ends with its line whatever the line end: with classic Mac OS's lone `\r`
+    /// it ran to the end of the file and took every instruction after it along.
+    #[test]
+    fn comments_end_at_every_line_end() {
+        for end in ["\n", "\r\n", "\r"] {
+            let src = format!("# first{end}SET x 1 # second{end}UNSET x{end}");
+            let expect = vec![
+                Tok::Command(Command::Set),
+                Tok::Ident("x".into()),
+                Tok::Number(1.0),
+                Tok::Command(Command::Unset),
+                Tok::Ident("x".into()),
+            ];
+            assert_eq!(toks(&src).unwrap(), expect, "{end:?}");
+        }
     }
 }

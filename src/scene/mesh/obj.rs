@@ -256,6 +256,19 @@ mod tests {
         assert_eq!(m.positions()[0], DVec3::ZERO);
     }
 
+    /// Every line end reads the same mesh: `\n`, `\r\n`, and classic Mac OS's lone `\r`
+    /// (tobj splits at `\n` only, and read such a file as one vertex statement).
+    #[test]
+    fn every_line_end_reads_the_same_mesh() {
+        let text = "# tri\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n";
+        let want = obj(text).unwrap();
+        for end in ["\r\n", "\r"] {
+            let m = obj(&text.replace('\n', end)).unwrap();
+            assert_eq!((m.positions(), m.triangles()), (want.positions(), want.triangles()), "{end:?}");
+            assert_eq!(m.normals(), want.normals(), "{end:?}");
+        }
+    }
+
     #[test]
     fn pentagon_is_fanned_into_three_triangles() {
         let m = obj("v 0 0 0\nv 2 0 0\nv 3 1 0\nv 1 2 0\nv -1 1 0\nf 1 2 3 4 5").unwrap();
