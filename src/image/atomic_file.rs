@@ -33,7 +33,7 @@ impl Writes {
         let mut tmp = {
             let mut pending = self.lock();
             let tmp = tempfile::Builder::new()
-                .prefix(&format!(".{name}."))
+                .prefix(&format!(".{}.", name_start(&name)))
                 .suffix(".lumen.tmp")
                 .make_in(dir, |p| File::options().write(true).create_new(true).open(p))?;
             pending.push(tmp.path().to_path_buf());
@@ -165,9 +165,31 @@ pub fn check_destination(path: &Path) -> std::io::Result<()> {
 }
 
 /// An error where `path` is a FIFO, a device or a socket (not followed through a symbolic
-/// link: the link is what a write replaces).
+/// link: the link is what a write replaces), or cannot be looked up for a reason other
+/// than not existing yet: a name longer than the file system takes ("File name too
+/// long") fails here, before a render, rather than at its write.
 fn refuse_special_file(path: &Path) -> std::io::Result<()> {
-    std::fs::symlink_metadata(path).map_or(Ok(()), |meta| crate::regular_file::refuse_special(meta.file_type()))
+    match std::fs::symlink_metadata(path) {
+        Ok(meta) => crate::regular_file::refuse_special(meta.file_type()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(e),
+    }
+}
+
+/// Most bytes of the target's name a temporary file's name repeats: the temporary name adds
+/// 18 bytes to it (`.`, `.`, six random characters, `.lumen.tmp`), and a target name within
+/// the file system's limit (255 bytes on most, 143 on eCryptfs) must not make a temporary
+/// name beyond it (a 250-byte name failed with "File name too long" after the render).
+const TMP_NAME_BYTES: usize = 100;
+
+/// The start of `name` that a temporary file's name repeats: at most [`TMP_NAME_BYTES`]
+/// bytes, cut at a character boundary.
+fn name_start(name: &str) -> &str {
+    let mut end = name.len().min(TMP_NAME_BYTES);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    &name[..end]
 }
 
 /// The directory a file at `path` goes in (`.` for a bare name).
@@ -281,6 +303,28 @@ mod tests {
         }
         // A bare file name goes in the working directory, which exists.
         assert!(check_destination(Path::new("out.png")).is_ok());
+    }
+
+    /// A file name as long as the file system takes (255 bytes here) is written, though its
+    /// temporary file's name could not repeat it whole; one byte more is refused before the
+    /// write by `check_destination`, as the write would refuse it.
+    #[test]
+    fn names_up_to_the_file_systems_limit_are_written() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in [format!("{}.png", "a".repeat(251)), format!("{}a.pfm", "é".repeat(125))] {
+            assert_eq!(name.len(), 255);
+            let path = dir.path().join(&name);
+            check_destination(&path).unwrap();
+            write_atomically(&path, b"image").unwrap();
+            assert_eq!(std::fs::read(&path).unwrap(), b"image");
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary file is left");
+        let too_long = dir.path().join(format!("{}.png", "b".repeat(252)));
+        let e = check_destination(&too_long).unwrap_err();
+        assert!(e.to_string().contains("too long"), "{e}");
+        assert!(write_atomically(&too_long, b"x").is_err());
+        assert_eq!(name_start("é".repeat(60).as_str()).len(), 100);
+        assert_eq!(name_start("éa".repeat(40).as_str()).len(), 99, "cut before a split character");
     }
 
     /// A symbolic link is replaced by the new file (its old target stays as it was), a
