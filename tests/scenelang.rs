@@ -969,3 +969,25 @@ fn a_leading_byte_order_mark_is_skipped() {
     // Only a leading one: elsewhere it is a stray character, as before.
     assert!(load(&format!("SPAWN Shape.Sphere()\n\u{feff}{src}")).is_err());
 }
+
+/// A script that is not UTF-8 (saved as Latin-1, or UTF-16 with its byte-order mark) is
+/// refused at its first bad byte, with line, column and the line up to there: it was one
+/// line without a position ("stream did not contain valid UTF-8").
+#[test]
+fn a_script_that_is_not_utf8_is_refused_where_it_stops_being_utf8() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&[u8], usize, usize, &str, &str); 4] = [
+        (b"SET x 1\nSET caf\xe9 2\n", 2, 8, "bytes 0xE9 0x20 0x32 0x0A", " 2 | SET caf\n   |        ^"),
+        (b"\xef\xbb\xbfSET \xff 1\n", 1, 5, "bytes 0xFF 0x20 0x31 0x0A", " 1 | SET \n   |     ^"),
+        (b"\xff\xfeS\x00E\x00T\x00", 1, 1, "bytes 0xFF 0xFE 0x53 0x00", " 1 | \n   | ^"),
+        (b"# \xc3\xa9t\xc3\xa9\r\nSET a\xc3", 2, 6, "byte 0xC3", " 2 | SET a\n   |      ^"),
+    ];
+    for (k, (bytes, line, col, shown, excerpt)) in cases.into_iter().enumerate() {
+        let path = dir.path().join(format!("s{k}.sl"));
+        std::fs::write(&path, bytes).unwrap();
+        let e = lumen::scenelang::load_file(&path, &LoadOptions::default()).unwrap_err();
+        assert_eq!((e.kind, e.line, e.col), (ErrorKind::Encoding, line, col), "case {k}: {e}");
+        assert_eq!(e.message, format!("the script is not UTF-8 text: {shown} here"), "case {k}");
+        assert!(e.to_string().contains(excerpt), "case {k}: {e}");
+    }
+}

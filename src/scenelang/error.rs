@@ -54,6 +54,8 @@ pub enum ErrorKind {
     TooLarge,
     /// The script file could not be read, or DUMP could not write.
     Io,
+    /// The script's bytes are not UTF-8 text (located at the first byte that is not).
+    Encoding,
 }
 
 /// A located SceneLang error. `Display` renders the full diagnostic:

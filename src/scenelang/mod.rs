@@ -87,15 +87,38 @@ pub fn load_file(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneLangErro
     use std::io::Read;
     let name = path.display().to_string();
     let fail = |why: String| SceneLangError::whole_file(&name, ErrorKind::Io, format!("cannot read script: {why}"));
-    let mut source = String::new();
+    let mut bytes = Vec::new();
     std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_SCRIPT_BYTES + 1).read_to_string(&mut source))
+        .and_then(|f| f.take(MAX_SCRIPT_BYTES + 1).read_to_end(&mut bytes))
         .map_err(|e| fail(e.to_string()))?;
-    if source.len() as u64 > MAX_SCRIPT_BYTES {
+    if bytes.len() as u64 > MAX_SCRIPT_BYTES {
         return Err(fail(format!("it is larger than {} MiB", MAX_SCRIPT_BYTES >> 20)));
     }
+    let source = String::from_utf8(bytes).map_err(|e| not_utf8(e.as_bytes(), e.utf8_error().valid_up_to(), &name))?;
     let base = path.parent().unwrap_or(Path::new("."));
     load_str(&source, &name, base, opts)
+}
+
+/// The error for a script whose bytes stop being UTF-8 at `at`, located there (line and
+/// column as an editor counts them, after a byte-order mark) with the line up to that byte:
+/// a script saved as Latin-1 or UTF-16 is found, not just refused.
+fn not_utf8(bytes: &[u8], at: usize, name: &str) -> SceneLangError {
+    // Everything before `at` is valid UTF-8.
+    let valid = std::str::from_utf8(&bytes[..at]).unwrap_or_default();
+    let text = valid.strip_prefix('\u{feff}').unwrap_or(valid);
+    let shown: Vec<String> = bytes[at..].iter().take(4).map(|b| format!("0x{b:02X}")).collect();
+    SceneLangError::at(
+        text,
+        name,
+        Span::new(text.len(), 1),
+        ErrorKind::Encoding,
+        format!(
+            "the script is not UTF-8 text: {} {} here",
+            if shown.len() == 1 { "byte" } else { "bytes" },
+            shown.join(" ")
+        ),
+    )
+    .with_expected("UTF-8 text (save the script as UTF-8; Latin-1 and UTF-16 files are not read)")
 }
 
 /// Loads a script from a string. `name` labels diagnostics; relative image paths resolve
