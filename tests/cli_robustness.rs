@@ -546,6 +546,12 @@ fn quoted_input_cannot_drive_the_terminal() {
         assert!(!obeyed(&o.stderr), "{script}: {:?}", stderr(&o));
         assert!(stderr(&o).contains(shown), "{script}: {}", stderr(&o));
     }
+    // A usage error quotes the command line, whose words may be file names from anywhere.
+    for args in [&["render", "tiny.sl", "--width", "1\r\x1b[2J"][..], &["check", "tiny.sl", "--vars", "\x1b]0;x\x07"]] {
+        let o = lumen(dir.path()).args(args).output().unwrap();
+        assert!(o.status.code().is_some_and(|c| c != 0), "{args:?}");
+        assert!(!obeyed(&o.stderr), "{args:?}: {:?}", stderr(&o));
+    }
     // Standard output: `check` names a mesh by its file name.
     let mesh = "tri\x1b[2J\u{202e}.obj";
     std::fs::write(dir.path().join(mesh), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();

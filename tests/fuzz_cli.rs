@@ -9,6 +9,8 @@
 //! - no death by a signal (an abort on a failed allocation included) and no timeout;
 //! - after a failure (non-zero exit), no file in the directory but the inputs (no output,
 //!   no temporary file);
+//! - no control character but newline and tab on stdout or stderr (a terminal obeys
+//!   them), and no line over 600 characters on stderr;
 //! - after a success, no NaN or infinity in any HDR image it wrote.
 //!
 //! The case counts are fixed and the seed too, so a run is reproducible and fits about two
@@ -36,6 +38,10 @@ use lumen::image::{write_image, HdrImage, ToneMap};
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+
+/// Longest line a run may print on stderr: diagnostics cut theirs at 500 characters
+/// (`lumen::printable`), SceneLang excerpts show 100 around their culprit.
+const MAX_STDERR_LINE: usize = 600;
 
 /// Address-space limit of every run: far above what a tiny render needs, far below what a
 /// size taken from a hostile header could ask for.
@@ -165,6 +171,16 @@ fn run(case: &Case) -> Verdict {
     }
     if let Some(sig) = status.signal() {
         return Verdict::Failure(format!("killed by signal {sig}; {said}"));
+    }
+    // What a terminal would obey rather than show (lumen quotes hostile input), and lines
+    // no terminal shows usefully (a megabyte line quoted whole).
+    for (stream, text) in [("stdout", &stdout), ("stderr", &stderr)] {
+        if let Some(c) = text.chars().find(|&c| c.is_control() && c != '\n' && c != '\t') {
+            return Verdict::Failure(format!("{stream} holds the control character {c:?}; {said}"));
+        }
+    }
+    if let Some(line) = stderr.lines().find(|l| l.chars().count() > MAX_STDERR_LINE) {
+        return Verdict::Failure(format!("a line of {} characters on stderr: {}", line.chars().count(), tail(line)));
     }
     let new: Vec<String> = listing(dir.path()).difference(&before).cloned().collect();
     if !status.success() {

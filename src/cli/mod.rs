@@ -104,11 +104,19 @@ pub fn main() -> ExitCode {
 }
 
 /// Prints clap's help, version or usage error; `--help` into a closed pipe or a full disk
-/// is handled like any other output.
+/// is handled like any other output. A usage error quotes the command line, whose words
+/// may come from anywhere (file names through `xargs`), so it goes through `diag!` as
+/// plain text (its control characters shown, not obeyed; without clap's colours), not
+/// through clap's own printer, which passes escape sequences to a terminal.
 fn clap_exit(e: &clap::Error) -> ExitCode {
+    let code = ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
+    if e.use_stderr() {
+        crate::diag!("{}", e.render().to_string().trim_end());
+        return code;
+    }
     match e.print() {
-        Err(io) if !e.use_stderr() => report(&output::StdoutError(io).into()),
-        _ => ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2)),
+        Err(io) => report(&output::StdoutError(io).into()),
+        Ok(()) => code,
     }
 }
 
