@@ -130,8 +130,9 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
     // Every image error names the file (image::ImageError).
     write_image_with(&args.output, &image, &ToneMap::default(), Some(&meta))?;
     crate::diag!(
-        "merged {} parts ({} samples per pixel: {}) into {}",
+        "merged {} part{} ({} samples per pixel: {}) into {}",
         parts.len(),
+        if parts.len() == 1 { "" } else { "s" },
         meta.spp(),
         meta.ranges_text(),
         args.output.display()
