@@ -451,14 +451,17 @@ fn special_files_are_refused_not_read() {
 
 /// An output the file system will not take (here past `RLIMIT_FSIZE`, as a full disk
 /// would) is one error line naming the file once, and nothing is left: no image, no
-/// temporary file. The outputs before it are whole.
+/// temporary file. The outputs before it are whole. The render cannot be kept either
+/// (the same limit), and the line says so.
 #[cfg(unix)]
 #[test]
 fn an_output_the_disk_refuses_is_one_clear_error_and_no_file() {
     use std::os::unix::process::CommandExt;
     let dir = scene_dir();
+    let rescue = tempfile::tempdir().unwrap();
     let mut cmd = lumen(dir.path());
     cmd.args(["render", "tiny.sl", "--device", "cpu", "--width", "64", "-o", "small.png", "-o", "big.pfm"]);
+    cmd.env("TMPDIR", rescue.path());
     // Past the limit a write fails with EFBIG instead of raising SIGXFSZ.
     ignored_in_child(&mut cmd, libc::SIGXFSZ);
     // SAFETY: only async-signal-safe calls (setrlimit) between fork and exec.
@@ -475,7 +478,13 @@ fn an_output_the_disk_refuses_is_one_clear_error_and_no_file() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     let errors: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
-    assert_eq!(errors, ["error: cannot write big.pfm: File too large (os error 27)"], "{err}");
+    assert_eq!(errors.len(), 1, "{err}");
+    let lost =
+        "error: cannot write big.pfm: File too large (os error 27); the render could not be kept either (cannot write ";
+    let kept = format!("{}/lumen-rescue-", rescue.path().display());
+    assert!(errors[0].starts_with(&format!("{lost}{kept}")), "{err}");
+    assert!(errors[0].ends_with("-big.pfm.exr: File too large (os error 27))"), "{err}");
+    assert_eq!(std::fs::read_dir(rescue.path()).unwrap().count(), 0, "no partial rescue");
     let mut names: Vec<String> =
         std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     names.sort();
@@ -604,4 +613,38 @@ fn every_line_end_loads_the_same_scene() {
         assert!(stderr(&o).contains(&format!("{name}:4:11: error: unknown type `Materail`")), "{name}: {}", stderr(&o));
     }
     assert!(summaries.iter().all(|s| *s == summaries[0]), "{summaries:?}");
+}
+
+/// An output whose directory is removed during the render (as a full disk or a lost share
+/// fails only at the write, after the checks before the render passed): the render is not
+/// lost but kept as an EXR in `$TMPDIR`, and the error says where and how to convert it.
+#[test]
+fn an_output_lost_after_the_render_keeps_the_render() {
+    let dir = scene_dir();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let rescue = tempfile::tempdir().unwrap();
+    let child = lumen(dir.path())
+        .args(["render", "tiny.sl", "--device", "cpu", "--spp", "1000000", "--time-limit", "3", "-o", "out/x.png"])
+        .env("TMPDIR", rescue.path())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    std::fs::remove_dir(&out).unwrap();
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let kept = rescue.path().join(format!("lumen-rescue-{pid}-x.png.exr"));
+    let said = format!(
+        "error: cannot write out/x.png: No such file or directory (os error 2); the render is kept in {}",
+        kept.display()
+    );
+    assert!(err.contains(&said), "{err}");
+    assert!(err.contains(&format!("`lumen tonemap {} out/x.png` makes it", kept.display())), "{err}");
+    let (image, meta) = lumen::image::read_render_part(&kept).unwrap();
+    assert_eq!((image.width(), image.height()), (32, 24));
+    assert!(meta.spp() >= 1, "{err}");
 }

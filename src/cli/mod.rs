@@ -18,6 +18,7 @@ pub mod merge;
 pub mod output;
 pub mod own_process;
 pub mod render;
+mod rescue;
 pub mod script_args;
 mod shader;
 pub mod software_driver;

@@ -19,7 +19,7 @@ use crate::device::{open_device, OpenDevice};
 use crate::gpu::render::{GpuRenderOptions, GpuRenderer, TwinUse};
 use crate::gpu::{ctrlc_flag, Gpu, GpuError};
 use crate::image::render_metadata::fingerprint;
-use crate::image::{write_image_with, HdrImage, ImageFormat, RenderMetadata, ToneMap};
+use crate::image::{HdrImage, ImageFormat, RenderMetadata, ToneMap};
 use crate::prepare::SampleRange;
 use crate::scene::{Renderer, Scene};
 use crate::stop::StopReason;
@@ -417,11 +417,7 @@ fn render_one(
     let taken = SampleRange { begin: range.begin, end: range.begin + out.spp };
     let meta = RenderMetadata::new(taken, fingerprint(&scene, total), &out.device, out.seconds);
     let writing = Instant::now();
-    for o in outputs {
-        // Every image error names the file (image::ImageError).
-        write_image_with(o, &out.image, tm, Some(&meta))?;
-        crate::diag!("wrote {}", o.display());
-    }
+    super::rescue::write_outputs(outputs, &out.image, tm, &meta, &std::env::temp_dir())?;
     if args.profile {
         // The rest of the process's time: a render's own figure leaves these out.
         crate::diag!("process: render {rendered:.3} s, writing {:.3} s", writing.elapsed().as_secs_f64());

@@ -28,14 +28,9 @@ impl Writes {
     /// [`produce_atomically`] in this register.
     fn produce(&self, path: &Path, make: impl FnOnce(&mut File, &Path) -> std::io::Result<()>) -> std::io::Result<()> {
         refuse_special_file(path)?;
-        let dir = directory_of(path);
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let mut tmp = {
             let mut pending = self.lock();
-            let tmp = tempfile::Builder::new()
-                .prefix(&format!(".{}.", name_start(&name)))
-                .suffix(".lumen.tmp")
-                .make_in(dir, |p| File::options().write(true).create_new(true).open(p))?;
+            let tmp = temporary_file_for(path)?;
             pending.push(tmp.path().to_path_buf());
             tmp
         };
@@ -49,6 +44,15 @@ impl Writes {
         written?;
         tmp.persist(path).map_err(|e| e.error)?;
         Ok(())
+    }
+
+    /// Creates the temporary file a write to `path` would make, and removes it: whether the
+    /// directory takes new files. Under the lock, so an exit that abandons the writes in
+    /// progress never finds the probe half done.
+    fn probe(&self, path: &Path) -> std::io::Result<()> {
+        let _held = self.lock();
+        // Dropping the file removes it.
+        temporary_file_for(path).map(drop)
     }
 
     fn abandon(&self) -> MutexGuard<'_, Vec<PathBuf>> {
@@ -132,10 +136,13 @@ pub fn abandon_writes() -> WritesAbandoned {
     WritesAbandoned { _held: WRITES.abandon() }
 }
 
-/// Checks what can be checked of a later [`write_atomically`] to `path` without writing:
-/// its directory exists and `path` is not a directory. Commands call it before long work
-/// (a render, a benchmark), so that a mistyped output path fails at once rather than after
-/// hours; a permission or disk error still shows only at the write.
+/// Checks what can be checked of a later [`write_atomically`] to `path` before the work
+/// that produces it: its directory exists, `path` is not a directory or a special file and
+/// its name is not too long, and the directory takes a new file (the write's temporary
+/// file is created there and removed at once: permissions, a read-only file system).
+/// Commands call it before long work (a render, a benchmark), so that an output that
+/// cannot be written fails at once rather than after hours; a full disk still shows only
+/// at the write.
 ///
 /// ```
 /// let dir = tempfile::tempdir().unwrap();
@@ -161,7 +168,18 @@ pub fn check_destination(path: &Path) -> std::io::Result<()> {
     if path.is_dir() {
         return Err(Error::new(ErrorKind::IsADirectory, "it is a directory"));
     }
-    refuse_special_file(path)
+    refuse_special_file(path)?;
+    WRITES.probe(path)
+}
+
+/// A new temporary file beside `path`, named after it (`.NAME.XXXXXX.lumen.tmp`: see
+/// [`write_atomically`]); removed when dropped unless persisted.
+fn temporary_file_for(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    tempfile::Builder::new()
+        .prefix(&format!(".{}.", name_start(&name)))
+        .suffix(".lumen.tmp")
+        .make_in(directory_of(path), |p| File::options().write(true).create_new(true).open(p))
 }
 
 /// An error where `path` is a FIFO, a device or a socket (not followed through a symbolic
@@ -303,6 +321,35 @@ mod tests {
         }
         // A bare file name goes in the working directory, which exists.
         assert!(check_destination(Path::new("out.png")).is_ok());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "the probes leave nothing (file, new.png)");
+    }
+
+    /// A directory that takes no new file is refused before the work, even for root, whom
+    /// permission bits do not stop: sysfs refuses new files to everyone (permission
+    /// denied), procfs has no such entry.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_directory_that_takes_no_new_file_is_refused_before_the_work() {
+        for path in ["/sys/lumen-probe.png", "/proc/lumen-probe.png"] {
+            let path = Path::new(path);
+            if !path.parent().unwrap().is_dir() {
+                continue;
+            }
+            let e = check_destination(path).unwrap_err();
+            assert!(matches!(e.kind(), ErrorKind::PermissionDenied | ErrorKind::NotFound), "{}: {e}", path.display());
+            assert!(write_atomically(path, b"x").is_err());
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let ro = dir.path().join("ro");
+        std::fs::create_dir(&ro).unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+            // Root writes there anyway; others are refused at once, as the write would be.
+            let (checked, written) = (check_destination(&ro.join("a.png")), write_atomically(&ro.join("a.png"), b"x"));
+            assert_eq!(checked.is_ok(), written.is_ok(), "{checked:?} {written:?}");
+        }
     }
 
     /// A file name as long as the file system takes (255 bytes here) is written, though its
