@@ -226,3 +226,47 @@ fn invalid_options_are_refused() {
     assert!(stderr(&o).contains("reinhard"));
     assert!(!output.exists());
 }
+
+/// A hand-built run-length Radiance file of `width × height` pixels, all of one RGBE
+/// value `rgbe`.
+fn radiance_rle_bytes(width: usize, height: usize, rgbe: [u8; 4]) -> Vec<u8> {
+    let mut out = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {height} +X {width}\n").into_bytes();
+    for _ in 0..height {
+        out.extend_from_slice(&[2, 2, (width >> 8) as u8, (width & 0xff) as u8]);
+        for value in rgbe {
+            let mut left = width;
+            while left > 0 {
+                let run = left.min(127);
+                out.extend_from_slice(&[128 + run as u8, value]);
+                left -= run;
+            }
+        }
+    }
+    out
+}
+
+/// Images within lumen's limits (2¹⁶ per side, 2²⁸ pixels) are read whatever the `image`
+/// crate's own cap (512 MiB per decode) would say: a 16384×8192 HDRI sky, 1.5 GiB as f32,
+/// was refused with "Memory limit exceeded", though `lumen tonemap` writes such files.
+/// Here 7,000² pixels (588 MB as f32) decode and read right; sizes past lumen's limits are
+/// refused with those limits, from the header alone.
+#[test]
+fn images_within_lumens_limits_are_read_whatever_their_decoded_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.hdr");
+    // RGBE (128, 64, 32, 129): mantissas over 256 times 2^(129 - 128).
+    std::fs::write(&big, radiance_rle_bytes(7000, 7000, [128, 64, 32, 129])).unwrap();
+    let img = read_image(&big).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((img.width(), img.height()), (7000, 7000));
+    for p in [img.pixels()[0], img.pixels()[7000 * 7000 - 1]] {
+        let want = [1.0, 0.5, 0.25];
+        for (got, want) in [p.r, p.g, p.b].into_iter().zip(want) {
+            assert!((got - want).abs() <= want * 0.01, "{p:?}");
+        }
+    }
+    drop(img);
+    let wide = dir.path().join("wide.hdr");
+    std::fs::write(&wide, radiance_rle_bytes(1 << 17, 1, [1, 1, 1, 128])).unwrap();
+    let e = read_image(&wide).unwrap_err().to_string();
+    assert!(e.contains("image size 131072×1 is too large (at most 65536 per side"), "{e}");
+}

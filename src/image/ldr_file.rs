@@ -4,8 +4,6 @@
 //! colour it shows on screen); 16-bit PNGs keep their precision; grey is expanded to RGB
 //! and alpha is dropped. Writing stores already tone-mapped, encoded 8-bit RGB.
 
-use std::io::Cursor;
-
 use ::image::codecs::jpeg::JpegEncoder;
 use ::image::codecs::png::PngEncoder;
 use ::image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
@@ -34,7 +32,8 @@ impl LdrFormat {
 }
 
 pub(crate) fn decode_ldr(bytes: &[u8], format: LdrFormat) -> Result<HdrImage, String> {
-    let img = ::image::load(Cursor::new(bytes), format.image_format()).map_err(|e| e.to_string())?;
+    // Beside the decoded image: its RGB conversion (up to 6 bytes a pixel) and our f32 copy.
+    let img = super::size::decode_within_limits(bytes, format.image_format(), 6 + 12)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let sixteen_bit = matches!(
         img,

@@ -1,8 +1,6 @@
 //! Radiance RGBE (`.hdr`) files through the `image` crate. RGBE stores no negative
 //! values: negative channels are written as 0.
 
-use std::io::Cursor;
-
 use ::image::codecs::hdr::HdrEncoder;
 use ::image::ImageFormat;
 
@@ -10,7 +8,8 @@ use super::HdrImage;
 use crate::color::Rgb32;
 
 pub(crate) fn decode_radiance(bytes: &[u8]) -> Result<HdrImage, String> {
-    let img = ::image::load(Cursor::new(bytes), ImageFormat::Hdr).map_err(|e| e.to_string())?.into_rgb32f();
+    // Beside the decoded f32 image: our copy of it.
+    let img = super::size::decode_within_limits(bytes, ImageFormat::Hdr, 12)?.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     let pixels = img.pixels().map(|p| Rgb32::new(p[0], p[1], p[2])).collect();
     HdrImage::from_pixels(w, h, pixels).ok_or_else(|| "decoder returned the wrong pixel count".to_owned())

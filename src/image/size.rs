@@ -17,6 +17,28 @@ pub enum SizeError {
     TooLarge { width: usize, height: usize },
 }
 
+/// Decodes `bytes` as `format` with the `image` crate under lumen's limits rather than the
+/// crate's own, which refuses any decode over 512 MiB ("Memory limit exceeded"): that turned
+/// away a 16384×8192 Radiance HDR (1.5 GiB as f32), the size of common HDRI skies, though
+/// `lumen tonemap` writes such files. Here the header's size must pass [`check_size`], and
+/// the decoded image plus `extra_bytes_per_pixel` (the caller's copies) must fit this
+/// process's memory ([`crate::memory::check_fits`]); then the crate decodes uncapped.
+pub(crate) fn decode_within_limits(
+    bytes: &[u8],
+    format: ::image::ImageFormat,
+    extra_bytes_per_pixel: u64,
+) -> Result<::image::DynamicImage, String> {
+    use ::image::ImageDecoder as _;
+    let mut reader = ::image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    reader.no_limits();
+    let decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let (width, height) = decoder.dimensions();
+    let pixels = check_size(width as usize, height as usize).map_err(|e| e.to_string())?;
+    let needed = decoder.total_bytes().saturating_add((pixels as u64).saturating_mul(extra_bytes_per_pixel));
+    crate::memory::check_fits(needed, &format!("decoding a {width}×{height} image")).map_err(|e| e.to_string())?;
+    ::image::DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())
+}
+
 /// Validates a size taken from a file header or a user and returns the pixel count.
 ///
 /// ```
