@@ -96,7 +96,7 @@ mod tests {
         let buf = ::image::ImageBuffer::<::image::LumaA<u16>, Vec<u16>>::from_raw(2, 1, vec![65535, 0, 32768, 65535])
             .unwrap();
         let mut png = Vec::new();
-        DynamicImage::ImageLumaA16(buf).write_to(&mut Cursor::new(&mut png), ImageFormat::Png).unwrap();
+        DynamicImage::ImageLumaA16(buf).write_to(&mut std::io::Cursor::new(&mut png), ImageFormat::Png).unwrap();
         let img = decode_ldr(&png, LdrFormat::Png).unwrap();
         assert_eq!(img.get(0, 0), Rgb32::WHITE);
         let want = srgb_to_linear(32768.0 / 65535.0);
