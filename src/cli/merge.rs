@@ -6,9 +6,10 @@
 //! layout, version) and size, and ranges that do not overlap; anything else is refused
 //! with the file's name and nothing is written. Gaps in the union are reported (the result
 //! is still the exact mean of the samples present). Merged files carry the union's
-//! metadata, so merges can be merged again.
+//! metadata, so merges can be merged again. Parts are read one at a time into running
+//! sums ([`Merge`]), so memory does not grow with their number.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::bail;
 use clap::Args;
@@ -28,79 +29,137 @@ pub struct MergeArgs {
     pub parts: Vec<PathBuf>,
 }
 
-/// The merge of `parts` (image and metadata, read from `paths` for messages).
-pub fn merge(parts: &[(PathBuf, HdrImage, RenderMetadata)]) -> anyhow::Result<(HdrImage, RenderMetadata)> {
-    let Some((first_path, first, first_meta)) = parts.first() else { bail!("nothing to merge") };
-    let (w, h) = (first.width(), first.height());
-    let mut ranges: Vec<(SampleRange, &PathBuf)> = Vec::new();
-    for (path, img, meta) in parts {
-        if meta.fingerprint != first_meta.fingerprint {
-            bail!(
-                "{}: rendered from other inputs than {} (fingerprint {} vs {}): a different scene, size, \
-                 settings, sample layout or lumen version",
-                path.display(),
-                first_path.display(),
-                meta.fingerprint,
-                first_meta.fingerprint
-            );
-        }
-        if (img.width(), img.height()) != (w, h) {
-            bail!(
-                "{}: {}×{} pixels, but {} has {w}×{h}",
-                path.display(),
-                img.width(),
-                img.height(),
-                first_path.display()
-            );
-        }
-        ranges.extend(meta.ranges.iter().map(|r| (*r, path)));
+/// A merge in progress. Parts are added one at a time and only their spp-weighted sums are
+/// kept, so a merge holds the sums and one part whatever the number of parts: holding every
+/// part, as the first version did, made 256 shards of a 4K image need 27 GB.
+///
+/// ```
+/// use lumen::cli::merge::Merge;
+/// use lumen::color::Rgb32;
+/// use lumen::image::{HdrImage, RenderMetadata};
+/// use lumen::prepare::SampleRange;
+/// use std::path::Path;
+///
+/// // Samples 0:1 saw 1.0 everywhere, samples 1:4 saw 3.0: the mean of the four is 2.5.
+/// let part = |v: f32, begin, end| {
+///     let meta = RenderMetadata::new(SampleRange { begin, end }, "scene".into(), "cpu", 0.0);
+///     (HdrImage::from_fn(2, 1, |_, _| Rgb32::new(v, v, v)), meta)
+/// };
+/// let mut merge = Merge::new();
+/// let (a, meta_a) = part(1.0, 0, 1);
+/// merge.add(Path::new("a.exr"), &a, &meta_a).unwrap();
+/// let (b, meta_b) = part(3.0, 1, 4);
+/// merge.add(Path::new("b.exr"), &b, &meta_b).unwrap();
+/// let (image, meta) = merge.finish().unwrap();
+/// assert_eq!(image.pixels()[0], Rgb32::new(2.5, 2.5, 2.5));
+/// assert_eq!(meta.ranges, [SampleRange { begin: 0, end: 4 }]);
+/// ```
+#[derive(Debug, Default)]
+pub struct Merge {
+    /// The first part's path, size and metadata: every later part must match them.
+    first: Option<(PathBuf, usize, usize, RenderMetadata)>,
+    /// Per pixel, the sum of every part's value times its samples per pixel.
+    sums: Vec<[f64; 3]>,
+    /// Every part's sample ranges, with the part they came from.
+    ranges: Vec<(SampleRange, PathBuf)>,
+    total_spp: u64,
+    devices: Vec<String>,
+    seconds: f64,
+}
+
+impl Merge {
+    /// An empty merge.
+    pub fn new() -> Self {
+        Self::default()
     }
-    ranges.sort_by_key(|(r, _)| (r.begin, r.end));
-    for pair in ranges.windows(2) {
-        let ((a, pa), (b, pb)) = (pair[0], pair[1]);
-        if b.begin < a.end {
-            bail!("{}: samples {b} overlap samples {a} of {}", pb.display(), pa.display());
+
+    /// Adds the part read from `path`: refused, naming `path`, where it was rendered from
+    /// other inputs or has another size than the first part.
+    pub fn add(&mut self, path: &Path, img: &HdrImage, meta: &RenderMetadata) -> anyhow::Result<()> {
+        let (w, h) = (img.width(), img.height());
+        match &self.first {
+            None => {
+                let bytes = (w * h * std::mem::size_of::<[f64; 3]>()) as u64;
+                self.sums = crate::memory::try_filled(w * h, [0.0; 3], "the merge's sums", bytes)?;
+                self.first = Some((path.to_path_buf(), w, h, meta.clone()));
+            }
+            Some((first_path, fw, fh, first_meta)) => {
+                if meta.fingerprint != first_meta.fingerprint {
+                    bail!(
+                        "{}: rendered from other inputs than {} (fingerprint {} vs {}): a different scene, size, \
+                         settings, sample layout or lumen version",
+                        path.display(),
+                        first_path.display(),
+                        meta.fingerprint,
+                        first_meta.fingerprint
+                    );
+                }
+                if (w, h) != (*fw, *fh) {
+                    bail!("{}: {w}×{h} pixels, but {} has {fw}×{fh}", path.display(), first_path.display());
+                }
+            }
         }
-    }
-    // The union, contiguous runs joined.
-    let mut union: Vec<SampleRange> = Vec::new();
-    for (r, _) in &ranges {
-        match union.last_mut() {
-            Some(last) if last.end == r.begin => last.end = r.end,
-            _ => union.push(*r),
-        }
-    }
-    let total: u64 = parts.iter().map(|(_, _, m)| m.spp()).sum();
-    let mut sums = vec![[0.0f64; 3]; w * h];
-    for (_, img, meta) in parts {
         let weight = meta.spp() as f64;
-        for (s, p) in sums.iter_mut().zip(img.pixels()) {
+        for (s, p) in self.sums.iter_mut().zip(img.pixels()) {
             s[0] += f64::from(p.r) * weight;
             s[1] += f64::from(p.g) * weight;
             s[2] += f64::from(p.b) * weight;
         }
-    }
-    let n = total as f64;
-    let image = HdrImage::from_fn(w, h, |x, y| {
-        let s = sums[y * w + x];
-        Rgb32::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
-    });
-    let mut devices: Vec<&str> = Vec::new();
-    for (_, _, m) in parts {
-        for d in m.device.split(" + ") {
-            if !devices.contains(&d) {
-                devices.push(d);
+        self.ranges.extend(meta.ranges.iter().map(|r| (*r, path.to_path_buf())));
+        self.total_spp += meta.spp();
+        for d in meta.device.split(" + ") {
+            if !self.devices.iter().any(|known| known == d) {
+                self.devices.push(d.to_string());
             }
         }
+        self.seconds += meta.seconds;
+        Ok(())
     }
-    let meta = RenderMetadata {
-        ranges: union,
-        fingerprint: first_meta.fingerprint.clone(),
-        device: devices.join(" + "),
-        seconds: parts.iter().map(|(_, _, m)| m.seconds).sum(),
-        version: first_meta.version.clone(),
-    };
-    Ok((image, meta))
+
+    /// The merged image and its metadata; refused, naming both parts, where two parts'
+    /// sample ranges overlap.
+    pub fn finish(mut self) -> anyhow::Result<(HdrImage, RenderMetadata)> {
+        let Some((_, w, h, first_meta)) = self.first.take() else { bail!("nothing to merge") };
+        self.ranges.sort_by_key(|(r, _)| (r.begin, r.end));
+        for pair in self.ranges.windows(2) {
+            let ((a, pa), (b, pb)) = (&pair[0], &pair[1]);
+            if b.begin < a.end {
+                bail!("{}: samples {b} overlap samples {a} of {}", pb.display(), pa.display());
+            }
+        }
+        // The union, contiguous runs joined.
+        let mut union: Vec<SampleRange> = Vec::new();
+        for (r, _) in &self.ranges {
+            match union.last_mut() {
+                Some(last) if last.end == r.begin => last.end = r.end,
+                _ => union.push(*r),
+            }
+        }
+        let n = self.total_spp as f64;
+        let sums = &self.sums;
+        let image = HdrImage::from_fn(w, h, |x, y| {
+            let s = sums[y * w + x];
+            Rgb32::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
+        });
+        let meta = RenderMetadata {
+            ranges: union,
+            fingerprint: first_meta.fingerprint,
+            device: self.devices.join(" + "),
+            seconds: self.seconds,
+            version: first_meta.version,
+        };
+        Ok((image, meta))
+    }
+}
+
+/// The merge of `parts` (image and metadata, with the path each was read from, for
+/// messages): [`Merge`] over them in order.
+pub fn merge(parts: &[(PathBuf, HdrImage, RenderMetadata)]) -> anyhow::Result<(HdrImage, RenderMetadata)> {
+    let mut merge = Merge::new();
+    for (path, img, meta) in parts {
+        merge.add(path, img, meta)?;
+    }
+    merge.finish()
 }
 
 /// Runs `lumen merge`.
@@ -108,12 +167,14 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
     if ImageFormat::from_path(&args.output).ok() != Some(ImageFormat::Exr) {
         bail!("{}: the merged image must be .exr (it carries the sample ranges)", args.output.display());
     }
-    let mut parts = Vec::new();
+    // One part in memory at a time, beside the sums.
+    let mut merge = Merge::new();
     for p in &args.parts {
         let (img, meta) = read_render_part(p)?;
-        parts.push((p.clone(), img, meta));
+        merge.add(p, &img, &meta)?;
     }
-    let (image, meta) = merge(&parts)?;
+    let parts = args.parts.len();
+    let (image, meta) = merge.finish()?;
     if meta.ranges.len() > 1 || meta.ranges[0].begin != 0 {
         let gaps: Vec<String> = std::iter::once(0)
             .chain(meta.ranges.iter().map(|r| r.end))
@@ -131,8 +192,8 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
     write_image_with(&args.output, &image, &ToneMap::default(), Some(&meta))?;
     crate::diag!(
         "merged {} part{} ({} samples per pixel: {}) into {}",
-        parts.len(),
-        if parts.len() == 1 { "" } else { "s" },
+        parts,
+        if parts == 1 { "" } else { "s" },
         meta.spp(),
         meta.ranges_text(),
         args.output.display()
