@@ -3,7 +3,8 @@
 //! the image one render of their union gives: the spp-weighted mean, in f64.
 //!
 //! Parts must be lumen EXR files with the same fingerprint (scene, size, settings, sample
-//! layout, version) and size, and ranges that do not overlap; anything else is refused
+//! layout, version) and size, ranges that do not overlap and finite pixels (lumen writes
+//! no NaN or infinity, so one means a damaged file); anything else is refused
 //! with the file's name and nothing is written. Gaps in the union are reported (the result
 //! is still the exact mean of the samples present). Merged files carry the union's
 //! metadata, so merges can be merged again. Parts are read one at a time into running
@@ -74,9 +75,17 @@ impl Merge {
     }
 
     /// Adds the part read from `path`: refused, naming `path`, where it was rendered from
-    /// other inputs or has another size than the first part.
+    /// other inputs or has another size than the first part, or holds a NaN or infinite
+    /// pixel.
     pub fn add(&mut self, path: &Path, img: &HdrImage, meta: &RenderMetadata) -> anyhow::Result<()> {
         let (w, h) = (img.width(), img.height());
+        // lumen writes NaN and infinite samples as black, so such pixels mean a damaged file;
+        // merged, one would poison a pixel's mean (the merged file would show it black).
+        let bad = img.non_finite_count();
+        if bad > 0 {
+            let (pixels, are) = if bad == 1 { ("pixel", "is") } else { ("pixels", "are") };
+            bail!("{}: {bad} {pixels} {are} NaN or infinite, which lumen never writes: a damaged part", path.display());
+        }
         match &self.first {
             None => {
                 let bytes = (w * h * std::mem::size_of::<[f64; 3]>()) as u64;
@@ -199,4 +208,25 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
         args.output.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A part with a NaN or infinite pixel (lumen writes none, so the file is damaged) is
+    /// refused by name; the parts before it do not make a result.
+    #[test]
+    fn a_part_with_non_finite_pixels_is_refused() {
+        let meta = |begin, end| RenderMetadata::new(SampleRange { begin, end }, "scene".into(), "cpu", 0.0);
+        let good = HdrImage::from_fn(2, 2, |_, _| Rgb32::new(1.0, 1.0, 1.0));
+        for bad_value in [f32::NAN, f32::INFINITY] {
+            let bad =
+                HdrImage::from_fn(2, 2, |x, y| Rgb32::new(if (x, y) == (1, 0) { bad_value } else { 1.0 }, 1.0, 1.0));
+            let mut merge = Merge::new();
+            merge.add(Path::new("a.exr"), &good, &meta(0, 1)).unwrap();
+            let e = merge.add(Path::new("b.exr"), &bad, &meta(1, 2)).unwrap_err().to_string();
+            assert_eq!(e, "b.exr: 1 pixel is NaN or infinite, which lumen never writes: a damaged part");
+        }
+    }
 }
