@@ -90,6 +90,11 @@ mod tests {
         RenderMetadata::new(SampleRange { begin: 0, end: 4 }, "scene".into(), "cpu", 1.0)
     }
 
+    /// The error of writing the test image to `outputs`, keeping it in `rescue_dir`.
+    fn failure(outputs: &[PathBuf], rescue_dir: &Path) -> String {
+        write_outputs(outputs, &image(), &ToneMap::default(), &meta(), rescue_dir).unwrap_err().to_string()
+    }
+
     /// An output in a directory that is gone: the others are written, the render is kept
     /// as an EXR that holds its radiance, and the error says where and how to convert it.
     #[test]
@@ -98,9 +103,7 @@ mod tests {
         let rescue = tempfile::tempdir().unwrap();
         let lost = dir.path().join("gone/x.png");
         let ok = dir.path().join("ok.png");
-        let e = write_outputs(&[lost.clone(), ok.clone()], &image(), &ToneMap::default(), &meta(), rescue.path())
-            .unwrap_err()
-            .to_string();
+        let e = failure(&[lost.clone(), ok.clone()], rescue.path());
         assert!(ok.exists());
         let kept = rescue.path().join(format!("lumen-rescue-{}-x.png.exr", std::process::id()));
         assert_eq!(read_image(&kept).unwrap().pixels(), image().pixels());
@@ -118,14 +121,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let lost = dir.path().join("gone/x.png");
         let exr = dir.path().join("y.exr");
-        let e = write_outputs(&[lost.clone(), exr.clone()], &image(), &ToneMap::default(), &meta(), dir.path())
-            .unwrap_err()
-            .to_string();
+        let e = failure(&[lost.clone(), exr.clone()], dir.path());
         assert!(e.contains(&format!("the render's radiance is in {}", exr.display())), "{e}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no copy: only y.exr");
-        let e = write_outputs(&[lost], &image(), &ToneMap::default(), &meta(), &dir.path().join("none"))
-            .unwrap_err()
-            .to_string();
+        let e = failure(&[lost], &dir.path().join("none"));
         assert!(e.contains("(os error 2); the render could not be kept either (cannot write "), "{e}");
         write_outputs(&[dir.path().join("z.png")], &image(), &ToneMap::default(), &meta(), dir.path()).unwrap();
         assert_eq!(

@@ -104,8 +104,7 @@ pub fn load_file(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneLangErro
 /// a script saved as Latin-1 or UTF-16 is found, not just refused.
 fn not_utf8(bytes: &[u8], at: usize, name: &str) -> SceneLangError {
     // Everything before `at` is valid UTF-8.
-    let valid = std::str::from_utf8(&bytes[..at]).unwrap_or_default();
-    let text = valid.strip_prefix('\u{feff}').unwrap_or(valid);
+    let text = without_bom(std::str::from_utf8(&bytes[..at]).unwrap_or_default());
     let shown: Vec<String> = bytes[at..].iter().take(4).map(|b| format!("0x{b:02X}")).collect();
     SceneLangError::at(
         text,
@@ -119,6 +118,12 @@ fn not_utf8(bytes: &[u8], at: usize, name: &str) -> SceneLangError {
         ),
     )
     .with_expected("UTF-8 text (save the script as UTF-8; Latin-1 and UTF-16 files are not read)")
+}
+
+/// `source` without a leading byte-order mark (Windows editors write one): it is not part
+/// of the script, and lines and columns count from after it, as an editor shows them.
+fn without_bom(source: &str) -> &str {
+    source.strip_prefix('\u{feff}').unwrap_or(source)
 }
 
 /// Loads a script from a string. `name` labels diagnostics; relative image paths resolve
@@ -144,9 +149,7 @@ pub fn load_str_with_output(
         it.cli_vars()?;
         vars = std::mem::take(&mut it.vars);
     }
-    // A leading byte-order mark (Windows editors write one) is not part of the script;
-    // lines and columns count from after it, as an editor shows them.
-    let source = source.strip_prefix('\u{feff}').unwrap_or(source);
+    let source = without_bom(source);
     let mut it = Interp::new(source, name, opts.time, base_dir, out, vars);
     it.run()?;
     it.finish()
