@@ -93,6 +93,38 @@ fn oversized_buffers_are_refused_with_the_limit() {
     assert!(err.to_string().contains("huge"));
 }
 
+/// A scene whose sky outgrows what one binding holds is refused by the packer at the texels,
+/// before their conversion and the sampling tables (10 s and 6 GB for a 16384×8192 sky on
+/// lavapipe, which binds 128 MiB, when it was refused at the upload instead).
+#[test]
+fn a_table_beyond_the_adapters_binding_is_refused_before_it_is_packed() {
+    use lumen::scene::{Environment, SceneBuilder, Transform};
+    let Some(gpu) = gpu_for_tests("a_table_beyond_the_adapters_binding_is_refused_before_it_is_packed") else {
+        return;
+    };
+    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    // Just over the limit in texels (3 f32 each).
+    let pixels = limit / 12 + 1;
+    if pixels > 1 << 26 {
+        println!("skipped: this adapter binds {limit} bytes; a sky beyond it is too large for a test");
+        return;
+    }
+    let width = 4096;
+    let height = pixels.div_ceil(width) as usize;
+    let mut b = SceneBuilder::new(4, 4);
+    let m = b.diffuse(lumen::color::Color::gray(0.5));
+    let image = std::sync::Arc::new(lumen::image::HdrImage::new(width as usize, height));
+    b.sphere(Transform::IDENTITY, m).environment(Environment::Image { image, intensity: 1.0, rotation_deg: 0.0 });
+    let err = lumen::gpu::render::render(&gpu, &b.build().unwrap(), &Default::default()).unwrap_err();
+    let texels = 12 * width * height as u64;
+    match &err {
+        GpuError::TooLarge { what, needed, limit: l, .. } => {
+            assert_eq!((what.as_str(), *needed, *l), ("floats", texels, limit), "{err}");
+        }
+        _ => panic!("expected the floats table to be refused, got {err}"),
+    }
+}
+
 // ---- shader assembly ----------------------------------------------------------------
 
 use lumen::gpu::{FeatureNames, KernelCache, ShaderLibrary};

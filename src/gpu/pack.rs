@@ -17,6 +17,7 @@ use glam::DVec3;
 
 use super::features::FeatureSet;
 use super::layout::{self, Affine, NONE};
+use super::tables::Table;
 use super::traversal::Unrolled;
 use crate::accel::{quantized, QuantizedNode};
 use crate::color::Color;
@@ -102,6 +103,36 @@ pub enum PackError {
     /// triangles in object space as f32; the file is finite in f64, so it loads).
     #[error("mesh {file}: a {what} reaches {magnitude:e}, beyond f32's range (±3.4e38) that the GPU stores meshes in")]
     MeshOutOfRange { file: String, what: &'static str, magnitude: f64 },
+    /// A table outgrows what one binding of the adapter holds ([`TableLimit`]); `needed` is
+    /// the table's size up to the part that would not fit, so a lower bound.
+    #[error("{what} needs {needed} bytes but this adapter allows at most {} bytes per {}", .limit.bytes, .limit.name)]
+    TooLarge { what: &'static str, needed: u64, limit: TableLimit },
+}
+
+/// The most bytes one table (one storage buffer) may take on the adapter a scene is packed
+/// for, and the name of that limit. [`pack_within`] refuses a table as soon as an image,
+/// a mesh or a sampling table would take it past this, before converting the rest: a
+/// 16384×8192 sky needs 2.7 GB of floats, and lavapipe binds 128 MiB, so packing all of
+/// it only to be refused at the upload cost ten seconds and gigabytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TableLimit {
+    pub bytes: u64,
+    pub name: &'static str,
+}
+
+impl TableLimit {
+    /// No limit ([`pack`]): the tables are checked where they are uploaded.
+    pub const NONE: TableLimit = TableLimit { bytes: u64::MAX, name: "table" };
+
+    /// Whether `table` still fits with `more` elements.
+    fn room<T>(self, which: Table, table: &[T], more: usize) -> Result<(), PackError> {
+        let what = which.wgsl_name();
+        let needed = (table.len() as u64).saturating_add(more as u64).saturating_mul(std::mem::size_of::<T>() as u64);
+        if needed > self.bytes {
+            return Err(PackError::TooLarge { what, needed, limit: self });
+        }
+        Ok(())
+    }
 }
 
 fn part_text(part: Option<usize>) -> String {
@@ -173,12 +204,32 @@ fn count_u32(what: &'static str, n: usize) -> Result<u32, PackError> {
 /// assert_eq!(packed.shapes[0].to_world.r0[3], 4.0);
 /// ```
 pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, PackError> {
-    scene.validate()?;
-    pack_form(scene, spp_override).map_err(|e| e.located_in(scene))
+    pack_within(scene, spp_override, TableLimit::NONE)
 }
 
-/// [`pack`] once the scene is valid; shapes are located in its render form.
-fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, PackError> {
+/// [`pack`] for an adapter whose tables may take at most `limit` bytes each: a table that
+/// outgrows it is refused before the bulk of it (texels, sampling tables, triangles) is
+/// converted.
+///
+/// ```
+/// use lumen::scene::*;
+/// use lumen::gpu::pack::{pack_within, PackError, TableLimit};
+/// let mut b = SceneBuilder::new(4, 4);
+/// let m = b.diffuse(lumen::color::Color::gray(0.5));
+/// b.sphere(Transform::IDENTITY, m)
+///     .environment(Environment::Image { image: std::sync::Arc::new(lumen::image::HdrImage::new(64, 32)), intensity: 1.0, rotation_deg: 0.0 });
+/// let limit = TableLimit { bytes: 4096, name: "storage buffer binding" };
+/// let err = pack_within(&b.build().unwrap(), None, limit).unwrap_err();
+/// // Refused at the texels (64 × 32 × 3 floats), before the sampling tables.
+/// assert_eq!(err, PackError::TooLarge { what: "floats", needed: 64 * 32 * 12, limit });
+/// ```
+pub fn pack_within(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Result<PackedScene, PackError> {
+    scene.validate()?;
+    pack_form(scene, spp_override, limit).map_err(|e| e.located_in(scene))
+}
+
+/// [`pack_within`] once the scene is valid; shapes are located in its render form.
+fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Result<PackedScene, PackError> {
     let form = crate::prepare::render_form(scene);
     let scene = &*form;
     let features = FeatureSet::of(scene);
@@ -224,8 +275,9 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         tri_shading: Vec::new(),
         origin,
     };
+    limit.room(Table::BvhNodes, &p.bvh_nodes, 0)?;
     let top_nodes = p.bvh_nodes.len();
-    let mesh_roots = pack_meshes(&shifted, &mut p)?;
+    let mesh_roots = pack_meshes(&shifted, &mut p, limit)?;
 
     // Objects in scene order: a top-level primitive is one shape, a CSG tree one tree
     // record and its leaves (depth first).
@@ -289,19 +341,19 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pa
         }
     }
     for l in &area_lights {
-        let light = packed_area_light(scene, l.shape, object_ref[l.shape], origin, &mesh_roots, &mut p.floats)?;
+        let light = packed_area_light(scene, l.shape, object_ref[l.shape], origin, &mesh_roots, &mut p.floats, limit)?;
         p.area_lights.push(light);
     }
 
     // Appearance.
     let mut textures: HashMap<*const HdrImage, u32> = HashMap::new();
     for m in &scene.materials {
-        let pigment = push_pigment(&mut p, &mut textures, m.brdf.pigment())?;
-        let emitted = push_pigment(&mut p, &mut textures, &m.emitted)?;
+        let pigment = push_pigment(&mut p, &mut textures, m.brdf.pigment(), limit)?;
+        let emitted = push_pigment(&mut p, &mut textures, &m.emitted, limit)?;
         let material = pack_material(&m.brdf, pigment, emitted, &mut p.rows);
         p.materials.push(material);
     }
-    p.environment = pack_environment(scene, &mut p.floats, &mut textures)?;
+    p.environment = pack_environment(scene, &mut p.floats, &mut textures, limit)?;
 
     for l in &scene.point_lights {
         let pos = l.position - origin;
@@ -378,7 +430,11 @@ const UNCOMPENSATED: [f64; CONDUCTOR_NODES] = [1.0; CONDUCTOR_NODES];
 /// and its triangles, in leaf order, to `tri_positions` and `tri_shading`, so that a leaf's
 /// range indexes the triangles directly. Returns the root node of each mesh (by the
 /// address of its `Arc`).
-fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, PackedMesh>, PackError> {
+fn pack_meshes(
+    shapes: &[Shape],
+    p: &mut PackedScene,
+    limit: TableLimit,
+) -> Result<HashMap<usize, PackedMesh>, PackError> {
     let bvhs = crate::prepare::MeshBvhs::of(shapes);
     let mut names = HashMap::new();
     for s in shapes {
@@ -404,6 +460,10 @@ fn pack_meshes(shapes: &[Shape], p: &mut PackedScene) -> Result<HashMap<usize, P
             });
         }
         leaf_range_fits("triangles (all meshes)", tri_base as usize + bvh.prim_indices().len())?;
+        let triangles = bvh.prim_indices().len();
+        limit.room(Table::BvhNodes, &p.bvh_nodes, nodes.len())?;
+        limit.room(Table::TriPositions, &p.tri_positions, triangles * layout::TRI_POSITION_VEC4S as usize)?;
+        limit.room(Table::TriShading, &p.tri_shading, triangles * layout::TRI_SHADING_VEC4S as usize)?;
         p.bvh_nodes.extend(nodes.iter().map(|&n| n.moved(node_base, tri_base)));
         let mut leaf_of = vec![0u32; mesh.triangle_count()];
         for (k, &t) in bvh.prim_indices().iter().enumerate() {
@@ -507,6 +567,7 @@ fn packed_area_light(
     origin: DVec3,
     meshes: &HashMap<usize, PackedMesh>,
     floats: &mut Vec<f32>,
+    limit: TableLimit,
 ) -> Result<layout::AreaLight, PackError> {
     let light = AreaLight::new(scene, shape)
         .ok_or_else(|| crate::scene::SceneError::Invalid(format!("shape {shape}: an emissive surface of zero area")))?;
@@ -515,6 +576,7 @@ fn packed_area_light(
         let packed = &meshes[&(std::sync::Arc::as_ptr(&instance.mesh) as usize)];
         mesh_cdf = count_u32("floats", floats.len())?;
         mesh_triangles = count_u32("emissive triangles", m.cdf.len())?;
+        limit.room(Table::Floats, floats, m.cdf.len() + packed.leaf_of.len())?;
         floats.extend(m.cdf.iter().map(|&c| c as f32));
         floats.extend(packed.leaf_of.iter().map(|&i| f32::from_bits(i)));
     }
@@ -714,10 +776,12 @@ fn push_texels(
     floats: &mut Vec<f32>,
     textures: &mut HashMap<*const HdrImage, u32>,
     image: &Arc<HdrImage>,
+    limit: TableLimit,
 ) -> Result<u32, PackError> {
     if let Some(&o) = textures.get(&Arc::as_ptr(image)) {
         return Ok(o);
     }
+    limit.room(Table::Floats, floats, 3 * image.pixels().len())?;
     let offset = count_u32("texel floats", floats.len())?;
     for px in image.pixels() {
         floats.extend([px.r, px.g, px.b]);
@@ -731,6 +795,7 @@ fn push_pigment(
     p: &mut PackedScene,
     textures: &mut HashMap<*const HdrImage, u32>,
     pigment: &Pigment,
+    limit: TableLimit,
 ) -> Result<u32, PackError> {
     let mut out = layout::Pigment {
         a: [0.0; 4],
@@ -758,7 +823,7 @@ fn push_pigment(
                 crate::scene::ImageFilter::Nearest => layout::image_filter_kind::NEAREST,
                 crate::scene::ImageFilter::Bilinear => layout::image_filter_kind::BILINEAR,
             };
-            out.tex_offset = push_texels(&mut p.floats, textures, image)?;
+            out.tex_offset = push_texels(&mut p.floats, textures, image, limit)?;
             out.tex_width = image.width() as u32;
             out.tex_height = image.height() as u32;
         }
@@ -777,6 +842,7 @@ fn pack_environment(
     scene: &Scene,
     floats: &mut Vec<f32>,
     textures: &mut HashMap<*const HdrImage, u32>,
+    limit: TableLimit,
 ) -> Result<layout::Environment, PackError> {
     let mut e = layout::Environment {
         a: [0.0; 4],
@@ -802,12 +868,17 @@ fn pack_environment(
         }
         Some(Environment::Image { image, intensity, rotation_deg }) => {
             e.kind = layout::environment_kind::IMAGE;
-            e.tex_offset = push_texels(floats, textures, image)?;
+            e.tex_offset = push_texels(floats, textures, image, limit)?;
             e.tex_width = image.width() as u32;
             e.tex_height = image.height() as u32;
             e.intensity = *intensity as f32;
             e.rotation_rad = rotation_deg.to_radians() as f32;
             e.dist_offset = count_u32("environment floats", floats.len())?;
+            // The tables' length, known before building them: per row (and once for the
+            // marginal) an integral, the cells and one more CDF entry than cells.
+            let (w, h) = (image.width(), image.height());
+            let tables = (1 + h + h + 1) + h * (1 + w + w + 1);
+            limit.room(Table::Floats, floats, tables)?;
             let dist = image_distribution(image);
             floats.push(dist.marginal.integral as f32);
             floats.extend(dist.marginal.func.iter().map(|&v| v as f32));
@@ -817,6 +888,7 @@ fn pack_environment(
                 floats.extend(row.func.iter().map(|&v| v as f32));
                 floats.extend(row.cdf.iter().map(|&v| v as f32));
             }
+            debug_assert_eq!(floats.len() - e.dist_offset as usize, tables);
             count_u32("environment floats", floats.len())?;
         }
     }

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use super::features::{FeatureSet, RendererKind};
-use super::pack::{pack, PackedScene};
+use super::pack::{pack_within, PackError, PackedScene, TableLimit};
 use super::parallel_jit;
 use super::tables::{Table, TableForms, TableLimits, TablePlacement};
 use super::wavefront::twin::{self, TwinStart};
@@ -334,7 +334,23 @@ pub fn kernel_listing(f: &FeatureSet) -> Result<String, GpuError> {
 }
 
 fn pack_error(e: super::pack::PackError) -> GpuError {
-    GpuError::Validation(format!("cannot pack the scene for the GPU: {e}"))
+    match e {
+        // The same error as the upload's, only sooner.
+        PackError::TooLarge { what, needed, limit } => {
+            GpuError::TooLarge { what: what.into(), needed, limit: limit.bytes, limit_name: limit.name }
+        }
+        e => GpuError::Validation(format!("cannot pack the scene for the GPU: {e}")),
+    }
+}
+
+/// The most bytes a table may take on `gpu`: one storage buffer binding, and one buffer.
+fn table_limit(gpu: &Gpu) -> TableLimit {
+    let l = &gpu.limits;
+    if l.max_storage_buffer_binding_size <= l.max_buffer_size {
+        TableLimit { bytes: l.max_storage_buffer_binding_size, name: "storage buffer binding" }
+    } else {
+        TableLimit { bytes: l.max_buffer_size, name: "buffer" }
+    }
 }
 
 /// Renders `scene` on `gpu`.
@@ -390,11 +406,11 @@ impl GpuRenderer {
     /// Renders `scene` on `gpu`, like [`render`].
     pub fn render(&mut self, gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
         let start = Instant::now();
-        let packed = pack(scene, opts.spp).map_err(pack_error)?;
+        let packed = pack_within(scene, opts.spp, table_limit(gpu)).map_err(pack_error)?;
         self.render_from(gpu, scene, &packed, opts, start)
     }
 
-    /// Renders `packed`, which [`pack`] made from `scene` with `opts.spp` (and a benchmark may
+    /// Renders `packed`, which [`pack`](super::pack::pack) made from `scene` with `opts.spp` (and a benchmark may
     /// have altered, e.g. its traversal through [`FeatureSet::object_list`]).
     pub fn render_packed(
         &mut self,
