@@ -14,11 +14,17 @@ use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
 /// assert_eq!(c.max_component(), 7.0);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
 pub struct Rgb<T> {
     pub r: T,
     pub g: T,
     pub b: T,
 }
+
+// SAFETY: three f32 fields under repr(C): no padding, and every bit pattern is a value.
+// (Images are hashed and written as their pixels' bytes.)
+unsafe impl bytemuck::Zeroable for Rgb<f32> {}
+unsafe impl bytemuck::Pod for Rgb<f32> {}
 
 /// Double-precision colour used by the scene model and the CPU reference.
 pub type Color = Rgb<f64>;

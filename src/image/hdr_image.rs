@@ -46,12 +46,8 @@ pub struct HdrImage {
 /// ```
 impl std::fmt::Debug for HdrImage {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let mut digest = super::fnv::Fnv1a::new();
-        for p in &self.pixels {
-            for c in [p.r, p.g, p.b] {
-                digest.bytes(&c.to_bits().to_le_bytes());
-            }
-        }
+        let mut digest = super::digest::Digest::new();
+        digest.scalars::<4, _>(&self.pixels);
         f.debug_struct("HdrImage")
             .field("width", &self.width)
             .field("height", &self.height)

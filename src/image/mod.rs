@@ -7,9 +7,9 @@
 //!   (8-bit sRGB), chosen by extension; writes are atomic.
 
 mod atomic_file;
+mod digest;
 mod error;
 mod exr_file;
-mod fnv;
 mod hdr_image;
 mod image_file;
 mod ldr_file;

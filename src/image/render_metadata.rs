@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 
 use exr::meta::attribute::{AttributeValue, Text};
 
-use super::fnv::Fnv1a;
+use super::digest::Digest;
 use crate::prepare::SampleRange;
 use crate::scene::{Scene, Shape};
 
@@ -50,25 +50,23 @@ const DEVICE: &str = "lumen.device";
 const SECONDS: &str = "lumen.renderSeconds";
 const VERSION: &str = "lumen.version";
 
-/// A 64-bit FNV-1a hash, fed through `fmt::Write` so that `Debug` text (which writes every
-/// f64 exactly, and images as a digest of their texels' bits) is hashed without being held
-/// in memory.
-struct Fnv {
-    hash: Fnv1a,
+/// A 64-bit hash ([`Digest`]), fed through `fmt::Write` so that `Debug` text (which writes
+/// every f64 exactly, and images as a digest of their texels' bits) is hashed without being
+/// held in memory.
+struct Hasher {
+    hash: Digest,
     /// Meshes already hashed (by the address of their `Arc`), each with its order of first
     /// use: an instance of one of them hashes that number, not its triangles again.
     meshes: Vec<usize>,
 }
 
-impl Fnv {
+impl Hasher {
     fn bytes(&mut self, bytes: &[u8]) {
         self.hash.bytes(bytes);
     }
 
     fn f64s(&mut self, values: &[f64]) {
-        for v in values {
-            self.bytes(&v.to_bits().to_le_bytes());
-        }
+        self.hash.scalars::<8, _>(values);
     }
 
     /// A shape tree by its bits: formatting a tree of millions of primitives would take
@@ -99,24 +97,18 @@ impl Fnv {
                 self.meshes.push(key);
                 let mesh = &m.mesh;
                 self.bytes(&(mesh.triangle_count() as u64).to_le_bytes());
-                for p in mesh.positions() {
-                    self.f64s(&p.to_array());
-                }
-                for t in mesh.triangles() {
-                    t.iter().for_each(|i| self.bytes(&i.to_le_bytes()));
-                }
-                for n in mesh.normals().unwrap_or_default() {
-                    self.f64s(&n.to_array());
-                }
-                for uv in mesh.uvs().unwrap_or_default() {
-                    self.f64s(&uv.to_array());
-                }
+                self.hash.scalars::<8, _>(mesh.positions());
+                self.hash.scalars::<4, _>(mesh.triangles());
+                // Presence is marked, so that normals cannot pass for uvs or vertices.
+                self.bytes(&[u8::from(mesh.normals().is_some()), u8::from(mesh.uvs().is_some())]);
+                self.hash.scalars::<8, _>(mesh.normals().unwrap_or_default());
+                self.hash.scalars::<8, _>(mesh.uvs().unwrap_or_default());
             }
         }
     }
 }
 
-impl std::fmt::Write for Fnv {
+impl std::fmt::Write for Hasher {
     fn write_str(&mut self, s: &str) -> std::fmt::Result {
         self.bytes(s.as_bytes());
         Ok(())
@@ -128,7 +120,7 @@ impl std::fmt::Write for Fnv {
 /// different when anything that changes the image differs. The device is left out on
 /// purpose (CPU and GPU shards of one render may be merged).
 pub fn fingerprint(scene: &Scene, layout_spp: u32) -> String {
-    let mut h = Fnv { hash: Fnv1a::new(), meshes: Vec::new() };
+    let mut h = Hasher { hash: Digest::new(), meshes: Vec::new() };
     let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment } = scene;
     let _ = write!(
         h,
