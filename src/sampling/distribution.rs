@@ -131,10 +131,12 @@ pub struct Sample2D {
 
 impl Distribution2D {
     /// Builds the tables from `values[row * width + col]`. Panics if the size is wrong or
-    /// zero.
+    /// zero. Rows are built in parallel (each on its own, so the tables do not depend on the
+    /// threads): a 16384×8192 sky's took 3 s on one core.
     pub fn new(values: &[f64], width: usize, height: usize) -> Self {
+        use rayon::prelude::*;
         assert!(width > 0 && height > 0 && values.len() == width * height, "distribution size mismatch");
-        let conditional: Vec<Distribution1D> = values.chunks(width).map(Distribution1D::new).collect();
+        let conditional: Vec<Distribution1D> = values.par_chunks(width).map(Distribution1D::new).collect();
         let row_integrals: Vec<f64> = conditional.iter().map(|d| d.integral).collect();
         let marginal = Distribution1D::new(&row_integrals);
         Self { width, height, conditional, marginal }
