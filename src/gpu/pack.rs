@@ -435,13 +435,21 @@ fn pack_meshes(
     p: &mut PackedScene,
     limit: TableLimit,
 ) -> Result<HashMap<usize, PackedMesh>, PackError> {
-    let bvhs = crate::prepare::MeshBvhs::of(shapes);
     let mut names = HashMap::new();
+    let mut triangles = 0;
     for s in shapes {
         if let Shape::Mesh(m) = s {
-            names.entry(Arc::as_ptr(&m.mesh) as usize).or_insert(&*m.name);
+            names.entry(Arc::as_ptr(&m.mesh) as usize).or_insert_with(|| {
+                triangles += m.mesh.triangle_count();
+                &*m.name
+            });
         }
     }
+    // Each distinct mesh's triangles are stored once: refused here, before the BVHs are
+    // built (seconds for millions of triangles), if they cannot fit.
+    limit.room(Table::TriPositions, &p.tri_positions, triangles * layout::TRI_POSITION_VEC4S as usize)?;
+    limit.room(Table::TriShading, &p.tri_shading, triangles * layout::TRI_SHADING_VEC4S as usize)?;
+    let bvhs = crate::prepare::MeshBvhs::of(shapes);
     let mut roots = HashMap::new();
     for mesh in &bvhs.meshes {
         let file = names[&(Arc::as_ptr(mesh) as usize)];
@@ -460,10 +468,7 @@ fn pack_meshes(
             });
         }
         leaf_range_fits("triangles (all meshes)", tri_base as usize + bvh.prim_indices().len())?;
-        let triangles = bvh.prim_indices().len();
         limit.room(Table::BvhNodes, &p.bvh_nodes, nodes.len())?;
-        limit.room(Table::TriPositions, &p.tri_positions, triangles * layout::TRI_POSITION_VEC4S as usize)?;
-        limit.room(Table::TriShading, &p.tri_shading, triangles * layout::TRI_SHADING_VEC4S as usize)?;
         p.bvh_nodes.extend(nodes.iter().map(|&n| n.moved(node_base, tri_base)));
         let mut leaf_of = vec![0u32; mesh.triangle_count()];
         for (k, &t) in bvh.prim_indices().iter().enumerate() {
@@ -1099,6 +1104,34 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    #[test]
+    fn a_mesh_beyond_the_binding_size_is_refused_by_its_triangle_count() {
+        use crate::scene::mesh::{MeshParts, TriangleMesh};
+        let parts = MeshParts {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+            triangles: vec![[0, 1, 2], [0, 1, 3], [0, 2, 3]],
+            ..MeshParts::default()
+        };
+        let mesh = std::sync::Arc::new(TriangleMesh::from_parts("three.obj", parts).unwrap());
+        let mut b = SceneBuilder::new(4, 4);
+        let m = b.diffuse(Color::gray(0.5));
+        // Two instances of one mesh store its triangles once.
+        for x in [0.0, 2.0] {
+            let placed = Transform::translation(DVec3::new(x, 5.0, 0.0));
+            b.shape(Shape::mesh(mesh.clone(), "three.obj", placed, m, false));
+        }
+        let scene = b.build().unwrap();
+        let positions = 3 * layout::TRI_POSITION_VEC4S as u64 * 16;
+        let shading = 3 * layout::TRI_SHADING_VEC4S as u64 * 16;
+        let fits = TableLimit { bytes: positions.max(shading) + 4096, name: "storage buffer binding" };
+        let p = pack_within(&scene, None, fits).unwrap();
+        assert_eq!(p.tri_positions.len() as u64 * 16, positions);
+        let limit = TableLimit { bytes: positions - 1, ..fits };
+        let err = pack_within(&scene, None, limit).unwrap_err();
+        assert_eq!(err, PackError::TooLarge { what: "tri_positions", needed: positions, limit });
+        assert!(err.to_string().starts_with(&format!("tri_positions needs {positions} bytes but")), "{err}");
     }
 
     #[test]
