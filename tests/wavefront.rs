@@ -315,6 +315,48 @@ fn cancel_drops_the_unfinished_round() {
     assert!(out.image.pixels().iter().all(|p| p.r == 0.0 && p.g == 0.0 && p.b == 0.0));
 }
 
+/// A launch traces about as many rays as a launch of the default batch at eight rays per
+/// path, however many point lights each path traces in it (the point-light renderer's
+/// first-hit launch, the path tracer's shadow launch): 4,000 lights make batches smaller
+/// (on lavapipe 262 slots instead of the image's 1,024), never a launch 4,000 times longer,
+/// and the image stays the CPU's.
+#[test]
+fn many_point_lights_make_batches_smaller_not_launches_longer() {
+    let Some(gpu) = gpu_for_tests("many_point_lights_make_batches_smaller_not_launches_longer") else { return };
+    const LIGHTS: u32 = 4000;
+    for renderer in [Renderer::PointLight { background: Color::gray(0.1), ambient: Color::gray(0.05) }, pt(1, 2, true)]
+    {
+        let mut b = SceneBuilder::new(32, 32);
+        let m = b.diffuse(Color::gray(0.6));
+        b.sphere(Transform::IDENTITY, m).plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), m);
+        for k in 0..LIGHTS {
+            let a = f64::from(k) * 2.399_963; // the golden angle: lights spread on a disc
+            let r = 3.0 * (f64::from(k) / f64::from(LIGHTS)).sqrt();
+            b.point_light(PointLight {
+                position: DVec3::new(-1.0 + r * a.cos(), r * a.sin(), 4.0),
+                color: Color::gray(4.0 / f64::from(LIGHTS)),
+                linear_radius: 0.0,
+            });
+        }
+        b.renderer(renderer)
+            .camera(Camera { transform: Transform::translation(DVec3::new(-2.0, 0.0, 0.5)), ..Camera::default() });
+        let scene = b.build().unwrap();
+        let name = scene.renderer.name();
+        let out = render(&gpu, &scene, &GpuRenderOptions { spp: Some(1), ..GpuRenderOptions::default() }).unwrap();
+        let budget = u64::from(lumen::gpu::wavefront::default_slots(&gpu))
+            * u64::from(lumen::gpu::wavefront::LAUNCH_RAYS_PER_SLOT);
+        let per_launch = u64::from(out.batch_paths) * u64::from(LIGHTS + 1);
+        assert!(
+            per_launch <= budget.max(u64::from(lumen::gpu::wavefront::MIN_BOUNDED_SLOTS) * u64::from(LIGHTS + 1)),
+            "{name}: {} slots",
+            out.batch_paths
+        );
+        let cpu =
+            lumen::cpu::render(&scene, &RenderOptions { spp: Some(1), ..RenderOptions::default() }, Progress::Hidden);
+        agreement(&out.image, &cpu.image).check(Tolerance::share(0.99)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
+
 /// A time limit that has passed after the first round keeps exactly that round.
 #[test]
 fn a_time_limit_keeps_whole_rounds() {

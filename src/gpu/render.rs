@@ -487,6 +487,8 @@ impl GpuRenderer {
         let n = if path_tracer { s.paths_per_sample.max(1) } else { 1 };
         let shadow_rays = if wavefront::has_shadow_rays(&f) { s.point_light_count + s.nee } else { 0 };
         let capacity = wavefront::capacity(gpu, scene.width, scene.height, n, shadow_rays, &f, opts.passes.batch_paths);
+        let rays_per_slot = wavefront::launch_rays_per_slot(&f, s.point_light_count, shadow_rays);
+        let capacity = wavefront::bounded_by_launch_rays(capacity, wavefront::default_slots(gpu), rays_per_slot);
         let groups = buffers.groups(gpu, &kernels)?;
         let setup = wavefront::RunnerSetup {
             gpu,

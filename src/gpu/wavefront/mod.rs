@@ -75,12 +75,7 @@ pub fn capacity(
     features: &FeatureSet,
     requested: u32,
 ) -> u32 {
-    let default = match gpu.adapter_info.device_type {
-        // 2¹⁷ measured best on lavapipe (2026-12-02, 160 px, 64 spp, against 2¹⁶: skybox.sl
-        // 20 % faster, csg.sl 11 %, mirrors.sl and glass.sl 4-5 %; 2¹⁸ and more no better).
-        wgpu::DeviceType::Cpu => 1 << 17,
-        _ => 1 << 21,
-    };
+    let default = default_slots(gpu);
     let wanted = if requested > 0 { requested } else { default };
     let image = u64::from(width) * u64::from(height) * u64::from(paths_per_sample) * u64::from(MAX_SPP_PER_ROUND);
     let mut slots = u64::from(wanted).min(image.max(1)).max(u64::from(paths_per_sample));
@@ -96,6 +91,54 @@ pub fn capacity(
         slots = slots.min(csg_pool_budget(gpu) / per_slot(StateBuffer::CsgPool)).max(1);
     }
     slots.min(u64::from(Control::new(features.queue_shards).max_slots())) as u32
+}
+
+/// The path slots of a batch on `gpu` unless asked otherwise.
+pub fn default_slots(gpu: &Gpu) -> u32 {
+    match gpu.adapter_info.device_type {
+        // 2¹⁷ measured best on lavapipe (2026-12-02, 160 px, 64 spp, against 2¹⁶: skybox.sl
+        // 20 % faster, csg.sl 11 %, mirrors.sl and glass.sl 4-5 %; 2¹⁸ and more no better).
+        wgpu::DeviceType::Cpu => 1 << 17,
+        _ => 1 << 21,
+    }
+}
+
+/// Rays one launch may trace per default slot: a batch whose paths each trace more rays in
+/// one launch ([`launch_rays_per_slot`]) gets fewer slots, so that no launch outgrows the
+/// usual ones by more than this factor.
+pub const LAUNCH_RAYS_PER_SLOT: u32 = 8;
+
+/// Fewest slots the launch bound leaves a batch (a few workgroups).
+pub const MIN_BOUNDED_SLOTS: u32 = 256;
+
+/// The rays one path of a batch may trace in one launch: the point-light renderer traces
+/// each light's shadow ray in the invocation of its camera ray, and the path tracer's
+/// shadow stage traces every shadow ray a vertex queued (`shadow_rays`) in one launch.
+pub fn launch_rays_per_slot(features: &FeatureSet, point_lights: u32, shadow_rays: u32) -> u32 {
+    match features.renderer {
+        RendererKind::PointLight => point_lights.saturating_add(1),
+        _ => shadow_rays.max(1),
+    }
+}
+
+/// `slots` bounded so that one launch traces about as many rays as a launch of the
+/// device's default batch does with [`LAUNCH_RAYS_PER_SLOT`] rays per path: a scene of
+/// 20,000 point lights traced 2.6 billion shadow rays in one launch of lavapipe's 2¹⁷ slots
+/// (15 s without a chance to stop; far beyond an OS watchdog's 2 s on a GPU that drives a
+/// display). Slots do not change the image (each sample's place and order are fixed), only
+/// how the work is cut. Ordinary scenes, up to eight rays per path, keep their batches.
+///
+/// ```
+/// use lumen::gpu::wavefront::bounded_by_launch_rays;
+/// assert_eq!(bounded_by_launch_rays(1 << 17, 1 << 17, 3), 1 << 17);
+/// assert_eq!(bounded_by_launch_rays(1 << 17, 1 << 17, 20_001), 256);
+/// assert_eq!(bounded_by_launch_rays(1 << 21, 1 << 21, 20_001), 838);
+/// assert_eq!(bounded_by_launch_rays(100, 1 << 17, 20_001), 100, "never more than asked");
+/// ```
+pub fn bounded_by_launch_rays(slots: u32, default_slots: u32, rays_per_slot: u32) -> u32 {
+    let budget = u64::from(default_slots) * u64::from(LAUNCH_RAYS_PER_SLOT);
+    let bound = (budget / u64::from(rays_per_slot.max(1))).max(u64::from(MIN_BOUNDED_SLOTS));
+    slots.min(u32::try_from(bound).unwrap_or(u32::MAX))
 }
 
 /// Queue shards for a render on the adapter `info` ([`Control`], `FeatureSet::queue_shards`):
