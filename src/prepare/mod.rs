@@ -234,16 +234,11 @@ fn environment_is_black(e: &Environment) -> bool {
 
 /// The texel weights luminance × sin θ (θ at the row centre), row 0 at the zenith.
 pub fn image_distribution(image: &HdrImage) -> Distribution2D {
-    use rayon::prelude::*;
     let (w, h) = (image.width(), image.height());
-    let mut values = vec![0.0; w * h];
-    values.par_chunks_mut(w).enumerate().for_each(|(row, out)| {
+    Distribution2D::from_rows(w, h, |row| {
         let sin_theta = (std::f64::consts::PI * (row as f64 + 0.5) / h as f64).sin();
-        for (col, v) in out.iter_mut().enumerate() {
-            *v = f64::from(image.get(col, row).luminance()).max(0.0) * sin_theta;
-        }
-    });
-    Distribution2D::new(&values, w, h)
+        (0..w).map(|col| f64::from(image.get(col, row).luminance()).max(0.0) * sin_theta).collect()
+    })
 }
 
 #[cfg(test)]

@@ -33,9 +33,18 @@ impl Distribution1D {
     /// Builds the table. Negative or non-finite values count as 0 (they cannot be radiance
     /// anyway, and must not poison the CDF). Panics on an empty slice.
     pub fn new(values: &[f64]) -> Self {
-        assert!(!values.is_empty(), "a distribution needs at least one cell");
-        let n = values.len();
-        let func: Vec<f64> = values.iter().map(|&v| if v.is_finite() && v > 0.0 { v } else { 0.0 }).collect();
+        Self::from_values(values.to_vec())
+    }
+
+    /// [`Self::new`], taking the values as the cell values' storage.
+    pub fn from_values(mut func: Vec<f64>) -> Self {
+        assert!(!func.is_empty(), "a distribution needs at least one cell");
+        let n = func.len();
+        for v in &mut func {
+            if !(v.is_finite() && *v > 0.0) {
+                *v = 0.0;
+            }
+        }
         let mut cdf = Vec::with_capacity(n + 1);
         cdf.push(0.0);
         for (i, f) in func.iter().enumerate() {
@@ -131,12 +140,36 @@ pub struct Sample2D {
 
 impl Distribution2D {
     /// Builds the tables from `values[row * width + col]`. Panics if the size is wrong or
-    /// zero. Rows are built in parallel (each on its own, so the tables do not depend on the
-    /// threads): a 16384×8192 sky's took 3 s on one core.
+    /// zero.
     pub fn new(values: &[f64], width: usize, height: usize) -> Self {
-        use rayon::prelude::*;
         assert!(width > 0 && height > 0 && values.len() == width * height, "distribution size mismatch");
-        let conditional: Vec<Distribution1D> = values.par_chunks(width).map(Distribution1D::new).collect();
+        Self::from_rows(width, height, |row| values[row * width..][..width].to_vec())
+    }
+
+    /// Builds the tables from each row's `width` values, `row(r)`, computed in parallel
+    /// (each row on its own, so the tables do not depend on the threads) and kept as the
+    /// rows' cell values, with no image-sized array of values beside them: a 16384×8192
+    /// sky's tables took 3 s on one core and 1 GB more memory that way. Panics if a row's
+    /// length is not `width` or a size is zero.
+    ///
+    /// ```
+    /// use lumen::sampling::distribution::Distribution2D;
+    /// let d = Distribution2D::from_rows(2, 2, |row| vec![1.0, 3.0 * row as f64]);
+    /// assert_eq!(d, Distribution2D::new(&[1.0, 0.0, 1.0, 3.0], 2, 2));
+    /// // Row 1 holds 2 of the marginal's 1.25, and its cell 1 holds 3 of the row's 2.
+    /// assert_eq!(d.pdf(0.75, 0.75), (2.0 / 1.25) * (3.0 / 2.0));
+    /// ```
+    pub fn from_rows(width: usize, height: usize, row: impl Fn(usize) -> Vec<f64> + Sync) -> Self {
+        use rayon::prelude::*;
+        assert!(width > 0 && height > 0, "distribution size mismatch");
+        let conditional: Vec<Distribution1D> = (0..height)
+            .into_par_iter()
+            .map(|r| {
+                let values = row(r);
+                assert_eq!(values.len(), width, "distribution size mismatch");
+                Distribution1D::from_values(values)
+            })
+            .collect();
         let row_integrals: Vec<f64> = conditional.iter().map(|d| d.integral).collect();
         let marginal = Distribution1D::new(&row_integrals);
         Self { width, height, conditional, marginal }
