@@ -196,6 +196,39 @@ fn a_gpu_render_too_large_for_host_memory_is_refused_with_the_amount() {
     }
 }
 
+/// A sky whose tables outgrow the adapter's storage binding: `--device gpu` refuses it,
+/// naming the table and pointing at the CPU, and `--device auto` renders it there.
+#[test]
+fn a_sky_too_large_for_the_gpu_is_refused_by_name_or_rendered_on_the_cpu() {
+    let Some(gpu) = lumen::gpu::gpu_for_tests("sky_too_large_for_the_gpu") else { return };
+    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    drop(gpu);
+    // Texels alone (3 f32 each) just over the limit.
+    let (width, height) = (4096, (limit / 12 / 4096 + 1) as usize);
+    if width * height > 1 << 25 {
+        println!("skipped: this adapter binds {limit} bytes; a sky beyond it is too large for a test");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut sky = lumen::image::HdrImage::new(width, height);
+    sky.pixels_mut().iter_mut().for_each(|p| *p = lumen::color::Rgb32::new(0.5, 0.6, 0.9));
+    lumen::image::write_image(&dir.path().join("sky.hdr"), &sky, &lumen::image::ToneMap::default()).unwrap();
+    drop(sky);
+    let script = SCENE.replace("USING", "SET\n    hdri LOAD \"sky.hdr\"\nUSING\n    Environment.Image(.image hdri)");
+    std::fs::write(dir.path().join("sky.sl"), script).unwrap();
+    let o = lumen(dir.path()).args(["render", "sky.sl", "--device", "gpu", "-o", "gpu.png"]).output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let why = "the floats table (image texels and sampling tables) needs";
+    assert!(err.contains(why) && err.contains("`--device cpu` (or `auto`) renders the scene on the CPU"), "{err}");
+    assert!(!dir.path().join("gpu.png").exists());
+    let o = lumen(dir.path()).args(["render", "sky.sl", "--device", "auto", "-o", "auto.png"]).output().unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains(&format!("warning: the GPU cannot render this scene: {why}")), "{err}");
+    assert!(err.contains("on the CPU (") && dir.path().join("auto.png").exists(), "{err}");
+}
+
 #[test]
 fn the_cpu_renderer_honours_the_time_limit() {
     let dir = scene_dir();

@@ -119,7 +119,8 @@ fn a_table_beyond_the_adapters_binding_is_refused_before_it_is_packed() {
     let texels = 12 * width * height as u64;
     match &err {
         GpuError::TooLarge { what, needed, limit: l, .. } => {
-            assert_eq!((what.as_str(), *needed, *l), ("floats", texels, limit), "{err}");
+            let floats = "the floats table (image texels and sampling tables)";
+            assert_eq!((what.as_str(), *needed, *l), (floats, texels, limit), "{err}");
         }
         _ => panic!("expected the floats table to be refused, got {err}"),
     }

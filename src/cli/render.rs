@@ -208,6 +208,9 @@ fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene, range: Sampl
             crate::diag!("warning: rendering on the CPU reference renderer instead, from the first sample");
             render_on_cpu(scene, args, range)
         }
+        Err(e @ GpuError::TooLarge { .. }) => {
+            Err(anyhow!("GPU render failed: {e}; `--device cpu` (or `auto`) renders the scene on the CPU"))
+        }
         other => other.map_err(|e| anyhow!("GPU render failed: {e}")),
     }
 }

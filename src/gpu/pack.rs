@@ -105,8 +105,8 @@ pub enum PackError {
     MeshOutOfRange { file: String, what: &'static str, magnitude: f64 },
     /// A table outgrows what one binding of the adapter holds ([`TableLimit`]); `needed` is
     /// the table's size up to the part that would not fit, so a lower bound.
-    #[error("{what} needs {needed} bytes but this adapter allows at most {} bytes per {}", .limit.bytes, .limit.name)]
-    TooLarge { what: &'static str, needed: u64, limit: TableLimit },
+    #[error("{} needs {needed} bytes but this adapter allows at most {} bytes per {}", .table.described(), .limit.bytes, .limit.name)]
+    TooLarge { table: Table, needed: u64, limit: TableLimit },
 }
 
 /// The most bytes one table (one storage buffer) may take on the adapter a scene is packed
@@ -126,10 +126,9 @@ impl TableLimit {
 
     /// Whether `table` still fits with `more` elements.
     fn room<T>(self, which: Table, table: &[T], more: usize) -> Result<(), PackError> {
-        let what = which.wgsl_name();
         let needed = (table.len() as u64).saturating_add(more as u64).saturating_mul(std::mem::size_of::<T>() as u64);
         if needed > self.bytes {
-            return Err(PackError::TooLarge { what, needed, limit: self });
+            return Err(PackError::TooLarge { table: which, needed, limit: self });
         }
         Ok(())
     }
@@ -214,6 +213,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
 /// ```
 /// use lumen::scene::*;
 /// use lumen::gpu::pack::{pack_within, PackError, TableLimit};
+/// use lumen::gpu::tables::Table;
 /// let mut b = SceneBuilder::new(4, 4);
 /// let m = b.diffuse(lumen::color::Color::gray(0.5));
 /// b.sphere(Transform::IDENTITY, m)
@@ -221,7 +221,7 @@ pub fn pack(scene: &Scene, spp_override: Option<u32>) -> Result<PackedScene, Pac
 /// let limit = TableLimit { bytes: 4096, name: "storage buffer binding" };
 /// let err = pack_within(&b.build().unwrap(), None, limit).unwrap_err();
 /// // Refused at the texels (64 × 32 × 3 floats), before the sampling tables.
-/// assert_eq!(err, PackError::TooLarge { what: "floats", needed: 64 * 32 * 12, limit });
+/// assert_eq!(err, PackError::TooLarge { table: Table::Floats, needed: 64 * 32 * 12, limit });
 /// ```
 pub fn pack_within(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Result<PackedScene, PackError> {
     scene.validate()?;
@@ -1130,8 +1130,9 @@ mod tests {
         assert_eq!(p.tri_positions.len() as u64 * 16, positions);
         let limit = TableLimit { bytes: positions - 1, ..fits };
         let err = pack_within(&scene, None, limit).unwrap_err();
-        assert_eq!(err, PackError::TooLarge { what: "tri_positions", needed: positions, limit });
-        assert!(err.to_string().starts_with(&format!("tri_positions needs {positions} bytes but")), "{err}");
+        assert_eq!(err, PackError::TooLarge { table: Table::TriPositions, needed: positions, limit });
+        let text = format!("the tri_positions table (mesh triangles' vertices) needs {positions} bytes but");
+        assert!(err.to_string().starts_with(&text), "{err}");
     }
 
     #[test]

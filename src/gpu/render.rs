@@ -336,8 +336,8 @@ pub fn kernel_listing(f: &FeatureSet) -> Result<String, GpuError> {
 fn pack_error(e: super::pack::PackError) -> GpuError {
     match e {
         // The same error as the upload's, only sooner.
-        PackError::TooLarge { what, needed, limit } => {
-            GpuError::TooLarge { what: what.into(), needed, limit: limit.bytes, limit_name: limit.name }
+        PackError::TooLarge { table, needed, limit } => {
+            GpuError::TooLarge { what: table.described(), needed, limit: limit.bytes, limit_name: limit.name }
         }
         e => GpuError::Validation(format!("cannot pack the scene for the GPU: {e}")),
     }
@@ -811,7 +811,8 @@ impl SceneBuffers {
                             BoundResource::Texture(gpu.u32_texture(table.wgsl_name(), table.bytes(p), row)?)
                         }
                         BindingKind::Storage { .. } => BoundResource::Buffer(
-                            gpu.storage_buffer(table.wgsl_name(), &super::tables::storage_contents(table, p))?,
+                            // Named for its errors ("... needs N bytes but ...").
+                            gpu.storage_buffer(&table.described(), &super::tables::storage_contents(table, p))?,
                         ),
                     };
                     buffers.insert((binding, kind), resource);

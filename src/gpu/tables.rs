@@ -148,6 +148,30 @@ impl Table {
         }
     }
 
+    /// The table named for a person: its WGSL name and what it holds (errors).
+    ///
+    /// ```
+    /// use lumen::gpu::tables::Table;
+    /// assert_eq!(Table::Floats.described(), "the floats table (image texels and sampling tables)");
+    /// ```
+    pub fn described(self) -> String {
+        let holds = match self {
+            Table::Shapes => "shapes",
+            Table::Indices => "object references",
+            Table::BvhNodes => "BVH nodes",
+            Table::CsgTrees => "CSG trees",
+            Table::Materials => "materials",
+            Table::Pigments => "pigments",
+            Table::PointLights => "point lights",
+            Table::AreaLights => "area lights",
+            Table::Floats => "image texels and sampling tables",
+            Table::Rows => "microfacet energy rows",
+            Table::TriPositions => "mesh triangles' vertices",
+            Table::TriShading => "mesh triangles' normals and uvs",
+        };
+        format!("the {} table ({holds})", self.wgsl_name())
+    }
+
     /// The WGSL element type of the storage form (the uniform form packs u32 and f32 four
     /// to a vec4).
     fn wgsl_element(self) -> &'static str {
