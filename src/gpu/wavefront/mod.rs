@@ -124,7 +124,7 @@ pub fn launch_rays_per_slot(features: &FeatureSet, point_lights: u32, shadow_ray
 /// `slots` bounded so that one launch traces about as many rays as a launch of the
 /// device's default batch does with [`LAUNCH_RAYS_PER_SLOT`] rays per path: a scene of
 /// 20,000 point lights traced 2.6 billion shadow rays in one launch of lavapipe's 2¹⁷ slots
-/// (15 s without a chance to stop; far beyond an OS watchdog's 2 s on a GPU that drives a
+/// (8 s without a chance to stop; far beyond an OS watchdog's 2 s on a GPU that drives a
 /// display). Slots do not change the image (each sample's place and order are fixed), only
 /// how the work is cut. Ordinary scenes, up to eight rays per path, keep their batches.
 ///
