@@ -93,6 +93,48 @@ fn oversized_buffers_are_refused_with_the_limit() {
     assert!(err.to_string().contains("huge"));
 }
 
+/// A mesh whose normals and uvs outgrow a storage binding still renders on a software
+/// adapter: the path tracer's shading stages read them from a texture, which holds more,
+/// so the packer checks only the triangles' vertices, which the BVH walks read.
+#[test]
+fn a_mesh_whose_shading_table_outgrows_a_storage_binding_renders_from_a_texture() {
+    use glam::DVec3;
+    use lumen::scene::mesh::{MeshParts, TriangleMesh};
+    use lumen::scene::{Renderer, SceneBuilder, Shape, Transform};
+    let Some(gpu) = gpu_for_tests("a_mesh_whose_shading_table_outgrows_a_storage_binding_renders_from_a_texture")
+    else {
+        return;
+    };
+    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    // Five vec4 of normals and uvs per triangle (80 bytes) past the limit, three of
+    // vertices (48 bytes) within it.
+    let triangles = (limit / 80 + 1) as usize;
+    if gpu.adapter_info.device_type != wgpu::DeviceType::Cpu || triangles > 4 << 20 {
+        println!("skipped: not a software adapter with a small binding ({limit} bytes)");
+        return;
+    }
+    // A strip of thin triangles across the view, one above the next.
+    let mut parts = MeshParts::default();
+    for k in 0..=triangles {
+        let z = -0.5 + k as f64 / triangles as f64;
+        parts.positions.extend([DVec3::new(0.0, -0.5, z), DVec3::new(0.0, 0.5, z)]);
+    }
+    for k in 0..triangles as u32 {
+        let (a, b) = (2 * (k / 2), 2 * (k / 2) + 1);
+        parts.triangles.push(if k % 2 == 0 { [a, b, a + 2] } else { [b, b + 2, a + 2] });
+    }
+    let mesh = std::sync::Arc::new(TriangleMesh::from_parts("strip", parts).unwrap());
+    let mut b = SceneBuilder::new(8, 8);
+    let lamp = common::emissive(&mut b, 0.5, 1.0);
+    b.shape(Shape::mesh(mesh, "strip", Transform::translation(DVec3::new(2.0, 0.0, 0.0)), lamp, false));
+    b.renderer(Renderer::PathTracer(lumen::scene::PathTracerSettings { max_depth: 1, ..Default::default() }));
+    let out = lumen::gpu::render::render(&gpu, &b.build().unwrap(), &Default::default()).unwrap();
+    use lumen::gpu::tables::{Table, TableForm};
+    assert_eq!(out.tables.form(Table::TriShading), TableForm::Texture);
+    // The strip covers the middle of the view: an emitter of radiance 1.
+    assert_eq!(out.image.get(4, 4).g, 1.0, "{:?}", out.image.get(4, 4));
+}
+
 /// A scene whose sky outgrows what one binding holds is refused by the packer at the texels,
 /// before their conversion and the sampling tables (10 s and 6 GB for a 16384×8192 sky on
 /// lavapipe, which binds 128 MiB, when it was refused at the upload instead).

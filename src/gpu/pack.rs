@@ -113,7 +113,11 @@ pub enum PackError {
 /// for, and the name of that limit. [`pack_within`] refuses a table as soon as an image,
 /// a mesh or a sampling table would take it past this, before converting the rest: a
 /// 16384×8192 sky needs 2.7 GB of floats, and lavapipe binds 128 MiB, so packing all of
-/// it only to be refused at the upload cost ten seconds and gigabytes.
+/// it only to be refused at the upload cost ten seconds and gigabytes. Only the tables that
+/// are storage buffers wherever a render reads them are checked (`floats`, `bvh_nodes`,
+/// `tri_positions`: the BVH walks read the last two, and `floats` is binary-searched), and
+/// only where textures do not replace them everywhere (`--tables texture`; the renderer
+/// passes [`TableLimit::NONE`] then).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableLimit {
     pub bytes: u64,
@@ -446,9 +450,10 @@ fn pack_meshes(
         }
     }
     // Each distinct mesh's triangles are stored once: refused here, before the BVHs are
-    // built (seconds for millions of triangles), if they cannot fit.
+    // built (seconds for millions of triangles), if they cannot fit. (Their normals and uvs
+    // are not: on a software adapter the path tracer reads them from a texture, which
+    // holds more than a storage binding; the upload checks them.)
     limit.room(Table::TriPositions, &p.tri_positions, triangles * layout::TRI_POSITION_VEC4S as usize)?;
-    limit.room(Table::TriShading, &p.tri_shading, triangles * layout::TRI_SHADING_VEC4S as usize)?;
     let bvhs = crate::prepare::MeshBvhs::of(shapes);
     let mut roots = HashMap::new();
     for mesh in &bvhs.meshes {

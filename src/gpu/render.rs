@@ -343,8 +343,13 @@ fn pack_error(e: super::pack::PackError) -> GpuError {
     }
 }
 
-/// The most bytes a table may take on `gpu`: one storage buffer binding, and one buffer.
-fn table_limit(gpu: &Gpu) -> TableLimit {
+/// The most bytes a table that is a storage buffer may take on `gpu`: one storage buffer
+/// binding, and one buffer; no limit where `placement` makes every table a texture in
+/// every stage (the upload checks the textures' size).
+fn table_limit(gpu: &Gpu, placement: TablePlacement) -> TableLimit {
+    if placement == TablePlacement::Texture {
+        return TableLimit::NONE;
+    }
     let l = &gpu.limits;
     if l.max_storage_buffer_binding_size <= l.max_buffer_size {
         TableLimit { bytes: l.max_storage_buffer_binding_size, name: "storage buffer binding" }
@@ -406,7 +411,7 @@ impl GpuRenderer {
     /// Renders `scene` on `gpu`, like [`render`].
     pub fn render(&mut self, gpu: &Gpu, scene: &Scene, opts: &GpuRenderOptions) -> Result<GpuRenderOutput, GpuError> {
         let start = Instant::now();
-        let packed = pack_within(scene, opts.spp, table_limit(gpu)).map_err(pack_error)?;
+        let packed = pack_within(scene, opts.spp, table_limit(gpu, opts.tables)).map_err(pack_error)?;
         self.render_from(gpu, scene, &packed, opts, start)
     }
 
