@@ -201,7 +201,7 @@ fn a_gpu_render_too_large_for_host_memory_is_refused_with_the_amount() {
 #[test]
 fn a_sky_too_large_for_the_gpu_is_refused_by_name_or_rendered_on_the_cpu() {
     let Some(gpu) = lumen::gpu::gpu_for_tests("sky_too_large_for_the_gpu") else { return };
-    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    let limit = gpu.storage_limit().0;
     drop(gpu);
     // Texels alone (3 f32 each) just over the limit.
     let (width, height) = (4096, (limit / 12 / 4096 + 1) as usize);

@@ -91,6 +91,15 @@ fn oversized_buffers_are_refused_with_the_limit() {
     let err = gpu.storage_buffer_zeroed("huge", too_big).unwrap_err();
     assert!(matches!(err, GpuError::TooLarge { .. }), "{err}");
     assert!(err.to_string().contains("huge"));
+    // A table texture one row too tall: its size and the texture's, in bytes.
+    let rows = u64::from(gpu.limits.max_texture_dimension_2d);
+    let err = gpu.u32_texture("tall", &vec![0u8; 32 * (rows as usize + 1)], 2).unwrap_err();
+    let sizes = match &err {
+        GpuError::TooLarge { needed, limit, .. } => (*needed, *limit),
+        _ => panic!("{err}"),
+    };
+    assert_eq!(sizes, (32 * (rows + 1), 32 * rows), "{err}");
+    assert!(err.to_string().ends_with(&format!("at most {} bytes per 2D texture", 32 * rows)), "{err}");
 }
 
 /// A mesh whose normals and uvs outgrow a storage binding still renders on a software
@@ -105,7 +114,7 @@ fn a_mesh_whose_shading_table_outgrows_a_storage_binding_renders_from_a_texture(
     else {
         return;
     };
-    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    let limit = gpu.storage_limit().0;
     // Five vec4 of normals and uvs per triangle (80 bytes) past the limit, three of
     // vertices (48 bytes) within it.
     let triangles = (limit / 80 + 1) as usize;
@@ -144,7 +153,7 @@ fn a_table_beyond_the_adapters_binding_is_refused_before_it_is_packed() {
     let Some(gpu) = gpu_for_tests("a_table_beyond_the_adapters_binding_is_refused_before_it_is_packed") else {
         return;
     };
-    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    let limit = gpu.storage_limit().0;
     // Just over the limit in texels (3 f32 each).
     let pixels = limit / 12 + 1;
     if pixels > 1 << 26 {

@@ -348,23 +348,21 @@ impl Gpu {
         })
     }
 
-    fn check_storage_size(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
-        let binding_limit = self.limits.max_storage_buffer_binding_size;
-        if bytes > binding_limit {
-            return Err(GpuError::TooLarge {
-                what: what.into(),
-                needed: bytes,
-                limit: binding_limit,
-                limit_name: "storage buffer binding",
-            });
+    /// The most bytes one storage buffer may hold on this device, and the name of the limit
+    /// that sets it: the smaller of a storage binding and a buffer.
+    pub fn storage_limit(&self) -> (u64, &'static str) {
+        let l = &self.limits;
+        if l.max_storage_buffer_binding_size <= l.max_buffer_size {
+            (l.max_storage_buffer_binding_size, "storage buffer binding")
+        } else {
+            (l.max_buffer_size, "buffer")
         }
-        if bytes > self.limits.max_buffer_size {
-            return Err(GpuError::TooLarge {
-                what: what.into(),
-                needed: bytes,
-                limit: self.limits.max_buffer_size,
-                limit_name: "buffer",
-            });
+    }
+
+    fn check_storage_size(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
+        let (limit, limit_name) = self.storage_limit();
+        if bytes > limit {
+            return Err(GpuError::TooLarge { what: what.into(), needed: bytes, limit, limit_name });
         }
         Ok(())
     }
@@ -472,11 +470,13 @@ impl Gpu {
         let rows = bytes.len().div_ceil(row_bytes).max(1);
         let limit = self.limits.max_texture_dimension_2d;
         if row_texels > limit || rows > limit as usize {
+            // In bytes, like every TooLarge: as many full rows (of at most `limit` texels)
+            // as the texture may have.
             return Err(GpuError::TooLarge {
                 what: label.into(),
-                needed: (rows as u64).max(u64::from(row_texels)),
-                limit: u64::from(limit),
-                limit_name: "2D texture dimension",
+                needed: bytes.len() as u64,
+                limit: u64::from(limit) * u64::from(row_texels.min(limit)) * 16,
+                limit_name: "2D texture",
             });
         }
         let extent =

@@ -343,19 +343,15 @@ fn pack_error(e: super::pack::PackError) -> GpuError {
     }
 }
 
-/// The most bytes a table that is a storage buffer may take on `gpu`: one storage buffer
-/// binding, and one buffer; no limit where `placement` makes every table a texture in
-/// every stage (the upload checks the textures' size).
+/// The most bytes a table that is a storage buffer may take on `gpu` ([`Gpu::storage_limit`]);
+/// no limit where `placement` makes every table a texture in every stage (the upload checks
+/// the textures' size).
 fn table_limit(gpu: &Gpu, placement: TablePlacement) -> TableLimit {
     if placement == TablePlacement::Texture {
         return TableLimit::NONE;
     }
-    let l = &gpu.limits;
-    if l.max_storage_buffer_binding_size <= l.max_buffer_size {
-        TableLimit { bytes: l.max_storage_buffer_binding_size, name: "storage buffer binding" }
-    } else {
-        TableLimit { bytes: l.max_buffer_size, name: "buffer" }
-    }
+    let (bytes, name) = gpu.storage_limit();
+    TableLimit { bytes, name }
 }
 
 /// Renders `scene` on `gpu`.
@@ -802,6 +798,7 @@ impl SceneBuffers {
                     continue;
                 }
                 if let Some(table) = Table::from_binding(binding) {
+                    // Each named for its errors ("the floats table (...) needs N bytes but ...").
                     let resource = match kind {
                         BindingKind::Uniform => {
                             let contents = super::tables::uniform_contents(table, p).ok_or_else(|| {
@@ -813,10 +810,9 @@ impl SceneBuffers {
                         }
                         BindingKind::TextureU32 => {
                             let row = super::tables::TEXTURE_ROW_TEXELS as u32;
-                            BoundResource::Texture(gpu.u32_texture(table.wgsl_name(), table.bytes(p), row)?)
+                            BoundResource::Texture(gpu.u32_texture(&table.described(), table.bytes(p), row)?)
                         }
                         BindingKind::Storage { .. } => BoundResource::Buffer(
-                            // Named for its errors ("... needs N bytes but ...").
                             gpu.storage_buffer(&table.described(), &super::tables::storage_contents(table, p))?,
                         ),
                     };

@@ -80,7 +80,7 @@ pub fn capacity(
     let image = u64::from(width) * u64::from(height) * u64::from(paths_per_sample) * u64::from(MAX_SPP_PER_ROUND);
     let mut slots = u64::from(wanted).min(image.max(1)).max(u64::from(paths_per_sample));
     // The largest per-slot array must fit one binding and one buffer.
-    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    let limit = gpu.storage_limit().0;
     let per_slot = |b| state_bytes(b, shadow_rays, features);
     let used = scene_buffers(features);
     let widest = used.iter().copied().map(per_slot).max().unwrap_or(1).max(1);
