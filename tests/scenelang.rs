@@ -580,6 +580,14 @@ fn shipped_scenes_have_what_they_promise() {
     let lamp = summary("streetlamp.sl");
     assert_eq!(lamp.point_lights, 3);
     assert!(lamp.renderer.starts_with("PointLight") && lamp.csg_nodes > 0);
+    // Every BRDF kind is counted (counted by hand from the scripts).
+    let mats = summary("materials.sl");
+    let kinds = |s: &lumen::scenelang::SceneSummary| {
+        (s.diffuse_materials, s.specular_materials, s.dielectric_materials, s.conductor_materials, s.plastic_materials)
+    };
+    assert_eq!((mats.materials, kinds(&mats)), (16, (1, 0, 5, 5, 5)));
+    let meshes = summary("meshes.sl");
+    assert_eq!((meshes.materials, kinds(&meshes), meshes.emissive_materials), (4, (2, 0, 0, 1, 1), 1));
     let many = summary("spheres_10k.sl");
     assert!(many.count(ShapeKind::Sphere) >= 10_000);
     // The animation moves with TIME.

@@ -34,6 +34,8 @@ pub struct SceneSummary {
     pub diffuse_materials: usize,
     pub specular_materials: usize,
     pub dielectric_materials: usize,
+    pub conductor_materials: usize,
+    pub plastic_materials: usize,
     pub emissive_materials: usize,
     /// "perspective" or "orthogonal".
     pub camera_kind: &'static str,
@@ -145,6 +147,8 @@ impl SceneSummary {
             diffuse_materials: count_brdf(|b| matches!(b, Brdf::Diffuse { .. })),
             specular_materials: count_brdf(|b| matches!(b, Brdf::Specular { .. })),
             dielectric_materials: count_brdf(|b| matches!(b, Brdf::Dielectric { .. })),
+            conductor_materials: count_brdf(|b| matches!(b, Brdf::Conductor { .. })),
+            plastic_materials: count_brdf(|b| matches!(b, Brdf::Plastic { .. })),
             emissive_materials: scene.materials.iter().filter(|m| m.is_emissive()).count(),
             camera_kind,
             aspect_ratio: scene.camera.aspect_ratio,
@@ -212,11 +216,13 @@ impl fmt::Display for SceneSummary {
         )?;
         writeln!(
             f,
-            "materials:    {} ({} diffuse, {} specular, {} dielectric; {} emissive)",
+            "materials:    {} ({} diffuse, {} specular, {} dielectric, {} conductor, {} plastic; {} emissive)",
             self.materials,
             self.diffuse_materials,
             self.specular_materials,
             self.dielectric_materials,
+            self.conductor_materials,
+            self.plastic_materials,
             self.emissive_materials
         )?;
         match self.aperture_deg {
@@ -280,6 +286,7 @@ mod tests {
         assert_eq!((s.top_level_shapes, s.primitives), (4, [2, 1, 2, 1]));
         assert_eq!((s.csg_nodes, s.csg_max_depth, s.area_lights, s.infinite_shapes), (2, 2, 2, 1));
         assert_eq!((s.materials, s.dielectric_materials, s.emissive_materials), (2, 1, 1));
+        assert_eq!((s.diffuse_materials, s.conductor_materials, s.plastic_materials), (1, 0, 0));
         // Sphere at x = 2 (radius 1), cube at x = −3 (half-side 0.5), CSG tree at x = 5.
         let bounds = s.bounds.unwrap();
         assert_eq!((bounds.min, bounds.max), (DVec3::new(-3.5, -1.0, -1.0), DVec3::new(5.5, 1.0, 1.0)));
