@@ -3,7 +3,7 @@
 // #if STAGE_SHADE
 // #requires float_index
 // #endif
-// #if STAGE_ESCAPE
+// #if ESCAPES
 // #requires cell_index
 // #endif
 // #endif
@@ -61,7 +61,7 @@ fn env_row_base(row: u32) -> u32 {
     return environment.dist_offset + 2u * h + 2u + row * (2u * w + 2u);
 }
 
-// #if STAGE_ESCAPE
+// #if ESCAPES
 // Distribution2D::pdf.
 fn env_dist_pdf(u: f32, v: f32) -> f32 {
     let w = environment.tex_width;
@@ -133,7 +133,7 @@ fn env_sample(xi0: f32, xi1: f32, azimuth: vec2<f32>) -> EnvSample {
 }
 // #endif
 
-// #if STAGE_ESCAPE
+// #if ESCAPES
 // #if ENV_IMAGE
 // EnvLight::pdf of the image light for the direction at (u, v) of the map.
 fn env_image_pdf_at(uv: vec2<f32>) -> f32 {

@@ -1,4 +1,4 @@
-// #requires bindings ray
+// #requires bindings ray normalize
 // #if ENV_IMAGE
 // #requires textures
 // #if !STAGE_SHADE
@@ -51,8 +51,9 @@ fn escape_direction(dir: vec3<f32>) -> vec3<f32> {
     return normalize_or(dir, vec3<f32>(0.0, 0.0, 1.0));
 }
 
-// #if !STAGE_ESCAPE
-// (The escape stage looks the environment up in pt_escaped, with its MIS density.)
+// #if !ESCAPES
+// (Escaped rays of the path tracer look the environment up in pt_escaped, with its MIS
+// density: wf_classify.wgsl.)
 fn escape_radiance(dir: vec3<f32>) -> vec3<f32> {
     let d = escape_direction(dir);
 // #if ENV_GRADIENT

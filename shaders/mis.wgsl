@@ -1,11 +1,11 @@
 // #requires wf_path bindings
-// #if WF_RADIANCE_ADD
+// #if EMISSION
 // #requires words_get
 // #endif
 // #if NEE
 // #requires lights
 // #endif
-// #if STAGE_ESCAPE
+// #if ESCAPES
 // #requires environment
 // #if NEE
 // #requires env_light
@@ -15,8 +15,9 @@
 // vertex a path stores between stages, the power heuristic, and the MIS weight of radiance
 // found by BSDF sampling (escaped rays here; emitters hit in wf_shade.wgsl).
 
-// #if WF_RADIANCE_ADD
-// What the next vertex needs to know about the one that scattered the ray to it.
+// #if EMISSION
+// What the next vertex needs to know about the one that scattered the ray to it (emission
+// MIS; an escape needs only the density, pt_escaped).
 struct Previous {
     point: vec3<f32>,
     object: u32,
@@ -58,13 +59,15 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 // #endif
 
-// #if STAGE_ESCAPE
+// #if ESCAPES
 // Radiance of an escaping ray, MIS-weighted when NEE samples the environment. NEE code
 // compiled in still obeys settings.nee (as cpu::path_tracer does), so a full-featured
 // kernel renders a scene without NEE correctly.
 // An image environment's (u, v) (two precise atan2) is computed once for the radiance
-// and the light's density.
-fn pt_escaped(prev: Previous, dir: vec3<f32>) -> vec3<f32> {
+// and the light's density. `prev_pdf` is the previous vertex's BSDF density as the path's
+// throughput field keeps it (negative after a delta vertex or the camera): the escape
+// reads nothing else of that vertex, so no `words` load (load_previous).
+fn pt_escaped(prev_pdf: f32, dir: vec3<f32>) -> vec3<f32> {
     if (environment.is_light == 0u) {
         return vec3<f32>(0.0);
     }
@@ -85,7 +88,7 @@ fn pt_escaped(prev: Previous, dir: vec3<f32>) -> vec3<f32> {
 // #if NEE
     // The light's density only where MIS weighs it: camera rays and rays leaving delta
     // surfaces (most of a sky-lit scene's escapes) skip the image's two table reads.
-    if (settings.nee == 0u || prev.delta) {
+    if (settings.nee == 0u || prev_pdf < 0.0) {
         return le;
     }
     var pdf = UNIFORM_SPHERE_PDF;
@@ -94,7 +97,7 @@ fn pt_escaped(prev: Previous, dir: vec3<f32>) -> vec3<f32> {
         pdf = env_image_pdf_at(uv);
     }
 // #endif
-    return le * power_heuristic(prev.pdf, light_selection_pdf() * pdf);
+    return le * power_heuristic(prev_pdf, light_selection_pdf() * pdf);
 // #else
     return le;
 // #endif

@@ -1,6 +1,6 @@
 // #requires layout
 // #if SHADING
-// #requires rescale
+// #requires normalize
 // #endif
 // Rays, crossings and hits in f32: mirrors src/cpu/{ray,hit}.rs and the Span/Crossing
 // types of src/cpu/shapes. Coordinates are relative to the camera (DESIGN.md "GPU renderer").
@@ -89,17 +89,4 @@ fn affine_normal(to_object: Affine, n: vec3<f32>) -> vec3<f32> {
     return n.x * to_object.r0.xyz + n.y * to_object.r1.xyz + n.z * to_object.r2.xyz;
 }
 // #endif
-
-// v/|v|, or `fallback` for zero; rescaled by a power of two first (ray::normalize_scaled)
-// so that the normal of a shape scaled by 1e30 (length 1e-30, squared 0 in f32) keeps
-// its direction.
-fn normalize_or(v_in: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
-    let a = abs(v_in);
-    let v = v_in * pow2_rescale(max(a.x, max(a.y, a.z)));
-    let l2 = dot(v, v);
-    if (l2 > 0.0) {
-        return v * inverseSqrt(l2);
-    }
-    return fallback;
-}
 // #endif

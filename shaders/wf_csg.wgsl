@@ -33,6 +33,8 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     }
     csg_use_slot(slot);
     var best = no_candidate();
+    // The closest-hit ray's direction, for an escape (classify).
+    var dir = vec3<f32>(0.0);
 // #if WF_SHADOW_CSG
     let ri = field(F_RADIANCE, slot);
     var radiance = paths_get(ri).xyz;
@@ -58,10 +60,12 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
         } else {
             ray = load_ray(slot);
             best = load_hit(slot);
+            dir = ray.dir;
         }
 // #else
         ray = load_ray(slot);
         best = load_hit(slot);
+        dir = ray.dir;
 // #endif
         ray.tmax = min(ray.tmax, end_past(best.c.t));
         let count = deferred_refs[record];
@@ -88,5 +92,5 @@ fn csg_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
         return;
     }
 // #endif
-    classify(slot, best, false);
+    classify(slot, best, false, dir, atomicLoad(&control[CTRL_BOUNCE]));
 }

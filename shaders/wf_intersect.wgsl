@@ -1,6 +1,6 @@
 // #requires wf_classify world
-// Closest-hit stage: BVH and planes for every ray of this bounce's ray queue. With
-// CSG_QUEUE, the CSG trees the traversal met are handed to the CSG stage with the best
+// Closest-hit stage: BVH and planes for every ray of this bounce's ray queue; rays that hit
+// nothing end their paths here (wf_classify.wgsl). With CSG_QUEUE, the CSG trees the traversal met are handed to the CSG stage with the best
 // candidate so far, instead of being evaluated here (DESIGN.md "Software adapters": code
 // reachable in this kernel costs every ray on SIMD software GPUs).
 
@@ -34,8 +34,8 @@ fn intersect_stage(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
             deferred_refs[base + 1u + k] = deferred.refs[k];
         }
     }
-    classify(slot, best, to_csg);
+    classify(slot, best, to_csg, ray.dir, bounce);
 // #else
-    classify(slot, world_first(ray, false), false);
+    classify(slot, world_first(ray, false), false, ray.dir, bounce);
 // #endif
 }

@@ -325,7 +325,7 @@ fn spherical_rectangles_match_the_cpu() {
 /// `out[i]`).
 fn offset_kernel(body: &str) -> String {
     format!(
-        "{}\n{}\n{}\n{}\n
+        "{}\n{}\n{}\n{}\n{}\n
 @group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
 @compute @workgroup_size(64)
@@ -336,6 +336,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
 }}",
         include_str!("../shaders/layout.wgsl"),
         include_str!("../shaders/rescale.wgsl"),
+        include_str!("../shaders/normalize.wgsl"),
         include_str!("../shaders/ray.wgsl"),
         include_str!("../shaders/offset.wgsl"),
     )
@@ -576,6 +577,36 @@ fn shapes_scene(renderer: Renderer) -> Scene {
             nadir: Color::gray(0.1),
         });
     b.build().unwrap()
+}
+
+/// A path-traced scene with nothing in it: every camera ray escapes at once, in the
+/// closest-hit stage of a kernel without geometry, where its path ends (wf_classify.wgsl).
+/// Under a uniform sky every pixel is the sky's radiance exactly (dyadic values, so the
+/// f32 sums are exact), with NEE or without; under a gradient the GPU agrees with the CPU
+/// pixel by pixel.
+#[test]
+fn an_empty_path_traced_scene_shows_its_environment() {
+    let Some(gpu) = gpu_for_tests("an_empty_path_traced_scene_shows_its_environment") else { return };
+    let sky = Color::new(0.25, 0.5, 1.0);
+    for nee in [true, false] {
+        let mut b = SceneBuilder::new(16, 8);
+        b.renderer(pt(2, 3, 2, nee)).environment(Environment::Uniform(sky));
+        let scene = b.build().unwrap();
+        let out = render(&gpu, &scene, &GpuRenderOptions::fixed_passes(Some(4), 2)).unwrap();
+        assert_eq!(out.spp_done, 4);
+        for p in out.image.pixels() {
+            assert_eq!((p.r, p.g, p.b), (0.25, 0.5, 1.0), "nee {nee}");
+        }
+    }
+    let mut b = SceneBuilder::new(24, 12);
+    b.renderer(pt(1, 4, 2, true)).environment(Environment::Gradient {
+        zenith: Color::new(0.2, 0.3, 0.8),
+        horizon: Color::gray(0.6),
+        nadir: Color::gray(0.1),
+    });
+    let img = assert_matches_cpu(&gpu, &b.build().unwrap(), Some(4), 1.0);
+    let (mean, _) = mean_and_stderr(&img, |_, _| true);
+    assert!(mean > 0.1 && mean < 0.8, "{mean}");
 }
 
 #[test]

@@ -4,12 +4,14 @@
 //! vertex is its own kernel, launched over a queue of slots with indirect dispatches sized
 //! on the device, so a kernel holds only its own code and runs only for the paths that
 //! need it (the closest-hit query never pays for CSG, glass or NEE code it does not use,
-//! which a SIMD software GPU would otherwise execute masked). Per bounce:
+//! which a SIMD software GPU would otherwise execute masked). Per bounce (a ray that hits
+//! nothing ends its path in the stage that found so, intersect or csg, with the
+//! environment's radiance):
 //!
 //! ```text
-//! intersect ─┬─ (CSG trees met) ─ csg ─┬─ escape
-//!            └──────────────────────────┴─ shade[diffuse | specular | dielectric] ─ shadow ─┬─ advance
-//!                                      (shadow rays that met CSG trees) shadow_csg_args ─ csg ─┘
+//! intersect ─┬─ (CSG trees met) ─ csg ─┐
+//!            └─────────────────────────┴─ shade[diffuse | specular | dielectric] ─ shadow ─┬─ advance
+//!                                     (shadow rays that met CSG trees) shadow_csg_args ─ csg ─┘
 //! ```
 //!
 //! Determinism: a path's state is written only by the stage that holds its slot, so no
@@ -531,7 +533,6 @@ impl<'a> Runner<'a> {
         if self.csg {
             self.indirect(pass, Stage::Csg, queue::CSG)?;
         }
-        self.indirect(pass, Stage::Escape, queue::ESCAPE)?;
         for &stage in &self.shade {
             if let Stage::Shade(kind) = stage {
                 self.indirect(pass, stage, queue::shade(kind))?;

@@ -24,8 +24,6 @@ pub enum Stage {
     Intersect,
     /// Deferred CSG trees of the rays that met some.
     Csg,
-    /// Rays that hit nothing: environment radiance, MIS-weighted.
-    Escape,
     /// One path vertex at a surface of one BRDF kind (`Material::brdf`), over that kind's
     /// queue. Every kind of a scene launches one shared kernel ([`Stage::kernel_kinds`]).
     Shade(u32),
@@ -46,7 +44,7 @@ impl Stage {
         if f.renderer != RendererKind::PathTracer {
             return vec![Stage::FirstHit, Stage::Film];
         }
-        let mut stages = vec![Stage::Camera, Stage::Intersect, Stage::Escape];
+        let mut stages = vec![Stage::Camera, Stage::Intersect];
         if csg_queue(f) {
             stages.push(Stage::Csg);
         }
@@ -101,7 +99,6 @@ impl Stage {
             Stage::FirstHit => ("wf_first_hit", "first_hit_stage"),
             Stage::Intersect => ("wf_intersect", "intersect_stage"),
             Stage::Csg => ("wf_csg", "csg_stage"),
-            Stage::Escape => ("wf_escape", "escape_stage"),
             Stage::Shade(_) => ("wf_shade", "shade_stage"),
             Stage::Shadow => ("wf_shadow", "shadow_stage"),
             Stage::Film => ("wf_film", "film_stage"),
@@ -136,7 +133,6 @@ impl Stage {
                 vec![Batch, Control, Queues, Paths, Words, Shadow, DeferredRefs, CsgPool]
             }
             Stage::Csg => vec![Batch, Control, Queues, Paths, Words, DeferredRefs, CsgPool],
-            Stage::Escape => vec![Batch, Control, Queues, Paths, Words],
             // A kernel's buffers are those of all its kinds (Stage::kernel_kinds).
             Stage::Shade(kind)
                 if self.kernel_kinds(f).into_iter().chain([kind]).any(casts_shadow_rays) && has_shadow_rays(f) =>
@@ -169,6 +165,7 @@ impl Stage {
         use StateBuffer::*;
         match self {
             Stage::Intersect if csg_queue(f) => vec![ArgsHits, ArgsCsg],
+            Stage::Intersect if !(f.bvh || f.plane) => vec![],
             Stage::Intersect | Stage::Csg => vec![ArgsHits],
             Stage::Shade(_) => vec![ArgsRays],
             Stage::Shadow if csg_queue(f) => vec![ArgsCsg],
@@ -225,7 +222,12 @@ impl Stage {
                     ]
                     .concat(),
                 );
-                n.extend(["WF_QUEUED", "WF_PUSH", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
+                n.extend(["WF_QUEUED", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
+                if f.bvh || f.plane {
+                    // Rays that hit something go on to a queue (with nothing to hit,
+                    // every path ends here).
+                    n.push("WF_PUSH");
+                }
                 if csg_queue(f) {
                     n.extend(["CSG_QUEUE", "WF_DEFERRED"]);
                 }
@@ -238,14 +240,6 @@ impl Stage {
                 if has_shadow_rays(f) {
                     n.push("WF_SHADOW_CSG");
                 }
-                n
-            }
-            Stage::Escape => {
-                let mut n = keep(&["SHADING", "ENV_UNIFORM", "ENV_GRADIENT", "ENV_IMAGE", "NEE"]);
-                if n.contains(&"ENV_IMAGE") {
-                    n.push("TEXTURES");
-                }
-                n.extend(["WF_QUEUED", "WF_RAY_LOAD", "WF_BETA_LOAD", "WF_RADIANCE_ADD"]);
                 n
             }
             Stage::Shade(kind) => {
@@ -417,19 +411,27 @@ impl Stage {
         {
             names.push("AFFINE");
         }
+        // Where a closest-hit query ends (classify), a ray that hit nothing adds the
+        // environment's radiance, MIS-weighted, and its path ends there: no escape stage.
+        if matches!(self, Stage::Intersect | Stage::Csg) {
+            names.extend(scene.iter().copied().filter(|n| ESCAPE_NAMES.contains(n)));
+            if names.contains(&"ENV_IMAGE") {
+                names.push("TEXTURES");
+            }
+            names.extend(["WF_BETA_LOAD", "WF_RADIANCE_ADD", "ESCAPES"]);
+        }
         // The settings uniform, for the stages that read it.
         let settings = match self {
             Stage::Camera | Stage::FirstHit | Stage::Shade(_) => true,
             Stage::Intersect | Stage::Shadow => geometry && (walks || plane_loop),
-            Stage::Escape => names.contains(&"NEE"),
             _ => false,
-        };
+        } || (names.contains(&"ESCAPES") && names.contains(&"NEE"));
         if settings {
             names.push("SETTINGS");
         }
         // The environment uniform: escaped rays, and NEE (light count, environment samples).
         let environment = match self {
-            Stage::Escape => true,
+            Stage::Intersect | Stage::Csg => true,
             Stage::FirstHit => scene.contains(&"SHADING"),
             Stage::Shade(_) => names.contains(&"NEE"),
             _ => false,
@@ -478,7 +480,6 @@ impl Stage {
             Stage::FirstHit => "STAGE_FIRST_HIT",
             Stage::Intersect => "STAGE_INTERSECT",
             Stage::Csg => "STAGE_CSG",
-            Stage::Escape => "STAGE_ESCAPE",
             Stage::Shade(_) => "STAGE_SHADE",
             Stage::Shadow => "STAGE_SHADOW",
             Stage::Film => "STAGE_FILM",
@@ -488,6 +489,7 @@ impl Stage {
 
     /// Every name [`Self::names`] may add beyond the scene's.
     pub const NAMES: [&'static str; 49] = [
+        "ESCAPES",
         "SPHERE_UV_UNUSED",
         "CUBE_UV_UNUSED",
         "CYLINDER_UV_UNUSED",
@@ -533,7 +535,6 @@ impl Stage {
         "STAGE_FIRST_HIT",
         "STAGE_INTERSECT",
         "STAGE_CSG",
-        "STAGE_ESCAPE",
         "STAGE_SHADE",
         "STAGE_SHADOW",
         "STAGE_FILM",
@@ -620,6 +621,10 @@ pub fn kind_name(kind: u32) -> &'static str {
     }
 }
 
+/// The scene's names (FeatureSet::names) that the escaped rays' code reads: the environment's
+/// kind and NEE (the MIS weight).
+const ESCAPE_NAMES: [&str; 4] = ["ENV_UNIFORM", "ENV_GRADIENT", "ENV_IMAGE", "NEE"];
+
 /// The area lights' names (FeatureSet::names): a shading stage that neither samples lights
 /// nor weighs emission against them leaves them out.
 const LIGHT_NAMES: [&str; 5] = ["AREA_LIGHTS", "SPHERE_LIGHTS", "CUBE_LIGHTS", "MESH_LIGHTS", "PRIMITIVE_LIGHTS"];
@@ -644,7 +649,6 @@ mod tests {
         match stage {
             Stage::Intersect => vec![queue::RAY, queue::RAY + 1],
             Stage::Csg => vec![queue::CSG, queue::SHADOW_CSG],
-            Stage::Escape => vec![queue::ESCAPE],
             Stage::Shade(kind) => vec![queue::shade(kind)],
             Stage::Shadow => vec![queue::SHADOW],
             _ => vec![],
