@@ -3,7 +3,10 @@
 
 // #if SPANS
 fn plane_span(o: vec3<f32>, d: vec3<f32>) -> Span {
-    if (d.z == 0.0) {
+    // Parallel within PLANE_PARALLEL_SLOPE (prepare::PLANE_PARALLEL_SLOPE): the plane is all
+    // inside or all outside, whichever way rounding tipped d.z.
+    let a = abs(d);
+    if (a.z <= PLANE_PARALLEL_SLOPE * max(a.x, max(a.y, a.z))) {
         if (o.z <= 0.0) {
             return Span(Crossing(-OPEN, 0u), Crossing(OPEN, 0u), true);
         }

@@ -426,9 +426,11 @@ pub fn tags_wgsl() -> String {
     let reach = 0.5 + crate::prepare::CUBE_FACE_MARGIN;
     assert_eq!(f64::from(reach as f32), reach);
     out.push_str(&format!("const CUBE_FACE_REACH: f32 = {reach:?};\n"));
-    for (name, value) in
-        [("SOLID_ANGLE_MIN", crate::prepare::SOLID_ANGLE_MIN), ("SOLID_ANGLE_MAX", crate::prepare::SOLID_ANGLE_MAX)]
-    {
+    for (name, value) in [
+        ("SOLID_ANGLE_MIN", crate::prepare::SOLID_ANGLE_MIN),
+        ("SOLID_ANGLE_MAX", crate::prepare::SOLID_ANGLE_MAX),
+        ("PLANE_PARALLEL_SLOPE", crate::prepare::PLANE_PARALLEL_SLOPE),
+    ] {
         assert_eq!(f64::from(value as f32), value);
         out.push_str(&format!("const {name}: f32 = {value:?};\n"));
     }

@@ -89,6 +89,18 @@ impl SceneBvh {
 /// differently, and the choice is unbiased either way (MIS uses the same rule's density).
 pub const CUBE_FACE_MARGIN: f64 = 1.0 / 1024.0;
 
+/// The slope below which a ray counts as parallel to a plane (`|d.z| ≤ slope · max |dᵢ|` in
+/// the plane's object space, where the plane is z = 0): 2⁻²⁰, exact in f32 and f64. A ray
+/// parallel to a plane in exact arithmetic, as a mirror tilted 45° sends a horizontal one,
+/// carries a d.z of a few rounding units, whose sign decides whether it meets the infinite
+/// plane at a distance of 1/d.z, 1e7 in f32 and 1e16 in f64: the two renderers went opposite
+/// ways (tests/gpu_random_scenes.rs, seed 45, scene 271: a wedge of two planes over a
+/// mirror floor). Both now take such a ray as parallel, so the plane is all inside or all
+/// outside it, as for d.z = 0. The angle, 1e-6 rad, is a few times f32's rounding of a
+/// transformed direction and hides only hits beyond about a million times the ray's
+/// height over the plane.
+pub const PLANE_PARALLEL_SLOPE: f64 = 1.0 / 1_048_576.0;
+
 /// The solid angles (steradians) between which NEE samples a rectangular cube face by the
 /// solid angle it subtends (`cpu::spherical_rectangle`) instead of by area: below, the face
 /// is far enough for area sampling to be nearly as good (on cornell.sl a minimum of 1/16
