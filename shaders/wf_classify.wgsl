@@ -5,7 +5,7 @@
 // BRDF kind. A ray that hit nothing adds the environment's radiance, MIS-weighted against
 // NEE (cpu::path_tracer), and its path ends here: handling escapes where the query ends
 // saves a launch per bounce, a queue push and reloading the ray and throughput (skybox.sl,
-// whose rays mostly escape, renders 8-9 % faster on lavapipe than with a stage of its own;
+// whose rays mostly escape, renders 8-10 % faster on lavapipe than with a stage of its own;
 // DESIGN.md "Wavefront renderer"). One store and one push site whatever the queue: llvmpipe
 // inlines every call site, and a push is a per-lane atomic and store.
 fn classify(slot: u32, cand: Candidate, to_csg: bool, dir: vec3<f32>, bounce: u32) {
