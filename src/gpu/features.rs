@@ -597,6 +597,12 @@ impl FeatureSet {
         self.renderer != RendererKind::OnOff
     }
 
+    /// True when rays can hit anything (the scene has finite objects or planes): the
+    /// `GEOMETRY` feature. Without it every ray escapes.
+    pub fn geometry(&self) -> bool {
+        self.bvh || self.plane
+    }
+
     /// True when the kernel reads materials (not OnOff, nor PointLight without lights).
     pub fn materials(&self) -> bool {
         match self.renderer {
@@ -659,7 +665,7 @@ impl FeatureSet {
     pub fn names(&self) -> Vec<&'static str> {
         let flags = [
             (self.materials(), "MATERIALS"),
-            (self.bvh || self.plane, "GEOMETRY"),
+            (self.geometry(), "GEOMETRY"),
             (self.renderer == RendererKind::OnOff || self.point_lights || self.nee, "SHADOWS"),
             (self.sphere, "SPHERE"),
             (self.plane, "PLANE"),

@@ -432,8 +432,9 @@ pub fn wide_word_modules() -> [(String, String); 2] {
 
 /// The buffer that holds queue `q`'s launch arguments. Each stage pushes only to queues of
 /// buffers other than the one it is launched from: the closest-hit stage (from `ArgsRays`)
-/// to the shading and CSG queues; the CSG stage (from `ArgsCsg`) to the shading queues; the shading stages (from `ArgsHits`) to the shadow queue and the next
-/// ray queue; the shadow stage (from `ArgsRays`) to the shadow rays' CSG queue.
+/// to the shading and CSG queues; the CSG stage (from `ArgsCsg`) to the shading queues;
+/// the shading stages (from `ArgsHits`) to the shadow queue and the next ray queue; the
+/// shadow stage (from `ArgsRays`) to the shadow rays' CSG queue.
 pub fn launch_args(q: u32) -> StateBuffer {
     if q == queue::RAY || q == queue::RAY + 1 || q == queue::SHADOW {
         StateBuffer::ArgsRays

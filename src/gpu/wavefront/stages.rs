@@ -126,7 +126,7 @@ impl Stage {
             Stage::Intersect if csg_queue(f) => vec![Batch, Control, Queues, Paths, Words, DeferredRefs],
             // Trees evaluated where the traversal meets them.
             Stage::Intersect if f.csg => vec![Batch, Control, Queues, Paths, Words, CsgPool],
-            Stage::Intersect if f.bvh || f.plane => vec![Batch, Control, Queues, Paths, Words],
+            Stage::Intersect if f.geometry() => vec![Batch, Control, Queues, Paths, Words],
             // Nothing to hit: every ray escapes and no hit is recorded.
             Stage::Intersect => vec![Batch, Control, Queues, Paths],
             Stage::Csg if has_shadow_rays(f) => {
@@ -165,7 +165,7 @@ impl Stage {
         use StateBuffer::*;
         match self {
             Stage::Intersect if csg_queue(f) => vec![ArgsHits, ArgsCsg],
-            Stage::Intersect if !(f.bvh || f.plane) => vec![],
+            Stage::Intersect if !f.geometry() => vec![],
             Stage::Intersect | Stage::Csg => vec![ArgsHits],
             Stage::Shade(_) => vec![ArgsRays],
             Stage::Shadow if csg_queue(f) => vec![ArgsCsg],
@@ -223,7 +223,7 @@ impl Stage {
                     .concat(),
                 );
                 n.extend(["WF_QUEUED", "WF_RAY_LOAD", "TRAVERSE", "SPANS"]);
-                if f.bvh || f.plane {
+                if f.geometry() {
                     // Rays that hit something go on to a queue (with nothing to hit,
                     // every path ends here).
                     n.push("WF_PUSH");
@@ -370,7 +370,7 @@ impl Stage {
         if f.wide_words {
             names.push(FeatureSet::DEVICE_NAMES[0]);
         }
-        if !scene.contains(&"GEOMETRY") {
+        if !f.geometry() {
             // Nothing to intersect: no spans or traversal helpers to call.
             names.retain(|n| !["SPANS", "TRAVERSE"].contains(n));
             if self == Stage::Intersect {
@@ -392,7 +392,7 @@ impl Stage {
             names.push("SHAPE_SPANS");
         }
         // Placed shapes and the camera transform points; nothing else does.
-        let geometry = scene.contains(&"GEOMETRY");
+        let geometry = f.geometry();
         // The hit record: stored where a query ends (if anything can be hit), read back by
         // the CSG and shading stages.
         if geometry && matches!(self, Stage::Intersect | Stage::Csg) {
