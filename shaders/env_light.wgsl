@@ -11,18 +11,24 @@
 // tables are packed in `floats` at environment.dist_offset, see src/gpu/pack.rs).
 
 // #if ENV_IMAGE
-// A Distribution1D of n cells at floats[base]: integral, n values, n + 1 CDF entries.
+// A Distribution1D of n cells packed at floats[base] (Distribution1D::packed; the DIST1D_*
+// offsets are generated from sampling::distribution::packed).
 fn dist1d_pdf_cell(base: u32, n: u32, i: u32) -> f32 {
-    let integral = float_at(base);
+    let integral = float_at(base + DIST1D_INTEGRAL);
     if (integral > 0.0) {
-        return float_at(base + 1u + i) / integral;
+        return float_at(base + DIST1D_VALUES + i) / integral;
     }
     return 1.0;
 }
 
+// The words of a packed table of n cells.
+fn dist1d_words(n: u32) -> u32 {
+    return DIST1D_WORDS + DIST1D_WORDS_PER_CELL * n;
+}
+
 // #if STAGE_SHADE
 fn dist1d_find_cell(base: u32, n: u32, u: f32) -> u32 {
-    let cdf = base + 1u + n;
+    let cdf = base + DIST1D_CDF + n;
     var lo = 0u;
     var hi = n;
     while (hi - lo > 1u) {
@@ -41,7 +47,7 @@ fn dist1d_find_cell(base: u32, n: u32, u: f32) -> u32 {
 // Distribution1D::sample: (x, pdf, cell).
 fn dist1d_sample(base: u32, n: u32, u: f32) -> vec3<f32> {
     let cell = dist1d_find_cell(base, n, u);
-    let cdf = base + 1u + n;
+    let cdf = base + DIST1D_CDF + n;
     let c0 = float_at(cdf + cell);
     let width = float_at(cdf + cell + 1u) - c0;
     var du = 0.0;
@@ -55,10 +61,9 @@ fn dist1d_sample(base: u32, n: u32, u: f32) -> vec3<f32> {
 }
 // #endif
 
+// Where row `row`'s table starts: after the marginal's (Distribution2D::packed_row).
 fn env_row_base(row: u32) -> u32 {
-    let w = environment.tex_width;
-    let h = environment.tex_height;
-    return environment.dist_offset + 2u * h + 2u + row * (2u * w + 2u);
+    return environment.dist_offset + dist1d_words(environment.tex_height) + row * dist1d_words(environment.tex_width);
 }
 
 // #if ESCAPES

@@ -426,6 +426,24 @@ pub fn tags_wgsl() -> String {
     let reach = 0.5 + crate::prepare::CUBE_FACE_MARGIN;
     assert_eq!(f64::from(reach as f32), reach);
     out.push_str(&format!("const CUBE_FACE_REACH: f32 = {reach:?};\n"));
+    // The packed layout of a 1-D distribution's table (sampling::distribution::packed), as
+    // the linear functions of its cell count that WGSL evaluates (shaders/env_light.wgsl).
+    {
+        use crate::sampling::distribution::packed;
+        let per_cell = packed::len(1) - packed::len(0);
+        assert!(
+            (0..64).all(|n| packed::len(n) == packed::len(0) + per_cell * n && packed::cdf(n) == packed::cdf(0) + n)
+        );
+        for (name, value) in [
+            ("DIST1D_INTEGRAL", packed::INTEGRAL),
+            ("DIST1D_VALUES", packed::VALUES),
+            ("DIST1D_CDF", packed::cdf(0)),
+            ("DIST1D_WORDS", packed::len(0)),
+            ("DIST1D_WORDS_PER_CELL", per_cell),
+        ] {
+            out.push_str(&format!("const {name}: u32 = {value}u;\n"));
+        }
+    }
     for (name, value) in [
         ("SOLID_ANGLE_MIN", crate::prepare::SOLID_ANGLE_MIN),
         ("SOLID_ANGLE_MAX", crate::prepare::SOLID_ANGLE_MAX),

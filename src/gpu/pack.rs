@@ -28,6 +28,7 @@ use crate::optics::ggx::alpha_of;
 use crate::prepare::image_distribution;
 use crate::prepare::pixel_samples::PixelSamples;
 use crate::prepare::AreaLight;
+use crate::sampling::distribution::Distribution2D;
 use crate::scene::{Brdf, CsgOp, Environment, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform};
 
 /// A scene ready for upload: every buffer of `shaders/bindings.wgsl`.
@@ -845,9 +846,8 @@ fn push_pigment(
 /// The environment (a uniform one of the background colour when the scene has none), with
 /// an image's texels and importance-sampling tables appended to `floats`.
 ///
-/// Table layout at `dist_offset` (mirrors `Distribution2D`): the marginal's integral, its
-/// `h` cell values and `h + 1` CDF entries, then for each row its integral, `w` values and
-/// `w + 1` CDF entries.
+/// The importance-sampling tables at `dist_offset` are `Distribution2D::packed`, in its
+/// layout (`sampling::distribution::packed`).
 fn pack_environment(
     scene: &Scene,
     floats: &mut Vec<f32>,
@@ -884,20 +884,11 @@ fn pack_environment(
             e.intensity = *intensity as f32;
             e.rotation_rad = rotation_deg.to_radians() as f32;
             e.dist_offset = count_u32("environment floats", floats.len())?;
-            // The tables' length, known before building them: per row (and once for the
-            // marginal) an integral, the cells and one more CDF entry than cells.
-            let (w, h) = (image.width(), image.height());
-            let tables = (1 + h + h + 1) + h * (1 + w + w + 1);
+            // The tables' length, known before building them.
+            let tables = Distribution2D::packed_len(image.width(), image.height());
             limit.room(Table::Floats, floats, tables)?;
-            let dist = image_distribution(image);
-            floats.push(dist.marginal.integral as f32);
-            floats.extend(dist.marginal.func.iter().map(|&v| v as f32));
-            floats.extend(dist.marginal.cdf.iter().map(|&v| v as f32));
-            for row in &dist.conditional {
-                floats.push(row.integral as f32);
-                floats.extend(row.func.iter().map(|&v| v as f32));
-                floats.extend(row.cdf.iter().map(|&v| v as f32));
-            }
+            floats.reserve(tables);
+            floats.extend(image_distribution(image).packed().map(|v| v as f32));
             debug_assert_eq!(floats.len() - e.dist_offset as usize, tables);
             count_u32("environment floats", floats.len())?;
         }

@@ -188,17 +188,51 @@ impl Distribution2D {
         self.marginal.pdf_cell(row) * self.conditional[row].pdf(u)
     }
 
-    /// All conditional CDFs, row after row (`height × (width + 1)` values), for upload.
-    pub fn conditional_cdf_flat(&self) -> Vec<f64> {
-        self.conditional.iter().flat_map(|d| d.cdf.iter().copied()).collect()
+    /// Words of [`Self::packed`] for a `width × height` grid: the marginal's table, then
+    /// each row's ([`packed::len`]).
+    pub const fn packed_len(width: usize, height: usize) -> usize {
+        packed::len(height) + height * packed::len(width)
     }
-    /// All conditional cell values, row after row (`height × width`), for upload.
-    pub fn conditional_func_flat(&self) -> Vec<f64> {
-        self.conditional.iter().flat_map(|d| d.func.iter().copied()).collect()
+
+    /// Where row `row`'s table starts in [`Self::packed`] of a `width × height` grid.
+    pub const fn packed_row(row: usize, width: usize, height: usize) -> usize {
+        packed::len(height) + row * packed::len(width)
     }
-    /// Each row's integral (the conditional normalisers), for upload.
-    pub fn conditional_integrals(&self) -> Vec<f64> {
-        self.conditional.iter().map(|d| d.integral).collect()
+
+    /// The tables as one run of words, in the [`packed`] layout: the marginal's table, then
+    /// each row's, row 0 first. The GPU uploads this (as f32) and samples from it at the
+    /// offsets of [`packed`], [`Self::packed_row`] and their generated WGSL constants, so
+    /// both renderers draw from the same numbers.
+    pub fn packed(&self) -> impl Iterator<Item = f64> + '_ {
+        std::iter::once(&self.marginal).chain(&self.conditional).flat_map(Distribution1D::packed)
+    }
+}
+
+impl Distribution1D {
+    /// The table as a run of [`packed::len`] words: the integral, the cell values, the CDF.
+    pub fn packed(&self) -> impl Iterator<Item = f64> + '_ {
+        std::iter::once(self.integral).chain(self.func.iter().copied()).chain(self.cdf.iter().copied())
+    }
+}
+
+/// Offsets within the packed table of a [`Distribution1D`] of `n` cells
+/// ([`Distribution1D::packed`]): its integral, then its `n` cell values, then its `n + 1`
+/// CDF entries. The WGSL that reads such tables gets these numbers as generated constants
+/// (`gpu::layout::tags_wgsl`: `DIST1D_*`), never typed out again.
+pub mod packed {
+    /// Offset of the integral.
+    pub const INTEGRAL: usize = 0;
+    /// Offset of the first cell value.
+    pub const VALUES: usize = 1;
+
+    /// Offset of the first CDF entry: after the `n` values.
+    pub const fn cdf(n: usize) -> usize {
+        VALUES + n
+    }
+
+    /// Words in the whole table: the CDF has one entry more than there are cells.
+    pub const fn len(n: usize) -> usize {
+        cdf(n) + n + 1
     }
 }
 
@@ -259,7 +293,29 @@ mod tests {
             let expected = v / total;
             assert!((*c as f64 / (n * n) as f64 - expected).abs() < 2.0 / n as f64, "{c} vs {expected}");
         }
-        assert_eq!(d.conditional_cdf_flat().len(), 2 * 4);
-        assert_eq!(d.conditional_func_flat(), vals.to_vec());
+    }
+
+    /// The packed words at the `packed` offsets, worked out by hand for a 4 × 2 grid whose
+    /// sums are exact in binary: the layout's one description agrees with what `packed`
+    /// writes.
+    #[test]
+    fn packed_tables_sit_at_their_offsets() {
+        let vals = [1.0, 1.0, 2.0, 4.0, 0.0, 4.0, 2.0, 2.0];
+        let d = Distribution2D::new(&vals, 4, 2);
+        let words: Vec<f64> = d.packed().collect();
+        assert_eq!(words.len(), Distribution2D::packed_len(4, 2));
+        assert_eq!(words.len(), (1 + 2 + 3) + 2 * (1 + 4 + 5));
+        // The marginal: both rows' integrals (means) are 2.
+        assert_eq!(words[packed::INTEGRAL], 2.0);
+        assert_eq!(&words[packed::VALUES..][..2], &[2.0, 2.0]);
+        assert_eq!(&words[packed::cdf(2)..][..3], &[0.0, 0.5, 1.0]);
+        let rows =
+            [([1.0, 1.0, 2.0, 4.0], [0.0, 0.125, 0.25, 0.5, 1.0]), ([0.0, 4.0, 2.0, 2.0], [0.0, 0.0, 0.5, 0.75, 1.0])];
+        for (row, (values, cdf)) in rows.iter().enumerate() {
+            let base = Distribution2D::packed_row(row, 4, 2);
+            assert_eq!(words[base + packed::INTEGRAL], 2.0);
+            assert_eq!(&words[base + packed::VALUES..][..4], values);
+            assert_eq!(&words[base + packed::cdf(4)..][..5], cdf);
+        }
     }
 }
