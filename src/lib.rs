@@ -36,6 +36,7 @@ pub mod cpu;
 pub mod device;
 pub mod gpu;
 pub mod image;
+pub mod line_ends;
 pub mod memory;
 pub mod optics;
 pub mod prepare;

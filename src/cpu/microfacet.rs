@@ -295,12 +295,6 @@ pub fn plastic_sample(
     finish(i, plastic_eval(alpha, eta, rho, o, i), plastic_pdf(alpha, eta, o, i), false)
 }
 
-/// The single-scattering GGX conductor's albedo E(μ) with F = 1, for tests and tables.
-pub fn conductor_single_scattering(alpha: f64, mu: f64) -> f64 {
-    let o = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-    crate::optics::energy_tables::conductor_albedo_integral(alpha, o, 64)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -737,11 +737,6 @@ impl FeatureSet {
     pub fn with_lists_of(self, packed: &FeatureSet) -> FeatureSet {
         FeatureSet { listed: packed.listed, planes_listed: packed.planes_listed, ..self }
     }
-
-    /// The set in the form the shader assembler takes.
-    pub fn assembly_features(&self) -> crate::gpu::FeatureNames {
-        self.names().into_iter().collect()
-    }
 }
 
 impl RendererKind {

@@ -250,16 +250,16 @@ fn without_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes)
 }
 
-/// OBJ text with classic Mac OS line ends (a lone `\r`) turned into `\n`, which is all
+/// OBJ text with classic Mac OS line ends (a lone `\r`, `crate::line_ends`) turned into `\n`, which is all
 /// tobj splits lines at: it read such a file as one line, a vertex with every other
 /// statement as its numbers. `\r\n` is left alone (tobj trims the `\r`). PLY is not
 /// converted: its binary bodies hold any bytes, and its header must end in `\n`.
 fn lone_cr_as_newline(bytes: &[u8]) -> std::borrow::Cow<'_, [u8]> {
-    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
-    if !(0..bytes.len()).any(lone) {
+    use crate::line_ends::ends_line;
+    if !(0..bytes.len()).any(|i| bytes[i] == b'\r' && ends_line(bytes, i)) {
         return std::borrow::Cow::Borrowed(bytes);
     }
-    std::borrow::Cow::Owned((0..bytes.len()).map(|i| if lone(i) { b'\n' } else { bytes[i] }).collect())
+    std::borrow::Cow::Owned((0..bytes.len()).map(|i| if ends_line(bytes, i) { b'\n' } else { bytes[i] }).collect())
 }
 
 #[cfg(test)]

@@ -73,17 +73,6 @@ impl Pigment {
             Pigment::Image { image, .. } => image.pixels().iter().all(|p| p.is_black()),
         }
     }
-
-    /// The largest channel value the pigment can return (bounds for roulette and lights).
-    pub fn max_value(&self) -> f64 {
-        match self {
-            Pigment::Uniform(c) => c.max_component(),
-            Pigment::Checkered { on, off, .. } => on.max_component().max(off.max_component()),
-            Pigment::Image { image, .. } => {
-                image.pixels().iter().map(|p| f64::from(p.max_component())).fold(0.0, f64::max)
-            }
-        }
-    }
 }
 
 /// Reads an image at (u, v) as Raytracer.jl does: column ⌊u·W⌋, row ⌊v·H⌋ with row 0 at

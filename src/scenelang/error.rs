@@ -158,14 +158,10 @@ pub struct LineIndex {
 }
 
 impl LineIndex {
-    /// Lines end at `\n`, `\r\n` or a lone `\r`.
+    /// Lines end at `\n`, `\r\n` or a lone `\r` (`crate::line_ends`).
     pub fn new(source: &str) -> Self {
         let bytes = source.as_bytes();
-        let ends = bytes
-            .iter()
-            .enumerate()
-            .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n')))
-            .map(|(i, _)| i + 1);
+        let ends = (0..bytes.len()).filter(|&i| crate::line_ends::ends_line(bytes, i)).map(|i| i + 1);
         Self { starts: std::iter::once(0).chain(ends).collect() }
     }
 
