@@ -11,10 +11,9 @@
 // #requires env_light cell_index
 // #endif
 // #endif
-// Shading stage of the BRDF kinds of its kernel (src/gpu/wavefront/stages.rs: one kernel
-// shared by the delta kinds the scene uses, one by the kinds that sample lights, each with
-// only the code of its kinds), launched once per kind over that kind's queue
-// (shade_queue.x): one path vertex of cpu::path_tracer per invocation. Seven draws, emission MIS-weighted against NEE; at
+// Shading stage: one kernel for every BRDF kind of the scene, with only those kinds' code
+// (src/gpu/wavefront/stages.rs, Stage::kernel_kinds), launched once per kind over that
+// kind's queue (shade_queue.x): one path vertex of cpu::path_tracer per invocation. Seven draws, emission MIS-weighted against NEE; at
 // non-delta vertices the point lights and NEE become shadow rays with their contribution
 // (traced by the shadow stage, pbrt-v4's deferred scheme); then BSDF sampling, Russian
 // roulette and the next ray.
