@@ -115,7 +115,7 @@ fn pt_light_ray(hit: Hit, l: NeeSample, f: vec3<f32>, bsdf_pdf: f32) -> LightRay
         return none;
     }
     if ((dot(l.dir, hit.normal) > 0.0) != (dot(l.dir, hit.geometric) > 0.0)) {
-        // Shading normals never take light from behind the facet (cpu Hit::consistent).
+        // Shading normals never take light from behind the facet (cpu SurfaceHit::consistent).
         return none;
     }
     let o = offset_origin(hit.point, hit.scale, hit.geometric, l.dir);
