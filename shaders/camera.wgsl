@@ -1,5 +1,5 @@
 // #requires bindings random permute ray divide
-// Camera rays: mirrors scene::Camera::ray and cpu::pixel_samples (DESIGN.md "Random
+// Camera rays: mirrors scene::Camera::ray and prepare::pixel_samples (DESIGN.md "Random
 // numbers"). camera.to_world places the camera relative to its own position.
 
 // The ray through screen coordinates (u, v) ∈ [0, 1]²; it starts at t = 1 (the screen).

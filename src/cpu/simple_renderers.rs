@@ -1,4 +1,4 @@
-//! The OnOff, Flat and PointLight integrators (SCENELANG.md "Renderer semantics").
+//! The OnOff, Flat and PointLight integrators (SCENELANG.md "Renderers").
 
 use crate::color::Color;
 

@@ -51,7 +51,7 @@ pub struct PassOptions {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Show a progress bar on stderr (hidden anyway when stderr is not a terminal).
     pub progress: bool,
-    /// Path slots in flight per batch (0: from the device, see `wavefront::default_capacity`).
+    /// Path slots in flight per batch (0: from the device, see `wavefront::capacity`).
     pub batch_paths: u32,
 }
 
