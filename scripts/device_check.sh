@@ -15,10 +15,13 @@
 #   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; scripts/device_check.sh "$OUT"
 #
 # It writes to OUT_DIR (default: $OUT, else target/device_check; relative paths, here and in
-# LUMEN_BIN and MEGAKERNEL_BIN, are from the repository's root), at most eight files:
+# LUMEN_BIN and MEGAKERNEL_BIN, are from the repository's root), at most nine files:
 # - device.txt      the GPU (nvidia-smi) and the adapters lumen sees;
 # - cornell.txt     scenes/cornell.sl at 1024×1024 and 1024 spp (goal: under 2 s), the
 #                   per-stage device times and the device's busy fraction (`--profile`);
+# - shards.txt      cornell.sl at 1024×1024, 256 spp, with every queue in 1, 8 and 32 shards
+#                   (`--queue-shards`; hardware's default is 1), each with `--profile`: what
+#                   a datacenter GPU's pushes to one counter per queue cost its stages;
 # - bench_large.md  every scene on the GPU alone at 1024 px wide and 256 spp: batches large
 #                   enough to fill a datacenter GPU;
 # - bench.md        `lumen bench` of every scene on the GPU and the CPU reference (160 px,
@@ -47,12 +50,14 @@ if [ "$quick" = 1 ]; then
     cornell=(--width 64 --height 64 --spp 16)
     batch=(--width 64 --height 64 --spp 4)
     batches=(4096)
+    shards=(--width 64 --height 64 --spp 4)
 else
     bench=(--max-spheres 0)
     large=(--width 1024 --spp 256)
     cornell=(--width 1024 --height 1024 --spp 1024)
     batch=(--width 1024 --height 1024 --spp 256)
     batches=(1048576 2097152 4194304 8388608)
+    shards=(--width 1024 --height 1024 --spp 256)
 fi
 bin=${LUMEN_BIN:-target/device/lumen}
 [ -x "$bin" ] || bin=target/release/lumen
@@ -118,6 +123,12 @@ fi
 step cornell 120 bash -c 'TIMEFORMAT="wall %R s (the whole process)"; { time "$@"; } 2>&1' _ \
     "$bin" render scenes/cornell.sl --device gpu "${cornell[@]}" --profile -o "$scratch/cornell.exr" \
     > "$out/cornell.txt"
+: > "$out/shards.txt"
+for n in 1 8 32; do
+    echo "--queue-shards $n" >> "$out/shards.txt"
+    step "shards $n" 40 bash -c '"$@" 2>&1' _ "$bin" render scenes/cornell.sl --device gpu "${shards[@]}" \
+        --queue-shards "$n" --profile -o "$scratch/shards.exr" >> "$out/shards.txt"
+done
 bench_each bench_large "$out/bench_large.md" 60 "$bin" --device gpu --max-spheres 0 "${large[@]}"
 bench_each bench "$out/bench.md" 40 "$bin" --device gpu,cpu "${bench[@]}"
 if [ -x "$mega" ]; then

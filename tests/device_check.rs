@@ -26,7 +26,7 @@ fn the_device_check_writes_every_report() {
     assert!(o.status.success(), "{said}");
     let read = |name: &str| std::fs::read_to_string(out.path().join(name)).unwrap_or_default();
     let log = read("log.txt");
-    for step in ["bench", "bench_large", "cornell", "batch 4096"] {
+    for step in ["bench", "bench_large", "cornell", "batch 4096", "shards 1", "shards 8", "shards 32"] {
         assert!(log.lines().any(|l| l.starts_with(&format!("{step}: exit 0 "))), "{step}: {log}\n{said}");
     }
     assert!(read("device.txt").contains("type: "), "{}", read("device.txt"));
@@ -48,13 +48,21 @@ fn the_device_check_writes_every_report() {
     // The batch sweep's render ran with the size it names.
     let batch = read("batch.txt");
     assert!(batch.contains("--batch-paths 4096") && batch.contains("4 of 4 samples per pixel"), "{batch}");
+    // Each shard count's render, profiled, with the shards it names.
+    let shards = read("shards.txt");
+    for n in [1, 8, 32] {
+        let s = if n == 1 { "" } else { "s" };
+        assert!(shards.contains(&format!("--queue-shards {n}\n")), "{shards}");
+        assert!(shards.contains(&format!(", {n} queue shard{s}):")), "{n}: {shards}");
+    }
+    assert_eq!(shards.matches("4 of 4 samples per pixel").count(), 3, "{shards}");
     // Nothing but the reports: the render's image went to a scratch directory.
     let mut files: Vec<String> =
         std::fs::read_dir(out.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
     files.sort();
     assert_eq!(
         files,
-        ["batch.txt", "bench.md", "bench_large.md", "cornell.txt", "device.txt", "log.txt", "stderr.txt"]
+        ["batch.txt", "bench.md", "bench_large.md", "cornell.txt", "device.txt", "log.txt", "shards.txt", "stderr.txt"]
     );
 }
 

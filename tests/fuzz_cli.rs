@@ -1086,8 +1086,8 @@ fn command_line() -> impl Strategy<Value = Case> {
 }
 
 /// Command lines of GPU renders: `render --device gpu` with the flags that shape a GPU
-/// render (table placement, batch size, one device or two, the adapter's name, a time
-/// limit, profiling, shards and sample ranges) given hostile values, beside the sizes,
+/// render (table placement, batch size, one device or two, queue shards, the adapter's name,
+/// a time limit, profiling, shards and sample ranges) given hostile values, beside the sizes,
 /// sample counts and outputs of [`command_line`]. The scene uses an image pigment, glass
 /// and a mirror, so the tables and kernels these flags place are really there.
 fn gpu_command_line() -> impl Strategy<Value = Case> {
@@ -1098,6 +1098,8 @@ fn gpu_command_line() -> impl Strategy<Value = Case> {
         prop::sample::select(vec!["0", "1", "63", "64", "65", "4194240", "4194241", "18446744073709551615", "-1", "x"])
             .prop_map(|v| vec!["--batch-paths".into(), v.to_string()]),
         Just(vec!["--one-device".into()]),
+        prop::sample::select(vec!["0", "1", "3", "32", "33", "-1", "x"])
+            .prop_map(|v| vec!["--queue-shards".into(), v.to_string()]),
         Just(vec!["--profile".into()]),
         prop::sample::select(vec!["llvmpipe", "LLVMPIPE", "pipe", "nvidia", "", "é", "x"])
             .prop_map(|v| vec!["--adapter".into(), v.to_string()]),

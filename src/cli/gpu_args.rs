@@ -7,6 +7,7 @@ use clap::Args;
 
 use crate::device::Device;
 use crate::gpu::tables::TablePlacement;
+use crate::gpu::wavefront::MAX_QUEUE_SHARDS;
 use crate::gpu::{ctrlc_flag, AdapterChoice, PassOptions};
 
 /// `--adapter NAME` (default: `$LUMEN_ADAPTER`, else the best adapter).
@@ -71,6 +72,11 @@ pub struct GpuArgs {
     /// side by side. Images do not depend on it.
     #[arg(long)]
     pub one_device: bool,
+    /// Shards of every GPU queue, each with a counter of its own (default: one per worker
+    /// thread of llvmpipe, 1 on other adapters; at most 32): for measuring how much pushes
+    /// to one counter cost a device. Images do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_QUEUE_SHARDS)))]
+    pub queue_shards: Option<u32>,
 }
 
 impl GpuArgs {
@@ -114,6 +120,12 @@ mod tests {
         let t = T::try_parse_from(["t", "--batch-paths", "4096"]).unwrap();
         assert_eq!(t.gpu.pass_options().batch_paths, 4096);
         assert!(T::try_parse_from(["t", "--batch-paths", "0"]).is_err());
+        let t = T::try_parse_from(["t", "--queue-shards", "8"]).unwrap();
+        assert_eq!(t.gpu.queue_shards, Some(8));
+        assert_eq!(T::try_parse_from(["t"]).unwrap().gpu.queue_shards, None);
+        for bad in ["0", "33", "-1", "x"] {
+            assert!(T::try_parse_from(["t", "--queue-shards", bad]).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -296,6 +296,7 @@ fn render_on_gpu(
         passes: args.gpu.pass_options(),
         profile: args.profile,
         tables: args.gpu.tables,
+        queue_shards: args.gpu.queue_shards,
         // Animation frames set the twin up in the first frame even when a frame is one
         // batch, so that every later frame shares its batches.
         twin: match (args.gpu.one_device, args.frames.is_some()) {
@@ -307,7 +308,13 @@ fn render_on_gpu(
     };
     let out = renderer.render(gpu, scene, &opts)?;
     match &out.profile {
-        Some(p) => crate::diag!("GPU stages ({}):\n{}", gpu.adapter_info.name, p.table()),
+        Some(p) => crate::diag!(
+            "GPU stages ({}, {} queue shard{}):\n{}",
+            gpu.adapter_info.name,
+            out.queue_shards,
+            if out.queue_shards == 1 { "" } else { "s" },
+            p.table()
+        ),
         None if args.profile => {
             crate::diag!(
                 "note: {} has no timestamp queries inside passes; --profile timed nothing",

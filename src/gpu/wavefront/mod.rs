@@ -207,8 +207,12 @@ pub(crate) fn llvmpipe_threads(setting: Option<&str>, cores: usize) -> u32 {
         Some(n) => n,
         None => u32::try_from(cores).unwrap_or(u32::MAX),
     };
-    threads.clamp(1, 32)
+    threads.clamp(1, MAX_QUEUE_SHARDS)
 }
+
+/// Most shards a queue is split into: as many as llvmpipe's worker threads can be (Mesa caps
+/// them at 32), the most [`queue_shards`] gives; `lumen render --queue-shards` takes no more.
+pub const MAX_QUEUE_SHARDS: u32 = 32;
 
 /// Where launch-argument buffer `b` is in `StateBuffer::ARGS` (and `Runner::args`).
 fn args_index(b: StateBuffer) -> usize {
