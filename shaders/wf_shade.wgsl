@@ -13,10 +13,10 @@
 // #endif
 // Shading stage: one kernel for every BRDF kind of the scene, with only those kinds' code
 // (src/gpu/wavefront/stages.rs, Stage::kernel_kinds), launched once per kind over that
-// kind's queue (shade_queue.x): one path vertex of cpu::path_tracer per invocation. Seven draws, emission MIS-weighted against NEE; at
-// non-delta vertices the point lights and NEE become shadow rays with their contribution
-// (traced by the shadow stage, pbrt-v4's deferred scheme); then BSDF sampling, Russian
-// roulette and the next ray.
+// kind's queue (shade_queue.x): one path vertex of cpu::path_tracer per invocation. Seven
+// draws, emission MIS-weighted against NEE; at non-delta vertices the point lights and NEE
+// become shadow rays with their contribution (traced by the shadow stage, pbrt-v4's
+// deferred scheme); then BSDF sampling, Russian roulette and the next ray.
 
 // path_tracer::roulette_probability.
 fn roulette_probability(color: vec3<f32>) -> f32 {

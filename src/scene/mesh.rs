@@ -250,10 +250,10 @@ fn without_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes)
 }
 
-/// OBJ text with classic Mac OS line ends (a lone `\r`, `crate::line_ends`) turned into `\n`, which is all
-/// tobj splits lines at: it read such a file as one line, a vertex with every other
-/// statement as its numbers. `\r\n` is left alone (tobj trims the `\r`). PLY is not
-/// converted: its binary bodies hold any bytes, and its header must end in `\n`.
+/// OBJ text with classic Mac OS line ends (a lone `\r`, `crate::line_ends`) turned into
+/// `\n`, which is all tobj splits lines at: it read such a file as one line, a vertex with
+/// every other statement as its numbers. `\r\n` is left alone (tobj trims the `\r`). PLY
+/// is not converted: its binary bodies hold any bytes, and its header must end in `\n`.
 fn lone_cr_as_newline(bytes: &[u8]) -> std::borrow::Cow<'_, [u8]> {
     use crate::line_ends::ends_line;
     if !(0..bytes.len()).any(|i| bytes[i] == b'\r' && ends_line(bytes, i)) {
