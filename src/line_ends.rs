@@ -19,3 +19,15 @@ pub fn ends_line(bytes: &[u8], i: usize) -> bool {
         _ => false,
     }
 }
+
+/// Whether `c` stops a line's text: `\n`, or a `\r` (lone, or the first of `\r\n`). Where a
+/// line's *end* is (for counting lines) is [`ends_line`].
+///
+/// ```
+/// use lumen::line_ends::ends_text;
+/// assert_eq!("ab\r\ncd".find(ends_text), Some(2));
+/// assert_eq!("ab\rcd".find(ends_text), Some(2));
+/// ```
+pub fn ends_text(c: char) -> bool {
+    c == '\n' || c == '\r'
+}

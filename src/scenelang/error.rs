@@ -124,12 +124,6 @@ fn excerpt(line: &str, col0: usize, len: usize) -> (String, usize, usize) {
     (text, caret_at, len.min(end.saturating_sub(col0)).max(1))
 }
 
-/// Whether `c` ends a line: `\n`, or a `\r` (the `\r` of `\r\n` ends the line's text, and
-/// a lone `\r` is the line end of classic Mac OS files).
-fn is_line_end(c: char) -> bool {
-    c == '\n' || c == '\r'
-}
-
 /// A byte range in the source being read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Span {
@@ -195,7 +189,7 @@ impl SceneLangError {
         let lines = LineIndex::new(source);
         let (line, col) = lines.line_col(source, start);
         let line_start = lines.start_of(line);
-        let line_end = source[start..].find(is_line_end).map_or(source.len(), |i| start + i);
+        let line_end = source[start..].find(crate::line_ends::ends_text).map_or(source.len(), |i| start + i);
         // The caret covers the span's characters on this line (at least one).
         let span_end = floor_char_boundary(source, (start + span.len).min(line_end));
         let caret_len = source[start..span_end.max(start)].chars().count().max(1);

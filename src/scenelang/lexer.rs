@@ -149,7 +149,7 @@ impl<'a> Lexer<'a> {
             if trimmed.starts_with('#') {
                 // A comment ends with its line, whichever line end the file uses (`\n`,
                 // `\r\n`, or classic Mac OS's lone `\r`, which the whitespace skip eats).
-                self.pos += trimmed.find(['\n', '\r']).unwrap_or(trimmed.len());
+                self.pos += trimmed.find(crate::line_ends::ends_text).unwrap_or(trimmed.len());
             } else {
                 return;
             }
