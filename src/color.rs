@@ -16,8 +16,11 @@ use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[repr(C)]
 pub struct Rgb<T> {
+    /// Red channel, linear.
     pub r: T,
+    /// Green channel, linear.
     pub g: T,
+    /// Blue channel, linear.
     pub b: T,
 }
 
@@ -32,6 +35,7 @@ pub type Color = Rgb<f64>;
 pub type Rgb32 = Rgb<f32>;
 
 impl<T> Rgb<T> {
+    /// A colour from its three linear channels, in red, green, blue order.
     pub const fn new(r: T, g: T, b: T) -> Self {
         Self { r, g, b }
     }
@@ -50,6 +54,7 @@ impl<T: Copy> Rgb<T> {
     pub fn zip_with<U, V>(self, o: Rgb<U>, f: impl Fn(T, U) -> V) -> Rgb<V> {
         Rgb::new(f(self.r, o.r), f(self.g, o.g), f(self.b, o.b))
     }
+    /// The channels as `[r, g, b]`, for indexing a channel by number.
     pub fn to_array(self) -> [T; 3] {
         [self.r, self.g, self.b]
     }
@@ -58,11 +63,15 @@ impl<T: Copy> Rgb<T> {
 macro_rules! float_rgb {
     ($t:ty) => {
         impl Rgb<$t> {
+            /// Zero in every channel: no light.
             pub const BLACK: Self = Self::new(0.0, 0.0, 0.0);
+            /// One in every channel: a white reflectance, or unit radiance.
             pub const WHITE: Self = Self::new(1.0, 1.0, 1.0);
+            /// The largest of the three channels.
             pub fn max_component(self) -> $t {
                 self.r.max(self.g).max(self.b)
             }
+            /// The smallest of the three channels.
             pub fn min_component(self) -> $t {
                 self.r.min(self.g).min(self.b)
             }
@@ -74,9 +83,11 @@ macro_rules! float_rgb {
             pub fn luminance(self) -> $t {
                 0.2126 * self.r + 0.7152 * self.g + 0.0722 * self.b
             }
+            /// True when no channel is NaN or infinite.
             pub fn is_finite(self) -> bool {
                 self.r.is_finite() && self.g.is_finite() && self.b.is_finite()
             }
+            /// True when every channel is exactly zero (negative zero included).
             pub fn is_black(self) -> bool {
                 self.r == 0.0 && self.g == 0.0 && self.b == 0.0
             }

@@ -41,8 +41,16 @@ pub enum DeviceChoice {
 /// compiled kernels, so only the first render of a kind of scene pays for kernel creation.
 #[derive(Debug)]
 pub enum OpenDevice {
+    /// The f64 CPU reference renderer; nothing to open or keep.
     Cpu,
-    Gpu { gpu: Box<Gpu>, renderer: RefCell<GpuRenderer> },
+    /// A GPU opened through wgpu.
+    Gpu {
+        /// The open device on the chosen adapter (boxed, which keeps the enum small).
+        gpu: Box<Gpu>,
+        /// The renderer for this device, which keeps the kernels compiled by earlier renders; in
+        /// a `RefCell` so that renders through a shared `&OpenDevice` can borrow it mutably.
+        renderer: RefCell<GpuRenderer>,
+    },
 }
 
 impl OpenDevice {
@@ -51,6 +59,8 @@ impl OpenDevice {
         OpenDevice::Gpu { gpu: Box::new(gpu), renderer: RefCell::new(GpuRenderer::new()) }
     }
 
+    /// The [`Device`] this is (CPU or GPU), without its opened state; [`open_devices`]
+    /// compares it to drop duplicates.
     pub fn kind(&self) -> Device {
         match self {
             OpenDevice::Cpu => Device::Cpu,

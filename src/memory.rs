@@ -13,14 +13,31 @@
 pub enum OutOfMemory {
     /// The allocator refused (address-space limit, no overcommit, or truly out of memory).
     #[error("cannot allocate {} for {what}; the whole task needs about {}", format_bytes(Some(*.bytes)), format_bytes(Some(*.total)))]
-    Refused { what: String, bytes: u64, total: u64 },
+    Refused {
+        /// What the buffer was for, as the message names it ("a 640×480 image", "the merge's sums").
+        what: String,
+        /// Size of the refused buffer, in bytes.
+        bytes: u64,
+        /// The whole task's estimated peak, in bytes (at least `bytes`).
+        total: u64,
+    },
     /// The estimate exceeds what this process may use: it can never succeed.
     #[error(
         "{what} needs about {} of memory, more than the {} this process may use ({limit})",
         format_bytes(Some(*.needed)),
         format_bytes(Some(*.available))
     )]
-    TooLarge { what: String, needed: u64, available: u64, limit: &'static str },
+    TooLarge {
+        /// The task refused, as the message names it ("a 640×480 CPU render").
+        what: String,
+        /// The task's estimated peak, in bytes.
+        needed: u64,
+        /// The most this process may use, in bytes ([`memory_limit`]).
+        available: u64,
+        /// What sets `available`: "RAM + swap", "the address-space limit" or "the cgroup's
+        /// memory.max".
+        limit: &'static str,
+    },
 }
 
 /// `n` copies of `value`, or an error naming `what` and the task's estimated `total` bytes.

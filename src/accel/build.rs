@@ -45,11 +45,15 @@ const PAR_THRESHOLD: usize = 4096;
 const PAR_BIN_THRESHOLD: usize = 1 << 16;
 const CHUNK: usize = 1 << 14;
 
-/// One primitive to place: an id stored in [`Bvh::prim_indices`] and its world bounds
-/// (finite, non-empty).
+/// One primitive to place: an id stored in [`Bvh::prim_indices`] and its bounds (finite,
+/// non-empty), in whatever space the BVH is built in: world space for the scene's, a mesh's
+/// object space for its triangles'.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BvhItem {
+    /// The caller's index of the primitive; traversal hands it back to the visitor.
     pub id: u32,
+    /// Box of the primitive (world space for the scene's BVH, object space for a mesh's),
+    /// used for binning and the node boxes.
     pub bounds: Aabb,
 }
 
@@ -102,6 +106,8 @@ impl Bvh {
         Bvh { nodes, prim_indices }
     }
 
+    /// The nodes in depth-first order, root first (see [`BvhNode`] for how children and
+    /// leaves are linked); empty for an empty BVH.
     pub fn nodes(&self) -> &[BvhNode] {
         &self.nodes
     }
@@ -111,6 +117,7 @@ impl Bvh {
         &self.prim_indices
     }
 
+    /// Whether the BVH was built over no items (it then has no nodes, not even a root).
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
     }

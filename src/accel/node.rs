@@ -15,9 +15,13 @@ use crate::scene::Aabb;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
+    /// Minimum corner of the node's box (in the items' space), rounded down to f32.
     pub min: [f32; 3],
+    /// Interior node: index of the right child. Leaf: first index into `prim_indices`.
     pub left_or_first: u32,
+    /// Maximum corner of the node's box (in the items' space), rounded up to f32.
     pub max: [f32; 3],
+    /// Number of primitives in a leaf; 0 marks an interior node.
     pub count: u32,
 }
 
@@ -35,6 +39,7 @@ impl BvhNode {
         Self { min: lo, left_or_first, max: hi, count }
     }
 
+    /// Whether the node is a leaf (`count > 0`).
     pub fn is_leaf(&self) -> bool {
         self.count > 0
     }

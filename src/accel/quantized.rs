@@ -55,13 +55,17 @@ pub const RIGHT_LEAF: u32 = 1 << 25;
 /// `QuantizedNode::scales`: where a leaf child's primitive count sits (3 bits each; a leaf
 /// holds at most [`super::MAX_LEAF_SIZE`]).
 pub const LEFT_COUNT_SHIFT: u32 = 26;
+/// `QuantizedNode::scales`: where the right leaf child's primitive count sits (3 bits).
 pub const RIGHT_COUNT_SHIFT: u32 = 29;
+/// Mask of a 3-bit primitive count once shifted down, in `scales` and in leaf references.
 pub const COUNT_MASK: u32 = 7;
 /// A walk's reference to a leaf, as the GPU's walk carries it on its stack: this bit, the
 /// count at [`REF_COUNT_SHIFT`] and the first primitive below [`MAX_LEAF_FIRST`]. A node
 /// reference is the node's index (`gpu::layout::mesh_bits::NODE_MASK` keeps those below
 /// this bit).
 pub const LEAF_REF: u32 = 1 << 31;
+/// Where a leaf reference's primitive count sits (bits 28–30); the first primitive takes
+/// the bits below.
 pub const REF_COUNT_SHIFT: u32 = 28;
 /// Leaves' first primitives stay below this (pack refuses more objects or triangles).
 pub const MAX_LEAF_FIRST: u32 = 1 << REF_COUNT_SHIFT;
@@ -90,9 +94,14 @@ const _: () = assert!(super::MAX_LEAF_SIZE as u32 <= COUNT_MASK);
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct QuantizedNode {
+    /// Origin of the node's grid: the least f32 minimum of its children's boxes, lowered
+    /// where needed so that it stays finite and below them when a GPU flushes denormals.
     pub corner: [f32; 3],
+    /// Biased grid-step exponents per axis, the leaf flags and the leaf children's counts.
     pub scales: u32,
+    /// Per axis, the four 8-bit grid coordinates of the two children's bounds.
     pub grid: [u32; 3],
+    /// Index of the right inner child, or the first primitive of the leaf children.
     pub link: u32,
 }
 
@@ -104,7 +113,13 @@ pub enum Child {
     /// An inner node, by index.
     Inner(u32),
     /// A leaf: primitives `first .. first + count` of the BVH's primitive order.
-    Leaf { first: u32, count: u32 },
+    Leaf {
+        /// Index of the leaf's first entry in the BVH's primitive order
+        /// ([`super::Bvh::prim_indices`]).
+        first: u32,
+        /// Number of primitives in the leaf (at most [`super::MAX_LEAF_SIZE`]).
+        count: u32,
+    },
 }
 
 impl QuantizedNode {

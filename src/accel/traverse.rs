@@ -29,6 +29,8 @@ pub struct RayBox {
 const FAR_WIDEN: f64 = 1.0 + 2.0 * (3.0 * f64::EPSILON * 0.5) / (1.0 - 3.0 * f64::EPSILON * 0.5);
 
 impl RayBox {
+    /// Prepares the ray `origin + t·dir` (`dir` need not be normalised) for slab tests; a
+    /// zero component of `dir` makes the ray parallel to that axis's slabs.
     pub fn new(origin: DVec3, dir: DVec3) -> Self {
         let inv_dir = dir.recip();
         Self { origin, inv_dir, parallel: !inv_dir.is_finite() }

@@ -49,7 +49,9 @@ pub struct TriangleHit {
     /// Barycentric weights of p0, p1 and p2: the hit point is `b0·p0 + b1·p1 + b2·p2`. Each
     /// is in [0, 1] and their sum is 1 up to rounding.
     pub b0: f64,
+    /// Barycentric weight of p1.
     pub b1: f64,
+    /// Barycentric weight of p2.
     pub b2: f64,
     /// Conservative (to first order) bound on |t − t_exact|, t_exact being the parameter at
     /// which the exact ray meets the exact plane of the f64 vertices. Callers that spawn
@@ -81,6 +83,7 @@ impl ShearedRay {
         Self { origin, kx, ky, kz, sx: dx / dz, sy: dy / dz, sz: 1.0 / dz }
     }
 
+    /// The ray's origin, as given to [`ShearedRay::new`] (in the caller's space).
     pub fn origin(&self) -> DVec3 {
         self.origin
     }

@@ -4,7 +4,9 @@
 /// y ≈ intercept + slope·x, with the coefficient of determination.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineFit {
+    /// Change in y per unit of x (for [`fit_loglog`], the power-law exponent).
     pub slope: f64,
+    /// y at x = 0 (for [`fit_loglog`], log10 of y at x = 1).
     pub intercept: f64,
     /// 1 − residual / total sum of squares (1 for collinear points; 1 when y is constant).
     pub r2: f64,

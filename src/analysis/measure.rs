@@ -12,6 +12,7 @@ use crate::scene::Scene;
 /// What one render produced and cost.
 #[derive(Debug, Clone)]
 pub struct Measurement {
+    /// The rendered image, linear radiance per pixel.
     pub image: HdrImage,
     /// Camera samples per pixel actually taken.
     pub spp: u32,
@@ -20,8 +21,9 @@ pub struct Measurement {
     pub seconds: f64,
     /// Radiance samples: pixels × spp × paths per sample.
     pub samples: u64,
-    /// Rays traced, where the renderer counts them (the CPU does; the GPU kernel does not).
-    pub rays: Option<u64>,
+    /// Rays traced: closest-hit and shadow rays, counted alike by both renderers.
+    pub rays: u64,
+    /// Samples whose radiance was NaN or infinite; the renderers count each as black.
     pub non_finite_samples: u64,
     /// CPU seconds of the whole process (every thread, the driver's included) during the
     /// render call ([`process_cpu_seconds`](super::process_cpu_seconds)); `None` where not
@@ -30,11 +32,14 @@ pub struct Measurement {
 }
 
 impl Measurement {
+    /// Radiance samples per wall-clock second ([`samples`](Self::samples) over
+    /// [`seconds`](Self::seconds), the time clamped to at least 1e-12 s).
     pub fn samples_per_second(&self) -> f64 {
         self.samples as f64 / self.seconds.max(1e-12)
     }
-    pub fn rays_per_second(&self) -> Option<f64> {
-        self.rays.map(|r| r as f64 / self.seconds.max(1e-12))
+    /// Rays traced per wall-clock second (the time clamped as in [`Self::samples_per_second`]).
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.seconds.max(1e-12)
     }
 }
 
@@ -96,7 +101,7 @@ fn render_on(
                 spp: out.stats.spp as u32,
                 seconds: out.stats.seconds,
                 samples: out.stats.samples,
-                rays: Some(out.stats.rays),
+                rays: out.stats.rays,
                 non_finite_samples: out.stats.non_finite_samples,
                 cpu_seconds: None,
             })
@@ -118,7 +123,7 @@ fn render_on(
                 spp: out.spp_done,
                 seconds: out.seconds,
                 samples: pixels * u64::from(out.spp_done) * paths_per_sample(scene),
-                rays: Some(out.rays),
+                rays: out.rays,
                 non_finite_samples: out.non_finite_samples,
                 cpu_seconds: None,
             })
@@ -145,7 +150,7 @@ mod tests {
         let m = measure(&devices[0], &scene, 4, false).unwrap();
         assert_eq!((m.spp, m.samples), (4, 6 * 4 * 4));
         // OnOff traces exactly one camera ray per sample.
-        assert_eq!(m.rays, Some(6 * 4 * 4));
+        assert_eq!(m.rays, 6 * 4 * 4);
         // The render's own CPU time, where the platform tells it.
         if let Some(c) = m.cpu_seconds {
             assert!(c >= 0.0 && c.is_finite(), "{c}");

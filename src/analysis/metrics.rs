@@ -9,8 +9,12 @@ pub const REL_MSE_EPSILON: f64 = 1e-2;
 /// Every metric `lumen converge` reports for one image.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ErrorMetrics {
+    /// Mean squared error per channel ([`mse`]).
     pub mse: f64,
+    /// Square root of `mse`, in the image's radiance units ([`rmse`]).
     pub rmse: f64,
+    /// Relative MSE, each channel's squared error over its reference value squared plus
+    /// [`REL_MSE_EPSILON`] ([`rel_mse`]).
     pub rel_mse: f64,
 }
 

@@ -13,6 +13,7 @@ use super::font::{draw_text, text_width, GLYPH_H};
 /// One line of the plot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Series {
+    /// Name shown in the legend next to the series' colour.
     pub label: String,
     /// (x, y) in data units; points that are not positive and finite are skipped.
     pub points: Vec<(f64, f64)>,
@@ -21,9 +22,13 @@ pub struct Series {
 /// A log-log plot: title, axis labels and series.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Plot {
+    /// Text centred above the axes (and the SVG's `<title>`).
     pub title: String,
+    /// Caption centred under the x axis.
     pub x_label: String,
+    /// Caption along the y axis, reading bottom to top.
     pub y_label: String,
+    /// The lines to draw, coloured in order from a fixed palette of six that repeats.
     pub series: Vec<Series>,
 }
 

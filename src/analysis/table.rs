@@ -5,12 +5,17 @@ use super::line_fit::{fit_loglog, tail_flattens, LineFit};
 /// One render of a convergence study.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ConvergeRow {
+    /// The device that rendered it, `cpu` or `gpu`; rows are grouped by it.
     pub device: String,
+    /// Camera samples per pixel of the render.
     pub spp: u32,
     /// Wall time of the render call.
     pub seconds: f64,
+    /// Mean squared error per channel against the reference image ([`mse`](super::mse)).
     pub mse: f64,
+    /// Root of `mse`, in radiance units.
     pub rmse: f64,
+    /// Relative MSE against the reference ([`rel_mse`](super::rel_mse)).
     pub rel_mse: f64,
 }
 
@@ -25,6 +30,8 @@ impl ConvergeRow {
 /// The rows of a study, in the order they were measured.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ConvergeTable {
+    /// One row per render, in measuring order; [`devices`](Self::devices) and
+    /// [`rows_of`](Self::rows_of) split them by device.
     pub rows: Vec<ConvergeRow>,
 }
 

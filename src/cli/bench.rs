@@ -34,15 +34,21 @@ pub const SPHERE_COUNTS: [u32; 6] = [1, 10, 100, 1_000, 10_000, 100_000];
 /// difference); `--width` defaults to 160.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
+    /// `--device` and `--adapter`: the devices measured, in turn.
     #[command(flatten)]
     pub devices: DeviceListArgs,
     /// Scene scripts, or directories whose *.sl files are all benchmarked, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "scenes")]
     pub scenes: Vec<PathBuf>,
+    /// `--spp`: samples per pixel of the per-scene measurements (default 16, 4 with `--quick`;
+    /// at most `MAX_SPP / 16`, since the scaling study takes 16× as many).
     #[command(flatten)]
     pub spp: SppArgs,
+    /// `--width` (default 160, 64 with `--quick`), `--height` and `--seed` of the scenes
+    /// loaded from scripts (the scaling study's generated scenes keep their own size).
     #[command(flatten)]
     pub overrides: SceneOverrides,
+    /// `--time` and `--vars` for every script (and for the `--cold-kernels` processes).
     #[command(flatten)]
     pub script: ScriptArgs,
     /// Small and fast: width 64, 4 spp, scaling up to 10 000 spheres.
@@ -452,7 +458,7 @@ struct Differential {
     more: Measurement,
     extra_samples: f64,
     extra_seconds: f64,
-    extra_rays: Option<f64>,
+    extra_rays: f64,
     extra_cpu_seconds: Option<f64>,
 }
 
@@ -473,7 +479,7 @@ impl Differential {
         Ok(Self {
             extra_samples: more.samples.saturating_sub(one.samples) as f64,
             extra_seconds: more.seconds - one.seconds,
-            extra_rays: one.rays.zip(more.rays).map(|(a, b)| b.saturating_sub(a) as f64),
+            extra_rays: more.rays.saturating_sub(one.rays) as f64,
             extra_cpu_seconds: one.cpu_seconds.zip(more.cpu_seconds).map(|(a, b)| b - a),
             more,
         })
@@ -490,7 +496,7 @@ impl Differential {
     }
 
     fn rays_per_second(&self) -> Option<f64> {
-        self.extra_rays.filter(|_| self.extra_seconds > 0.0).map(|r| r / self.extra_seconds)
+        (self.extra_seconds > 0.0).then(|| self.extra_rays / self.extra_seconds)
     }
 }
 

@@ -37,6 +37,7 @@ pub struct ConvergeArgs {
     /// Samples per pixel of the CPU-rendered reference (default: 16 × the largest --spp).
     #[arg(long)]
     pub reference_spp: Option<u32>,
+    /// `--device` and `--adapter`: the devices measured, in turn.
     #[command(flatten)]
     pub devices: DeviceListArgs,
     /// Camera samples per pixel to measure (a list: each count is one measurement; one
@@ -46,8 +47,10 @@ pub struct ConvergeArgs {
     /// Directory for converge.csv, converge.md, converge.png and the rendered reference.
     #[arg(short = 'o', long = "output", default_value = "converge")]
     pub output: PathBuf,
+    /// `--width`, `--height` and `--seed` of the scene (a `--reference` image must match the size).
     #[command(flatten)]
     pub overrides: SceneOverrides,
+    /// `--time` and `--vars` of the script.
     #[command(flatten)]
     pub script: ScriptArgs,
 }

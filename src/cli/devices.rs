@@ -10,6 +10,7 @@ use crate::gpu::{list_adapters, select_adapter};
 /// Arguments of `lumen devices`.
 #[derive(Debug, Args)]
 pub struct DevicesArgs {
+    /// `--adapter`: the adapter marked `(selected)`; a name that matches none is an error.
     #[command(flatten)]
     pub adapter: AdapterArgs,
 }

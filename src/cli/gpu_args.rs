@@ -20,6 +20,8 @@ pub struct AdapterArgs {
 }
 
 impl AdapterArgs {
+    /// The adapter to open: `--adapter` if given and not blank, else `$LUMEN_ADAPTER`, else
+    /// none named (the best adapter).
     pub fn choice(&self) -> AdapterChoice {
         AdapterChoice::new(self.adapter.clone())
     }
@@ -32,6 +34,7 @@ pub struct DeviceListArgs {
     /// Devices to measure, comma-separated; an unavailable GPU is skipped with a warning.
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Device::Gpu, Device::Cpu])]
     pub device: Vec<Device>,
+    /// `--adapter`: the adapter a `gpu` in the list opens.
     #[command(flatten)]
     pub adapter: AdapterArgs,
 }
@@ -46,6 +49,7 @@ impl DeviceListArgs {
 /// The adapter plus progressive-render controls.
 #[derive(Debug, Clone, Default, Args)]
 pub struct GpuArgs {
+    /// `--adapter`: the adapter a GPU render opens.
     #[command(flatten)]
     pub adapter: AdapterArgs,
     /// Stop after about this many seconds and save what was rendered, on the GPU or the CPU

@@ -29,10 +29,12 @@ mod tonemap;
 #[derive(Debug, Parser)]
 #[command(name = "lumen", version, about, long_about = None, propagate_version = true)]
 pub struct Cli {
+    /// The subcommand named on the command line, with its arguments; [`run`] dispatches on it.
     #[command(subcommand)]
     pub command: Command,
 }
 
+/// The subcommands of `lumen`, each with its parsed arguments (one file of this module each).
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Tone-map or convert an image file (PFM, OpenEXR, Radiance HDR, PNG, JPEG).

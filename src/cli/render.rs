@@ -40,12 +40,17 @@ pub struct RenderArgs {
     /// Where to render.
     #[arg(long, value_enum, default_value_t = DeviceChoice::Auto)]
     pub device: DeviceChoice,
+    /// `--adapter`, `--time-limit`, and the GPU's `--batch-paths`, `--tables`, `--one-device` and
+    /// `--queue-shards`.
     #[command(flatten)]
     pub gpu: GpuArgs,
+    /// `--width`, `--height` and `--seed`: changes to the loaded scene.
     #[command(flatten)]
     pub overrides: SceneOverrides,
+    /// `--spp`: samples per pixel instead of the tracer's own.
     #[command(flatten)]
     pub spp: SppArgs,
+    /// `--time` and `--vars` of the script (`--frames` sets TIME per frame instead of `--time`).
     #[command(flatten)]
     pub script: ScriptArgs,
     /// Path tracer: no next-event estimation (light only found by BSDF sampling, as in
@@ -113,8 +118,11 @@ impl Part {
 /// An animation's times.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Frames {
+    /// The script's TIME in the first frame.
     pub start: f64,
+    /// The script's TIME in the last frame (it may be less than `start`).
     pub end: f64,
+    /// Number of frames, 1 to [`MAX_FRAMES`]; with one, only `start` is rendered.
     pub count: u32,
 }
 

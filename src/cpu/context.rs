@@ -13,8 +13,11 @@ use super::{offset_origin, Ray, World};
 /// Per-render, read-only state shared by all threads.
 #[derive(Debug)]
 pub struct Context<'a> {
+    /// The scene being rendered: materials, camera, tracer and renderer settings.
     pub scene: &'a Scene,
+    /// The scene's geometry prepared for closest-hit and occlusion queries.
     pub world: &'a World,
+    /// The lights next-event estimation samples.
     pub lights: &'a Lights,
     /// log₂ of the strata per dimension of a path vertex (`sampling::strata_bits` of the
     /// pixel's samples of the whole render, not of one round or range).

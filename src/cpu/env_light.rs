@@ -32,6 +32,7 @@ pub struct EnvSample {
 /// The environment light of a scene.
 #[derive(Debug, Clone)]
 pub struct EnvLight {
+    /// What escaping rays see: the scene's environment, or a uniform one of its background.
     pub environment: Environment,
     /// For image environments: the luminance × sin θ distribution over its texels.
     pub distribution: Option<Distribution2D>,

@@ -11,6 +11,7 @@ pub struct Hit {
     pub t: f64,
     /// Point, normals, error scale and surface coordinates, oriented against the ray.
     pub surface: SurfaceHit,
+    /// Material of the surface hit (of the CSG leaf whose surface it is, in a CSG tree).
     pub material: MaterialId,
     /// Index of the top-level shape in `Scene::shapes`.
     pub shape: u32,

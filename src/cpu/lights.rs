@@ -20,11 +20,15 @@ pub struct Lights {
 /// Which light ξ0 chose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LightChoice {
+    /// The area light at this index of [`Lights::area`].
     Area(u32),
+    /// The environment light, [`Lights::env`].
     Env,
 }
 
 impl Lights {
+    /// The scene's NEE lights: its emissive top-level spheres, cubes and meshes (leaving out
+    /// meshes of zero or non-finite area) and its escape radiance, unless that is black.
     pub fn new(scene: &Scene) -> Self {
         let area: Vec<AreaLight> = scene.area_lights().iter().filter_map(|l| AreaLight::new(scene, l.shape)).collect();
         let mut area_of_shape = vec![None; scene.shapes.len()];

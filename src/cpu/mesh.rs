@@ -15,22 +15,31 @@ use crate::scene::{MaterialId, MeshInstance, Transform, TriangleMesh};
 /// A mesh instance with its BVH.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshObject {
+    /// The triangles in object space, shared with every other instance of the mesh.
     pub mesh: Arc<TriangleMesh>,
+    /// Bottom-level BVH over `mesh`'s triangles in object space (ids index its triangles).
     pub bvh: Arc<Bvh>,
+    /// Object-to-world transformation of this instance.
     pub to_world: Transform,
+    /// Material of every triangle of the instance.
     pub material: MaterialId,
+    /// Shade with the mesh's interpolated vertex normals (`MeshInstance::shades_smooth`).
     pub smooth: bool,
 }
 
 /// Where a ray meets the mesh: t, the triangle and the barycentric weights of its vertices.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshCrossing {
+    /// Ray parameter of the crossing (the same in object and world space).
     pub t: f64,
+    /// Index of the triangle in `TriangleMesh::triangles`.
     pub triangle: u32,
+    /// Barycentric weights of the triangle's three vertices, in the mesh's vertex order.
     pub b: [f64; 3],
 }
 
 impl MeshObject {
+    /// Instance `m` for ray queries, with `bvh` the BVH of `m.mesh` (`prepare::mesh_bvh`).
     pub fn new(m: &MeshInstance, bvh: Arc<Bvh>) -> Self {
         Self { mesh: m.mesh.clone(), bvh, to_world: m.transform, material: m.material, smooth: m.shades_smooth() }
     }

@@ -23,16 +23,22 @@ use super::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 /// single-scattering comparisons).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rough {
+    /// GGX α, the width of the microfacet slopes (`ggx::alpha_of` of the roughness).
     pub alpha: f64,
+    /// Add the Kulla–Conty multiple-scattering lobe and mix its sampler in.
     pub compensate: bool,
 }
 
 /// A local-frame sample: direction, f·|cos|/pdf, pdf; `delta` for the plastic's smooth coat.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocalSample {
+    /// The sampled direction i in the local frame; z < 0 for a transmission.
     pub dir: DVec3,
+    /// f·|cos θi|/pdf per channel: what the path's throughput is multiplied by.
     pub weight: Color,
+    /// Solid-angle density of `dir` under the sampler (0 for a delta sample).
     pub pdf: f64,
+    /// The smooth coat's mirror reflection: no density, and light sampling never finds it.
     pub delta: bool,
 }
 
@@ -70,6 +76,9 @@ pub fn conductor_eval(r: Rough, fresnel: Option<(Color, Color)>, o: DVec3, i: DV
     f
 }
 
+/// Solid-angle density with which [`conductor_sample`] draws `i` seen from `o`: the
+/// visible-normal reflection with probability E(μo) (1 when uncompensated), else the cosine
+/// lobe. 0 when either direction is below the surface.
 pub fn conductor_pdf(r: Rough, o: DVec3, i: DVec3) -> f64 {
     if o.z <= 0.0 || i.z <= 0.0 {
         return 0.0;
@@ -79,6 +88,10 @@ pub fn conductor_pdf(r: Rough, o: DVec3, i: DVec3) -> f64 {
     p * visible_normal_pdf(r.alpha, o, h) / (4.0 * o.dot(h)) + (1.0 - p) * cosine_hemisphere_pdf(i.z)
 }
 
+/// Draws i for a GGX conductor seen from `o`: `xi_lobe` chooses single scattering (a visible
+/// normal, `xi` placing it, then a mirror reflection) or the multiple-scattering lobe (`xi`
+/// cosine-distributed). `None` when nothing is scattered (i below the surface, a zero or
+/// non-finite weight).
 pub fn conductor_sample(
     r: Rough,
     fresnel: Option<(Color, Color)>,
@@ -165,6 +178,10 @@ pub fn dielectric_eval(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
     ss + ms
 }
 
+/// Solid-angle density with which [`dielectric_sample`] draws `i` (reflected for i.z > 0,
+/// transmitted for i.z < 0) seen from `o` through an interface of relative index `eta`:
+/// the visible-normal lobe weighted by Fresnel, mixed with the compensation lobe. 0 for
+/// o.z ≤ 0 or i.z = 0.
 pub fn dielectric_pdf(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
     if o.z <= 0.0 || i.z == 0.0 {
         return 0.0;
@@ -193,6 +210,11 @@ pub fn dielectric_pdf(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
     }
 }
 
+/// Draws i for a GGX dielectric interface of relative index `eta` seen from `o`: with
+/// probability E(μo) a visible normal, reflected or refracted by its Fresnel term (`xi_lobe`
+/// rescaled decides), else the cosine lobe, mirrored below the surface with the
+/// compensation's transmit probability. `None` when the microfacet sends i to the wrong side
+/// (the single-scattering loss) or nothing is scattered.
 pub fn dielectric_sample(r: Rough, eta: f64, o: DVec3, xi_lobe: f64, xi: [f64; 2]) -> Option<LocalSample> {
     let (p, k_t) = if r.compensate {
         let (e_o, lobes) = dielectric_energy(energy_tables(), r.alpha, eta, o.z);
@@ -275,6 +297,10 @@ pub fn plastic_pdf(alpha: Option<f64>, eta: f64, o: DVec3, i: DVec3) -> f64 {
     p * coat + (1.0 - p) * cosine_hemisphere_pdf(i.z)
 }
 
+/// Draws i for the plastic, a coat of GGX α `alpha` (`None`: smooth) and index `eta` over a
+/// diffuse base of albedo `rho`: with probability E_R(μo) the coat (for a smooth coat its
+/// mirror reflection, a delta sample of weight 1), else the base's cosine lobe. `None` when
+/// nothing is scattered.
 pub fn plastic_sample(
     alpha: Option<f64>,
     eta: f64,

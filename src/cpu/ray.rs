@@ -2,20 +2,26 @@
 
 use glam::DVec3;
 
-/// The segment `origin + t·dir` for `t ∈ [tmin, tmax]`. `dir` need not be unit length
+/// The segment `origin + t·dir` for `t ∈ (tmin, tmax)`, open at both ends. `dir` need not be unit length
 /// (camera rays keep Raytracer.jl's parameterisation, with t = 1 at the screen).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ray {
+    /// Start point, in world space for the renderer's queries.
     pub origin: DVec3,
+    /// Direction, not necessarily unit length: t counts multiples of it.
     pub dir: DVec3,
+    /// Lower end of the range; queries accept hits with t in the open range (tmin, tmax).
     pub tmin: f64,
+    /// Upper end of the range; `f64::INFINITY` for an unbounded ray.
     pub tmax: f64,
 }
 
 impl Ray {
+    /// The ray `origin + t·dir` restricted to t in `(tmin, tmax)`; nothing is checked.
     pub fn new(origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Self {
         Self { origin, dir, tmin, tmax }
     }
+    /// The point `origin + t·dir`, for any t (not clamped to the ray's range).
     pub fn at(&self, t: f64) -> DVec3 {
         self.origin + self.dir * t
     }

@@ -76,6 +76,7 @@ impl Limits {
 /// Whether to draw a progress bar on standard error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Progress {
+    /// Draw nothing on standard error.
     Hidden,
     /// A bar with ETA, drawn only when standard error is a terminal.
     Bar,
@@ -90,6 +91,7 @@ pub struct RenderStats {
     pub rays: u64,
     /// Samples whose radiance was NaN or infinite; each was counted as 0.
     pub non_finite_samples: u64,
+    /// Wall-clock time of the whole call, scene preparation included, in seconds.
     pub seconds: f64,
     /// Camera samples per pixel taken, the same in every pixel.
     pub spp: u64,
@@ -97,13 +99,16 @@ pub struct RenderStats {
     pub spp_requested: u64,
     /// Rounds kept.
     pub rounds: u32,
+    /// Why the render ended: all samples taken, the time limit or cancellation.
     pub stop: StopReason,
 }
 
 /// A rendered image (linear radiance) and its statistics.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderOutput {
+    /// Per pixel, the mean radiance of the samples kept (black where none were taken).
     pub image: HdrImage,
+    /// Counts, timing and the reason the render stopped.
     pub stats: RenderStats,
 }
 

@@ -28,6 +28,7 @@ pub fn uniform_sphere(xi0: f64, xi1: f64) -> DVec3 {
     DVec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// Solid-angle density of [`uniform_sphere`], 1/(4π) per steradian.
 pub const UNIFORM_SPHERE_PDF: f64 = 1.0 / (4.0 * PI);
 
 /// One minus the cosine of the half-angle of the cone that a sphere of radius `r` at

@@ -125,6 +125,7 @@ pub struct World {
 }
 
 impl World {
+    /// Prepares the top-level shapes of `scene` (see [`World::from_shapes`]).
     pub fn new(scene: &Scene) -> World {
         Self::from_shapes(&scene.shapes)
     }

@@ -28,18 +28,60 @@ use super::device::{Gpu, GpuError};
 /// Errors of the preprocessor and of module resolution, each with its location.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum AssembleError {
+    /// A `// #if` or a feature set names a feature the library does not declare (a typo).
     #[error("{file}:{line}: unknown feature {name:?} (known: {known})")]
-    UnknownFeature { file: String, line: usize, name: String, known: String },
+    UnknownFeature {
+        /// The module's file, or `<feature set>` when the feature set passed to
+        /// [`ShaderLibrary::assemble`] names it.
+        file: String,
+        /// 1-based line of the `// #if`; 0 for a feature set.
+        line: usize,
+        /// The unknown feature.
+        name: String,
+        /// The declared features, comma-separated.
+        known: String,
+    },
+    /// A malformed directive: an unknown `// #word`, an `// #else` or `// #endif` without its
+    /// `// #if`, a second `// #else`, a bad `// #if` argument, or a `// #provides` that is
+    /// empty, repeated or inside `// #if`.
     #[error("{file}:{line}: {message}")]
-    Directive { file: String, line: usize, message: String },
+    Directive {
+        /// The module's file.
+        file: String,
+        /// 1-based line of the directive.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The file ends inside a `// #if` section.
     #[error("{file}: `// #if` opened at line {line} has no `// #endif`")]
-    Unclosed { file: String, line: usize },
+    Unclosed {
+        /// The module's file.
+        file: String,
+        /// 1-based line of the innermost `// #if` left open.
+        line: usize,
+    },
+    /// A root or a `// #requires` names a module the library does not hold.
     #[error("module {name:?} required by {required_by} is not in the shader library")]
-    MissingModule { name: String, required_by: String },
+    MissingModule {
+        /// The missing module's name.
+        name: String,
+        /// The requiring module as `name (file)`, or `the caller` for a root.
+        required_by: String,
+    },
+    /// Modules require each other in a loop; holds the chain, `a -> b -> a`.
     #[error("modules require each other in a cycle: {0}")]
     Cycle(String),
+    /// Two files provide a module of the same name (file stem or `// #provides`).
     #[error("module {name:?} is provided by both {first} and {second}")]
-    Duplicate { name: String, first: String, second: String },
+    Duplicate {
+        /// The module name both provide.
+        name: String,
+        /// The file added first.
+        first: String,
+        /// The file whose addition was refused.
+        second: String,
+    },
 }
 
 /// The names of the `// #if` sections a kernel is assembled with (e.g. `CSG`, `ENV_IMAGE`);
@@ -48,6 +90,7 @@ pub enum AssembleError {
 pub struct FeatureNames(BTreeSet<String>);
 
 impl FeatureNames {
+    /// No features: every `// #if NAME` section dropped, every `// #if !NAME` kept.
     pub fn new() -> Self {
         Self::default()
     }
@@ -56,12 +99,16 @@ impl FeatureNames {
         self.insert(feature);
         self
     }
+    /// Turns `feature` on (a no-op if it already is); whether the library declares it is
+    /// checked only at assembly.
     pub fn insert(&mut self, feature: &str) {
         self.0.insert(feature.to_string());
     }
+    /// Whether `feature` is on, i.e. its `// #if` sections are kept.
     pub fn contains(&self, feature: &str) -> bool {
         self.0.contains(feature)
     }
+    /// The features that are on, in sorted order.
     pub fn iter(&self) -> impl Iterator<Item = &str> {
         self.0.iter().map(String::as_str)
     }
@@ -87,14 +134,18 @@ impl fmt::Display for FeatureNames {
 pub struct SourceLine {
     /// 1-based line number in the module's file.
     pub line: usize,
+    /// The line as written, without its line ending.
     pub text: String,
 }
 
 /// A module after preprocessing: kept lines and its (kept) `#requires`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Preprocessed {
+    /// The name given by `// #provides NAME`, if the module has one (else its file stem names it).
     pub provides: Option<String>,
+    /// Module names from the `// #requires` lines in kept sections, in order of appearance.
     pub requires: Vec<String>,
+    /// The kept lines that are not directives, in file order.
     pub lines: Vec<SourceLine>,
 }
 
@@ -208,6 +259,8 @@ pub struct ShaderLibrary {
 /// An assembled program: WGSL source plus where each of its lines came from.
 #[derive(Debug, Clone)]
 pub struct Assembled {
+    /// The WGSL program: each module's kept lines after a `// ---- module NAME (FILE) ----`
+    /// header line, dependencies first.
     pub source: String,
     /// Modules in the order they were concatenated.
     pub modules: Vec<String>,

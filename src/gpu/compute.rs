@@ -19,8 +19,11 @@ pub const MIN_BUFFER_BYTES: u64 = 16;
 /// What kind of resource a binding declares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum BindingKind {
+    /// A `var<uniform>` buffer.
     Uniform,
+    /// A `var<storage>` buffer.
     Storage {
+        /// Declared without `write` access: the kernel only reads it.
         read_only: bool,
     },
     /// A `texture_2d<u32>` read with `textureLoad` (a scene table: `tables::TableForm`).
@@ -30,7 +33,9 @@ pub enum BindingKind {
 /// What one binding holds: a buffer, or a texture's view (`BindingKind::TextureU32`).
 #[derive(Debug)]
 pub enum BoundResource {
+    /// A uniform or storage buffer, bound whole.
     Buffer(wgpu::Buffer),
+    /// The view of a `texture_2d<u32>` table.
     Texture(wgpu::TextureView),
 }
 
@@ -47,7 +52,9 @@ impl BoundResource {
 /// A validated WGSL module: naga's IR plus its validation info.
 #[derive(Debug)]
 pub struct ValidatedModule {
+    /// The parsed module.
     pub module: naga::Module,
+    /// naga's analysis of it, per function and entry point (such as the globals each uses).
     pub info: naga::valid::ModuleInfo,
 }
 
@@ -79,7 +86,9 @@ pub fn validate_wgsl(label: &str, source: &str) -> Result<ValidatedModule, GpuEr
 /// One compute entry point, ready to dispatch.
 #[derive(Debug)]
 pub struct ComputeKernel {
+    /// The name given at compilation, used in errors and as the wgpu objects' label.
     pub label: String,
+    /// The compiled pipeline, whose layout is built from `layouts`.
     pub pipeline: wgpu::ComputePipeline,
     /// One layout per bind group index 0..=max declared (empty for unused indices).
     pub layouts: Vec<wgpu::BindGroupLayout>,

@@ -18,32 +18,93 @@ pub const LOOP_LIMITER_PROBE_TRIPS: u32 = 70_000;
 /// Everything that can go wrong on the GPU side, as values rather than panics.
 #[derive(Debug, Error)]
 pub enum GpuError {
+    /// wgpu found no adapter on any backend it tried: no GPU driver is installed, or
+    /// `WGPU_BACKEND` names none that has one. The CPU renderer still works.
     #[error("no GPU adapter found ({})", no_adapter_hint())]
     NoAdapter,
+    /// `--adapter` / `LUMEN_ADAPTER` names no adapter this machine has.
     #[error("no GPU adapter matches {wanted:?}; available adapters: {}", list_or_none(.available))]
-    AdapterNotFound { wanted: String, available: Vec<String> },
+    AdapterNotFound {
+        /// The name asked for (matched as a case-insensitive substring).
+        wanted: String,
+        /// Every adapter found, best first, as [`AdapterDescription`] displays it.
+        available: Vec<String>,
+    },
+    /// The adapter refused to open a device with its own limits and lumen's features.
     #[error("cannot open device on adapter {adapter:?}: {message}")]
-    RequestDevice { adapter: String, message: String },
+    RequestDevice {
+        /// The adapter's name.
+        adapter: String,
+        /// wgpu's reason.
+        message: String,
+    },
+    /// naga could not parse or validate WGSL.
     #[error("shader {label:?} does not compile:\n{message}")]
-    Shader { label: String, message: String },
+    Shader {
+        /// The shader's name; for an assembled program, the module file and line the error
+        /// points at where naga gives one (`shaders/csg.wgsl:12`).
+        label: String,
+        /// naga's diagnostic, with an excerpt of the source.
+        message: String,
+    },
+    /// A module has no `@compute` entry point of the name asked for.
     #[error("shader {label:?} has no compute entry point {entry:?}")]
-    NoEntryPoint { label: String, entry: String },
-    #[error("shader {label:?}: binding @group({group}) @binding({binding}) is a {kind}, which the compute runner does not bind (only uniform and storage buffers)")]
-    UnsupportedBinding { label: String, group: u32, binding: u32, kind: String },
+    NoEntryPoint {
+        /// The shader's name.
+        label: String,
+        /// The entry point asked for.
+        entry: String,
+    },
+    /// A kernel declares a binding the compute runner cannot bind (only uniform and storage
+    /// buffers and 2D `u32` textures are).
+    #[error("shader {label:?}: binding @group({group}) @binding({binding}) is a {kind}, which the compute runner does not bind (only uniform and storage buffers and 2D u32 textures)")]
+    UnsupportedBinding {
+        /// The shader's name.
+        label: String,
+        /// The binding's `@group` index.
+        group: u32,
+        /// The binding's `@binding` index within its group.
+        binding: u32,
+        /// Its address space, as naga debug-prints it.
+        kind: String,
+    },
+    /// A wgpu validation error, or a request lumen's GPU code refuses itself: bind groups that
+    /// do not match a kernel's declarations, more bind groups or storage buffers than the
+    /// adapter allows, a scene that cannot be packed, a render plan out of range.
     #[error("GPU validation error: {0}")]
     Validation(String),
+    /// wgpu could not allocate device memory (or a render its host-side accumulator).
     #[error("GPU out of memory: {0}")]
     OutOfMemory(String),
+    /// wgpu's internal error, or an inconsistency in lumen's GPU code (a missing kernel,
+    /// queue or bind group).
     #[error("GPU internal error: {0}")]
     Internal(String),
+    /// The device was lost (driver reset, crash) or waiting on it failed: everything after
+    /// is meaningless, so [`Gpu::check`] reports it before any other error.
     #[error("GPU device lost: {0}")]
     DeviceLost(String),
+    /// Mapping a buffer for reading on the host failed, or a read asked for more than the
+    /// buffer holds.
     #[error("reading a GPU buffer back failed: {0}")]
     Readback(String),
+    /// Assembling a kernel's WGSL from `shaders/` failed.
     #[error(transparent)]
     Assemble(#[from] super::assemble::AssembleError),
+    /// A buffer, texture or packed scene table exceeds one of the adapter's size limits (the
+    /// path state of a batch is first retried with fewer slots).
     #[error("{what} needs {needed} bytes but this adapter allows at most {limit} bytes per {limit_name}")]
-    TooLarge { what: String, needed: u64, limit: u64, limit_name: &'static str },
+    TooLarge {
+        /// The buffer's or texture's label, or the scene table's description.
+        what: String,
+        /// Bytes it needs.
+        needed: u64,
+        /// Bytes the limit allows.
+        limit: u64,
+        /// The wgpu limit that applies: "storage buffer binding", "buffer", "uniform buffer
+        /// binding" or "2D texture".
+        limit_name: &'static str,
+    },
     /// A ray passed more hidden crossings of a CSG tree than its kernels walk without the
     /// sweeps: the render starts again with them (`gpu::render`; never returned from it).
     #[error("a CSG query exceeded the walk budget of kernels without sweeps")]
@@ -102,10 +163,16 @@ impl AdapterChoice {
 /// One adapter as `lumen devices` reports it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct AdapterDescription {
+    /// The adapter's name as the driver reports it (`llvmpipe (LLVM 15.0.6, 256 bits)`), which
+    /// `--adapter` matches against.
     pub name: String,
+    /// The graphics API wgpu reaches it through (Vulkan, Metal, DX12, OpenGL).
     pub backend: wgpu::Backend,
+    /// Discrete, integrated, virtual, CPU (software) or other.
     pub device_type: wgpu::DeviceType,
+    /// The driver's name (`llvmpipe`), possibly empty.
     pub driver: String,
+    /// The driver's version details (`Mesa 25.0.7 (LLVM 15.0.6)`), possibly empty.
     pub driver_info: String,
 }
 
@@ -408,8 +475,12 @@ struct ErrorSink {
 /// An open device on one adapter, plus what a renderer needs to know about it.
 #[derive(Debug)]
 pub struct Gpu {
+    /// The logical device: creates buffers, textures and pipelines. Its uncaptured errors and
+    /// loss are recorded for [`Gpu::check`] instead of panicking.
     pub device: wgpu::Device,
+    /// The device's only queue, which every submission goes through.
     pub queue: wgpu::Queue,
+    /// What the chosen adapter reports of itself: name, backend, type, driver.
     pub adapter_info: wgpu::AdapterInfo,
     /// The limits the device was opened with: the adapter's own, not wgpu's defaults, so
     /// that large scenes (big storage buffers) fit wherever the hardware allows.

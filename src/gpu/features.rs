@@ -12,6 +12,8 @@ use crate::scene::{Environment, Pigment, Renderer, Scene, Shape, ShapeKind};
 /// kernel is sized for the worst scene it accepts; these cover every example scene, and a
 /// scene with larger bounds raises them.
 pub const FULL_CSG_MAX_LEAVES: u32 = 16;
+/// The least CSG tree depth (CSG nodes on the longest root-to-leaf path) a full-featured
+/// kernel's evaluation stack is sized for; see [`FULL_CSG_MAX_LEAVES`].
 pub const FULL_CSG_MAX_DEPTH: u32 = 8;
 
 /// Environment kinds, for specialisation.
@@ -20,8 +22,12 @@ pub enum EnvKind {
     /// No environment: escaping rays see the renderer's background colour.
     #[default]
     Background,
+    /// One colour in every direction (`Environment::Uniform`).
     Uniform,
+    /// Zenith, horizon and nadir colours blended by direction (`Environment::Gradient`).
     Gradient,
+    /// An equirectangular HDR image, looked up per direction and importance-sampled
+    /// (`Environment::Image`).
     Image,
     /// Any of the above, chosen at run time by the packed `environment.kind` (the shaders
     /// already branch on it): what a full-featured kernel compiles, so one kernel per
@@ -154,9 +160,13 @@ const _: () = assert!(BRDF_KINDS == crate::gpu::layout::brdf_kind::COUNT as usiz
 /// Integrator kinds, for specialisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum RendererKind {
+    /// `on` colour where a camera ray hits anything, `off` elsewhere (`Renderer::OnOff`).
     OnOff,
+    /// Emission plus pigment colour at the first hit (`Renderer::Flat`).
     Flat,
+    /// Direct light from point lights plus an ambient term (`Renderer::PointLight`).
     PointLight,
+    /// The Monte Carlo path tracer, with next-event estimation where enabled.
     #[default]
     PathTracer,
 }
@@ -165,9 +175,13 @@ pub enum RendererKind {
 /// [`FeatureSet::of`]; any value (even one no scene produces) assembles to valid WGSL.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct FeatureSet {
+    /// Some primitive is a sphere (a CSG leaf included).
     pub sphere: bool,
+    /// Some primitive is an infinite plane (a CSG leaf included).
     pub plane: bool,
+    /// Some primitive is a cube (a CSG leaf included).
     pub cube: bool,
+    /// Some primitive is a cylinder (a CSG leaf included).
     pub cylinder: bool,
     /// Some top-level shape is a CSG tree.
     pub csg: bool,
@@ -188,11 +202,21 @@ pub struct FeatureSet {
     /// Top-level CSG trees: up to `prepare::CSG_DEFER_MAX` of them are evaluated after the BVH
     /// traversal rather than inside it (as `cpu::World` does; DESIGN.md "Software adapters").
     pub csg_trees: u32,
+    /// Some material in use has a uniform pigment (as its BRDF's colour or its emission);
+    /// the pigment flags are off where the kernel reads no materials ([`Self::materials`]).
     pub pigment_uniform: bool,
+    /// Some material in use has a checkered pigment (BRDF colour or emission).
     pub pigment_checkered: bool,
+    /// Some material in use has an image pigment (BRDF colour or emission).
     pub pigment_image: bool,
+    /// Some material in use is Lambertian diffuse. The BRDF flags are set only for
+    /// integrators that evaluate BRDFs (path tracer, point lights).
     pub diffuse: bool,
+    /// Some material in use is a perfect mirror (path tracer only: a delta BRDF adds nothing
+    /// to point-light shading).
     pub specular: bool,
+    /// Some material in use is a smooth dielectric (roughness 0; path tracer only, as for
+    /// `specular`).
     pub dielectric: bool,
     /// GGX conductors (rough or smooth).
     pub conductor: bool,
@@ -200,7 +224,11 @@ pub struct FeatureSet {
     pub rough_dielectric: bool,
     /// Plastics (rough or smooth coat).
     pub plastic: bool,
+    /// The scene has point lights and the renderer uses them (point-light renderer or path
+    /// tracer).
     pub point_lights: bool,
+    /// The path tracer samples emissive spheres, cubes or meshes as lights: `nee` is on and
+    /// the scene has some such emitter.
     pub area_lights: bool,
     /// Some area light is a sphere (sampled by its cone, or uniformly from inside).
     pub sphere_lights: bool,
@@ -209,7 +237,10 @@ pub struct FeatureSet {
     /// Some area light is a triangle mesh (sampled by its triangles' areas). Without
     /// sphere or cube lights, the primitive lights' code is left out (PRIMITIVE_LIGHTS).
     pub mesh_lights: bool,
+    /// What escaping rays see; [`EnvKind::Background`] for the OnOff renderer, which shows
+    /// no environment.
     pub environment: EnvKind,
+    /// The integrator; a kernel holds exactly one.
     pub renderer: RendererKind,
     /// Triangle mesh instances (bottom-level BVHs under the top-level one).
     pub mesh: bool,
@@ -740,6 +771,7 @@ impl FeatureSet {
 }
 
 impl RendererKind {
+    /// The kind of the scene's renderer, without its settings.
     pub fn of(r: &Renderer) -> Self {
         match r {
             Renderer::OnOff { .. } => RendererKind::OnOff,

@@ -21,6 +21,7 @@ pub struct KernelCache {
 }
 
 impl KernelCache {
+    /// An empty cache.
     pub fn new() -> Self {
         Self::default()
     }
@@ -56,6 +57,7 @@ impl KernelCache {
         self.kernels.len()
     }
 
+    /// Whether the cache holds no kernel yet.
     pub fn is_empty(&self) -> bool {
         self.kernels.is_empty()
     }

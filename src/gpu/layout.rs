@@ -21,9 +21,13 @@ pub const CSG_NODE_BIT: u32 = 0x8000_0000;
 
 /// `Shape::kind` values (the order of `ShapeKind::ALL`).
 pub mod shape_kind {
+    /// The unit sphere: radius 1 at the origin.
     pub const SPHERE: u32 = 0;
+    /// The plane z = 0 with normal +z (the half-space z ≤ 0 inside CSG).
     pub const PLANE: u32 = 1;
+    /// The unit cube [−0.5, 0.5]³.
     pub const CUBE: u32 = 2;
+    /// The capped cylinder of axis z, radius 0.5, z ∈ [−0.5, 0.5].
     pub const CYLINDER: u32 = 3;
     /// A triangle mesh instance: `Shape::mesh` says where its bottom-level BVH starts.
     pub const MESH: u32 = 4;
@@ -41,12 +45,18 @@ pub mod mesh_bits {
 /// Per triangle, in `tri_positions`: three vec4 (the vertices, object space); in
 /// `tri_shading`: five vec4 (three vertex normals, then uv0 uv1 and uv2).
 pub const TRI_POSITION_VEC4S: u32 = 3;
+/// Per triangle, the vec4 in `tri_shading`: three vertex normals (zero when the file has
+/// none), then (u0, v0, u1, v1) and (u2, v2, 0, 0).
 pub const TRI_SHADING_VEC4S: u32 = 5;
 /// CSG operations, as the program's BEGIN instructions carry them.
 pub mod csg_op {
+    /// Union keeping every child's surfaces (`CsgOp::Unite`).
     pub const UNITE: u32 = 0;
+    /// Points inside every child.
     pub const INTERSECT: u32 = 1;
+    /// Points inside the first child and outside all the others.
     pub const DIFF: u32 = 2;
+    /// Union without the inner surfaces (`CsgOp::Fuse`).
     pub const FUSE: u32 = 3;
 }
 /// A CSG tree's program (`CsgTree::program`): its nodes and leaves depth first, one
@@ -54,9 +64,13 @@ pub mod csg_op {
 /// opens a node, END closes the innermost open one, LEAF stands for the next leaf (leaves
 /// are shapes `first_leaf`, `first_leaf + 1`, ... in program order).
 pub mod csg_instr {
+    /// The next leaf shape of the tree.
     pub const LEAF: u32 = 0;
+    /// Closes the innermost open node.
     pub const END: u32 = 1;
+    /// Opens a node; the instruction is `BEGIN + op`, `op` a `csg_op` value.
     pub const BEGIN: u32 = 2;
+    /// Width of one instruction in a program word.
     pub const BITS: u32 = 4;
     /// Instructions per program word.
     pub const PER_WORD: u32 = 32 / BITS;
@@ -69,16 +83,24 @@ pub mod csg_instr {
 /// in the low `OP_BITS`, `FIRST_CHILD` when it is its parent's first child, and its child
 /// count from `CHILDREN_SHIFT` up. After the nodes, one word per leaf: its node's number.
 pub mod csg_sweep {
+    /// Trees of more leaves than this get a sweep table; smaller ones are only walked.
     pub const MIN_LEAVES: u32 = 64;
+    /// The parent word of the root node.
     pub const NO_PARENT: u32 = 0xFFFF_FFFF;
+    /// Mask of the node's `csg_op` in its second word (0 for a leaf).
     pub const OP_BITS: u32 = 0x3;
+    /// Set in the second word of a node that is its parent's first child.
     pub const FIRST_CHILD: u32 = 0x4;
+    /// Shift of the child count in the second word.
     pub const CHILDREN_SHIFT: u32 = 3;
 }
 /// `Material::brdf` values.
 pub mod brdf_kind {
+    /// Lambertian.
     pub const DIFFUSE: u32 = 0;
+    /// Perfect mirror tinted by the pigment.
     pub const SPECULAR: u32 = 1;
+    /// Smooth dielectric: delta Fresnel reflection and refraction (roughness 0).
     pub const DIELECTRIC: u32 = 2;
     /// GGX conductor, rough or smooth (α = 0: a delta reflection with its Fresnel).
     pub const CONDUCTOR: u32 = 3;
@@ -111,22 +133,33 @@ pub mod brdf_kind {
 }
 /// `Pigment::kind` values.
 pub mod pigment_kind {
+    /// One colour, `Pigment::a`.
     pub const UNIFORM: u32 = 0;
+    /// `n × n` squares per unit of uv alternating `a` and `b`.
     pub const CHECKERED: u32 = 1;
+    /// An image texture in `floats`.
     pub const IMAGE: u32 = 2;
 }
-/// `Environment::kind` values (`NONE_ENV`: escaping rays see the background colour).
+/// `Environment::kind` values. A scene without an environment is packed as a `UNIFORM` one
+/// of the renderer's background colour, so every kernel has one; 0, a zeroed struct's kind,
+/// names none.
 pub mod environment_kind {
-    pub const NONE_ENV: u32 = 0;
+    /// One radiance in every direction, `Environment::a`.
     pub const UNIFORM: u32 = 1;
+    /// Blend of zenith, horizon and nadir colours by the direction's z.
     pub const GRADIENT: u32 = 2;
+    /// An equirectangular image in `floats`, with its importance-sampling tables.
     pub const IMAGE: u32 = 3;
 }
 /// `Settings::renderer` values.
 pub mod renderer_kind {
+    /// One colour where the camera ray hits anything, another elsewhere.
     pub const ON_OFF: u32 = 0;
+    /// Emitted plus pigment colour at the first hit.
     pub const FLAT: u32 = 1;
+    /// Direct light from the point lights plus an ambient term.
     pub const POINT_LIGHT: u32 = 2;
+    /// The wavefront path tracer.
     pub const PATH_TRACER: u32 = 3;
 }
 /// `Settings::jitter` values: how camera sample j is placed in its pixel.
@@ -143,8 +176,11 @@ pub mod jitter_mode {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Affine {
+    /// First row: the mapped x of a point p is `r0.xyz · p + r0.w`.
     pub r0: [f32; 4],
+    /// Second row: the mapped y.
     pub r1: [f32; 4],
+    /// Third row: the mapped z.
     pub r2: [f32; 4],
 }
 
@@ -159,18 +195,27 @@ impl Affine {
     }
 }
 
+/// One unit primitive or mesh instance placed in the camera frame: a top-level shape or a
+/// CSG leaf (WGSL `Shape`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Shape {
+    /// Camera frame to object space: the f64 inverse of `to_world`, rounded to f32.
     pub to_object: Affine,
+    /// Object space to the camera frame.
     pub to_world: Affine,
+    /// A `shape_kind` value.
     pub kind: u32,
+    /// Index in `materials`.
     pub material: u32,
+    /// Index in `area_lights` when the shape is emissive and sampled as a light, else [`NONE`].
     pub light: u32,
     /// Mesh instances: `mesh_bits` (root node and flags); 0 for primitives.
     pub mesh: u32,
 }
 
+/// A top-level CSG tree: its bounds, its program (`csg_instr`), its contiguous run of leaf
+/// shapes and its optional sweep table (WGSL `CsgTree`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct CsgTree {
@@ -179,11 +224,13 @@ pub struct CsgTree {
     pub min: [f32; 3],
     /// Index in `indices` of the program's first word.
     pub program: u32,
+    /// Upper corner of the bounds (`min` is the lower one), camera frame.
     pub max: [f32; 3],
     /// Instructions in the program.
     pub length: u32,
     /// Shape index of the first leaf.
     pub first_leaf: u32,
+    /// Number of leaves: shapes `first_leaf .. first_leaf + leaf_count`.
     pub leaf_count: u32,
     /// Index in `indices` of the tree's sweep table (`csg_sweep`), 0 when it has none.
     pub sweep: u32,
@@ -191,21 +238,29 @@ pub struct CsgTree {
     pub node_count: u32,
 }
 
+/// A material: its BSDF kind and constants, and its pigments (WGSL `Material`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Material {
+    /// A `brdf_kind` value.
     pub brdf: u32,
+    /// Index in `pigments` of the colour that tints the BSDF.
     pub pigment: u32,
+    /// Index in `pigments` of the emitted radiance.
     pub emitted: u32,
+    /// Dielectrics and plastic: index of refraction, inside over outside; 1 for the others.
     pub ior: f32,
     /// GGX α of the microfacet kinds (0: smooth).
     pub alpha: f32,
     /// Offset in `floats` of the material's energy-table rows (`pack::pack_material`).
     pub rows: u32,
+    /// Padding, so that `eta` starts on 16 bytes as WGSL's vec4 does.
     pub _pad0: u32,
+    /// Padding (see `_pad0`).
     pub _pad1: u32,
     /// Conductor: complex index η and k per channel; `eta[3]` is 1 when given (else F = 1).
     pub eta: [f32; 4],
+    /// Conductor: the extinction coefficient k per channel (rgb; w is 0).
     pub k: [f32; 4],
     /// Compensation constants (`optics::compensation`): conductor, the lobe scale per
     /// channel; rough dielectric entering (η = ior), (k_t, reflect, transmit); plastic,
@@ -215,18 +270,29 @@ pub struct Material {
     pub lobe_back: [f32; 4],
 }
 
+/// A colour over a surface's uv: uniform, checkered or an image (WGSL `Pigment`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Pigment {
+    /// Uniform: the colour; checkered: the `on` colour (rgb, w unused).
     pub a: [f32; 4],
+    /// Checkered: the `off` colour.
     pub b: [f32; 4],
+    /// A `pigment_kind` value.
     pub kind: u32,
+    /// Checkered: squares per unit of u and of v.
     pub n: u32,
+    /// Image: an `image_filter_kind` value.
     pub image_filter: u32,
+    /// Image: offset in `floats` of the texels (rgb triples, row 0 at the top).
     pub tex_offset: u32,
+    /// Image: width in texels.
     pub tex_width: u32,
+    /// Image: height in texels.
     pub tex_height: u32,
+    /// Padding to a multiple of 16 bytes (the WGSL struct's alignment).
     pub _pad0: u32,
+    /// Padding (see `_pad0`).
     pub _pad1: u32,
 }
 
@@ -235,8 +301,12 @@ pub struct Pigment {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct AreaLight {
+    /// Centre (xyz, camera frame) and radius (w) of a sphere placed by a similarity; all 0
+    /// otherwise.
     pub sphere: [f32; 4],
+    /// Index in `shapes` of the emissive shape (a sphere, a cube or a mesh instance).
     pub shape: u32,
+    /// |determinant| of the linear part of the shape's object-to-world map.
     pub det: f32,
     /// Cubes and meshes: the world surface area.
     pub area: f32,
@@ -249,53 +319,85 @@ pub struct AreaLight {
     pub mesh_triangles: u32,
     /// Cubes: bit `axis` set where `prepare::AreaLight::rectangular_faces[axis]`.
     pub rectangular_faces: u32,
+    /// Padding to a multiple of 16 bytes (the WGSL struct's alignment).
     pub _pad0: u32,
+    /// Padding (see `_pad0`).
     pub _pad1: u32,
+    /// Padding (see `_pad0`).
     pub _pad2: u32,
 }
 
+/// A point light (WGSL `PointLight`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct PointLight {
+    /// Position (xyz, camera frame) and, in w, the light's `linear_radius`.
     pub position: [f32; 4],
+    /// Emitted colour (rgb, w is 0).
     pub color: [f32; 4],
 }
 
+/// What escaping rays see (WGSL `Environment`); without a scene environment, a uniform one
+/// of the renderer's background colour.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Environment {
+    /// Uniform: the radiance; gradient: the zenith colour (rgb, w unused).
     pub a: [f32; 4],
+    /// Gradient: the horizon colour.
     pub b: [f32; 4],
+    /// Gradient: the nadir colour.
     pub c: [f32; 4],
+    /// An `environment_kind` value.
     pub kind: u32,
+    /// Image: width in texels.
     pub tex_width: u32,
+    /// Image: height in texels.
     pub tex_height: u32,
+    /// Image: offset in `floats` of the texels (rgb triples, row 0 at the top).
     pub tex_offset: u32,
+    /// Image: the factor its texels are scaled by (1 for the other kinds).
     pub intensity: f32,
+    /// Image: rotation of the map about the z axis, in radians.
     pub rotation_rad: f32,
+    /// Image: offset in `floats` of the importance-sampling tables (`Distribution2D::packed`).
     pub dist_offset: u32,
+    /// 1 when next-event estimation samples the environment (it is not black), else 0.
     pub is_light: u32,
 }
 
+/// The camera (WGSL `Camera`), with `scene::Camera`'s conventions: it looks along +x of
+/// its own space, z up.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Camera {
+    /// Camera space to the camera frame (the packed coordinates, whose origin is the eye or
+    /// the centre of the orthogonal ray plane).
     pub to_world: Affine,
+    /// A `projection_kind` value.
     pub projection: u32,
+    /// Screen width over height: the screen spans y ∈ [−aspect_ratio, aspect_ratio],
+    /// z ∈ [−1, 1] in camera space.
     pub aspect_ratio: f32,
+    /// Perspective: the eye's distance behind the screen (at x = 0); 0 for orthogonal.
     pub screen_distance: f32,
+    /// Padding to a multiple of 16 bytes (the WGSL struct's alignment).
     pub _pad: u32,
 }
 
 /// `Camera::projection` values.
 pub mod projection_kind {
+    /// Rays from the eye at (−screen_distance, 0, 0) through the screen.
     pub const PERSPECTIVE: u32 = 0;
+    /// Parallel rays along +x from the plane x = −1.
     pub const ORTHOGONAL: u32 = 1;
 }
 
 /// `Pigment::image_filter` values.
 pub mod image_filter_kind {
+    /// The texel containing (u, v).
     pub const NEAREST: u32 = 0;
+    /// Bilinear between the four nearest texel centres, wrapping in u and clamping in v.
     pub const BILINEAR: u32 = 1;
 }
 
@@ -398,7 +500,6 @@ pub fn tags_wgsl() -> String {
         (
             "ENV",
             &[
-                ("NONE", environment_kind::NONE_ENV),
                 ("UNIFORM", environment_kind::UNIFORM),
                 ("GRADIENT", environment_kind::GRADIENT),
                 ("IMAGE", environment_kind::IMAGE),
@@ -459,33 +560,57 @@ pub fn tags_wgsl() -> String {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Settings {
+    /// On-off: the colour where the camera ray hits (`on`); flat, point-light and path
+    /// tracer: the background, which escaping rays read from `Environment` instead.
     pub color0: [f32; 4],
+    /// On-off: the colour where it misses (`off`); point-light: the ambient term added at
+    /// every hit; black for the others.
     pub color1: [f32; 4],
+    /// The tracer's PCG seed as `PcgSeed::words` (state lo, state hi, inc lo, inc hi): the
+    /// camera's jitter and the path tracer's streams derive from it.
     pub tracer_seed: [u32; 4],
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// A `renderer_kind` value.
     pub renderer: u32,
+    /// Stratified jitter: s of the s×s strata per pixel; 0 for the other modes.
     pub samples_per_side: u32,
+    /// A `jitter_mode` value.
     pub jitter: u32,
+    /// Path tracer: independent paths per camera sample; 1 for the other renderers.
     pub paths_per_sample: u32,
+    /// Path tracer: the last bounce (the camera hit is bounce 0), so a path has at most
+    /// `max_depth + 1` surface hits; 0 for the other renderers.
     pub max_depth: u32,
+    /// Path tracer: Russian roulette applies at bounces ≥ this.
     pub roulette_depth: u32,
+    /// 1 when the path tracer uses next-event estimation with MIS, else 0.
     pub nee: u32,
     /// Camera samples per pixel of the whole render.
     pub spp: u32,
     /// Ranges of the `indices` buffer (BVH leaf objects start at 0).
     pub plane_offset: u32,
+    /// Entries of the unbounded list at `plane_offset` (planes and unbounded CSG trees).
     pub plane_count: u32,
     /// log₂ of the strata per dimension of a path vertex (`sampling::strata_bits` of the
     /// pixel's samples: camera samples times paths per sample).
     pub strata_bits: u32,
+    /// Entries of `area_lights`.
     pub area_light_count: u32,
+    /// Entries of `point_lights`.
     pub point_light_count: u32,
+    /// Nodes of the top-level BVH at the start of `bvh_nodes` (the meshes' follow); 0 when
+    /// no bounded object is in it.
     pub bvh_node_count: u32,
     /// `sampling::seed_word` of the tracer's seed, for the strata's permutation keys.
     pub strata_seed: u32,
+    /// Padding to a multiple of 16 bytes (the WGSL struct's alignment).
     pub _pad1: u32,
+    /// Padding (see `_pad1`).
     pub _pad2: u32,
+    /// Padding (see `_pad1`).
     pub _pad3: u32,
 }
 

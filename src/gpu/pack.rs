@@ -34,17 +34,28 @@ use crate::scene::{Brdf, CsgOp, Environment, Pigment, Projection, Renderer, Scen
 /// A scene ready for upload: every buffer of `shaders/bindings.wgsl`.
 #[derive(Debug, Clone)]
 pub struct PackedScene {
+    /// What the kernels are specialised on: `FeatureSet::of` the scene's render form, with
+    /// the object lists the kernels may unroll (`listed`, `planes_listed`) set by the packer.
     pub features: FeatureSet,
+    /// The `settings` uniform: renderer, sampling and the ranges of the tables.
     pub settings: layout::Settings,
+    /// The `camera` uniform, in the camera frame.
     pub camera: layout::Camera,
+    /// The `environment` uniform.
     pub environment: layout::Environment,
+    /// Top-level primitives and mesh instances, and each CSG tree's leaves (contiguous,
+    /// depth first), in scene order; an object reference without `CSG_NODE_BIT` indexes it.
     pub shapes: Vec<layout::Shape>,
     /// BVH leaf objects, then planes and CSG children (see `Settings`).
     pub indices: Vec<u32>,
     /// The scene's BVH, then each distinct mesh's, in the GPU's quantized form.
     pub bvh_nodes: Vec<QuantizedNode>,
+    /// The top-level CSG trees, indexed by object references with `CSG_NODE_BIT` set.
     pub csg_trees: Vec<layout::CsgTree>,
+    /// One per scene material, in the scene's order (`layout::Shape::material` indexes it).
     pub materials: Vec<layout::Material>,
+    /// Each material's BSDF pigment, then its emitted one (`layout::Material::pigment` and
+    /// `emitted` index them).
     pub pigments: Vec<layout::Pigment>,
     /// Texels, the environment's importance-sampling tables and mesh lights' CDFs.
     pub floats: Vec<f32>,
@@ -52,7 +63,10 @@ pub struct PackedScene {
     /// table of its own, small enough for a uniform buffer where `floats` is not (an image
     /// environment makes it megabytes).
     pub rows: Vec<f32>,
+    /// The scene's point lights, in the camera frame.
     pub point_lights: Vec<layout::PointLight>,
+    /// The emissive spheres, cubes and mesh instances that next-event estimation samples,
+    /// in `Scene::area_lights` order (`layout::Shape::light` indexes it).
     pub area_lights: Vec<layout::AreaLight>,
     /// Triangles of every distinct mesh, in bottom-level BVH leaf order
     /// (`layout::TRI_POSITION_VEC4S` vec4 each, object space).
@@ -85,8 +99,19 @@ pub const MAX_CSG_POOL: usize = 1 << 19;
 /// Why a scene cannot be packed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PackError {
+    /// The scene has more of something than the GPU renderer's buffers or index encodings
+    /// can address (shapes, BVH nodes, triangles, samples per pixel, CSG pool entries, ...).
     #[error("{what}: {count} exceeds the GPU renderer's limit of {limit}")]
-    TooMany { what: &'static str, count: usize, limit: usize },
+    TooMany {
+        /// What was counted, for the message.
+        what: &'static str,
+        /// How many the scene needs.
+        count: usize,
+        /// The most the GPU renderer allows.
+        limit: usize,
+    },
+    /// The scene fails validation, or the packer meets what it cannot represent (a mesh as
+    /// a CSG operand, an emissive surface of zero area).
     #[error("invalid scene: {0}")]
     Scene(#[from] crate::scene::SceneError),
     /// f32 cannot hold the shape's placement: rounding its transform would give ±∞ and a
@@ -99,15 +124,40 @@ pub enum PackError {
         .shape + 1,
         part_text(*.part)
     )]
-    OutOfRange { shape: usize, part: Option<usize>, what: &'static str, magnitude: f64 },
+    OutOfRange {
+        /// The shape's index in spawn order, from 0 (the message counts from 1).
+        shape: usize,
+        /// Which part of a split top-level UNITE, from 0; `None` for a shape not split.
+        part: Option<usize>,
+        /// What overflowed: the shape's kind (`"sphere"`, ...), a CSG leaf's, or `"mesh instance"`.
+        what: &'static str,
+        /// The largest |entry| of its object-to-camera-frame matrix; ∞ for a shape other
+        /// than a plane or CSG tree whose bounds are infinite.
+        magnitude: f64,
+    },
     /// A mesh file's vertex or texture coordinate beyond f32's range (the GPU stores the
     /// triangles in object space as f32; the file is finite in f64, so it loads).
     #[error("mesh {file}: a {what} reaches {magnitude:e}, beyond f32's range (±3.4e38) that the GPU stores meshes in")]
-    MeshOutOfRange { file: String, what: &'static str, magnitude: f64 },
+    MeshOutOfRange {
+        /// The mesh file as the script named it.
+        file: String,
+        /// Which coordinate: a vertex coordinate (in object space or in the camera frame)
+        /// or a texture coordinate.
+        what: &'static str,
+        /// The largest |coordinate| found.
+        magnitude: f64,
+    },
     /// A table outgrows what one binding of the adapter holds ([`TableLimit`]); `needed` is
     /// the table's size up to the part that would not fit, so a lower bound.
     #[error("{} needs {needed} bytes but this adapter allows at most {} bytes per {}", .table.described(), .limit.bytes, .limit.name)]
-    TooLarge { table: Table, needed: u64, limit: TableLimit },
+    TooLarge {
+        /// The table that would not fit.
+        table: Table,
+        /// Its size in bytes up to the part refused (a lower bound).
+        needed: u64,
+        /// The adapter's limit it outgrew.
+        limit: TableLimit,
+    },
 }
 
 /// The most bytes one table (one storage buffer) may take on the adapter a scene is packed
@@ -121,7 +171,10 @@ pub enum PackError {
 /// passes [`TableLimit::NONE`] then).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableLimit {
+    /// The most bytes one table may take.
     pub bytes: u64,
+    /// The name of the adapter limit that sets it, for messages (e.g. "storage buffer
+    /// binding").
     pub name: &'static str,
 }
 

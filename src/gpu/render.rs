@@ -157,6 +157,8 @@ pub struct GpuRenderOutput {
     pub image: HdrImage,
     /// Camera samples per pixel taken (fewer than requested after a time limit or Ctrl-C).
     pub spp_done: u32,
+    /// Camera samples per pixel asked for: the tracer's or `--spp`'s count, cut to
+    /// [`GpuRenderOptions::samples`].
     pub spp_requested: u32,
     /// Wall time, including packing and kernel compilation.
     pub seconds: f64,
@@ -167,6 +169,7 @@ pub struct GpuRenderOutput {
     pub kernels_compiled: usize,
     /// Path (or camera-sample) estimates that were NaN or infinite, written as 0.
     pub non_finite_samples: u64,
+    /// Why the render ended: all samples taken, the time limit, or a cancel.
     pub stop: StopReason,
     /// Features the kernels were compiled for (the scene's, or the override), leaving out
     /// the choices made for the adapter: the table placement, which is [`Self::tables`],
@@ -395,6 +398,7 @@ struct TwinCache {
 }
 
 impl GpuRenderer {
+    /// A renderer with no kernels cached yet (the first render compiles its stages).
     pub fn new() -> Self {
         Self::default()
     }

@@ -31,14 +31,21 @@ pub const UNIFORM_TABLE_BYTES: usize = 65536;
 /// A read-only group-1 table that may live in a uniform buffer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Table {
+    /// Placed primitives, mesh instances and CSG leaves ([`layout::Shape`]).
     Shapes,
     /// Object references (u32), packed four to a `vec4<u32>` in the uniform form.
     Indices,
+    /// The quantized BVH nodes, top level then each mesh's ([`QuantizedNode`]).
     BvhNodes,
+    /// The top-level CSG trees ([`layout::CsgTree`]).
     CsgTrees,
+    /// [`layout::Material`], one per scene material.
     Materials,
+    /// [`layout::Pigment`], two per material (its BSDF's and its emitted one).
     Pigments,
+    /// [`layout::PointLight`], in the camera frame.
     PointLights,
+    /// [`layout::AreaLight`], the emissive shapes next-event estimation samples.
     AreaLights,
     /// Texels and sampling tables (f32), packed four to a `vec4<f32>` in the uniform form.
     Floats,
@@ -51,6 +58,7 @@ pub enum Table {
 }
 
 impl Table {
+    /// Every table, in declaration order.
     pub const ALL: [Table; 12] = [
         Table::Shapes,
         Table::Indices,
@@ -341,7 +349,11 @@ pub enum TablePlacement {
 /// of a 2D texture (0: no texture tables on this adapter).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableLimits {
+    /// The adapter's `max_uniform_buffer_binding_size`, in bytes: uniform tables need at
+    /// least [`UNIFORM_TABLE_BYTES`].
     pub max_uniform_bytes: u64,
+    /// The most rows of [`TEXTURE_ROW_TEXELS`] texels a table texture may have (the
+    /// adapter's `max_texture_dimension_2d`); 0 disables texture tables.
     pub max_texture_rows: u32,
 }
 

@@ -72,7 +72,12 @@ pub struct Unrolled {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum UnrolledEntry {
     /// Shape `index` of kind `kind` (`layout::shape_kind`).
-    Shape { index: u32, kind: u32 },
+    Shape {
+        /// The shape's index in `shapes` (its object reference).
+        index: u32,
+        /// Its `layout::shape_kind`.
+        kind: u32,
+    },
     /// A CSG tree, by its reference (`CSG_NODE_BIT` | tree index).
     Csg(u32),
 }

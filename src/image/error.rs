@@ -14,24 +14,84 @@ use super::tone_map::ToneMapError;
 /// only `{err}` still tells the user everything.
 #[derive(Debug, Error)]
 pub enum ImageError {
+    /// The file's extension names no format lumen reads or writes (see [`SUPPORTED_EXTENSIONS`]).
     #[error("{}: {}", path.display(), describe_extension(ext))]
-    UnsupportedExtension { path: PathBuf, ext: Option<String> },
+    UnsupportedExtension {
+        /// The file that was to be read or written.
+        path: PathBuf,
+        /// The extension as given, without the dot and case kept; `None` when there is none.
+        ext: Option<String>,
+    },
+    /// The file could not be read: missing, unreadable, or not a regular file.
     #[error("cannot read {}: {cause}", path.display())]
-    Read { path: PathBuf, cause: std::io::Error },
+    Read {
+        /// The file being read.
+        path: PathBuf,
+        /// The error from the file system.
+        cause: std::io::Error,
+    },
+    /// The encoded image could not be written to its temporary file or renamed into place.
     #[error("cannot write {}: {cause}", path.display())]
-    Write { path: PathBuf, cause: std::io::Error },
+    Write {
+        /// The output file.
+        path: PathBuf,
+        /// The error from the file system.
+        cause: std::io::Error,
+    },
+    /// A `.pfm` file whose header or data is malformed.
     #[error("{}: invalid PFM file: {cause}", path.display())]
-    Pfm { path: PathBuf, cause: PfmError },
+    Pfm {
+        /// The file being read.
+        path: PathBuf,
+        /// What was wrong, with the byte offset where it starts.
+        cause: PfmError,
+    },
+    /// An OpenEXR, Radiance HDR, PNG or JPEG file that its decoder rejected (corrupt, a
+    /// variant it cannot read, or too large for this process's memory).
     #[error("{}: cannot decode {format} image: {message}", path.display())]
-    Decode { path: PathBuf, format: &'static str, message: String },
+    Decode {
+        /// The file being read.
+        path: PathBuf,
+        /// The format's name for messages (`ImageFormat::name`).
+        format: &'static str,
+        /// The decoder's explanation.
+        message: String,
+    },
+    /// The encoder for the output format failed; nothing was written.
     #[error("{}: cannot encode {format} image: {message}", path.display())]
-    Encode { path: PathBuf, format: &'static str, message: String },
+    Encode {
+        /// The output file.
+        path: PathBuf,
+        /// The format's name for messages (`ImageFormat::name`).
+        format: &'static str,
+        /// The encoder's explanation.
+        message: String,
+    },
+    /// The image read, or the one to write, is empty or over lumen's size limits.
     #[error("{}: {cause}", path.display())]
-    Size { path: PathBuf, cause: SizeError },
+    Size {
+        /// The file read or to be written.
+        path: PathBuf,
+        /// Which limit was broken, with the size.
+        cause: SizeError,
+    },
+    /// The tone mapping for an 8-bit output (PNG, JPEG) has a parameter out of range.
     #[error("{}: invalid tone mapping: {cause}", path.display())]
-    ToneMap { path: PathBuf, cause: ToneMapError },
+    ToneMap {
+        /// The output file.
+        path: PathBuf,
+        /// Why the tone mapping failed.
+        cause: ToneMapError,
+    },
+    /// A render shard (`lumen merge`'s input) that is not EXR, or whose lumen render metadata
+    /// is missing or invalid.
     #[error("{}: {message}", path.display())]
-    Metadata { path: PathBuf, message: String },
+    Metadata {
+        /// The shard file.
+        path: PathBuf,
+        /// What is missing or wrong.
+        message: String,
+    },
 }
 
 /// The extensions [`crate::image::read_image`] and [`crate::image::write_image`] accept.

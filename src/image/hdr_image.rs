@@ -91,18 +91,23 @@ impl HdrImage {
         Self { width, height, pixels }
     }
 
+    /// Number of columns, in pixels.
     pub fn width(&self) -> usize {
         self.width
     }
+    /// Number of rows, in pixels.
     pub fn height(&self) -> usize {
         self.height
     }
+    /// All pixels, row-major from the top-left: pixel (col, row) is at `row * width + col`.
     pub fn pixels(&self) -> &[Rgb32] {
         &self.pixels
     }
+    /// All pixels, mutable, in the order of [`pixels`](Self::pixels).
     pub fn pixels_mut(&mut self) -> &mut [Rgb32] {
         &mut self.pixels
     }
+    /// The pixel buffer, in the order of [`pixels`](Self::pixels), without copying it.
     pub fn into_pixels(self) -> Vec<Rgb32> {
         self.pixels
     }
@@ -115,6 +120,7 @@ impl HdrImage {
     pub fn get(&self, col: usize, row: usize) -> Rgb32 {
         self.pixels[self.offset(col, row)]
     }
+    /// Replaces the pixel at column `col`, row `row` (0 = top). Panics outside the image.
     pub fn set(&mut self, col: usize, row: usize, c: Rgb32) {
         let i = self.offset(col, row);
         self.pixels[i] = c;

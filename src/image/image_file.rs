@@ -77,6 +77,7 @@ pub fn is_hdr_path(path: &Path) -> bool {
 /// What [`write_image`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct WriteReport {
+    /// The format written, chosen by the path's extension.
     pub format: ImageFormat,
     /// Pixels with a NaN or infinite channel; they were written as black.
     pub non_finite: usize,

@@ -24,24 +24,73 @@ use crate::color::Rgb32;
 /// What was wrong with a PFM file; `at byte N` is the offset where the problem starts.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum PfmError {
+    /// The first line is not `PF` or `Pf`.
     #[error("bad magic at byte 0: expected \"PF\" (colour) or \"Pf\" (grey) on the first line, found {found:?}")]
-    BadMagic { found: String },
+    BadMagic {
+        /// The first line as read (lossy UTF-8), or the file's first 16 bytes when it has no
+        /// complete first line.
+        found: String,
+    },
+    /// The file ends, or 256 bytes pass without a newline, before a header line is complete.
     #[error(
         "header ends early at byte {offset}: no complete {what} line (a line ending in a newline within 256 bytes)"
     )]
-    MissingLine { offset: usize, what: &'static str },
+    MissingLine {
+        /// Byte offset where the missing line should start.
+        offset: usize,
+        /// Which header line: `"size"` or `"scale"`.
+        what: &'static str,
+    },
+    /// The size line is not two plain decimal integers.
     #[error("bad size line at byte {offset}: expected \"<width> <height>\" as two positive integers, found {found:?}")]
-    BadDimensions { offset: usize, found: String },
+    BadDimensions {
+        /// Byte offset of the size line.
+        offset: usize,
+        /// The line as read (lossy UTF-8 when it is not text).
+        found: String,
+    },
+    /// The size parsed but is empty or over lumen's limits ([`check_size`]).
     #[error("bad size at byte {offset}: {cause}")]
-    BadSize { offset: usize, cause: SizeError },
+    BadSize {
+        /// Byte offset of the size line.
+        offset: usize,
+        /// Which limit the size broke.
+        cause: SizeError,
+    },
+    /// The scale line is not a finite, non-zero number.
     #[error("bad scale line at byte {offset}: expected a finite non-zero number (negative = little-endian), found {found:?}")]
-    BadScale { offset: usize, found: String },
+    BadScale {
+        /// Byte offset of the scale line.
+        offset: usize,
+        /// The line as read (lossy UTF-8 when it is not text).
+        found: String,
+    },
+    /// Fewer bytes of samples follow the header than its size and channel count need.
     #[error(
         "pixel data at byte {offset} is {actual} bytes long, but a {width}×{height} {kind} image needs {expected}"
     )]
-    ShortData { offset: usize, width: usize, height: usize, kind: &'static str, expected: usize, actual: usize },
+    ShortData {
+        /// Byte offset where the pixel data starts (just after the header).
+        offset: usize,
+        /// Width from the header, in pixels.
+        width: usize,
+        /// Height from the header, in pixels.
+        height: usize,
+        /// `"colour"` (`PF`, three channels) or `"grey"` (`Pf`, one).
+        kind: &'static str,
+        /// Bytes of pixel data the header calls for.
+        expected: usize,
+        /// Bytes of pixel data present.
+        actual: usize,
+    },
+    /// More bytes follow the pixel data than the header accounts for.
     #[error("{extra} trailing bytes after the pixel data (which ends at byte {end})")]
-    TrailingData { end: usize, extra: usize },
+    TrailingData {
+        /// Byte offset where the pixel data should end.
+        end: usize,
+        /// Number of bytes after it.
+        extra: usize,
+    },
 }
 
 /// Longest header line we look for, so a binary file is rejected without a long scan.

@@ -37,10 +37,18 @@ pub struct RenderMetadata {
 /// Why a file's attributes are not lumen render metadata.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum MetadataError {
+    /// A required attribute, named here, is absent: the file was not written by `lumen render`.
     #[error("not written by lumen render (no `{0}` attribute)")]
     Missing(&'static str),
+    /// An attribute has the wrong type or an unreadable value, the sample ranges overlap or
+    /// are out of order, or `samplesPerPixel` disagrees with the ranges.
     #[error("attribute `{name}` is malformed: {value:?}")]
-    Malformed { name: &'static str, value: String },
+    Malformed {
+        /// The attribute's name in the EXR header.
+        name: &'static str,
+        /// What the file holds: the text of `lumen.samples`, else the value's `Debug` form.
+        value: String,
+    },
 }
 
 const SPP: &str = "samplesPerPixel";

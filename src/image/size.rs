@@ -11,10 +11,22 @@ pub const MAX_PIXELS: usize = 1 << 28;
 /// Why an image size was refused.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum SizeError {
+    /// A side is zero.
     #[error("image size {width}×{height} is empty (both sides must be at least 1)")]
-    Empty { width: usize, height: usize },
+    Empty {
+        /// Width asked for, in pixels.
+        width: usize,
+        /// Height asked for, in pixels.
+        height: usize,
+    },
+    /// A side is over [`MAX_SIDE`], or the pixel count is over [`MAX_PIXELS`].
     #[error("image size {width}×{height} is too large (at most {MAX_SIDE} per side and {MAX_PIXELS} pixels)")]
-    TooLarge { width: usize, height: usize },
+    TooLarge {
+        /// Width asked for, in pixels.
+        width: usize,
+        /// Height asked for, in pixels.
+        height: usize,
+    },
 }
 
 /// Decodes `bytes` as `format` with the `image` crate under lumen's limits rather than the

@@ -50,6 +50,7 @@ pub enum Curve {
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ToneMap {
+    /// Which pipeline runs; it decides which of the fields below are used.
     pub curve: Curve,
     /// Reinhard only: the key the image luminosity is normalised to (> 0).
     pub alpha: f32,
@@ -75,12 +76,16 @@ impl Default for ToneMap {
 /// Why a [`ToneMap`] was refused.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ToneMapError {
+    /// Reinhard's key `alpha` (the value given) is not a finite number above zero.
     #[error("alpha must be a finite number > 0, got {0}")]
     Alpha(f32),
+    /// Reinhard's `gamma` (the value given) is not a finite number above zero.
     #[error("gamma must be a finite number > 0, got {0}")]
     Gamma(f32),
+    /// A fixed Reinhard `luminosity` (the value given) is not a finite number above zero.
     #[error("luminosity must be a finite number > 0, got {0}")]
     Luminosity(f32),
+    /// The ACES or Exposure curve's `exposure` (the value given, in stops) is NaN or infinite.
     #[error("exposure must be a finite number of stops, got {0}")]
     Exposure(f32),
 }

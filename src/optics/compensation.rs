@@ -50,8 +50,12 @@ pub fn conductor_ms(t: &EnergyTables, alpha: f64, fresnel: Option<(Color, Color)
 /// reflected and the transmitted lobes (the latter with the 1/η² of radiance).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DielectricLobes {
+    /// Share of the lost energy returned by transmission: the probability with which the
+    /// compensation lobe's sampler goes below the surface.
     pub k_t: f64,
+    /// Scale of the reflected lobe: (1 − k_t) times [`ms_scale`] of this side's E_avg.
     pub reflect: f64,
+    /// Scale of the transmitted lobe: k_t times [`ms_scale`] of the far side's E_avg, over η².
     pub transmit: f64,
 }
 
@@ -85,10 +89,14 @@ pub fn dielectric_lobes(t: &EnergyTables, alpha: f64, eta: f64) -> DielectricLob
 /// `base`. `alpha` is `None` for a smooth coat.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlasticCoat {
+    /// r_i, the coat's reflectance for diffuse light arriving from the base below it.
     pub internal: f64,
+    /// Scale of the base's lobe: [`ms_scale`] of the coat's average reflected albedo.
     pub base: f64,
 }
 
+/// The [`PlasticCoat`] constants of a coat of GGX α `alpha` and relative index `eta` (a
+/// smooth coat, `None`, reads the tables at their smoothest α node).
 pub fn plastic_coat(t: &EnergyTables, alpha: Option<f64>, eta: f64) -> PlasticCoat {
     let avg = t.dielectric_average(alpha.unwrap_or(0.0), eta)[0];
     PlasticCoat { internal: 1.0 - (1.0 - avg) / (eta * eta), base: ms_scale(avg) }

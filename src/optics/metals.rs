@@ -12,8 +12,11 @@ use crate::color::Color;
 /// A named metal: its symbol, η and k per channel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Metal {
+    /// Chemical symbol, as SceneLang's `.metal` names it ("Au").
     pub name: &'static str,
+    /// Real part of the refractive index at the red, green and blue primaries.
     pub eta: Color,
+    /// Extinction coefficient (imaginary part of the index) at the same primaries.
     pub k: Color,
 }
 

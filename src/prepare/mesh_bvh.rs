@@ -37,6 +37,8 @@ fn key(mesh: &Arc<TriangleMesh>) -> usize {
 }
 
 impl MeshBvhs {
+    /// The BVHs of the meshes of the top-level `shapes`, built in parallel, one per distinct
+    /// mesh allocation.
     pub fn of(shapes: &[Shape]) -> Self {
         let mut out = Self::default();
         for s in shapes {

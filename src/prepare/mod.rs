@@ -38,7 +38,9 @@ pub const CSG_DEFER_MAX: usize = 16;
 /// neither.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneBvh {
+    /// BVH over the world bounds of the bounded shapes.
     pub bvh: Bvh,
+    /// Indices into `Scene::shapes` of the unbounded shapes, in scene order.
     pub unbounded: Vec<u32>,
 }
 
@@ -54,6 +56,7 @@ pub enum Placement {
 }
 
 impl Placement {
+    /// Where shape `s` goes, from its world bounds.
     pub fn of(s: &Shape) -> Self {
         let b = s.bounds();
         if b.is_empty() {
@@ -67,6 +70,8 @@ impl Placement {
 }
 
 impl SceneBvh {
+    /// Places each of `shapes` by [`Placement::of`] and builds the BVH over the bounded ones
+    /// (index i in the list is id i).
     pub fn from_shapes(shapes: &[Shape]) -> Self {
         let mut items = Vec::new();
         let mut unbounded = Vec::new();
@@ -112,6 +117,8 @@ pub const PLANE_PARALLEL_SLOPE: f64 = 1.0 / 1_048_576.0;
 /// their own Ω with the same numbers; the rule is deterministic per (point, face), so it is
 /// unbiased wherever it falls, and MIS applies it too.
 pub const SOLID_ANGLE_MIN: f64 = 1.0 / 16.0;
+/// The solid angle (steradians) above which a cube face is sampled by area again (see
+/// [`SOLID_ANGLE_MIN`]).
 pub const SOLID_ANGLE_MAX: f64 = 6.0;
 
 /// One area light, with what sampling needs precomputed.
@@ -119,8 +126,12 @@ pub const SOLID_ANGLE_MAX: f64 = 6.0;
 pub struct AreaLight {
     /// Index of the shape in [`Scene::shapes`].
     pub shape: u32,
+    /// The unit primitive, a sphere or a cube; mesh lights hold `Cube` here and are told
+    /// apart by [`AreaLight::mesh`].
     pub kind: ShapeKind,
+    /// Object-to-world transformation of the shape.
     pub transform: Transform,
+    /// The shape's (emissive) material.
     pub material: MaterialId,
     /// |det| of the linear part of the object-to-world transform.
     pub det: f64,
@@ -143,6 +154,7 @@ pub struct AreaLight {
 /// share of the world area, then a uniform point on it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshLight {
+    /// The instance's triangles, in object space (the light's `transform` places them).
     pub mesh: std::sync::Arc<crate::scene::TriangleMesh>,
     /// Cumulative world areas of the triangles (in the file's order) over the total: the
     /// last entry is 1.
@@ -162,7 +174,8 @@ impl MeshLight {
 }
 
 impl AreaLight {
-    /// The light for `Scene::shapes[shape]`, which must be a sphere or cube primitive.
+    /// The light for `Scene::shapes[shape]`, a sphere or cube primitive or a mesh instance;
+    /// `None` for any other shape and for a mesh whose placed area is 0 or not finite.
     pub fn new(scene: &Scene, shape: usize) -> Option<Self> {
         if let Shape::Mesh(m) = &scene.shapes[shape] {
             let lin = DMat3::from_mat4(m.transform.matrix());

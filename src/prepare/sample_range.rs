@@ -8,21 +8,40 @@ use std::fmt;
 /// Camera samples `[begin, end)` of every pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct SampleRange {
+    /// Index of the first camera sample taken in each pixel.
     pub begin: u32,
+    /// Index one past the last camera sample taken (exclusive).
     pub end: u32,
 }
 
 /// Why a sample range or a shard cannot be had.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SampleRangeError {
+    /// The text given for a sample range (`--samples`) is not `A:B` with A < B.
     #[error("{0:?} is not a sample range: expected A:B with whole numbers 0 ≤ A < B")]
     Syntax(String),
+    /// The text given for a shard (`--shard`) is not `I/N` with I < N.
     #[error("{0:?} is not a shard: expected I/N with whole numbers 0 ≤ I < N")]
     ShardSyntax(String),
+    /// The render has fewer samples per pixel than shards (or the shard is out of range), so
+    /// this shard would take none.
     #[error("shard {index}/{count} of {total} samples per pixel is empty (use at most {total} shards)")]
-    EmptyShard { index: u32, count: u32, total: u32 },
+    EmptyShard {
+        /// The shard asked for, from 0.
+        index: u32,
+        /// Number of shards the samples are split into.
+        count: u32,
+        /// Samples per pixel of the whole render.
+        total: u32,
+    },
+    /// The range asked for ends past the samples per pixel of the scene's layout.
     #[error("samples {range} lie beyond the render's {total} samples per pixel")]
-    Beyond { range: SampleRange, total: u32 },
+    Beyond {
+        /// The range asked for.
+        range: SampleRange,
+        /// Samples per pixel of the whole render.
+        total: u32,
+    },
 }
 
 impl SampleRange {

@@ -12,7 +12,9 @@
 /// then 1), so callers never divide by zero.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Distribution1D {
+    /// The cells' values, negative and non-finite ones replaced by 0.
     pub func: Vec<f64>,
+    /// Normalised running sums of `func`: `cdf[i]` is the probability of cells below i.
     pub cdf: Vec<f64>,
     /// ∫ func over [0, 1) = mean of `func`.
     pub integral: f64,
@@ -64,9 +66,12 @@ impl Distribution1D {
         Self { func, cdf, integral }
     }
 
+    /// Number of cells.
     pub fn len(&self) -> usize {
         self.func.len()
     }
+    /// Whether there are no cells: never for a table from [`Self::new`] or
+    /// [`Self::from_values`], which panic on zero cells.
     pub fn is_empty(&self) -> bool {
         self.func.is_empty()
     }
@@ -118,7 +123,9 @@ impl Distribution1D {
 /// row 0 first: a marginal distribution over rows and one conditional per row.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Distribution2D {
+    /// Cells per row (columns, along u).
     pub width: usize,
+    /// Number of rows (along v).
     pub height: usize,
     /// One distribution over u per row.
     pub conditional: Vec<Distribution1D>,
@@ -129,12 +136,15 @@ pub struct Distribution2D {
 /// A sample drawn from a [`Distribution2D`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample2D {
+    /// Position along a row, in [0, 1).
     pub u: f64,
+    /// Position across the rows, in [0, 1) (row 0 at v = 0).
     pub v: f64,
     /// Density with respect to du dv.
     pub pdf: f64,
     /// The cell (column, row) holding (u, v).
     pub col: usize,
+    /// Row of the cell holding (u, v).
     pub row: usize,
 }
 

@@ -19,6 +19,8 @@ impl Pcg32 {
         p
     }
 
+    /// Advances the state and returns the next 32 uniformly random bits (the reference
+    /// `pcg32_random_r`).
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(MULTIPLIER).wrapping_add(self.inc);

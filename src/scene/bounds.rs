@@ -8,35 +8,44 @@ use super::Transform;
 /// `min > max` on some axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aabb {
+    /// The low corner: the least x, y and z inside (may be −∞).
     pub min: DVec3,
+    /// The high corner: the greatest x, y and z inside (may be +∞).
     pub max: DVec3,
 }
 
 impl Aabb {
+    /// The box holding nothing (min +∞, max −∞): the starting point of [`Self::union`] and
+    /// [`Self::grow`] folds.
     pub const EMPTY: Self = Self { min: DVec3::splat(f64::INFINITY), max: DVec3::splat(f64::NEG_INFINITY) };
-    pub const INFINITE: Self = Self { min: DVec3::splat(f64::NEG_INFINITY), max: DVec3::splat(f64::INFINITY) };
 
+    /// The box from corner `min` to corner `max`, as given (`min > max` on an axis makes it
+    /// empty).
     pub fn new(min: DVec3, max: DVec3) -> Self {
         Self { min, max }
     }
+    /// Whether the box holds no point: `min > max` on some axis.
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
+    /// Whether every corner coordinate is finite: false for a box with an infinite extent (a
+    /// plane's) and for [`Self::EMPTY`].
     pub fn is_finite(&self) -> bool {
         self.min.is_finite() && self.max.is_finite()
     }
+    /// The smallest box holding both boxes.
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
+    /// The box both boxes hold (empty when they do not overlap).
     pub fn intersection(&self, o: &Aabb) -> Aabb {
         Aabb { min: self.min.max(o.min), max: self.max.min(o.max) }
     }
+    /// The smallest box holding this one and the point `p`.
     pub fn grow(&self, p: DVec3) -> Aabb {
         Aabb { min: self.min.min(p), max: self.max.max(p) }
     }
-    pub fn center(&self) -> DVec3 {
-        (self.min + self.max) * 0.5
-    }
+    /// The side lengths, `max − min` per axis (negative on some axis for an empty box).
     pub fn extent(&self) -> DVec3 {
         self.max - self.min
     }

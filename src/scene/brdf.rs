@@ -7,23 +7,60 @@ use crate::color::Color;
 #[derive(Debug, Clone, PartialEq)]
 pub enum Brdf {
     /// Lambertian: f = pigment / π, sampled by the cosine.
-    Diffuse { pigment: Pigment },
+    Diffuse {
+        /// The albedo ρ: the fraction of light reflected, per channel.
+        pigment: Pigment,
+    },
     /// Perfect mirror tinted by the pigment. `threshold_angle_rad` is kept from
     /// Raytracer.jl for DUMP and round-trips; like Raytracer.jl's own sampler, lumen reflects
     /// exactly.
-    Specular { pigment: Pigment, threshold_angle_rad: f64 },
+    Specular {
+        /// Tints the reflected light (per-channel reflectance).
+        pigment: Pigment,
+        /// SceneLang's `.threshold_angle_rad`, in radians (default
+        /// [`DEFAULT_THRESHOLD_ANGLE_RAD`]); no renderer reads it.
+        threshold_angle_rad: f64,
+    },
     /// Dielectric interface (ext): exact Fresnel reflection and refraction with total
     /// internal reflection; `ior` is the inside index relative to the outside. Roughness 0
     /// is smooth glass; above, GGX reflection and transmission (Walter et al. 2007), with
     /// energy compensation unless `multiple_scattering` is false.
-    Dielectric { pigment: Pigment, ior: f64, roughness: f64, multiple_scattering: bool },
+    Dielectric {
+        /// Tints both the reflected and the transmitted light.
+        pigment: Pigment,
+        /// Index of refraction of the inside relative to the outside (the side the outward
+        /// normal points to); SceneLang requires it finite and > 0.
+        ior: f64,
+        /// GGX α in [0, 1] (SceneLang checks the range); 0 is a smooth (delta) interface.
+        roughness: f64,
+        /// Kulla–Conty energy compensation of the rough lobes; no effect at roughness 0.
+        multiple_scattering: bool,
+    },
     /// GGX metal (ext): `roughness` is α (0: a perfect mirror); `fresnel` the complex index
     /// (η, k) per channel, or `None` for F = 1. Multiple scattering is compensated unless
     /// `multiple_scattering` is false (single scattering only, as most renderers do: for
     /// comparisons with them).
-    Conductor { pigment: Pigment, roughness: f64, fresnel: Option<(Color, Color)>, multiple_scattering: bool },
+    Conductor {
+        /// Tints the reflectance, on top of the Fresnel term.
+        pigment: Pigment,
+        /// GGX α in [0, 1] (SceneLang checks the range); 0 is a perfect (delta) mirror.
+        roughness: f64,
+        /// The metal's complex index (η, k), one value per RGB channel (from SceneLang's
+        /// `.eta`/`.k` or `.metal`); `None` makes the Fresnel term 1.
+        fresnel: Option<(Color, Color)>,
+        /// Kulla–Conty energy compensation of the rough lobe; no effect at roughness 0.
+        multiple_scattering: bool,
+    },
     /// A diffuse base (the pigment) under a GGX dielectric coat of index `ior` (ext).
-    Plastic { pigment: Pigment, ior: f64, roughness: f64 },
+    Plastic {
+        /// The diffuse base's albedo, clamped to [0, 1] per channel when shading.
+        pigment: Pigment,
+        /// Index of refraction of the coat relative to the outside; SceneLang requires it
+        /// finite and > 0.
+        ior: f64,
+        /// GGX α of the coat in [0, 1] (SceneLang checks the range); 0 is a smooth coat.
+        roughness: f64,
+    },
 }
 
 impl Default for Brdf {
@@ -36,6 +73,8 @@ impl Default for Brdf {
 pub const DEFAULT_THRESHOLD_ANGLE_RAD: f64 = 0.0017453294;
 
 impl Brdf {
+    /// The pigment whatever the variant: what tints the scattering, and the colour the Flat
+    /// renderer shows.
     pub fn pigment(&self) -> &Pigment {
         match self {
             Brdf::Diffuse { pigment }

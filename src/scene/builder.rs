@@ -62,38 +62,51 @@ impl SceneBuilder {
         self.material(Material::new(Brdf::Diffuse { pigment: Pigment::Uniform(c) }, Pigment::Uniform(Color::BLACK)))
     }
 
+    /// Adds `s` as a top-level shape (a CSG tree is one shape).
     pub fn shape(&mut self, s: Shape) -> &mut Self {
         self.scene.shapes.push(s);
         self
     }
+    /// Adds the unit sphere placed by `t` (object to world), made of `m`.
     pub fn sphere(&mut self, t: Transform, m: MaterialId) -> &mut Self {
         self.shape(Shape::primitive(ShapeKind::Sphere, t, m))
     }
+    /// Adds the plane z = 0 placed by `t` (object to world), made of `m`.
     pub fn plane(&mut self, t: Transform, m: MaterialId) -> &mut Self {
         self.shape(Shape::primitive(ShapeKind::Plane, t, m))
     }
+    /// Adds the cube [−0.5, 0.5]³ placed by `t` (object to world), made of `m`.
     pub fn cube(&mut self, t: Transform, m: MaterialId) -> &mut Self {
         self.shape(Shape::primitive(ShapeKind::Cube, t, m))
     }
+    /// Adds the capped cylinder of radius 0.5 and height 1 along z, centred at the origin,
+    /// placed by `t` (object to world), made of `m`.
     pub fn cylinder(&mut self, t: Transform, m: MaterialId) -> &mut Self {
         self.shape(Shape::primitive(ShapeKind::Cylinder, t, m))
     }
+    /// Adds a point light (see [`PointLight`] for its falloff).
     pub fn point_light(&mut self, l: PointLight) -> &mut Self {
         self.scene.point_lights.push(l);
         self
     }
+    /// Replaces the camera. Its aspect ratio is taken as given, not matched to the image
+    /// size as [`Self::new`]'s default is.
     pub fn camera(&mut self, c: Camera) -> &mut Self {
         self.scene.camera = c;
         self
     }
+    /// Replaces the integrator (by default the path tracer with default settings).
     pub fn renderer(&mut self, r: Renderer) -> &mut Self {
         self.scene.renderer = r;
         self
     }
+    /// Replaces the pixel sampling (by default one ray through each pixel centre, seed
+    /// `Pcg(.state 42, .inc 54)`).
     pub fn tracer(&mut self, t: Tracer) -> &mut Self {
         self.scene.tracer = t;
         self
     }
+    /// Sets what escaping rays see (by default nothing: the renderer's background colour).
     pub fn environment(&mut self, e: Environment) -> &mut Self {
         self.scene.environment = Some(e);
         self

@@ -4,10 +4,15 @@ use glam::DVec3;
 
 use super::Transform;
 
+/// How a camera's rays leave its screen: from one eye point, or all parallel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Projection {
     /// Eye at (−d, 0, 0) in camera space, screen at x = 0.
-    Perspective { screen_distance: f64 },
+    Perspective {
+        /// d, the eye's distance behind the screen in camera-space units: the larger, the
+        /// narrower the field of view (see [`Camera::aperture_deg`]). Positive.
+        screen_distance: f64,
+    },
     /// Parallel rays along +x from the plane x = −1.
     Orthogonal,
 }
@@ -15,8 +20,12 @@ pub enum Projection {
 /// A camera. In camera space it looks along +x with z up; `transform` places it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
+    /// Perspective or orthogonal, with the perspective's screen distance.
     pub projection: Projection,
+    /// Screen width over height: the screen spans y ∈ [−a, a] and z ∈ [−1, 1] in camera
+    /// space. Positive; it should match the image's, or pixels come out stretched.
     pub aspect_ratio: f64,
+    /// Camera space to world.
     pub transform: Transform,
 }
 
@@ -34,7 +43,10 @@ impl Default for Camera {
 /// before the screen is not, as in Raytracer.jl). `dir` is not normalised.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CameraRay {
+    /// Where the ray starts (t = 0): the eye for a perspective camera, a point on the
+    /// plane x = −1 of camera space for an orthogonal one.
     pub origin: DVec3,
+    /// The step from `origin` to the screen point (t = 1).
     pub dir: DVec3,
 }
 

@@ -8,21 +8,30 @@ use glam::DVec3;
 use crate::color::Color;
 use crate::image::HdrImage;
 
+/// Radiance arriving from infinitely far away, as a function of world direction (z up):
+/// what escaping rays see, and a light the path tracer samples with next-event estimation.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Environment {
+    /// The same radiance from every direction.
     Uniform(Color),
     /// Blends zenith → horizon for directions above the horizon and horizon → nadir below,
     /// linearly in the direction's z component.
     Gradient {
+        /// Radiance straight up (+z).
         zenith: Color,
+        /// Radiance along the horizon (z = 0).
         horizon: Color,
+        /// Radiance straight down (−z).
         nadir: Color,
     },
     /// Equirectangular image, z up: u = atan2(y, x)/2π (wrapped to [0, 1)) after rotating
     /// by `rotation_deg` about z, v = acos(z)/π with row 0 at the zenith.
     Image {
+        /// The map, in linear radiance (before `intensity`).
         image: Arc<HdrImage>,
+        /// Factor on every texel (SceneLang's `.intensity`, default 1).
         intensity: f64,
+        /// Turn of the map about +z, in degrees (SceneLang's `.rotation`).
         rotation_deg: f64,
     },
 }

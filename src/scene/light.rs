@@ -12,8 +12,12 @@ use crate::color::Color;
 /// light with r = 1 is a physical point light of intensity `color`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PointLight {
+    /// Where the light is, in world space.
     pub position: DVec3,
+    /// Linear RGB strength, unbounded: the contribution before the falloff f(d).
     pub color: Color,
+    /// r of the falloff, in world units (SceneLang's `.linear_radius`, ≥ 0); 0 turns the
+    /// falloff off.
     pub linear_radius: f64,
 }
 

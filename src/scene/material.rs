@@ -6,6 +6,7 @@ use super::{Brdf, Pigment};
 /// becomes an area light that the path tracer samples directly.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
+    /// How the surface scatters light; its pigment is the surface's colour.
     pub brdf: Brdf,
     /// Radiance leaving the surface on its own, the same in every direction.
     pub emitted: Pigment,
@@ -19,9 +20,11 @@ impl Default for Material {
 }
 
 impl Material {
+    /// A material that scatters by `brdf` and emits `emitted` (a black pigment for none).
     pub fn new(brdf: Brdf, emitted: Pigment) -> Self {
         Self { brdf, emitted }
     }
+    /// Whether the surface emits anywhere: its emitted pigment is not black everywhere.
     pub fn is_emissive(&self) -> bool {
         !self.emitted.is_black()
     }

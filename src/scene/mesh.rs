@@ -28,7 +28,9 @@ pub const MAX_MESH_ELEMENTS: u64 = 1 << 31;
 /// The file formats lumen reads, chosen by extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MeshFormat {
+    /// Wavefront OBJ text (`.obj`).
     Obj,
+    /// Stanford PLY, ASCII or binary of either endianness (`.ply`).
     Ply,
 }
 
@@ -51,11 +53,14 @@ impl MeshFormat {
 /// validates them.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshParts {
+    /// Vertex positions in the mesh's object space (the file's own coordinates).
     pub positions: Vec<DVec3>,
     /// Per-vertex normals, any length (they are used only if there is one per vertex).
     pub normals: Option<Vec<DVec3>>,
     /// Per-vertex texture coordinates, as in the file (used only if one per vertex).
     pub uvs: Option<Vec<DVec2>>,
+    /// Each triangle's three 0-based indices into `positions`, not yet range-checked; for
+    /// corners a, b, c in this order, (b − a) × (c − a) points to the outside.
     pub triangles: Vec<[u32; 3]>,
     /// Faces the loader already dropped as degenerate (a PLY face of fewer than 3
     /// vertices); added to the count of dropped triangles.
@@ -170,6 +175,7 @@ impl TriangleMesh {
         Ok(Self { positions, normals, uvs, triangles: kept, dropped_degenerate, dropped_normals, dropped_uvs, bounds })
     }
 
+    /// Vertex positions in object space, one per vertex, including any no triangle uses.
     pub fn positions(&self) -> &[DVec3] {
         &self.positions
     }
@@ -181,12 +187,16 @@ impl TriangleMesh {
     pub fn uvs(&self) -> Option<&[DVec2]> {
         self.uvs.as_deref()
     }
+    /// The kept triangles (never empty) as indices into [`Self::positions`], all in range;
+    /// for corners a, b, c in this order, (b − a) × (c − a) points to the outside.
     pub fn triangles(&self) -> &[[u32; 3]] {
         &self.triangles
     }
+    /// Number of vertices, used by a triangle or not.
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
+    /// Number of triangles kept (at least 1; degenerate ones are not counted).
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }

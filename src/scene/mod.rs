@@ -36,14 +36,23 @@ pub const MAX_IMAGE_SIDE: u32 = 32_768;
 /// Problems that make a scene invalid (raised while building or loading it).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SceneError {
+    /// A transformation has no usable inverse: a zero scale factor, or a matrix whose
+    /// determinant is zero or negligible next to the scale of its linear part.
     #[error("transformation is singular (zero scale or degenerate matrix)")]
     SingularTransform,
+    /// A transformation (or scale factor) has a NaN or infinite entry.
     #[error("transformation has a non-finite entry (NaN or infinity)")]
     NonFiniteTransform,
+    /// A matrix's last row is not `0 0 0 1`: Raytracer.jl accepts projective matrices,
+    /// lumen does not.
     #[error("transformation is not affine: only affine matrices (last row 0 0 0 1) are supported")]
     NotAffine,
+    /// The image's width and height, in pixels, of which one is 0 or above [`MAX_IMAGE_SIDE`].
     #[error("image size {0}×{1} is invalid (each side must be 1..={MAX_IMAGE_SIDE})")]
     BadImageSize(u32, u32),
+    /// Any other invalid scene, with the message shown to the user: a material id out of
+    /// range, a mesh inside CSG, a camera's non-positive aspect ratio or screen distance, or
+    /// (from the GPU packer) an emissive surface of zero area.
     #[error("{0}")]
     Invalid(String),
 }
@@ -55,11 +64,18 @@ pub struct Scene {
     pub shapes: Vec<Shape>,
     /// Materials referenced by [`MaterialId`].
     pub materials: Vec<Material>,
+    /// Point lights (SceneLang's `Light`); area lights are emissive shapes instead (see
+    /// [`Scene::area_lights`]).
     pub point_lights: Vec<PointLight>,
+    /// The one camera the image is seen through.
     pub camera: Camera,
+    /// Image width in pixels, 1..=[`MAX_IMAGE_SIDE`] once [`Scene::validate`] has passed.
     pub width: u32,
+    /// Image height in pixels, 1..=[`MAX_IMAGE_SIDE`] once [`Scene::validate`] has passed.
     pub height: u32,
+    /// The integrator that turns a camera ray into radiance, with its settings.
     pub renderer: Renderer,
+    /// How many camera rays each pixel gets and where, and the seed of every random stream.
     pub tracer: Tracer,
     /// Radiance of escaping rays; `None` means the renderer's background colour.
     pub environment: Option<Environment>,
@@ -74,6 +90,8 @@ pub struct EmissiveShape {
 }
 
 impl Scene {
+    /// The material `id` refers to. Panics if `id` is out of range, which a scene that
+    /// passed [`Scene::validate`] rules out.
     pub fn material(&self, id: MaterialId) -> &Material {
         &self.materials[id.0 as usize]
     }
@@ -87,8 +105,8 @@ impl Scene {
         }
     }
 
-    /// Emissive top-level spheres and cubes, in shape order. Emitters inside CSG trees,
-    /// planes and cylinders are not sampled directly; their emission still counts when a
+    /// Emissive top-level spheres, cubes and mesh instances, in shape order. Emitters inside
+    /// CSG trees, planes and cylinders are not sampled directly; their emission still counts when a
     /// path hits them (with full weight, so the estimate stays unbiased).
     pub fn area_lights(&self) -> Vec<EmissiveShape> {
         self.shapes

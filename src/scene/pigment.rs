@@ -19,15 +19,24 @@ pub enum ImageFilter {
 /// A colour over the unit square of surface coordinates.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Pigment {
+    /// The same colour everywhere.
     Uniform(Color),
     /// `n × n` squares alternating `on` (where ⌊nu⌋ + ⌊nv⌋ is even) and `off`.
     Checkered {
+        /// Squares along each side of the unit square (SceneLang's `.N`).
         n: u32,
+        /// Colour of the squares where ⌊nu⌋ + ⌊nv⌋ is even (SceneLang's `.color_on`).
         on: Color,
+        /// Colour of the other squares (SceneLang's `.color_off`).
         off: Color,
     },
+    /// An image stretched over the unit square: u runs along the columns, v down the rows
+    /// from row 0 at the top.
     Image {
+        /// The texels, linear; shared, so that the GPU uploads each image once however many
+        /// pigments use it.
         image: Arc<HdrImage>,
+        /// Nearest texel (Raytracer.jl's lookup, the default) or bilinear (SceneLang's `.filter`).
         filter: ImageFilter,
     },
 }

@@ -6,7 +6,11 @@ use crate::color::Color;
 /// [`crate::sampling`] for how each (pixel, sample, bounce) derives its own stream.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PcgSeed {
+    /// Initial state (`.state`): the PCG32 reference's `initstate`, which each stream
+    /// offsets by its own key.
     pub state: u64,
+    /// Stream selector (`.inc`): the reference's `initseq`; the generator's increment is
+    /// `2·inc + 1`.
     pub inc: u64,
 }
 
@@ -34,22 +38,30 @@ impl Default for PcgSeed {
 pub enum Renderer {
     /// `on` where a ray hits anything, `off` elsewhere.
     OnOff {
+        /// Colour of pixels whose ray hits (SceneLang's `.on_color`).
         on: Color,
+        /// Colour of escaping rays (SceneLang's `.off_color`); an environment is ignored.
         off: Color,
     },
     /// Emitted + pigment colour at the first hit.
     Flat {
+        /// Colour of escaping rays when the scene has no environment.
         background: Color,
     },
     /// Direct light from point lights plus a constant ambient term.
     PointLight {
+        /// Colour of escaping rays when the scene has no environment.
         background: Color,
+        /// Radiance added at every hit, whatever the surface (not tinted by its pigment).
         ambient: Color,
     },
+    /// Global illumination: Monte Carlo path tracing.
     PathTracer(PathTracerSettings),
 }
 
 impl Renderer {
+    /// The variant's SceneLang name, as in `Renderer.<name>` (`OnOff`, `Flat`, `PointLight`,
+    /// `PathTracer`); the CLI prints it.
     pub fn name(&self) -> &'static str {
         match self {
             Renderer::OnOff { .. } => "OnOff",
@@ -68,8 +80,11 @@ impl Renderer {
     }
 }
 
+/// The settings of `Renderer.PathTracer`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathTracerSettings {
+    /// Colour of escaping rays when the scene has no environment; it lights the scene like
+    /// a uniform environment.
     pub background: Color,
     /// Raytracer.jl's `.rng`: kept for DUMP; streams derive from the tracer's seed.
     pub rng: PcgSeed,
@@ -94,5 +109,6 @@ impl Default for PathTracerSettings {
 pub struct Tracer {
     /// s > 0: s×s jittered (stratified) samples; 0: one ray through the pixel centre.
     pub samples_per_side: u32,
+    /// Seed from which every random stream derives (camera jitter and path vertices alike).
     pub rng: PcgSeed,
 }

@@ -21,8 +21,10 @@ pub enum ShapeKind {
 }
 
 impl ShapeKind {
+    /// Every kind, in declaration order (the order of `lumen check`'s primitive counts).
     pub const ALL: [ShapeKind; 4] = [ShapeKind::Sphere, ShapeKind::Plane, ShapeKind::Cube, ShapeKind::Cylinder];
 
+    /// Lower-case name for messages and `lumen check`: `sphere`, `plane`, `cube`, `cylinder`.
     pub fn name(self) -> &'static str {
         match self {
             ShapeKind::Sphere => "sphere",
@@ -70,9 +72,11 @@ pub const MAX_CSG_DEPTH: usize = 256;
 /// One placed unit primitive.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Primitive {
+    /// Which unit shape is placed.
     pub kind: ShapeKind,
     /// Object to world.
     pub transform: Transform,
+    /// Material of its surface, including the parts of it that carve another CSG operand.
     pub material: MaterialId,
 }
 
@@ -91,6 +95,7 @@ pub enum CsgOp {
 }
 
 impl CsgOp {
+    /// The SceneLang command (`UNITE`, `INTERSECT`, `DIFF`, `FUSE`), for DUMP and messages.
     pub fn keyword(self) -> &'static str {
         match self {
             CsgOp::Unite => "UNITE",
@@ -105,8 +110,12 @@ impl CsgOp {
 /// (applied after the children's own).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Csg {
+    /// How the children combine.
     pub op: CsgOp,
+    /// The operands, in script order (DIFF keeps the first and removes the rest), each
+    /// placed by its own transformation in the node's space; never meshes in a valid scene.
     pub children: Vec<Shape>,
+    /// Node to parent space (to world for a top-level node).
     pub transform: Transform,
 }
 
@@ -116,11 +125,13 @@ pub struct Csg {
 /// are not CSG operands.
 #[derive(Clone, PartialEq)]
 pub struct MeshInstance {
+    /// The file's triangles, in object space; the same `Arc` for every use of the file.
     pub mesh: Arc<TriangleMesh>,
     /// The file as the script named it, for messages and `lumen check`.
     pub name: Arc<str>,
     /// Object to world.
     pub transform: Transform,
+    /// The material of every triangle.
     pub material: MaterialId,
     /// Interpolate the file's vertex normals (flat facets when false or when the file has
     /// none).
@@ -156,8 +167,11 @@ impl std::fmt::Debug for MeshInstance {
 #[derive(Debug, Clone, PartialEq)]
 #[allow(clippy::large_enum_variant)]
 pub enum Shape {
+    /// One placed unit primitive.
     Primitive(Primitive),
+    /// A CSG node over its children.
     Csg(Box<Csg>),
+    /// A placed triangle mesh.
     Mesh(Box<MeshInstance>),
 }
 
@@ -167,14 +181,21 @@ fn unite_splits(c: &Csg) -> bool {
 }
 
 impl Shape {
+    /// The unit primitive `kind` placed by `transform` (object to world), made of `material`.
     pub fn primitive(kind: ShapeKind, transform: Transform, material: MaterialId) -> Self {
         Shape::Primitive(Primitive { kind, transform, material })
     }
 
+    /// A CSG node applying `op` to `children`, placed by `transform`. Nothing is checked
+    /// here: SceneLang enforces [`MAX_CSG_DEPTH`] and [`MAX_PRIMITIVES`], and
+    /// [`crate::scene::Scene::validate`] refuses mesh operands.
     pub fn csg(op: CsgOp, children: Vec<Shape>, transform: Transform) -> Self {
         Shape::Csg(Box::new(Csg { op, children, transform }))
     }
 
+    /// An instance of `mesh` placed by `transform`, made of `material`; `name` is the file as
+    /// the script named it and `smooth` asks for interpolated vertex normals (see
+    /// [`MeshInstance`]).
     pub fn mesh(mesh: Arc<TriangleMesh>, name: &str, transform: Transform, material: MaterialId, smooth: bool) -> Self {
         Shape::Mesh(Box::new(MeshInstance { mesh, name: name.into(), transform, material, smooth }))
     }

@@ -27,6 +27,7 @@ impl Default for Transform {
 }
 
 impl Transform {
+    /// The transformation that moves nothing: object space is the parent's.
     pub const IDENTITY: Self = Self { m: DMat4::IDENTITY, inv: DMat4::IDENTITY };
 
     /// Builds a transformation from a matrix, computing the inverse. Fails on non-finite
@@ -57,6 +58,7 @@ impl Transform {
         Self::from_matrix(DMat4::from_cols_array(&rows).transpose())
     }
 
+    /// Translation by `v` (SceneLang's `TRANSLATE`); the inverse is the translation by −v.
     pub fn translation(v: DVec3) -> Self {
         Self { m: DMat4::from_translation(v), inv: DMat4::from_translation(-v) }
     }
@@ -96,22 +98,29 @@ impl Transform {
         Self { m, inv: m.transpose() }
     }
 
+    /// The forward matrix M, the one [`Self::point`] applies (column-major, as glam stores it).
     pub fn matrix(&self) -> DMat4 {
         self.m
     }
+    /// M⁻¹, stored alongside M rather than computed per call.
     pub fn inverse_matrix(&self) -> DMat4 {
         self.inv
     }
+    /// The inverse transformation: the two stored matrices swapped, nothing computed.
     pub fn inverse(&self) -> Self {
         Self { m: self.inv, inv: self.m }
     }
+    /// Whether M is exactly the identity (no tolerance).
     pub fn is_identity(&self) -> bool {
         self.m == DMat4::IDENTITY
     }
 
+    /// Applies M to a point: the linear part, then the translation.
     pub fn point(&self, p: DVec3) -> DVec3 {
         self.m.transform_point3(p)
     }
+    /// Applies M's linear part to a direction or offset (no translation; the result is not
+    /// normalised, so scaling changes its length).
     pub fn vector(&self, v: DVec3) -> DVec3 {
         self.m.transform_vector3(v)
     }

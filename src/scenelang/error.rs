@@ -68,6 +68,7 @@ pub enum ErrorKind {
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneLangError {
+    /// The class of error, for telling errors apart without matching on the message.
     pub kind: ErrorKind,
     /// The script's name as given to the loader (a path, or `--vars`).
     pub file: String,
@@ -75,6 +76,7 @@ pub struct SceneLangError {
     pub line: usize,
     /// 1-based column (in characters) of the culprit; 0 for an error about the whole file.
     pub col: usize,
+    /// The one-line description after `error:` (without the location, excerpt or hints).
     pub message: String,
     /// Boxed to keep `Result<_, SceneLangError>` small.
     detail: Box<Detail>,
@@ -127,11 +129,14 @@ fn excerpt(line: &str, col0: usize, len: usize) -> (String, usize, usize) {
 /// A byte range in the source being read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Span {
+    /// Byte offset of the first byte.
     pub start: usize,
+    /// Length in bytes (0 for a point, such as the end of the input).
     pub len: usize,
 }
 
 impl Span {
+    /// The `len` bytes starting at byte offset `start`.
     pub fn new(start: usize, len: usize) -> Self {
         Self { start, len }
     }

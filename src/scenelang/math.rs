@@ -26,8 +26,11 @@ use crate::color::Color;
 /// The value of a math expression.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MathValue {
+    /// A plain number.
     Num(f64),
+    /// A linear RGB colour (`RGB(r, g, b)`, or a variable holding a colour).
     Color(Color),
+    /// A point or vector (`Point(x, y, z)`, or a variable holding a point).
     Point(DVec3),
 }
 
@@ -50,18 +53,24 @@ impl MathValue {
 
 /// What a name means inside an expression.
 pub enum Lookup {
+    /// Bound to a number, colour or point, which the expression uses.
     Value(MathValue),
     /// Defined, but of a type expressions cannot use.
     WrongType(Ty),
+    /// Not bound to anything; `TIME`, `pi` and `π` then fall back to their built-in values.
     Undefined,
 }
 
 /// An error inside an expression, with its absolute span in the script.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MathError {
+    /// The culprit's bytes in the whole script (not in the expression's text).
     pub span: Span,
+    /// The class of error the caller reports (`BadExpression`, `UndefinedName`, …).
     pub kind: ErrorKind,
+    /// The one-line description of what is wrong.
     pub message: String,
+    /// What would have been accepted there, for the diagnostic's `expected:` line.
     pub expected: Option<String>,
 }
 

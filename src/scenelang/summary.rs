@@ -20,33 +20,48 @@ pub struct SceneSummary {
     pub top_level_shapes: usize,
     /// Primitives of each kind, inside CSG trees or not, in [`ShapeKind::ALL`] order.
     pub primitives: [usize; 4],
+    /// CSG operations (UNITE, INTERSECT, …) over all trees, nested ones included.
     pub csg_nodes: usize,
     /// Deepest CSG tree (0 when there is none).
     pub csg_max_depth: usize,
     /// Mesh instances, and per distinct mesh (file): its name, triangles, vertices,
     /// degenerate triangles dropped, and its object-space bounds.
     pub mesh_instances: usize,
+    /// One entry per distinct mesh, in the order of its first instance.
     pub meshes: Vec<MeshSummary>,
+    /// Point lights (SceneLang's `Light`).
     pub point_lights: usize,
-    /// Emissive top-level spheres and cubes ([`Scene::area_lights`]).
+    /// Emissive top-level spheres, cubes and mesh instances ([`Scene::area_lights`]).
     pub area_lights: usize,
+    /// Entries of the scene's material table, used or not.
     pub materials: usize,
+    /// Materials with a Lambertian (`Brdf::Diffuse`) BRDF.
     pub diffuse_materials: usize,
+    /// Materials with a perfect-mirror (`Brdf::Specular`) BRDF.
     pub specular_materials: usize,
+    /// Materials with a glass-like (`Brdf::Dielectric`) BSDF.
     pub dielectric_materials: usize,
+    /// Materials with a GGX metal (`Brdf::Conductor`) BRDF.
     pub conductor_materials: usize,
+    /// Materials with a coated diffuse (`Brdf::Plastic`) BRDF.
     pub plastic_materials: usize,
+    /// Materials with a non-black emitted radiance, whatever their BRDF.
     pub emissive_materials: usize,
     /// "perspective" or "orthogonal".
     pub camera_kind: &'static str,
+    /// The camera's screen width over height, as the scene gives it (not taken from the image size).
     pub aspect_ratio: f64,
     /// Full opening angle in degrees (perspective cameras only).
     pub aperture_deg: Option<f64>,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
     /// Renderer name and its settings, as one line.
     pub renderer: String,
+    /// The tracer's s for s×s jittered samples per pixel; 0 for one ray through each pixel centre.
     pub samples_per_side: u32,
+    /// The tracer's PCG seed as (state, inc).
     pub tracer_seed: (u64, u64),
     /// The environment, as one line ("none" when escaping rays see the background).
     pub environment: String,
@@ -59,13 +74,22 @@ pub struct SceneSummary {
 /// One distinct mesh of a scene, for `lumen check`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshSummary {
+    /// The file as the script named it.
     pub name: String,
+    /// Top-level shapes that place this mesh (each with its own transformation and material).
     pub instances: usize,
+    /// Triangles kept after loading.
     pub triangles: usize,
+    /// Vertices as loaded from the file, whether a kept triangle uses them or not.
     pub vertices: usize,
+    /// Triangles dropped while loading as degenerate (repeated indices, zero area, short faces).
     pub dropped_degenerate: usize,
+    /// True when the file had usable vertex normals (whether instances interpolate them is
+    /// each instance's `smooth` setting).
     pub smooth_normals: bool,
+    /// True when the file had usable texture coordinates.
     pub uvs: bool,
+    /// Object-space bounds of the triangles' vertices, before any instance's transformation.
     pub bounds: Aabb,
 }
 
@@ -74,6 +98,7 @@ fn rgb(c: crate::color::Color) -> String {
 }
 
 impl SceneSummary {
+    /// Counts and describes everything in `scene`.
     pub fn of(scene: &Scene) -> Self {
         let mut primitives = [0; 4];
         for s in &scene.shapes {

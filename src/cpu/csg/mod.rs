@@ -55,9 +55,11 @@ pub const SLIVER: f64 = 1.0 / 17_592_186_044_416.0; // 2⁻⁴⁴
 /// A visible surface crossing: the ray parameter and the surface there.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct End {
+    /// Ray parameter of the crossing.
     pub t: f64,
     /// Index of the leaf in [`CsgTree::leaves`].
     pub leaf: u32,
+    /// Which face of the leaf's primitive was crossed (as in `shapes::Crossing::face`).
     pub face: u8,
     /// The leaf's outward normal points into this solid (a carved surface).
     pub flip: bool,
@@ -132,6 +134,7 @@ const WALKED_CROSSINGS: usize = 16;
 /// The closest surface of a CSG tree along a ray.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CsgHit {
+    /// The crossing the tree shows; [`CsgTree::surface_hit`] turns it into a surface.
     pub end: End,
 }
 

@@ -11,8 +11,11 @@ use crate::scene::{MaterialId, ShapeKind, Transform};
 /// product of the transformations of every enclosing node).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Instance {
+    /// Which unit primitive.
     pub kind: ShapeKind,
+    /// Object-to-world transformation.
     pub to_world: Transform,
+    /// Material of the primitive's surface.
     pub material: MaterialId,
 }
 

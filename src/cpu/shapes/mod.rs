@@ -28,11 +28,14 @@ pub use quadratic::sphere_roots;
 /// An infinite `t` marks an open end of a span (no surface there).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Crossing {
+    /// Line parameter of the crossing (object and world space alike); ±∞ for an open end.
     pub t: f64,
+    /// Which face of the primitive is crossed, numbered as above.
     pub face: u8,
 }
 
 impl Crossing {
+    /// A crossing of `face` at parameter `t`.
     pub const fn new(t: f64, face: u8) -> Self {
         Self { t, face }
     }
@@ -46,7 +49,9 @@ impl Crossing {
 /// infinite (planes).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Span {
+    /// Where the line enters the solid; `t = −∞` where the solid is unbounded behind.
     pub enter: Crossing,
+    /// Where the line leaves the solid; `t = +∞` where the solid is unbounded ahead.
     pub exit: Crossing,
 }
 
@@ -66,6 +71,7 @@ pub struct SurfacePoint {
     pub point: DVec3,
     /// Outward normal (not necessarily unit length).
     pub normal: DVec3,
+    /// Texture coordinates of the point, per SCENELANG.md.
     pub uv: DVec2,
 }
 

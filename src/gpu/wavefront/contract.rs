@@ -218,9 +218,11 @@ pub struct BatchUniform {
     /// `i < pixel_count`: a batch holds whole pixels, interleaved with the other batches of
     /// its round where several devices share them (`schedule::batches`).
     pub pixel_begin: u32,
+    /// Pixels the batch holds; the film stage sums one per invocation.
     pub pixel_count: u32,
     /// Camera samples `[sample_begin, sample_begin + samples)` of the round.
     pub sample_begin: u32,
+    /// Camera samples per pixel in the batch (see `sample_begin`).
     pub samples: u32,
     /// Paths per camera sample (n; 1 for the first-hit integrators).
     pub paths_per_sample: u32,
@@ -240,6 +242,7 @@ pub struct BatchUniform {
     pub shard_slots: u32,
     /// See `pixel_begin`.
     pub pixel_stride: u32,
+    /// Padding to 48 bytes, a multiple of 16 (`_pad0` of the WGSL `Batch`); always 0.
     pub _pad: [u32; 1],
 }
 
@@ -262,17 +265,35 @@ const BATCH_WGSL: &str = "struct Batch {
 /// A buffer of bind group 0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum StateBuffer {
+    /// `batch`, the uniform [`BatchUniform`]: which pixels and camera samples the batch holds.
     Batch,
+    /// `control`: the bounce, the queue lengths and the ray and NaN counters, in the words
+    /// [`Control`] lays out.
     Control,
+    /// `queues`: the path slots in each queue, shard s of queue q from
+    /// `(q · shards + s) · shard_slots`.
     Queues,
+    /// `paths`: the `vec4<f32>` path fields (ray, throughput, radiance), field f of slot s at
+    /// `f · capacity + s`.
     Paths,
+    /// `words`: the `vec4<u32>` path fields (closest hit, previous vertex), laid out as `paths`.
     Words,
+    /// `shadow`: per slot, `batch.shadow_rays` shadow rays of three `vec4<f32>` each.
     Shadow,
+    /// `deferred_refs`: per slot, the CSG trees that its closest-hit query and each of its
+    /// shadow rays met (a count, then the tree references).
     DeferredRefs,
+    /// `film`: per pixel of the batch, the compensated sum of its camera samples (the sum,
+    /// then its error term).
     Film,
+    /// `args_rays`: indirect launch arguments of the two ray queues and the shadow queue.
     ArgsRays,
+    /// `args_hits`: indirect launch arguments of the shading queues.
     ArgsHits,
+    /// `args_csg`: indirect launch arguments of the CSG and shadow-CSG queues.
     ArgsCsg,
+    /// `csg_pool`: per slot, the working entries of the CSG query it evaluates (leaf spans,
+    /// faces, sweep state; [`csg_pool_entries`] entries each).
     CsgPool,
     /// The shading queue a launch of a shading kernel drains (`shade_queue.x`): one small
     /// uniform per shading stage, so that the kinds sharing a kernel
@@ -281,6 +302,7 @@ pub enum StateBuffer {
 }
 
 impl StateBuffer {
+    /// Every buffer, in binding order.
     pub const ALL: [StateBuffer; 13] = [
         StateBuffer::Batch,
         StateBuffer::Control,

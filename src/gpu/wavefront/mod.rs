@@ -49,6 +49,9 @@ use crate::gpu::features::{FeatureSet, RendererKind};
 /// The compiled kernel of every stage a scene needs.
 #[derive(Debug, Clone)]
 pub struct StageKernels {
+    /// The kernel each stage of the scene launches, shared with the renderer's kernel cache;
+    /// the shading stages whose kinds share a kernel ([`Stage::kernel_kinds`]) map to the
+    /// same one.
     pub kernels: BTreeMap<Stage, Arc<ComputeKernel>>,
     /// How many of them were new to the renderer (assembled, validated, created and, on
     /// llvmpipe, JIT-compiled for this render) rather than found in its cache.
@@ -224,7 +227,10 @@ fn args_index(b: StateBuffer) -> usize {
 /// Device counters read at the end of a render.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Counters {
+    /// Rays traced: the closest-hit queries of every bounce plus the shadow rays.
     pub rays: u64,
+    /// Path estimates and camera-sample means the film stage found NaN or infinite and
+    /// replaced by 0.
     pub non_finite: u64,
 }
 

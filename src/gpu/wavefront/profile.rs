@@ -27,7 +27,10 @@ pub const FEATURES: wgpu::Features =
 /// One stage's launches and their device time.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTime {
+    /// Timed launches of the stage (untimed ones are counted in
+    /// [`StageProfile::untimed_launches`] only).
     pub launches: u64,
+    /// Their summed device time, in seconds (from the timestamps' period).
     pub seconds: f64,
 }
 

@@ -81,7 +81,9 @@ pub struct Accumulated {
     pub spp_done: u32,
     /// Rounds and batches run, including those of a dropped round.
     pub rounds: u32,
+    /// Batches submitted over all rounds.
     pub batches: u64,
+    /// Why the rounds ended: every sample taken, the time limit, or cancellation.
     pub stop: StopReason,
     /// Pixel sums dropped as NaN/infinite (should be 0: the film stage already replaces
     /// non-finite estimates by 0).
