@@ -1,5 +1,5 @@
 //! The `lumen` binary under hostile conditions (issue 16): standard output full or closed,
-//! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer, a second Ctrl-C
+//! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer, Ctrl-C before the first sample, a second Ctrl-C
 //! while the outputs are written, control characters and megabyte lines in what it quotes,
 //! every kind of line end.
 
@@ -244,6 +244,44 @@ fn the_cpu_renderer_honours_the_time_limit() {
     assert!(!err.contains("warning: --time-limit"), "{err}");
     let img = lumen::image::read_image(&dir.path().join("t.pfm")).unwrap();
     assert_eq!((img.width(), img.height()), (32, 24));
+}
+
+/// Ctrl-C before the first sample per pixel is complete: one clear error and a failure, no
+/// output, and (with `--device auto`) no second try on the CPU, which the user did not ask
+/// for. Until 2026-12-07 the GPU reported it as a validation error, which `auto` took for a
+/// scene the GPU cannot render and answered by starting over on the CPU.
+#[cfg(unix)]
+#[test]
+fn a_ctrl_c_before_the_first_sample_writes_nothing_and_tries_no_other_device() {
+    // 1.5 billion paths in the first round: minutes on lavapipe or two cores, seconds on a
+    // datacenter GPU. Each renderer stops within a batch of paths of the signal.
+    let scene = "SPAWN Shape.Sphere(.material Material(.brdf Brdf.Diffuse(Pigment.Uniform(<0.8, 0.8, 0.8>))))\n\
+                 USING Camera.Perspective(.transformation TRANSLATE(.X -3)) Image(2000, 1500)\n\
+                 Renderer.PathTracer(.n 512, .max_depth 8) Tracer() Environment.Uniform(<1, 1, 1>)\n";
+    for device in ["auto", "cpu"] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("s.sl"), scene).unwrap();
+        let mut child = lumen(dir.path())
+            .args(["render", "s.sl", "--device", device, "--spp", "1", "-o", "out.png"])
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The render installs its Ctrl-C handler when it starts, a fraction of a second in
+        // (the CPU renderer prints nothing before its summary, so there is no line to wait for).
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        // SAFETY: kill(2) on our own child, which has not been waited for.
+        unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut text).unwrap();
+        let exit = child.wait().unwrap();
+        assert_eq!(exit.code(), Some(1), "{device}: {text}");
+        assert!(text.contains("error: stopped before any sample was complete; nothing to write"), "{device}: {text}");
+        assert!(text.contains(": 0 of 1 samples per pixel"), "{device}: {text}");
+        for wrong in ["validation", "warning", "instead", "keeping the 0"] {
+            assert!(!text.contains(wrong), "{device}: {wrong:?} in {text}");
+        }
+        assert!(!dir.path().join("out.png").exists(), "{device}");
+    }
 }
 
 /// A mistyped output path fails before any work: no device opened, nothing rendered or

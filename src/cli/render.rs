@@ -200,8 +200,23 @@ struct Rendered {
 
 /// Renders on the open device. With `--device auto`, a scene the GPU refuses (too large
 /// for the adapter's limits, say), or a render the GPU fails (device lost, out of memory),
-/// is rendered on the CPU instead, from the start, with a warning.
+/// is rendered on the CPU instead, from the start, with a warning. A render stopped before
+/// its first complete sample per pixel (Ctrl-C, a signal) is an error on either device, and
+/// not a reason to try the other: the user asked it to stop.
 fn render_on(device: &OpenDevice, args: &RenderArgs, scene: &Scene, range: SampleRange) -> anyhow::Result<Rendered> {
+    let rendered = render_with_fallback(device, args, scene, range)?;
+    if rendered.spp == 0 {
+        bail!("stopped before any sample was complete; nothing to write");
+    }
+    Ok(rendered)
+}
+
+fn render_with_fallback(
+    device: &OpenDevice,
+    args: &RenderArgs,
+    scene: &Scene,
+    range: SampleRange,
+) -> anyhow::Result<Rendered> {
     let OpenDevice::Gpu { gpu, renderer } = device else {
         return render_on_cpu(scene, args, range);
     };
@@ -245,9 +260,6 @@ fn render_on_cpu(scene: &Scene, args: &RenderArgs, range: SampleRange) -> anyhow
     if args.profile {
         crate::diag!("note: --profile times GPU stages; this render ran on the CPU");
     }
-    if s.spp == 0 {
-        bail!("stopped before any sample was complete; nothing to write");
-    }
     Ok(Rendered {
         image: out.image,
         spp: s.spp as u32,
@@ -280,6 +292,8 @@ fn twin_note(twin: u64, batches: u64) -> String {
 fn report_stop(stop: StopReason, spp_done: u64) -> bool {
     match stop {
         StopReason::Completed => false,
+        // `render_on`'s error says it: nothing was kept.
+        _ if spp_done == 0 => true,
         StopReason::TimeLimit => {
             crate::diag!("note: stopped at the time limit with {spp_done} samples per pixel");
             true
@@ -347,9 +361,6 @@ fn render_on_gpu(
         twin_note(out.twin_batches, out.batches)
     );
     let stopped_early = report_stop(out.stop, u64::from(out.spp_done));
-    if out.spp_done == 0 {
-        return Err(GpuError::Validation("stopped before any sample was complete; nothing to write".into()));
-    }
     Ok(Rendered {
         image: out.image,
         spp: out.spp_done,
