@@ -1,7 +1,7 @@
 //! The `lumen` binary under hostile conditions (issue 16): standard output full or closed,
-//! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer, Ctrl-C before the first sample, a second Ctrl-C
-//! while the outputs are written, control characters and megabyte lines in what it quotes,
-//! every kind of line end.
+//! no `XDG_RUNTIME_DIR`, memory limits, time limits on the CPU renderer, Ctrl-C before the
+//! first sample, a second Ctrl-C while the outputs are written, control characters and
+//! megabyte lines in what it quotes, every kind of line end.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
