@@ -1,5 +1,6 @@
-//! Sampling points on area lights (emissive top-level spheres and cubes) as seen from a
-//! shading point, and the solid-angle density of doing so (for MIS).
+//! Sampling points on area lights (emissive top-level spheres, cubes and mesh instances) as
+//! seen from a shading point, and the solid-angle density of doing so (for MIS). A mesh
+//! light is sampled uniformly over its world area ([`crate::prepare::MeshLight`]).
 //!
 //! Two strategies, chosen by the same test in [`AreaLight::uses_cone`] whether sampling or
 //! evaluating the density, so that MIS weights stay consistent:
@@ -45,7 +46,7 @@ use super::offset::error_scale;
 use super::spherical_rectangle::{may_subtend, SphericalRectangle};
 use super::warp::{cone_one_minus_cos, uniform_cone, uniform_cone_pdf, uniform_sphere};
 
-pub use crate::prepare::{AreaLight, CUBE_FACE_MARGIN, SOLID_ANGLE_MAX, SOLID_ANGLE_MIN};
+pub use crate::prepare::{AreaLight, LightSurface, MeshLight, CUBE_FACE_MARGIN, SOLID_ANGLE_MAX, SOLID_ANGLE_MIN};
 
 /// A point sampled on a light, seen from the shading point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,7 +70,7 @@ impl AreaLight {
     /// Whether directions toward this light are drawn from its cone, for a shading point
     /// `x` lying on shape `x_shape`.
     pub fn uses_cone(&self, x: DVec3, x_shape: u32) -> Option<(DVec3, f64, f64)> {
-        let (c, r) = self.sphere?;
+        let LightSurface::Sphere { round: Some((c, r)) } = self.surface else { return None };
         let d = (c - x).length();
         (x_shape != self.shape && d > r).then_some((c, r, d))
     }
@@ -84,8 +85,11 @@ impl AreaLight {
                 let scale = (c.abs() + (r * normal).abs()).max_element();
                 LightPoint { point, scale, normal, object_point: self.transform.inverse().point(point), pdf, uv: None }
             }
-            None if self.mesh.is_some() => self.sample_mesh(x, xi0, xi1),
-            None => self.sample_area(x, x_shape, xi0, xi1),
+            None => match &self.surface {
+                LightSurface::Mesh(m) => self.sample_mesh(m, x, xi0, xi1),
+                LightSurface::Sphere { .. } => self.sample_sphere(x, xi0, xi1),
+                LightSurface::Cube { .. } => self.sample_cube(x, x_shape, xi0, xi1),
+            },
         }
     }
 
@@ -96,12 +100,14 @@ impl AreaLight {
         if let Some((_, r, d)) = self.uses_cone(x, x_shape) {
             return uniform_cone_pdf(cone_one_minus_cos(r, d));
         }
-        if self.mesh.is_some() {
-            return self.mesh_pdf_solid_angle(x, y, n_y);
-        }
+        let kind = match self.surface {
+            LightSurface::Mesh(_) => return self.mesh_pdf_solid_angle(x, y, n_y),
+            LightSurface::Sphere { .. } => ShapeKind::Sphere,
+            LightSurface::Cube { .. } => ShapeKind::Cube,
+        };
         let p_obj = self.transform.inverse().point(y);
-        let n_obj = object_normal(self.kind, p_obj);
-        if self.kind == ShapeKind::Sphere {
+        let n_obj = object_normal(kind, p_obj);
+        if kind == ShapeKind::Sphere {
             return self.area_pdf_solid_angle(x, y, n_obj, self.sphere_area(n_obj));
         }
         let faces = self.cube_faces(x, x_shape);
@@ -118,10 +124,11 @@ impl AreaLight {
     /// The face of `axis` that `faces` samples, seen from `x` as a spherical rectangle,
     /// where NEE samples it by solid angle (module documentation): a rectangular face, the
     /// only one of its pair sampled, subtending between [`SOLID_ANGLE_MIN`] and
-    /// [`SOLID_ANGLE_MAX`]. `None`: sampled by area.
+    /// [`SOLID_ANGLE_MAX`]. `None`: sampled by area (and for a light that is not a cube).
     pub fn solid_angle_face(&self, x: DVec3, faces: &CubeFaces, axis: usize) -> Option<SphericalRectangle> {
+        let LightSurface::Cube { rectangular_faces, .. } = self.surface else { return None };
         let side = faces.side[axis];
-        if side == 0.0 || !self.rectangular_faces[axis] {
+        if side == 0.0 || !rectangular_faces[axis] {
             return None;
         }
         let (u, v) = face_axes(axis);
@@ -137,14 +144,18 @@ impl AreaLight {
     }
 
     /// The cube faces NEE samples from shading point `x` on shape `x_shape` (module
-    /// documentation): the ones `x` is in front of, else all.
+    /// documentation): the ones `x` is in front of, else all; none for a light that is not
+    /// a cube.
     pub fn cube_faces(&self, x: DVec3, x_shape: u32) -> CubeFaces {
+        let LightSurface::Cube { face_areas, .. } = self.surface else {
+            return CubeFaces { weight: [0.0; 3], side: [0.0; 3] };
+        };
         if x_shape != self.shape {
             let p = self.transform.inverse().point(x);
             let mut faces = CubeFaces { weight: [0.0; 3], side: [0.0; 3] };
             for axis in 0..3 {
                 if p[axis].abs() > 0.5 + CUBE_FACE_MARGIN {
-                    faces.weight[axis] = self.face_areas[axis];
+                    faces.weight[axis] = face_areas[axis];
                     faces.side[axis] = p[axis].signum();
                 }
             }
@@ -152,7 +163,7 @@ impl AreaLight {
                 return faces;
             }
         }
-        CubeFaces { weight: self.face_areas.map(|a| 2.0 * a), side: [0.0; 3] }
+        CubeFaces { weight: face_areas.map(|a| 2.0 * a), side: [0.0; 3] }
     }
 
     /// World area of the unit sphere under the transform, by Nanson's formula at `n_obj`
@@ -168,24 +179,23 @@ impl AreaLight {
         if let Pigment::Uniform(c) = emitted {
             return *c;
         }
-        if let Some(uv) = lp.uv {
-            return emitted.color_at(uv.x, uv.y);
-        }
-        let n = object_normal(self.kind, lp.object_point);
-        // Cube faces are numbered 2·axis + (1 on the + side), as the shapes number them.
-        let face = if self.kind == ShapeKind::Cube {
-            let axis = n.abs().max_position() as u8;
-            2 * axis + u8::from(n[axis as usize] > 0.0)
-        } else {
-            0
+        // Mesh points carry their uv; the unit shapes' follows from the object point.
+        let uv = match (&self.surface, lp.uv) {
+            (_, Some(uv)) => uv,
+            (LightSurface::Cube { .. }, None) => {
+                // Faces are numbered 2·axis + (1 on the + side), as the shapes number them.
+                let n = object_normal(ShapeKind::Cube, lp.object_point);
+                let axis = n.abs().max_position() as u8;
+                let face = 2 * axis + u8::from(n[axis as usize] > 0.0);
+                super::shapes::surface(ShapeKind::Cube, lp.object_point, face).uv
+            }
+            (_, None) => super::shapes::surface(ShapeKind::Sphere, lp.object_point, 0).uv,
         };
-        let uv = super::shapes::surface(self.kind, lp.object_point, face).uv;
         emitted.color_at(uv.x, uv.y)
     }
 
     /// A triangle by its world-area share (ξ0), a uniform point on it (the rest of ξ0, ξ1).
-    fn sample_mesh(&self, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
-        let Some(m) = &self.mesh else { unreachable!("sample_mesh is called for meshes") };
+    fn sample_mesh(&self, m: &MeshLight, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
         let (t, u) = m.choose(xi0);
         let [p0, p1, p2] = m.mesh.triangle(t);
         let su = u.sqrt();
@@ -220,29 +230,33 @@ impl AreaLight {
         dist2 / (cos_light * self.area)
     }
 
-    fn sample_area(&self, x: DVec3, x_shape: u32, xi0: f64, xi1: f64) -> LightPoint {
-        let (p_obj, n_obj, y, pdf) = match self.kind {
-            ShapeKind::Sphere => {
-                let p = uniform_sphere(xi0, xi1);
-                let y = self.transform.point(p);
-                (p, p, y, self.area_pdf_solid_angle(x, y, p, self.sphere_area(p)))
-            }
-            _ => {
-                // A face by ξ0, then a point on it from the rest of ξ0 and ξ1: by solid
-                // angle or by area (module documentation).
-                let faces = self.cube_faces(x, x_shape);
-                let face = CubeFace::pick(&faces, xi0);
-                let rect = self.solid_angle_face(x, &faces, face.axis);
-                let (s, t) = rect.map_or((face.u, xi1), |r| r.sample(face.u, xi1));
-                let (p, n) = face.point(s, t);
-                let y = self.transform.point(p);
-                let pdf = match rect {
-                    Some(r) => faces.solid_angle_pdf(face.axis, &r),
-                    None => self.area_pdf_solid_angle(x, y, n, faces.area()),
-                };
-                (p, n, y, pdf)
-            }
+    /// A point uniform in object space on the unit sphere (area sampling: ellipsoids, and
+    /// points inside or on the light).
+    fn sample_sphere(&self, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
+        let p = uniform_sphere(xi0, xi1);
+        let y = self.transform.point(p);
+        self.unit_shape_point(p, p, y, self.area_pdf_solid_angle(x, y, p, self.sphere_area(p)))
+    }
+
+    /// A face by ξ0, then a point on it from the rest of ξ0 and ξ1: by solid angle or by
+    /// area (module documentation).
+    fn sample_cube(&self, x: DVec3, x_shape: u32, xi0: f64, xi1: f64) -> LightPoint {
+        let faces = self.cube_faces(x, x_shape);
+        let face = CubeFace::pick(&faces, xi0);
+        let rect = self.solid_angle_face(x, &faces, face.axis);
+        let (s, t) = rect.map_or((face.u, xi1), |r| r.sample(face.u, xi1));
+        let (p, n) = face.point(s, t);
+        let y = self.transform.point(p);
+        let pdf = match rect {
+            Some(r) => faces.solid_angle_pdf(face.axis, &r),
+            None => self.area_pdf_solid_angle(x, y, n, faces.area()),
         };
+        self.unit_shape_point(p, n, y, pdf)
+    }
+
+    /// The sampled point `y` (object point `p_obj`, outward object normal `n_obj`) of a unit
+    /// sphere or cube.
+    fn unit_shape_point(&self, p_obj: DVec3, n_obj: DVec3, y: DVec3, pdf: f64) -> LightPoint {
         LightPoint {
             point: y,
             scale: error_scale(&self.transform.matrix(), p_obj),
@@ -423,12 +437,13 @@ mod tests {
 
     /// Monte Carlo estimate of the solid angle of the light's visible (front-facing) part:
     /// E[visible / pdf] = Ω. Also checks that `pdf` agrees with the sample's density.
+    /// `force_area`: a sphere light sampled by area where it would use its cone.
     fn solid_angle_estimate(light: &AreaLight, x: DVec3, force_area: bool, n: usize) -> f64 {
         let mut rng = Pcg32::new(3, 5);
         let mut sum = 0.0;
         for _ in 0..n {
             let (a, b) = (rng.next_f64(), rng.next_f64());
-            let s = if force_area { light.sample_area(x, u32::MAX, a, b) } else { light.sample(x, u32::MAX, a, b) };
+            let s = if force_area { light.sample_sphere(x, a, b) } else { light.sample(x, u32::MAX, a, b) };
             if s.pdf <= 0.0 {
                 continue;
             }
@@ -481,7 +496,7 @@ mod tests {
         let t = Transform::translation(DVec3::new(1.0, 2.0, 3.0)) * Transform::scaling(DVec3::splat(0.5));
         let scene = scene_with(ShapeKind::Sphere, t);
         let light = AreaLight::new(&scene, 0).unwrap();
-        let (c, r) = light.sphere.unwrap();
+        let LightSurface::Sphere { round: Some((c, r)) } = light.surface else { panic!("{light:?}") };
         assert!((r - 0.5).abs() < 1e-15);
         let x = c + DVec3::new(0.0, 1.5, 0.2);
         let omega = 2.0 * PI * cone_one_minus_cos(r, (c - x).length());
@@ -527,7 +542,7 @@ mod tests {
         let t = Transform::scaling(DVec3::new(2.0, 0.5, 1.0));
         let scene = scene_with(ShapeKind::Cube, t);
         let light = AreaLight::new(&scene, 0).unwrap();
-        assert!(light.sphere.is_none());
+        assert!(matches!(light.surface, LightSurface::Cube { .. }));
         let h = 0.7;
         let x = DVec3::new(0.0, 0.0, 0.5 + h);
         let (a, b) = (2.0f64, 0.5f64);
@@ -594,8 +609,9 @@ mod tests {
         let below = DVec3::new(1.02, 0.05, 1.2);
         let faces = light.cube_faces(below, u32::MAX);
         assert_eq!(faces.side, [0.0, 0.0, -1.0]);
-        assert!((faces.area() - light.face_areas[2]).abs() < 1e-15);
-        assert!((light.face_areas[2] - 0.2).abs() < 1e-12);
+        let LightSurface::Cube { face_areas, .. } = light.surface else { panic!("{light:?}") };
+        assert!((faces.area() - face_areas[2]).abs() < 1e-15);
+        assert!((face_areas[2] - 0.2).abs() < 1e-12);
         // Below and to the side: the bottom face and the side facing the point.
         let aside = DVec3::new(1.8, -0.9, 0.5);
         let faces = light.cube_faces(aside, u32::MAX);
@@ -705,7 +721,7 @@ mod tests {
     fn ellipsoids_use_area_sampling_and_points_on_the_light_too() {
         let scene = scene_with(ShapeKind::Sphere, Transform::scaling(DVec3::new(1.0, 2.0, 1.0)));
         let light = AreaLight::new(&scene, 0).unwrap();
-        assert!(light.sphere.is_none());
+        assert_eq!(light.surface, LightSurface::Sphere { round: None });
         let scene = scene_with(ShapeKind::Sphere, Transform::rotation_x(30.0));
         let light = AreaLight::new(&scene, 0).unwrap();
         assert!(light.uses_cone(DVec3::new(3.0, 0.0, 0.0), 7).is_some());

@@ -308,16 +308,16 @@ pub struct AreaLight {
     pub shape: u32,
     /// |determinant| of the linear part of the shape's object-to-world map.
     pub det: f32,
-    /// Cubes and meshes: the world surface area.
+    /// Cubes and meshes: the world surface area; 0 for spheres.
     pub area: f32,
     /// Meshes: offset in `floats` of the triangle CDF (file order; then each triangle's
     /// index in `tri_positions`, as bits).
     pub mesh_cdf: u32,
-    /// Cubes: `prepare::AreaLight::face_areas` (one face of each pair, world area).
+    /// Cubes: `LightSurface::Cube::face_areas` (one face of each pair, world area); 0 otherwise.
     pub face_areas: [f32; 3],
     /// Meshes: the triangle count; 0 for spheres and cubes.
     pub mesh_triangles: u32,
-    /// Cubes: bit `axis` set where `prepare::AreaLight::rectangular_faces[axis]`.
+    /// Cubes: bit `axis` set where `LightSurface::Cube::rectangular_faces[axis]`; 0 otherwise.
     pub rectangular_faces: u32,
     /// Padding to a multiple of 16 bytes (the WGSL struct's alignment).
     pub _pad0: u32,

@@ -27,7 +27,7 @@ use crate::optics::energy_tables::{energy_tables, CONDUCTOR_NODES, DIELECTRIC_NO
 use crate::optics::ggx::alpha_of;
 use crate::prepare::image_distribution;
 use crate::prepare::pixel_samples::PixelSamples;
-use crate::prepare::AreaLight;
+use crate::prepare::{AreaLight, LightSurface};
 use crate::sampling::distribution::Distribution2D;
 use crate::scene::{Brdf, CsgOp, Environment, Pigment, Projection, Renderer, Scene, Shape, ShapeKind, Transform};
 
@@ -636,7 +636,7 @@ fn packed_area_light(
     let light = AreaLight::new(scene, shape)
         .ok_or_else(|| crate::scene::SceneError::Invalid(format!("shape {shape}: an emissive surface of zero area")))?;
     let (mut mesh_cdf, mut mesh_triangles) = (0, 0);
-    if let (Some(m), Shape::Mesh(instance)) = (&light.mesh, &scene.shapes[shape]) {
+    if let (LightSurface::Mesh(m), Shape::Mesh(instance)) = (&light.surface, &scene.shapes[shape]) {
         let packed = &meshes[&(std::sync::Arc::as_ptr(&instance.mesh) as usize)];
         mesh_cdf = count_u32("floats", floats.len())?;
         mesh_triangles = count_u32("emissive triangles", m.cdf.len())?;
@@ -644,22 +644,25 @@ fn packed_area_light(
         floats.extend(m.cdf.iter().map(|&c| c as f32));
         floats.extend(packed.leaf_of.iter().map(|&i| f32::from_bits(i)));
     }
-    let sphere = match light.sphere {
-        Some((c, r)) => {
-            let c = c - origin;
-            [c.x as f32, c.y as f32, c.z as f32, r as f32]
-        }
-        None => [0.0; 4],
-    };
+    let mut sphere = [0.0; 4];
+    if let LightSurface::Sphere { round: Some((c, r)) } = light.surface {
+        let c = c - origin;
+        sphere = [c.x as f32, c.y as f32, c.z as f32, r as f32];
+    }
+    let (mut face_areas, mut rectangular_faces) = ([0.0; 3], 0);
+    if let LightSurface::Cube { face_areas: areas, rectangular_faces: rectangular } = light.surface {
+        face_areas = areas.map(|a| a as f32);
+        rectangular_faces = (0..3).filter(|&axis| rectangular[axis]).map(|axis| 1 << axis).sum();
+    }
     Ok(layout::AreaLight {
         sphere,
         shape: shape_ref,
         det: light.det as f32,
         area: light.area as f32,
         mesh_cdf,
-        face_areas: light.face_areas.map(|a| a as f32),
+        face_areas,
         mesh_triangles,
-        rectangular_faces: (0..3).filter(|&axis| light.rectangular_faces[axis]).map(|axis| 1 << axis).sum(),
+        rectangular_faces,
         _pad0: 0,
         _pad1: 0,
         _pad2: 0,

@@ -126,28 +126,41 @@ pub const SOLID_ANGLE_MAX: f64 = 6.0;
 pub struct AreaLight {
     /// Index of the shape in [`Scene::shapes`].
     pub shape: u32,
-    /// The unit primitive, a sphere or a cube; mesh lights hold `Cube` here and are told
-    /// apart by [`AreaLight::mesh`].
-    pub kind: ShapeKind,
     /// Object-to-world transformation of the shape.
     pub transform: Transform,
     /// The shape's (emissive) material.
     pub material: MaterialId,
     /// |det| of the linear part of the object-to-world transform.
     pub det: f64,
-    /// World centre and radius when the shape is a sphere under a similarity transform.
-    pub sphere: Option<(DVec3, f64)>,
-    /// Cubes: the world area of one face of each pair (±x, ±y, ±z; both faces of a pair
-    /// have the same). NEE chooses among the faces a shading point is in front of by these
-    /// (`cpu::area_light`, "visible faces").
-    pub face_areas: [f64; 3],
-    /// Cubes: per axis, whether that pair's faces are rectangles (the transform keeps the
-    /// two edges orthogonal), which NEE may sample by solid angle.
-    pub rectangular_faces: [bool; 3],
-    /// Cubes and meshes: the world surface area (sampling density 1 / area).
+    /// Cubes and meshes: the world surface area (sampling density 1 / area); spheres, whose
+    /// density varies over an ellipsoid, compute theirs per point.
     pub area: f64,
-    /// Meshes: the triangles and what sampling them needs.
-    pub mesh: Option<MeshLight>,
+    /// The light's surface, with what sampling it needs.
+    pub surface: LightSurface,
+}
+
+/// What an area light's surface is: the unit sphere or cube, or a mesh, under the light's
+/// transformation.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LightSurface {
+    /// The unit sphere.
+    Sphere {
+        /// World centre and radius where the transformation is a similarity (a round
+        /// sphere in the world), whose subtended cone NEE samples; `None` for an ellipsoid.
+        round: Option<(DVec3, f64)>,
+    },
+    /// The unit cube.
+    Cube {
+        /// World area of one face of each pair (±x, ±y, ±z; both faces of a pair have the
+        /// same). NEE chooses among the faces a shading point is in front of by these
+        /// (`cpu::area_light`, "visible faces").
+        face_areas: [f64; 3],
+        /// Per axis, whether that pair's faces are rectangles (the transform keeps the
+        /// two edges orthogonal), which NEE may sample by solid angle.
+        rectangular_faces: [bool; 3],
+    },
+    /// A mesh instance: its triangles and what sampling them needs.
+    Mesh(MeshLight),
 }
 
 /// An emissive mesh instance, sampled uniformly over its world surface: a triangle by its
@@ -193,41 +206,33 @@ impl AreaLight {
             cdf.iter_mut().for_each(|c| *c /= sum);
             return Some(Self {
                 shape: shape as u32,
-                kind: ShapeKind::Cube,
                 transform: m.transform,
                 material: m.material,
                 det: lin.determinant().abs(),
-                sphere: None,
-                face_areas: [0.0; 3],
-                rectangular_faces: [false; 3],
                 area: sum,
-                mesh: Some(MeshLight { mesh: m.mesh.clone(), cdf }),
+                surface: LightSurface::Mesh(MeshLight { mesh: m.mesh.clone(), cdf }),
             });
         }
         let Shape::Primitive(p) = &scene.shapes[shape] else { return None };
-        if !matches!(p.kind, ShapeKind::Sphere | ShapeKind::Cube) {
-            return None;
-        }
         let lin = DMat3::from_mat4(p.transform.matrix());
-        let sphere = (p.kind == ShapeKind::Sphere).then(|| similarity_scale(lin)).flatten();
-        // World area of one unit face per axis (Nanson: |det M| · |M⁻ᵀ e_i|).
         let det = lin.determinant().abs();
-        let faces = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| det * p.transform.normal(e).length());
-        Some(Self {
-            shape: shape as u32,
-            kind: p.kind,
-            transform: p.transform,
-            material: p.material,
-            det: lin.determinant().abs(),
-            sphere: sphere.map(|r| (p.transform.point(DVec3::ZERO), r)),
-            face_areas: faces,
-            rectangular_faces: [0, 1, 2].map(|axis| {
-                let (a, b) = (lin.col((axis + 1) % 3), lin.col((axis + 2) % 3));
-                a.dot(b).abs() <= 1e-9 * a.length() * b.length()
-            }),
-            area: 2.0 * faces.iter().sum::<f64>(),
-            mesh: None,
-        })
+        let (surface, area) = match p.kind {
+            ShapeKind::Sphere => {
+                let round = similarity_scale(lin).map(|r| (p.transform.point(DVec3::ZERO), r));
+                (LightSurface::Sphere { round }, 0.0)
+            }
+            ShapeKind::Cube => {
+                // World area of one unit face per axis (Nanson: |det M| · |M⁻ᵀ e_i|).
+                let face_areas = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| det * p.transform.normal(e).length());
+                let rectangular_faces = [0, 1, 2].map(|axis| {
+                    let (a, b) = (lin.col((axis + 1) % 3), lin.col((axis + 2) % 3));
+                    a.dot(b).abs() <= 1e-9 * a.length() * b.length()
+                });
+                (LightSurface::Cube { face_areas, rectangular_faces }, 2.0 * face_areas.iter().sum::<f64>())
+            }
+            _ => return None,
+        };
+        Some(Self { shape: shape as u32, transform: p.transform, material: p.material, det, area, surface })
     }
 }
 
