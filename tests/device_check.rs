@@ -35,9 +35,17 @@ fn the_device_check_writes_every_report() {
     assert!(bench.contains("| gpu |") && bench.contains("| cpu |") && bench.contains("cornell.sl"), "{bench}");
     let large = read("bench_large.md");
     assert!(large.contains("| gpu |") && !large.contains("| cpu |"), "{large}");
-    // The render's summary, the stage profile with the busy fraction, the process's time.
+    // The render's summary, the stage profile with the busy fraction, the process's time
+    // to its end (the device closed).
     let cornell = read("cornell.txt");
-    for want in ["16 of 16 samples per pixel", "device busy", "s waiting for read-backs", "process: render", "wall "] {
+    let wanted = [
+        "16 of 16 samples per pixel",
+        "device busy",
+        "s waiting for read-backs",
+        "process: render",
+        "process: closing",
+    ];
+    for want in wanted.into_iter().chain(["wall "]) {
         assert!(cornell.contains(want), "{want}: {cornell}");
     }
     // One line per scene in the log, each scene's table in the bench reports.

@@ -472,7 +472,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         crate::diag!("process: scene {loaded:.3} s, device start-up {:.3} s", started.elapsed().as_secs_f64() - loaded);
     }
     let Some(frames) = frames else {
-        return render_one(&device, &args, args.script.time, &outputs, &tm, part, first).map(|_| ());
+        render_one(&device, &args, args.script.time, &outputs, &tm, part, first)?;
+        if args.profile {
+            // Closing the device (its queue drained, its buffers freed, a twin's thread
+            // joined) is part of the process's time too.
+            let closing = Instant::now();
+            drop(device);
+            crate::diag!("process: closing the device {:.3} s", closing.elapsed().as_secs_f64());
+        }
+        return Ok(());
     };
     // `--shard I/N` with frames: contiguous runs of frames, as for samples.
     let mine = match part {
