@@ -23,8 +23,7 @@ pub enum SampleRangeError {
     /// The text given for a shard (`--shard`) is not `I/N` with I < N.
     #[error("{0:?} is not a shard: expected I/N with whole numbers 0 ≤ I < N")]
     ShardSyntax(String),
-    /// The render has fewer samples per pixel than shards (or the shard is out of range), so
-    /// this shard would take none.
+    /// The render has fewer samples per pixel than shards, so some shard would take none.
     #[error("shard {index}/{count} of {total} samples per pixel is empty (use at most {total} shards)")]
     EmptyShard {
         /// The shard asked for, from 0.
@@ -78,15 +77,21 @@ impl SampleRange {
     }
 
     /// Shard `index` of `count` contiguous, nearly equal ranges covering `[0, total)`
-    /// (the first `total mod count` shards are one sample longer). Every shard is non-empty.
+    /// (the first `total mod count` shards are one sample longer). Every shard is non-empty:
+    /// more shards than samples is an error, as is a shard that is not `0 ≤ index < count`.
     ///
     /// ```
-    /// use lumen::prepare::SampleRange;
+    /// use lumen::prepare::{SampleRange, SampleRangeError};
     /// let shards: Vec<_> = (0..3).map(|i| SampleRange::shard(i, 3, 10).unwrap()).collect();
     /// assert_eq!(shards.iter().map(|r| (r.begin, r.end)).collect::<Vec<_>>(), [(0, 4), (4, 7), (7, 10)]);
+    /// assert_eq!(SampleRange::shard(0, 11, 10), Err(SampleRangeError::EmptyShard { index: 0, count: 11, total: 10 }));
+    /// assert_eq!(SampleRange::shard(3, 3, 10), Err(SampleRangeError::ShardSyntax("3/3".into())));
     /// ```
     pub fn shard(index: u32, count: u32, total: u32) -> Result<Self, SampleRangeError> {
-        if count == 0 || index >= count || count > total {
+        if count == 0 || index >= count {
+            return Err(SampleRangeError::ShardSyntax(format!("{index}/{count}")));
+        }
+        if count > total {
             return Err(SampleRangeError::EmptyShard { index, count, total });
         }
         let (base, extra) = (total / count, total % count);
