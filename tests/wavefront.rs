@@ -383,7 +383,7 @@ fn a_device_lost_mid_render_is_an_error() {
         render(&gpu, &scene, &opts)
     });
     let err = result.expect_err("65,536 spp cannot finish in 0.3 s");
-    println!("{err}");
+    assert!(matches!(err, lumen::gpu::GpuError::DeviceLost(_)), "{err}");
 }
 
 /// Issue 12, goal 3: a FUSE of 1,000 overlapping spheres (interval bound 1,000) renders on

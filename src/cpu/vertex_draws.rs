@@ -58,10 +58,12 @@ mod tests {
     }
 
     /// With 16 samples, draw k of sample i lies in its stratum of 16 (2D: of the 4 × 4
-    /// grid), at the stream's 24-bit draw scaled into it and rounded down to 24 bits.
+    /// grid), at the stream's 24-bit draw scaled into it and rounded down to 24 bits, and
+    /// the 16 samples fill every stratum once.
     #[test]
     fn draws_sit_in_their_strata() {
         let word = seed_word(PcgSeed::default());
+        let mut filled: [std::collections::BTreeSet<(u64, u64)>; 5] = Default::default();
         for i in 0..16 {
             let strata = VertexStrata::new(word, 9, i, 1, 4);
             let mut a = Pcg32::new(7, u64::from(i));
@@ -76,6 +78,12 @@ mod tests {
                 let stratum = d[k] * m as f64;
                 assert_eq!(bits, ((stratum.floor() as u64) << 24 | x[k]) / m, "draw {k} of sample {i}");
             }
+            // The 1D draws' strata of 16, and the 2D pairs' cells of the 4 × 4 grid.
+            let cell = |k: usize, m: f64| (d[k] * m).floor() as u64;
+            for (set, (a, b)) in filled.iter_mut().zip([(0, 0), (3, 3), (6, 6), (1, 2), (4, 5)]) {
+                set.insert(if a == b { (cell(a, 16.0), 0) } else { (cell(a, 4.0), cell(b, 4.0)) });
+            }
         }
+        assert!(filled.iter().all(|set| set.len() == 16), "{filled:?}");
     }
 }

@@ -150,8 +150,14 @@ pub struct AdapterChoice {
 impl AdapterChoice {
     /// The command line's `--adapter` if given, else the `LUMEN_ADAPTER` environment variable.
     pub fn new(cli: Option<String>) -> Self {
-        let env = std::env::var(ADAPTER_ENV).ok().filter(|s| !s.trim().is_empty());
-        Self { name: cli.filter(|s| !s.trim().is_empty()).or(env) }
+        Self::chosen(cli, std::env::var(ADAPTER_ENV).ok())
+    }
+
+    /// The rule of [`Self::new`] on given values: the command line's name over the
+    /// environment's, a blank name (empty or spaces) counting as none.
+    fn chosen(cli: Option<String>, env: Option<String>) -> Self {
+        let given = |s: Option<String>| s.filter(|s| !s.trim().is_empty());
+        Self { name: given(cli).or(given(env)) }
     }
 
     /// Only the environment (`LUMEN_ADAPTER`): what tests and library callers use.
@@ -669,13 +675,17 @@ mod tests {
 
     #[test]
     fn cli_choice_overrides_environment_and_blank_means_none() {
-        // Only the CLI path is tested here: tests must not mutate the process environment.
-        assert_eq!(AdapterChoice { name: Some("llvm".into()) }.name.as_deref(), Some("llvm"));
-        let c = AdapterChoice::new(Some("LLVMpipe".into()));
-        assert_eq!(c.name.as_deref(), Some("LLVMpipe"));
-        if std::env::var(ADAPTER_ENV).is_err() {
-            assert_eq!(AdapterChoice::new(Some("  ".into())).name, None);
-        }
+        // The rule on given values: tests must not mutate the process environment.
+        let name =
+            |cli: Option<&str>, env: Option<&str>| AdapterChoice::chosen(cli.map(Into::into), env.map(Into::into)).name;
+        assert_eq!(name(Some("LLVMpipe"), Some("nvidia")).as_deref(), Some("LLVMpipe"));
+        assert_eq!(name(None, Some("nvidia")).as_deref(), Some("nvidia"));
+        assert_eq!(name(Some("  "), Some("nvidia")).as_deref(), Some("nvidia"));
+        assert_eq!(name(Some("LLVMpipe"), Some(" ")).as_deref(), Some("LLVMpipe"));
+        assert_eq!(name(Some(""), Some("\t")), None);
+        assert_eq!(name(None, None), None);
+        // `new` reads the real environment through the same rule.
+        assert_eq!(AdapterChoice::new(Some("LLVMpipe".into())).name.as_deref(), Some("LLVMpipe"));
     }
 
     #[test]
@@ -687,7 +697,8 @@ mod tests {
                 assert_eq!(available.len(), list_adapters().len());
                 assert!(err.to_string().contains("available adapters"));
             }
-            GpuError::NoAdapter => {}
+            // No adapter at all: a skip, unless GPU tests are required.
+            GpuError::NoAdapter => assert!(!crate::gpu::gpu_required(), "{err}"),
             other => panic!("unexpected error {other}"),
         }
     }

@@ -358,7 +358,13 @@ mod tests {
     }
 
     /// The tables between nodes agree with fresh integrals (finer rule) within what the
-    /// white furnace tolerates.
+    /// white furnace tolerates: the conductor's albedo, and each of the dielectric's two lobes
+    /// (a swap or a leak between reflection and transmission would keep their sum). One place
+    /// is exempt from the lobes' check, only their sum holding there: leaving a denser medium
+    /// (η < 1) at low roughness, within 0.13 in μ above the critical angle, reflection falls
+    /// from total to a few per cent faster than linear interpolation between nodes follows
+    /// (α 0.05, μ 0.71, η 1/1.33: 0.355 for 0.215, measured 2026-12-07). The renderers read
+    /// the lobes only summed or averaged over μ there (DESIGN.md "Rough materials").
     #[test]
     fn interpolation_error_is_small() {
         let t = energy_tables();
@@ -368,9 +374,16 @@ mod tests {
                 let e = conductor_albedo_integral(alpha, o, 96);
                 assert!((t.conductor_albedo(mu, alpha) - e).abs() < 4e-3, "α {alpha} μ {mu}");
                 for eta in [1.5, 1.0 / 1.33] {
-                    let [r, tr] = dielectric_albedo_integral(alpha, eta, o, 96);
-                    let [tr_, tt_] = t.dielectric_albedo(mu, alpha, eta);
-                    assert!((r + tr - tr_ - tt_).abs() < 6e-3, "α {alpha} μ {mu} η {eta}: {} vs {}", r + tr, tr_ + tt_);
+                    // Each lobe on its own: a swap or a leak between reflection and
+                    // transmission would keep their sum.
+                    let fresh = dielectric_albedo_integral(alpha, eta, o, 96);
+                    let table = t.dielectric_albedo(mu, alpha, eta);
+                    let sum = (fresh[0] + fresh[1] - table[0] - table[1]).abs();
+                    assert!(sum < 6e-3, "α {alpha} μ {mu} η {eta}: {fresh:?} vs {table:?}");
+                    let critical = (1.0 - eta * eta).max(0.0).sqrt();
+                    let near_edge = alpha < 0.1 && eta < 1.0 && (0.0..2.0 / 15.0).contains(&(mu - critical));
+                    let lobes = (fresh[0] - table[0]).abs().max((fresh[1] - table[1]).abs());
+                    assert!(near_edge || lobes < 6e-3, "α {alpha} μ {mu} η {eta}: {fresh:?} vs {table:?}");
                 }
             }
         }

@@ -286,7 +286,12 @@ mod tests {
             let ShapeNode::Csg { children, .. } = c.node() else { panic!("not a CSG node") };
             assert_eq!(children[0].key(), children[1].key());
         }
-        assert_eq!(c, c.clone());
+        // Two roots built apart over the same shared children: equal after one level, where
+        // a walk of the 2⁷⁰-leaf tree would never end (this test would hang, not pass).
+        let ShapeNode::Csg { children, .. } = c.node() else { panic!("not a CSG node") };
+        let twin = ShapeValue::csg(CsgOp::Fuse, vec![children[0].clone(), children[1].clone()], Transform::IDENTITY);
+        assert!(!Arc::ptr_eq(&c.0, &twin.0));
+        assert_eq!(c, twin);
         // Equal trees built apart still compare equal.
         let a = ShapeValue::csg(CsgOp::Unite, vec![sphere(), sphere()], Transform::IDENTITY);
         let b = ShapeValue::csg(CsgOp::Unite, vec![sphere(), sphere()], Transform::IDENTITY);

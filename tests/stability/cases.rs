@@ -299,6 +299,14 @@ fn analytic_material(scene: &Scene, shape: &Shape, col: usize, row: usize, e: f6
 pub const CPU_MARGIN: f64 = 1e-4;
 pub const GPU_MARGIN: f64 = 1e-2;
 
+/// The most pixels of an image an analytic check may skip as ambiguous (within its margin
+/// of an edge): a few per cent, so that a broken classifier cannot pass a case by calling
+/// most of the image ambiguous.
+fn check_ambiguous(scene: &Scene, ambiguous: usize) {
+    let pixels = scene.width as usize * scene.height as usize;
+    assert!(ambiguous * 20 <= pixels, "{ambiguous} of {pixels} pixels ambiguous");
+}
+
 /// Flat rendering: pixels whose colour is not that of the analytic first hit's material
 /// (black for a miss), out of the unambiguous pixels; returns (mismatches, ambiguous).
 fn flat_mismatches(scene: &Scene, img: &HdrImage, shape: &Shape, e: f64) -> (usize, usize) {
@@ -319,6 +327,7 @@ fn flat_mismatches(scene: &Scene, img: &HdrImage, shape: &Shape, e: f64) -> (usi
             }
         }
     }
+    check_ambiguous(scene, ambiguous);
     (bad, ambiguous)
 }
 
@@ -473,6 +482,8 @@ fn sky_lit_classified(
     let (mut ca, mut ga) = (0, 0);
     let c = err(&cpu, CPU_MARGIN, &mut ca);
     let gerr = gpu_img.as_ref().map(|i| err(i, GPU_MARGIN, &mut ga));
+    check_ambiguous(scene, ca);
+    check_ambiguous(scene, ga);
     let agree = gpu_img.as_ref().map(|g| agreement(g, &cpu));
     (c, gerr, agree, ambiguous_note(ca, gerr.map(|_| ga)))
 }

@@ -606,13 +606,24 @@ mod tests {
             ("zero", std::mem::offset_of!(BatchUniform, zero)),
             ("shard_slots", std::mem::offset_of!(BatchUniform, shard_slots)),
             ("pixel_stride", std::mem::offset_of!(BatchUniform, pixel_stride)),
+            ("_pad0", std::mem::offset_of!(BatchUniform, _pad)),
         ];
+        assert_eq!(members.len(), rust.len());
         for (m, (name, offset)) in members.iter().zip(rust) {
             assert_eq!((m.name.as_deref(), m.offset as usize), (Some(name), offset));
         }
-        let mut bindings: Vec<u32> = StateBuffer::ALL.iter().map(|b| b.binding()).collect();
+        // Each buffer is declared in group 0 at the binding the host binds it to, and no two
+        // of the module's resources share a binding.
+        let declared: Vec<(String, naga::ResourceBinding)> =
+            v.module.global_variables.iter().filter_map(|(_, g)| Some((g.name.clone()?, g.binding?))).collect();
+        for b in &alone {
+            let at = declared.iter().find(|(name, _)| name == b.declaration_name()).map(|(_, r)| r);
+            assert_eq!(at, Some(&naga::ResourceBinding { group: 0, binding: b.binding() }), "{b:?}");
+        }
+        let mut bindings: Vec<(u32, u32)> = declared.iter().map(|(_, r)| (r.group, r.binding)).collect();
+        bindings.sort_unstable();
         bindings.dedup();
-        assert_eq!(bindings.len(), StateBuffer::ALL.len());
+        assert_eq!(bindings.len(), declared.len(), "{declared:?}");
     }
 
     #[test]
