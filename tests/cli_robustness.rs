@@ -607,6 +607,34 @@ fn sizes_out_of_range_are_usage_errors_for_every_command() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "only tiny.sl is left");
 }
 
+/// Whole-number arguments say what they accept: a negative value is not taken for an
+/// unknown flag (clap advised `-- -4`), a fraction or a word is not met with Rust's
+/// "invalid digit found in string", and a huge count hears the argument's range, not u32's.
+#[test]
+fn whole_number_arguments_say_what_they_accept() {
+    let dir = scene_dir();
+    for (args, says) in [
+        (&["--width", "-4"][..], "-4 is negative; expected a whole number from 1 to 32768"),
+        (&["--width", "4.5"], "4.5 is not a whole number; expected one from 1 to 32768"),
+        (&["--spp", "99999999999"], "99999999999 is not in 1..=1048576"),
+        (&["--spp", "-1"], "-1 is negative; expected a whole number from 1 to 1048576"),
+        (&["--seed", "abc"], "\"abc\" is not a number; expected a whole number from 0 to 18446744073709551615"),
+        (&["--queue-shards", "40"], "40 is not in 1..=32"),
+        (&["--time-limit", "-1"], "the time limit must be a finite number of seconds ≥ 0"),
+    ] {
+        let o = lumen(dir.path())
+            .args(["render", "tiny.sl", "--device", "cpu", "-o", "t.png"])
+            .args(args)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!err.contains("invalid digit") && !err.contains("unexpected argument"), "{args:?}: {err}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "only tiny.sl is left");
+}
+
 /// What lumen prints quotes its input, and a terminal obeys the control characters it is
 /// sent: a script's `ESC [ 2 J` cleared the screen when its line was quoted in an error.
 /// Now no control character but tab and newline reaches standard error or output (they are

@@ -113,10 +113,10 @@ fn an_unavailable_gpu_is_skipped_with_a_warning() {
 fn bad_arguments_fail_clearly() {
     let dir = tempfile::tempdir().unwrap();
     let cases: [(&[&str], &str); 5] = [
-        (&["--device", "cpu", "--spp", "0"], "--spp must be 1..="),
+        (&["--device", "cpu", "--spp", "0"], "'--spp <SPP>': 0 is not in 1..=1048576"),
         (&["--device", "tpu"], "tpu"),
-        (&["--device", "cpu", "--reference-spp", "0"], "--reference-spp must be 1..="),
-        (&["--device", "cpu", "--spp", "x"], "--spp"),
+        (&["--device", "cpu", "--reference-spp", "0"], "'--reference-spp <REFERENCE_SPP>': 0 is not in 1..=1048576"),
+        (&["--device", "cpu", "--spp", "4,x"], "\"x\" is not a number; expected a whole number from 1 to 1048576"),
         (&["--device", "cpu", "--reference", "missing.pfm"], "missing.pfm"),
     ];
     for (args, expect) in cases {
@@ -177,8 +177,9 @@ fn bench_reports_scenes_and_sphere_scaling_on_the_cpu() {
 #[test]
 fn bench_bad_arguments_fail_clearly() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&[&str], &str); 3] = [
-        (&["--device", "cpu", "--spp", "0"], "--spp must be 1..="),
+    let cases: [(&[&str], &str); 4] = [
+        (&["--device", "cpu", "--spp", "0"], "0 is not in 1..=1048576"),
+        (&["--device", "cpu", "--spp", "100000"], "--spp must be 1..=65536, got 100000"),
         (&["--device", "cpu", "--scenes", "nowhere"], "nowhere"),
         (&["--device", "gpu,dsp"], "dsp"),
     ];

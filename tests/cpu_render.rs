@@ -590,6 +590,16 @@ mod cli {
         if !ffmpeg {
             assert!(stderr.contains("ffmpeg is not on PATH"), "{stderr}");
         }
+        // TIME may start below 0 (clap took `-1:0:2` for a flag until 2026-12-07).
+        let out = crate::common::lumen_command()
+            .current_dir(dir.path())
+            .args(["render", "anim.sl", "--device", "cpu", "--frames", "-1:0:2", "-o", "g.pfm"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let frame = |k: u32| lumen::image::read_image(&dir.path().join(format!("g_000{k}.pfm"))).unwrap();
+        assert_eq!(frame(1).get(2, 2), lumen::color::Rgb32::new(1.0, 0.0, 0.0)); // moved 4 units away
+        assert_eq!(frame(2).get(2, 2), lumen::color::Rgb32::new(0.25, 0.5, 2.0));
     }
 
     /// An ffmpeg that fails after writing part of the video (a stand-in on PATH) leaves no

@@ -9,6 +9,8 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context as _};
 use clap::Args;
+
+use super::number_args::whole;
 use glam::DVec3;
 
 use super::gpu_args::DeviceListArgs;
@@ -55,7 +57,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Largest sphere count of the scaling study (0 skips it).
-    #[arg(long)]
+    #[arg(long, value_parser = whole::<u32>(0, u64::from(u32::MAX)), allow_negative_numbers = true)]
     pub max_spheres: Option<u32>,
     /// Also compare the scene-specialised GPU kernel with a full-featured one (WGSL size,
     /// pipeline creation time, samples/s), and the BVH with a plain object list.
@@ -66,7 +68,7 @@ pub struct BenchArgs {
     pub output: Option<PathBuf>,
     /// Measure each scene this many times, the devices alternating, and report medians with
     /// each run's GPU/CPU ratio: side-by-side figures on a shared, noisy machine.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+    #[arg(long, default_value_t = 1, value_parser = whole::<u32>(1, 100), allow_negative_numbers = true)]
     pub repeat: u32,
     /// Also time the GPU's kernel creation with every cache cold, `--repeat` times per
     /// scene: each time a new process of this program renders the scene at 8×8 and 1 spp

@@ -11,6 +11,8 @@ use std::path::PathBuf;
 use anyhow::{anyhow, bail, Context as _};
 use clap::Args;
 
+use super::number_args::whole;
+
 use super::gpu_args::DeviceListArgs;
 use super::script_args::{SceneOverrides, ScriptArgs, MAX_SPP};
 use crate::analysis::{
@@ -35,14 +37,14 @@ pub struct ConvergeArgs {
     #[arg(long, conflicts_with = "reference_spp")]
     pub reference: Option<PathBuf>,
     /// Samples per pixel of the CPU-rendered reference (default: 16 × the largest --spp).
-    #[arg(long)]
+    #[arg(long, value_parser = whole::<u32>(1, u64::from(MAX_SPP)), allow_negative_numbers = true)]
     pub reference_spp: Option<u32>,
     /// `--device` and `--adapter`: the devices measured, in turn.
     #[command(flatten)]
     pub devices: DeviceListArgs,
     /// Camera samples per pixel to measure (a list: each count is one measurement; one
     /// count is the `--spp` of the other commands), comma-separated (sorted ascending).
-    #[arg(long, value_delimiter = ',', default_values_t = [1, 4, 16, 64, 256])]
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 4, 16, 64, 256], value_parser = whole::<u32>(1, u64::from(MAX_SPP)), allow_negative_numbers = true)]
     pub spp: Vec<u32>,
     /// Directory for converge.csv, converge.md, converge.png and the rendered reference.
     #[arg(short = 'o', long = "output", default_value = "converge")]

@@ -5,6 +5,8 @@ use std::time::Duration;
 
 use clap::Args;
 
+use super::number_args::whole;
+
 use crate::device::Device;
 use crate::gpu::tables::TablePlacement;
 use crate::gpu::wavefront::MAX_QUEUE_SHARDS;
@@ -54,12 +56,12 @@ pub struct GpuArgs {
     pub adapter: AdapterArgs,
     /// Stop after about this many seconds and save what was rendered, on the GPU or the CPU
     /// (every pixel gets the same number of samples; the report says how many).
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_negative_numbers = true)]
     pub time_limit: Option<Duration>,
     /// GPU path slots per batch (paths in flight at once; default from the device: 131,072
     /// on a software adapter, 2,097,152 on a hardware GPU; at most 4,194,240, more is
     /// clamped). Images do not depend on it.
-    #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..=1 << 30))]
+    #[arg(long, value_name = "PATHS", value_parser = whole::<u32>(1, 1 << 30), allow_negative_numbers = true)]
     pub batch_paths: Option<u32>,
     /// Where GPU kernels read the scene's tables (shapes, BVH nodes, materials, triangles,
     /// texels, ...) from: `auto` puts each table that fits 64 KiB in a uniform buffer and
@@ -79,7 +81,7 @@ pub struct GpuArgs {
     /// Shards of every GPU queue, each with a counter of its own (default: one per worker
     /// thread of llvmpipe, 1 on other adapters; at most 32): for measuring how much pushes
     /// to one counter cost a device. Images do not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_QUEUE_SHARDS)))]
+    #[arg(long, value_name = "N", value_parser = whole::<u32>(1, u64::from(MAX_QUEUE_SHARDS)), allow_negative_numbers = true)]
     pub queue_shards: Option<u32>,
 }
 

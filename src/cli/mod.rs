@@ -15,6 +15,7 @@ pub mod gpu_args;
 #[cfg(unix)]
 pub mod headless;
 pub mod merge;
+pub mod number_args;
 pub mod output;
 pub mod own_process;
 pub mod render;

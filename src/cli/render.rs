@@ -64,8 +64,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub gamma: Option<f32>,
     /// Render TIME from START to END (inclusive) in COUNT frames, into numbered files
-    /// (out.png → out_0001.png ...), plus an mp4 when ffmpeg is on PATH.
-    #[arg(long, value_name = "START:END:COUNT")]
+    /// (out.png → out_0001.png ...), plus an mp4 when ffmpeg is on PATH. START and END may be
+    /// negative (`--frames -1:1:5`).
+    #[arg(long, value_name = "START:END:COUNT", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Render only camera samples [A, B) of the image's sample layout (the `--spp` count, or
     /// the tracer's): a shard that `lumen merge` combines exactly with the others. Write it

@@ -7,6 +7,8 @@ use std::path::Path;
 use anyhow::{anyhow, bail};
 use clap::Args;
 
+use super::number_args::whole;
+
 use crate::image::check_size;
 use crate::scene::{Scene, MAX_IMAGE_SIDE};
 use crate::scenelang::{load_file, LoadOptions};
@@ -44,20 +46,20 @@ impl ScriptArgs {
 #[derive(Debug, Clone, Default, Args)]
 pub struct SceneOverrides {
     /// Image width in pixels. Given alone, the height follows from the camera's aspect ratio.
-    #[arg(long, value_parser = image_side())]
+    #[arg(long, value_parser = image_side(), allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height in pixels. Given alone, the width follows from the camera's aspect ratio.
-    #[arg(long, value_parser = image_side())]
+    #[arg(long, value_parser = image_side(), allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Replaces the state of the tracer's Pcg seed.
-    #[arg(long)]
+    #[arg(long, value_parser = whole::<u64>(0, u64::MAX), allow_negative_numbers = true)]
     pub seed: Option<u64>,
 }
 
 /// `--width` and `--height`: 1 to [`crate::scene::MAX_IMAGE_SIDE`], refused when parsed by
 /// every command alike (a `bench` run would otherwise report a 0-pixel size per scene).
-fn image_side() -> clap::builder::RangedI64ValueParser<u32> {
-    clap::value_parser!(u32).range(1..=i64::from(crate::scene::MAX_IMAGE_SIDE))
+fn image_side() -> impl Fn(&str) -> Result<u32, String> + Clone + Send + Sync + 'static {
+    whole(1, u64::from(crate::scene::MAX_IMAGE_SIDE))
 }
 
 impl SceneOverrides {
@@ -76,7 +78,7 @@ impl SceneOverrides {
 pub struct SppArgs {
     /// Camera samples per pixel (a perfect square s² gives s×s strata), instead of the
     /// tracer's samples_per_side².
-    #[arg(long)]
+    #[arg(long, value_parser = whole::<u32>(1, u64::from(MAX_SPP)), allow_negative_numbers = true)]
     pub spp: Option<u32>,
 }
 
