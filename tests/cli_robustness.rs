@@ -289,10 +289,15 @@ fn a_ctrl_c_before_the_first_sample_writes_nothing_and_tries_no_other_device() {
 #[test]
 fn an_output_in_a_missing_directory_fails_before_the_work() {
     let dir = scene_dir();
-    let commands: [&[&str]; 3] = [
+    // tonemap and merge check their output before reading inputs (missing here, so that an
+    // input read first would name them instead; until 2026-12-07 they said only
+    // "No such file or directory (os error 2)" when writing).
+    let commands: [&[&str]; 5] = [
         &["render", "tiny.sl", "--device", "cpu", "-o", "no/such/dir/out.png"],
         &["render", "tiny.sl", "--device", "cpu", "-o", "ok.pfm", "-o", "no/out.png", "--frames", "0:1:2"],
         &["bench", "--device", "cpu", "--scenes", "tiny.sl", "--spp", "1", "--max-spheres", "0", "-o", "no/b.md"],
+        &["tonemap", "missing.pfm", "no/out.png"],
+        &["merge", "-o", "no/m.exr", "missing.exr"],
     ];
     for args in commands {
         let o = lumen(dir.path()).args(args).output().unwrap();

@@ -272,6 +272,11 @@ fn image_errors() {
     let e = load_in("SET a LOAD \"missing.pfm\"");
     assert_eq!((e.kind, e.line, e.col), (ErrorKind::ImageFile, 1, 12));
     assert!(e.to_string().contains("missing.pfm") && e.to_string().contains("not found"), "{e}");
+    // A directory is there, not missing (it was "not found" until 2026-12-07).
+    std::fs::create_dir(dir.path().join("folder.png")).unwrap();
+    let e = load_in("SET a LOAD \"folder.png\"");
+    assert_eq!((e.kind, e.line, e.col), (ErrorKind::ImageFile, 1, 12));
+    assert!(e.to_string().contains("folder.png: it is a directory") && !e.to_string().contains("not found"), "{e}");
     let e = load_in("SET a Image(\"broken.pfm\")");
     assert_eq!((e.kind, e.col), (ErrorKind::ImageFile, 13));
     assert!(e.to_string().contains("broken.pfm"), "{e}");
@@ -489,8 +494,16 @@ fn settings_errors() {
 
 #[test]
 fn math_errors_and_singular_transformations() {
-    check_err("SET a $1 / 0$", ErrorKind::NonFinite, 1, 8, "non-finite");
-    check_err("SET a $log(-1) + 1$", ErrorKind::NonFinite, 1, 8, "non-finite");
+    // The value in words, not Rust's debug form (`Num(inf)` until 2026-12-07).
+    check_err("SET a $1 / 0$", ErrorKind::NonFinite, 1, 8, "gives a non-finite value: infinity");
+    check_err("SET a $log(-1) + 1$", ErrorKind::NonFinite, 1, 8, "gives a non-finite value: NaN");
+    check_err(
+        "SET a $RGB(1, 0, 0) / 0$",
+        ErrorKind::NonFinite,
+        1,
+        8,
+        "gives a non-finite value: the colour <inf, NaN, NaN>",
+    );
     check_err("SET a $1 + 2b$", ErrorKind::UndefinedName, 1, 13, "undefined identifier `b`");
     check_err("SET a $div(1, 2, 3)$", ErrorKind::BadExpression, 1, 8, "takes 2 arguments, got 3");
     check_err("SET m Material()\nSET a $m * 2$", ErrorKind::WrongType, 2, 8, "holds a Material");
@@ -915,7 +928,13 @@ fn bad_rough_material_values_are_located_errors() {
     check_err("SET b Brdf.Dielectric(.roughness 2)", ErrorKind::BadValue, 1, 34, "`.roughness` must be in [0, 1]");
     check_err("SET b Brdf.Plastic(.ior -1)", ErrorKind::BadValue, 1, 25, "must be > 0");
     check_err("SET b Brdf.Conductor(.eta <0, 1, 1>)", ErrorKind::BadValue, 1, 27, "`.eta` must be finite and positive");
-    check_err("SET b Brdf.Conductor(.k <1, -1, 1>)", ErrorKind::BadValue, 1, 25, "`.k` must be finite and positive");
+    check_err(
+        "SET b Brdf.Conductor(.k <1, -1, 1>)",
+        ErrorKind::BadValue,
+        1,
+        25,
+        "`.k` must be finite and positive, got <1, -1, 1>",
+    );
     check_err("SET b Brdf.Conductor(.metal \"Pt\")", ErrorKind::BadValue, 1, 29, "unknown metal \"Pt\"");
     check_err(
         "SET b Brdf.Conductor(.metal \"Au\", .k <1, 1, 1>)",

@@ -12,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::bail;
+use anyhow::{bail, Context as _};
 use clap::Args;
 
 use crate::color::Rgb32;
@@ -93,6 +93,11 @@ impl Merge {
                 self.first = Some((path.to_path_buf(), w, h, meta.clone()));
             }
             Some((first_path, fw, fh, first_meta)) => {
+                // The size first: it is one of the inputs the fingerprint covers, and the one
+                // a person can see.
+                if (w, h) != (*fw, *fh) {
+                    bail!("{}: {w}×{h} pixels, but {} has {fw}×{fh}", path.display(), first_path.display());
+                }
                 if meta.fingerprint != first_meta.fingerprint {
                     bail!(
                         "{}: rendered from other inputs than {} (fingerprint {} vs {}): a different scene, size, \
@@ -102,9 +107,6 @@ impl Merge {
                         meta.fingerprint,
                         first_meta.fingerprint
                     );
-                }
-                if (w, h) != (*fw, *fh) {
-                    bail!("{}: {w}×{h} pixels, but {} has {fw}×{fh}", path.display(), first_path.display());
                 }
             }
         }
@@ -176,6 +178,7 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
     if ImageFormat::from_path(&args.output).ok() != Some(ImageFormat::Exr) {
         bail!("{}: the merged image must be .exr (it carries the sample ranges)", args.output.display());
     }
+    crate::image::check_destination(&args.output).with_context(|| format!("cannot write {}", args.output.display()))?;
     // One part in memory at a time, beside the sums.
     let mut merge = Merge::new();
     for p in &args.parts {

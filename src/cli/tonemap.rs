@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::Args;
 
 use crate::image::{is_hdr_path, read_image, write_image, Curve, ImageFormat, ToneMap};
@@ -100,8 +100,9 @@ impl TonemapArgs {
 
 /// Reads, tone-maps (for 8-bit outputs) and writes; warns once about NaN/Inf pixels.
 pub fn run(args: TonemapArgs) -> Result<()> {
-    // Refuse a bad output name before spending time on the input.
+    // Refuse a bad output name or place before spending time on the input.
     ImageFormat::from_path(&args.output)?;
+    crate::image::check_destination(&args.output).with_context(|| format!("cannot write {}", args.output.display()))?;
     let tm = args.tone_map()?;
     let img = read_image(&args.input)?;
     let report = write_image(&args.output, &img, &tm)?;

@@ -558,7 +558,10 @@ impl Interp<'_> {
                                             .err(
                                                 span,
                                                 ErrorKind::BadValue,
-                                                format!("`.{name}` must be finite and positive, got {c:?}"),
+                                                format!(
+                                                    "`.{name}` must be finite and positive, got <{}, {}, {}>",
+                                                    c.r, c.g, c.b
+                                                ),
                                             )
                                             .with_expected(if i == 2 {
                                                 "a colour of numbers > 0"
@@ -884,7 +887,8 @@ impl Interp<'_> {
     pub(super) fn load_image(&self, path: &str, span: Span) -> Res<ImageValue> {
         let p = Path::new(path);
         let full: PathBuf = if p.is_absolute() { p.to_path_buf() } else { self.base_dir.join(p) };
-        if !full.is_file() {
+        // A directory or a special file is there, not missing: reading it says what it is.
+        if !full.exists() {
             return Err(self
                 .err(span, ErrorKind::ImageFile, format!("image file {} not found", full.display()))
                 .with_expected(

@@ -133,6 +133,17 @@ pub fn evaluate(text: &str, offset: usize, time: f64, lookup: &dyn Fn(&str) -> L
     Ok(v)
 }
 
+/// A value that is not finite, as an error message says it: `infinity`, `NaN`, or the
+/// colour or point in SceneLang's syntax (`<inf, 0, 1>`, `{NaN, 0, 0}`).
+fn non_finite_text(v: &MathValue) -> String {
+    match *v {
+        MathValue::Num(x) if x.is_nan() => "NaN".into(),
+        MathValue::Num(x) => (if x > 0.0 { "infinity" } else { "minus infinity" }).into(),
+        MathValue::Color(c) => format!("the colour <{}, {}, {}>", c.r, c.g, c.b),
+        MathValue::Point(p) => format!("the point {{{}, {}, {}}}", p.x, p.y, p.z),
+    }
+}
+
 fn show(t: &M) -> String {
     match t {
         M::Num(n) => format!("number `{n}`"),
@@ -240,7 +251,11 @@ impl Parser<'_> {
         } else {
             Err(MathError {
                 expected: Some("a finite result (check for division by zero or a function outside its domain)".into()),
-                ..err(span, ErrorKind::NonFinite, format!("math expression gives a non-finite value ({v:?})"))
+                ..err(
+                    span,
+                    ErrorKind::NonFinite,
+                    format!("math expression gives a non-finite value: {}", non_finite_text(&v)),
+                )
             })
         }
     }

@@ -130,7 +130,9 @@ impl Layout {
         };
         match &face.properties[list].data_type {
             PropertyType::List(_, t) if !matches!(t, ScalarType::Float | ScalarType::Double) => {}
-            other => return Err(bad(format!("face property `{list}` must be a list of integers, not {other:?}"))),
+            other => {
+                return Err(bad(format!("face property `{list}` must be a list of integers, not {}", ply_type(other))))
+            }
         }
         let face = renamed(face, |p| (p == list).then_some(FACE_INDICES));
 
@@ -267,6 +269,24 @@ impl MeshError {
             *message = format!("in element `{element}`: {message}");
         }
         self
+    }
+}
+
+/// A PLY property type as a PLY header writes it (`uchar`, `list of float`), for messages.
+fn ply_type(t: &PropertyType) -> String {
+    let scalar = |s: &ScalarType| match s {
+        ScalarType::Char => "char",
+        ScalarType::UChar => "uchar",
+        ScalarType::Short => "short",
+        ScalarType::UShort => "ushort",
+        ScalarType::Int => "int",
+        ScalarType::UInt => "uint",
+        ScalarType::Float => "float",
+        ScalarType::Double => "double",
+    };
+    match t {
+        PropertyType::Scalar(s) => format!("a single {}", scalar(s)),
+        PropertyType::List(_, s) => format!("a list of {}", scalar(s)),
     }
 }
 
@@ -445,10 +465,8 @@ mod tests {
         let e = ascii("property float x\nproperty float y\n", "list uchar int vertex_indices", b"");
         assert_eq!(e.to_string(), "model.ply: element `vertex` has no scalar property `z`");
         let e = ascii(XYZ_FLOAT, "list uchar float vertex_indices", b"");
-        assert!(
-            e.to_string().starts_with("model.ply: face property `vertex_indices` must be a list of integers"),
-            "{e}"
-        );
+        let says = "model.ply: face property `vertex_indices` must be a list of integers, not a list of float";
+        assert!(e.to_string().starts_with(says), "{e}");
         let e = ascii(XYZ_FLOAT, "list uchar int corners", b"");
         assert!(e.to_string().starts_with("model.ply: element `face` has no `vertex_indices`"), "{e}");
         // A point cloud has no triangles.
