@@ -101,7 +101,11 @@ pub struct WriteReport {
 pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
     let format = ImageFormat::from_path(path)?;
     let bytes = crate::regular_file::read(path).map_err(|cause| ImageError::Read { path: path.to_owned(), cause })?;
-    let decode_err = |message: String| ImageError::Decode { path: path.to_owned(), format: format.name(), message };
+    let decode_err = |message: String| ImageError::Decode {
+        path: path.to_owned(),
+        format: format.name(),
+        message: decoder_words(format.name(), &message),
+    };
     let img = match format {
         ImageFormat::Pfm => decode_pfm(&bytes).map_err(|cause| ImageError::Pfm { path: path.to_owned(), cause })?,
         ImageFormat::Exr => decode_exr(&bytes).map_err(|e| exr_error(path, e))?,
@@ -113,8 +117,28 @@ pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
     Ok(img)
 }
 
+/// A decoder's message as a person reads it: the image crate's "Format error decoding Png:"
+/// prefix dropped (the error already names the format), and a read past the end, which the
+/// decoders report as an I/O detail ("failed to fill whole buffer", "reference to missing
+/// bytes"), said as what it means.
+fn decoder_words(format: &str, message: &str) -> String {
+    let message = message.trim();
+    let message = match message.split_once(": ") {
+        Some((prefix, rest)) if prefix.starts_with("Format error decoding ") => rest.trim(),
+        _ => message,
+    };
+    if message.contains("failed to fill whole buffer") || message.contains("reference to missing bytes") {
+        return format!("the file ends early (cut short, or not a whole {format} file)");
+    }
+    message.to_string()
+}
+
 fn exr_error(path: &Path, e: ExrDecodeError) -> ImageError {
-    let decode_err = |message: String| ImageError::Decode { path: path.to_owned(), format: "OpenEXR", message };
+    let decode_err = |message: String| ImageError::Decode {
+        path: path.to_owned(),
+        format: "OpenEXR",
+        message: decoder_words("OpenEXR", &message),
+    };
     match e {
         ExrDecodeError::Size(cause) => ImageError::Size { path: path.to_owned(), cause },
         ExrDecodeError::Other(message) => decode_err(message),
@@ -279,6 +303,19 @@ mod tests {
             let e = read_image(&path).unwrap_err();
             assert_eq!(e.path(), path);
             assert!(e.to_string().contains(name), "{e}");
+            assert!(!e.to_string().contains("Format error decoding"), "{e}");
+        }
+        // A file cut short says so, not the decoder's I/O detail.
+        let img = HdrImage::new(16, 16);
+        for (name, format) in [("cut.hdr", "Radiance HDR"), ("cut.exr", "OpenEXR")] {
+            let path = dir.path().join(name);
+            write_image(&path, &img, &ToneMap::default()).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+            let e = read_image(&path).unwrap_err().to_string();
+            let says =
+                format!("cannot decode {format} image: the file ends early (cut short, or not a whole {format} file)");
+            assert!(e.ends_with(&says), "{e}");
         }
     }
 }

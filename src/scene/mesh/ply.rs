@@ -249,7 +249,16 @@ fn parse_error(name: &str, e: ply_rs_bw::parser::ParseError, text: bool) -> Mesh
         Some(n) => full.strip_prefix(&format!("Line {n}: ")).unwrap_or(&full),
         None => &full,
     };
-    let mut message: String = message.split(['\n', '\r', '\t']).filter(|s| !s.is_empty()).collect::<Vec<_>>().join(" ");
+    let message: String = message.split(['\n', '\r', '\t']).filter(|s| !s.is_empty()).collect::<Vec<_>>().join(" ");
+    // The parser's messages read "What failed. String: '<the text>' Error: <its own parser's
+    // state, debug-printed>": keep what failed and the text it failed on.
+    let mut message = match message.split_once(" String: '") {
+        Some((what, rest)) => {
+            let text = rest.split_once("' Error:").map_or(rest, |(text, _)| text);
+            format!("{}: \"{}\"", what.trim_end_matches('.'), text.trim())
+        }
+        None => message,
+    };
     if message.len() > MAX_MESSAGE {
         let mut cut = MAX_MESSAGE;
         while !message.is_char_boundary(cut) {
@@ -462,6 +471,9 @@ mod tests {
         assert_eq!(e.to_string(), "model.ply: vertex 2: coordinate is not finite (NaN or infinity)");
         let e = ascii(XYZ_FLOAT, "list uchar int vertex_indices", b"0 0 0\n1 0 x\n0 1 0\n3 0 1 2\n");
         assert!(e.to_string().starts_with("model.ply: line 12: in element `vertex`: "), "{e}");
+        // The line that failed, not the parser's state (`ParseError { location: .. }`).
+        assert!(e.to_string().ends_with(": \"1 0 x\""), "{e}");
+        assert!(!e.to_string().contains("Error:") && !e.to_string().contains("expected one of"), "{e}");
         let e = ascii("property float x\nproperty float y\n", "list uchar int vertex_indices", b"");
         assert_eq!(e.to_string(), "model.ply: element `vertex` has no scalar property `z`");
         let e = ascii(XYZ_FLOAT, "list uchar float vertex_indices", b"");
