@@ -251,8 +251,11 @@ fn meshes_in_csg_and_bad_mesh_files_are_located_errors() {
     let e = err("SPAWN Shape.Mesh(.file \"missing.obj\")");
     assert_eq!(e.kind, ErrorKind::MeshFile);
     assert!(e.to_string().contains("missing.obj") && e.to_string().contains("t.sl:1:24"), "{e}");
+    assert!(e.to_string().contains("expected: a readable .obj or .ply file"), "{e}");
+    // A readable file's error is not answered with "a readable file" (until 2026-12-07 it was).
     let e = err("SPAWN Shape.Mesh(.file \"bad.obj\")");
     assert!(e.to_string().contains("bad.obj") && e.to_string().contains("line 3"), "{e}");
+    assert!(e.to_string().contains("expected: faces that refer only to what the file defines"), "{e}");
     let e = err("SPAWN Shape.Mesh(.material Material())");
     assert!(e.to_string().contains("needs a `.file`"), "{e}");
 }

@@ -872,8 +872,18 @@ impl Interp<'_> {
             Some(m) => m.clone(),
             None => {
                 let m = crate::scene::TriangleMesh::load(&full).map_err(|e| {
-                    self.err(span, ErrorKind::MeshFile, format!("cannot load mesh: {e}"))
-                        .with_expected("a readable .obj or .ply file (relative paths start at the script's folder)")
+                    use crate::scene::MeshErrorKind as K;
+                    let expected = match e.kind {
+                        K::Io { .. } | K::UnknownExtension { .. } => {
+                            "a readable .obj or .ply file (relative paths start at the script's folder)"
+                        }
+                        K::Syntax { .. } => "a well-formed OBJ or PLY file",
+                        K::IndexOutOfRange { .. } => "faces that refer only to what the file defines",
+                        K::NonFinite { .. } => "finite vertex coordinates",
+                        K::NoTriangles { .. } => "at least one triangle of nonzero area",
+                        K::TooMany { .. } => "a smaller mesh",
+                    };
+                    self.err(span, ErrorKind::MeshFile, format!("cannot load mesh: {e}")).with_expected(expected)
                 })?;
                 let m = Arc::new(m);
                 self.meshes.insert(full, m.clone());

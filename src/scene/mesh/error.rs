@@ -65,7 +65,7 @@ pub enum MeshErrorKind {
     },
     /// A face refers to a vertex (or, in OBJ, a texture coordinate or normal) that does not
     /// exist.
-    #[error("{at}: {what} index {index} is out of range (the file has {count} {})", plural(what))]
+    #[error("{at}: {what} index {index} is out of range (the file has {count} {}){}", noun(what, *count), counts_from_1(*index, *count))]
     IndexOutOfRange {
         /// The face: its OBJ line, PLY face index, or triangle index.
         at: MeshLocation,
@@ -101,11 +101,21 @@ pub enum MeshErrorKind {
     },
 }
 
-/// The plural of the element names used in [`MeshErrorKind::IndexOutOfRange`].
-fn plural(what: &str) -> String {
-    match what {
-        "vertex" => "vertices".to_string(),
-        w => format!("{w}s"),
+/// The element names used in [`MeshErrorKind::IndexOutOfRange`], for `count` of them.
+fn noun(what: &str, count: usize) -> String {
+    match (what, count) {
+        (w, 1) => w.to_string(),
+        ("vertex", _) => "vertices".to_string(),
+        (w, _) => format!("{w}s"),
+    }
+}
+
+/// Index 0 of a file that has elements is out of range only in OBJ, which counts from 1.
+fn counts_from_1(index: i64, count: usize) -> &'static str {
+    if index == 0 && count > 0 {
+        "; OBJ indices start at 1"
+    } else {
+        ""
     }
 }
 

@@ -349,15 +349,21 @@ mod tests {
         let e = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n").unwrap_err();
         assert_eq!(
             e.to_string(),
-            "model.obj: line 5: texture coordinate index 2 is out of range (the file has 1 texture coordinates)"
+            "model.obj: line 5: texture coordinate index 2 is out of range (the file has 1 texture coordinate)"
         );
         let e = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n").unwrap_err();
         assert_eq!(
             e.kind,
             MeshErrorKind::IndexOutOfRange { at: MeshLocation::Line(4), what: "normal", index: 1, count: 0 }
         );
-        // 0 is never an OBJ index; huge ones do not overflow anything.
-        assert!(matches!(obj("v 0 0 0\nf 0 1 1\n").unwrap_err().kind, MeshErrorKind::IndexOutOfRange { index: 0, .. }));
+        // 0 is never an OBJ index, and the message says where they start; huge ones do not
+        // overflow anything.
+        let e = obj("v 0 0 0\nf 0 1 1\n").unwrap_err();
+        assert!(matches!(e.kind, MeshErrorKind::IndexOutOfRange { index: 0, .. }));
+        assert_eq!(
+            e.to_string(),
+            "model.obj: line 2: vertex index 0 is out of range (the file has 1 vertex); OBJ indices start at 1"
+        );
         let e = obj("v 0 0 0\nvt 0 0\nf 1/-9223372036854775808 1/1 1/1\n").unwrap_err();
         assert!(matches!(e.kind, MeshErrorKind::IndexOutOfRange { .. }), "{e}");
         let e = obj("v 0 0 0\nvt 0 0\nf 1/9223372036854775807 1/1 1/1\n").unwrap_err();
