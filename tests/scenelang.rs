@@ -370,6 +370,19 @@ fn time_and_command_line_variables() {
     let e = load_str("", "t.sl", Path::new("."), &bad).unwrap_err();
     assert_eq!((e.file.as_str(), e.line, e.col), ("--vars", 1, 12));
     assert!(e.to_string().starts_with("--vars:1:12: error:"), "{e}");
+    // A value of the wrong type read through a name says where the name was set: on the
+    // command line, which the script does not show, or at its SET.
+    let src = "SET white Material()\nSPAWN Shape.Sphere(.material white)";
+    let three = LoadOptions { time: 0.0, vars: vec!["white 3".into()] };
+    let e = load_str(src, "t.sl", Path::new("."), &three).unwrap_err();
+    assert_eq!((e.kind, e.line, e.col), (ErrorKind::WrongType, 2, 30));
+    assert!(e.to_string().contains("note: `white` was set on the command line (--vars)"), "{e}");
+    let e = load_str("SET t 3\nSPAWN Shape.Cube(.transformation t)", "t.sl", Path::new("."), &LoadOptions::default())
+        .unwrap_err();
+    assert!(e.to_string().contains("note: `t` was defined at t.sl:1:5"), "{e}");
+    let e =
+        load_str("SET s 3\nSET u UNITE(Shape.Cube(), s)", "t.sl", Path::new("."), &LoadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("note: `s` was defined at t.sl:1:5"), "{e}");
 }
 
 #[test]

@@ -162,9 +162,8 @@ impl Interp<'_> {
             };
             if v.ty() != param.ty {
                 return Err(self
-                    .err(
+                    .type_err(
                         s,
-                        ErrorKind::WrongType,
                         format!(
                             "`.{}` of {ctor} must be {}, found {}",
                             param.name,
@@ -330,9 +329,8 @@ impl Interp<'_> {
                 let (v, s) = self.value()?;
                 let Value::Transformation(tr) = v else {
                     return Err(self
-                        .err(
+                        .type_err(
                             s,
-                            ErrorKind::WrongType,
                             format!("`.transformation` of {name} must be a Transformation, found {}", v.ty().article()),
                         )
                         .with_expected("a Transformation"));
@@ -353,7 +351,7 @@ impl Interp<'_> {
             let (v, s) = self.value()?;
             let Value::Shape(shape) = v else {
                 return Err(self
-                    .err(s, ErrorKind::WrongType, format!("{name} combines shapes, found {}", v.ty().article()))
+                    .type_err(s, format!("{name} combines shapes, found {}", v.ty().article()))
                     .with_expected("a Shape"));
             };
             if let ShapeNode::Mesh { file, .. } = shape.node() {

@@ -106,6 +106,19 @@ impl<'a> Interp<'a> {
         format!("{}:{l}:{c}", self.lx.file)
     }
 
+    /// `err` of a value of the wrong type read at `span`, noting where the name is defined
+    /// when the value is a name: its SET may be far away, or on the command line (`--vars`),
+    /// where the script does not show it.
+    pub(super) fn type_err(&self, span: Span, msg: impl Into<String>) -> SceneLangError {
+        let e = self.err(span, ErrorKind::WrongType, msg);
+        let text = self.lx.source.get(span.start..span.start + span.len).unwrap_or_default();
+        match self.vars.get(text) {
+            Some(v) if v.from_cli => e.with_note(format!("`{text}` was set on the command line (--vars)")),
+            Some(v) => e.with_note(format!("`{text}` was defined at {}", v.origin)),
+            None => e,
+        }
+    }
+
     pub(super) fn peek(&mut self) -> Res<Token> {
         self.lx.peek().cloned()
     }
