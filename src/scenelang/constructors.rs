@@ -557,8 +557,8 @@ impl Interp<'_> {
                                                 span,
                                                 ErrorKind::BadValue,
                                                 format!(
-                                                    "`.{name}` must be finite and positive, got <{}, {}, {}>",
-                                                    c.r, c.g, c.b
+                                                    "`.{name}` must be finite and positive, got {}",
+                                                    super::dump::describe(&Value::Color(c))
                                                 ),
                                             )
                                             .with_expected(if i == 2 {

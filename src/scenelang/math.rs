@@ -139,8 +139,8 @@ fn non_finite_text(v: &MathValue) -> String {
     match *v {
         MathValue::Num(x) if x.is_nan() => "NaN".into(),
         MathValue::Num(x) => (if x > 0.0 { "infinity" } else { "minus infinity" }).into(),
-        MathValue::Color(c) => format!("the colour <{}, {}, {}>", c.r, c.g, c.b),
-        MathValue::Point(p) => format!("the point {{{}, {}, {}}}", p.x, p.y, p.z),
+        MathValue::Color(c) => format!("the colour {}", super::dump::describe(&super::value::Value::Color(c))),
+        MathValue::Point(p) => format!("the point {}", super::dump::describe(&super::value::Value::Point(p))),
     }
 }
 
