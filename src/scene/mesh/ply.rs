@@ -30,7 +30,8 @@ const FACE_INDICES: &str = "indices";
 
 pub(super) fn parse(name: &str, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
     let mut reader = Reader::new(Cursor::new(bytes));
-    let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| parse_error(name, e, true))?;
+    let size = bytes.len();
+    let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| parse_error(name, e, true, size))?;
     let layout = Layout::from_header(name, &header)?;
 
     let mut vertices: Option<Vec<PlyVertex>> = None;
@@ -40,7 +41,7 @@ pub(super) fn parse(name: &str, bytes: &[u8]) -> Result<TriangleMesh, MeshError>
         if vertices.is_some() && faces.is_some() {
             break;
         }
-        let context = |e| parse_error(name, e, ascii).in_element(key);
+        let context = |e| parse_error(name, e, ascii, size).in_element(key);
         if *key == layout.vertex.name {
             vertices =
                 Some(Parser::new().read_payload_for_element(&mut reader, &layout.vertex, &header).map_err(context)?);
@@ -242,8 +243,15 @@ const MAX_MESSAGE: usize = 240;
 
 /// A ply-rs error as a lumen one, on one line. ply-rs counts "lines" in binary payloads too
 /// (one per element, after the header's), which names nothing a reader can find, so the
-/// line is kept only for text (the header, ASCII payloads).
-fn parse_error(name: &str, e: ply_rs_bw::parser::ParseError, text: bool) -> MeshError {
+/// line is kept only for text (the header, ASCII payloads). A payload cut short says how
+/// many of the declared elements it holds and the file's size, where ply-rs stacks its
+/// readers' messages ("... Error: failed to fill whole buffer").
+fn parse_error(name: &str, e: ply_rs_bw::parser::ParseError, text: bool, size: usize) -> MeshError {
+    let at = if text { e.line().map(MeshLocation::Line) } else { None };
+    if let Some((expected, got)) = early_end(&e) {
+        let message = format!("the file ({size} bytes) ends after {got} of the {expected} the header declares");
+        return MeshError::syntax(name, at, message);
+    }
     let full = e.to_string();
     let message = match e.line() {
         Some(n) => full.strip_prefix(&format!("Line {n}: ")).unwrap_or(&full),
@@ -267,8 +275,20 @@ fn parse_error(name: &str, e: ply_rs_bw::parser::ParseError, text: bool) -> Mesh
         message.truncate(cut);
         message.push('…');
     }
-    let at = if text { e.line().map(MeshLocation::Line) } else { None };
     MeshError::syntax(name, at, message)
+}
+
+/// The declared and the complete elements of a payload that ended early (ply-rs writes
+/// "Unexpected end of file while reading [binary ]element 'face' (expected 4, got 1)").
+fn early_end(e: &ply_rs_bw::parser::ParseError) -> Option<(u64, u64)> {
+    if e.kind() != std::io::ErrorKind::UnexpectedEof {
+        return None;
+    }
+    let text = e.to_string();
+    let counts = text.split_once("' (expected ")?.1;
+    let (expected, rest) = counts.split_once(", got ")?;
+    let got = rest.split(')').next()?;
+    Some((expected.parse().ok()?, got.parse().ok()?))
 }
 
 impl MeshError {
@@ -517,9 +537,21 @@ mod tests {
                 if cut > payload {
                     assert!(matches!(e.kind, MeshErrorKind::Syntax { at: None, .. }), "cut {cut}: {e:?}");
                     assert!(e.to_string().contains("in element `"), "cut {cut}: {e}");
+                    // What is there, not the parser's stacked reader errors.
+                    let sized = format!("the file ({cut} bytes) ends after ");
+                    assert!(
+                        e.to_string().contains(&sized) && e.to_string().ends_with(" the header declares"),
+                        "cut {cut}: {e}"
+                    );
                 }
             }
         }
+        // Three bytes into vertex 2 (25 bytes a vertex: three f64 and the flags byte).
+        let b = binary_quad(true, true, "list uchar int vertex_indices");
+        let cut = b.windows(11).position(|w| w == b"end_header\n").unwrap() + 11 + 2 * 25 + 3;
+        let want =
+            format!("model.ply: in element `vertex`: the file ({cut} bytes) ends after 2 of the 5 the header declares");
+        assert_eq!(ply(&b[..cut]).unwrap_err().to_string(), want);
     }
 
     #[test]
