@@ -177,6 +177,71 @@ fn a_table_beyond_the_adapters_binding_is_refused_before_it_is_packed() {
     }
 }
 
+/// A camera sample's paths are summed within one batch (the film adds a pixel's paths in
+/// f32), so a batch must hold them all. A scene whose per-path state leaves fewer slots
+/// (point lights: a shadow ray each per path vertex) is refused with what takes the room and
+/// the limit; one that just fits renders, though the launch bound
+/// (`wavefront::bounded_by_launch_rays`) alone would leave fewer slots than the sample's
+/// paths (a "validation error" with --device gpu, a fallback to the CPU with auto, before).
+#[test]
+fn a_camera_samples_paths_that_cannot_share_a_batch_are_refused_with_the_reason() {
+    use glam::DVec3;
+    use lumen::gpu::wavefront::MAX_PATHS_PER_PIXEL_PER_ROUND;
+    use lumen::scene::{PathTracerSettings, PointLight, Renderer, Scene, SceneBuilder, Transform};
+    let name = "a_camera_samples_paths_that_cannot_share_a_batch_are_refused_with_the_reason";
+    let Some(gpu) = gpu_for_tests(name) else { return };
+    let limit = gpu.storage_limit().0;
+    let n = MAX_PATHS_PER_PIXEL_PER_ROUND;
+    // Shadow rays (48 bytes each) a slot may hold when n slots share the binding.
+    let room = limit / (48 * u64::from(n));
+    if !(2..=20_000).contains(&room) {
+        println!("skipped: this adapter binds {limit} bytes; {room} shadow rays per path is not a test-sized scene");
+        return;
+    }
+    // One pixel, one camera sample of `paths` paths, a grey plane under `lights` point lights;
+    // with NEE a vertex queues a shadow ray per light and one for light sampling.
+    let scene = |paths: u32, lights: u64| -> Scene {
+        let mut b = SceneBuilder::new(1, 1);
+        let grey = b.diffuse(lumen::color::Color::gray(0.5));
+        b.plane(Transform::translation(DVec3::new(0.0, 0.0, -1.0)), grey);
+        for i in 0..lights {
+            let x = (i % 100) as f64 * 0.1;
+            b.point_light(PointLight {
+                position: DVec3::new(x, 0.0, 2.0),
+                color: lumen::color::Color::gray(1e-3),
+                linear_radius: 0.0,
+            });
+        }
+        let pt = PathTracerSettings { n: paths, max_depth: 1, ..Default::default() };
+        b.renderer(Renderer::PathTracer(pt))
+            .camera(lumen::scene::Camera { transform: Transform::rotation_y(60.0), ..Default::default() });
+        b.build().unwrap()
+    };
+    let opts = Default::default();
+    // One light too many: room + 1 shadow rays per path.
+    let err = lumen::gpu::render::render(&gpu, &scene(n, room), &opts).unwrap_err();
+    match &err {
+        GpuError::SampleExceedsBatch { paths, reason } => {
+            assert_eq!(*paths, n, "{err}");
+            let bytes = 48 * (room + 1);
+            for part in [format!("{bytes} bytes"), format!("{} shadow rays", room + 1), format!("({limit} bytes)")] {
+                assert!(reason.contains(&part), "{part:?} missing from: {err}");
+            }
+        }
+        _ => panic!("expected the sample's paths to be refused, got {err}"),
+    }
+    // Exactly room: every path of the sample in one batch, each pixel value finite.
+    let out = lumen::gpu::render::render(&gpu, &scene(n, room - 1), &opts).unwrap();
+    let c = out.image.get(0, 0);
+    assert!(c.r.is_finite() && c.r > 0.0, "{c:?}");
+    // More paths than the film sums per pixel in a batch, whatever the memory.
+    let err = lumen::gpu::render::render(&gpu, &scene(n + 1, 0), &opts).unwrap_err();
+    assert!(
+        matches!(&err, GpuError::SampleExceedsBatch { paths, reason } if *paths == n + 1 && reason.contains(&n.to_string())),
+        "{err}"
+    );
+}
+
 // ---- shader assembly ----------------------------------------------------------------
 
 use lumen::gpu::{FeatureNames, KernelCache, ShaderLibrary};

@@ -105,6 +105,20 @@ pub enum GpuError {
         /// binding" or "2D texture".
         limit_name: &'static str,
     },
+    /// One camera sample's paths do not fit one batch: the GPU sums a sample's paths for a
+    /// pixel within one batch (its film adds f32 values, [`MAX_PATHS_PER_PIXEL_PER_ROUND`]
+    /// at most), and the scene's per-path state leaves fewer slots than that (a million
+    /// point lights, each a shadow ray per path vertex), or `.n` asks for more. The message
+    /// says which and why.
+    ///
+    /// [`MAX_PATHS_PER_PIXEL_PER_ROUND`]: crate::gpu::wavefront::MAX_PATHS_PER_PIXEL_PER_ROUND
+    #[error("one camera sample's {paths} paths do not fit one GPU batch: {reason}")]
+    SampleExceedsBatch {
+        /// The renderer's paths per camera sample (`Renderer.PathTracer`'s `.n`).
+        paths: u32,
+        /// What limits the batch, in words with its figures.
+        reason: String,
+    },
     /// A ray passed more hidden crossings of a CSG tree than its kernels walk without the
     /// sweeps: the render starts again with them (`gpu::render`; never returned from it).
     #[error("a CSG query exceeded the walk budget of kernels without sweeps")]

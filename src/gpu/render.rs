@@ -491,9 +491,12 @@ impl GpuRenderer {
         let path_tracer = f.renderer == RendererKind::PathTracer;
         let n = if path_tracer { s.paths_per_sample.max(1) } else { 1 };
         let shadow_rays = if wavefront::has_shadow_rays(&f) { s.point_light_count + s.nee } else { 0 };
-        let capacity = wavefront::capacity(gpu, scene.width, scene.height, n, shadow_rays, &f, opts.passes.batch_paths);
+        let capacity =
+            wavefront::capacity(gpu, scene.width, scene.height, n, shadow_rays, &f, opts.passes.batch_paths)?;
         let rays_per_slot = wavefront::launch_rays_per_slot(&f, s.point_light_count, shadow_rays);
-        let capacity = wavefront::bounded_by_launch_rays(capacity, wavefront::default_slots(gpu), rays_per_slot);
+        // Never below one camera sample's paths, which a batch must hold (`capacity` made
+        // sure it can): launches grow longer instead.
+        let capacity = wavefront::bounded_by_launch_rays(capacity, wavefront::default_slots(gpu), rays_per_slot).max(n);
         let groups = buffers.groups(gpu, &kernels)?;
         let setup = wavefront::RunnerSetup {
             gpu,

@@ -328,7 +328,7 @@ impl StateBuffer {
     }
 
     /// Its WGSL name.
-    fn declaration_name(self) -> &'static str {
+    pub(crate) fn declaration_name(self) -> &'static str {
         match self {
             StateBuffer::Batch => "batch",
             StateBuffer::Control => "control",

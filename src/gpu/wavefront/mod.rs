@@ -70,7 +70,10 @@ impl StageKernels {
 /// Path slots per batch: `requested` if non-zero, else a default for the device (a software
 /// adapter runs a few SIMD lanes per core, and beyond 2¹⁷ slots gains nothing; a hardware GPU wants
 /// millions of paths in flight), never more than the image's paths per round need, and
-/// within the device's buffer limits.
+/// within the device's buffer limits. A batch holds at least one camera sample's paths,
+/// which the film sums together: where the limits leave fewer slots (a slot's shadow rays
+/// grow with the point lights, its CSG spans with the largest tree), the error says which
+/// state, how large and which limit.
 pub fn capacity(
     gpu: &Gpu,
     width: u32,
@@ -79,23 +82,64 @@ pub fn capacity(
     shadow_rays: u32,
     features: &FeatureSet,
     requested: u32,
-) -> u32 {
+) -> Result<u32, GpuError> {
+    let n = paths_per_sample.max(1);
+    if n > MAX_PATHS_PER_PIXEL_PER_ROUND {
+        return Err(GpuError::SampleExceedsBatch {
+            paths: n,
+            reason: format!(
+                "the GPU's film sums at most {MAX_PATHS_PER_PIXEL_PER_ROUND} paths per pixel in a batch; fewer paths per \
+                 camera sample (Renderer.PathTracer's .n) and more camera samples (Tracer's .samples_per_side, or \
+                 --spp) estimate the same image"
+            ),
+        });
+    }
     let default = default_slots(gpu);
     let wanted = if requested > 0 { requested } else { default };
-    let image = u64::from(width) * u64::from(height) * u64::from(paths_per_sample) * u64::from(MAX_SPP_PER_ROUND);
-    let mut slots = u64::from(wanted).min(image.max(1)).max(u64::from(paths_per_sample));
+    let image = u64::from(width) * u64::from(height) * u64::from(n) * u64::from(MAX_SPP_PER_ROUND);
+    let mut slots = u64::from(wanted).min(image.max(1)).max(u64::from(n));
     // The largest per-slot array must fit one binding and one buffer.
-    let limit = gpu.storage_limit().0;
+    let (limit, limit_name) = gpu.storage_limit();
     let per_slot = |b| state_bytes(b, shadow_rays, features);
     let used = scene_buffers(features);
-    let widest = used.iter().copied().map(per_slot).max().unwrap_or(1).max(1);
-    slots = slots.min(limit / widest).max(1);
+    let widest = used.iter().copied().max_by_key(|&b| per_slot(b)).unwrap_or(StateBuffer::Paths);
+    slots = slots.min(limit / per_slot(widest).max(1)).max(1);
+    let mut bound = (widest, limit, format!("this adapter's {limit_name} limit"));
     // CSG leaf spans (per slot, sized by the largest tree) within their budget: a large
     // tree makes batches smaller, never the kernels larger.
     if used.contains(&StateBuffer::CsgPool) {
-        slots = slots.min(csg_pool_budget(gpu) / per_slot(StateBuffer::CsgPool)).max(1);
+        let budget = csg_pool_budget(gpu);
+        let by_pool = budget / per_slot(StateBuffer::CsgPool);
+        if by_pool < slots {
+            slots = by_pool.max(1);
+            bound = (StateBuffer::CsgPool, budget, "the CSG span pool's budget on this adapter".to_string());
+        }
     }
-    slots.min(u64::from(Control::new(features.queue_shards).max_slots())) as u32
+    let slots = slots.min(u64::from(Control::new(features.queue_shards).max_slots()));
+    if slots < u64::from(n) {
+        let (buffer, limit, limit_name) = bound;
+        let what = match buffer {
+            StateBuffer::Shadow | StateBuffer::DeferredRefs => {
+                let lights = shadow_rays.saturating_sub(features.nee as u32);
+                format!(
+                    "a vertex's {} shadow ray{} (one per point light{})",
+                    shadow_rays,
+                    if shadow_rays == 1 { "" } else { "s" },
+                    if lights < shadow_rays { ", and one for the area lights and the environment" } else { "" }
+                )
+            }
+            StateBuffer::CsgPool => "the working spans of the scene's largest CSG tree".to_string(),
+            other => format!("its {} state", other.declaration_name()),
+        };
+        return Err(GpuError::SampleExceedsBatch {
+            paths: n,
+            reason: format!(
+                "each path needs {} bytes for {what}, and {limit_name} ({limit} bytes) holds {slots} such paths",
+                per_slot(buffer)
+            ),
+        });
+    }
+    Ok(slots as u32)
 }
 
 /// The path slots of a batch on `gpu` unless asked otherwise.

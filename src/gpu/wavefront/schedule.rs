@@ -195,7 +195,8 @@ pub(crate) fn run_rounds<R: BatchRunner>(
         )));
     }
     if plan.paths_per_sample > plan.capacity || plan.paths_per_sample > MAX_PATHS_PER_PIXEL_PER_ROUND {
-        return Err(GpuError::Validation(format!(
+        // `wavefront::capacity` refuses such plans with their reason first.
+        return Err(GpuError::Internal(format!(
             "{} paths per camera sample exceed what one GPU batch sums ({} path slots, at most {} paths per pixel)",
             plan.paths_per_sample, plan.capacity, MAX_PATHS_PER_PIXEL_PER_ROUND
         )));
