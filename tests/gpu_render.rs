@@ -1579,7 +1579,10 @@ USING Camera.Perspective() Image(4, 4) Renderer.PathTracer(.n 1, .max_depth 3) T
     };
     let gpu = run("gpu", "gpu.pfm");
     let stderr = String::from_utf8_lossy(&gpu.stderr);
-    assert!(!gpu.status.success() && stderr.contains("shape 1 in spawn order (sphere)"), "{stderr}");
+    assert!(
+        !gpu.status.success() && stderr.contains("shape 1 in spawn order (sphere, written at huge.sl:2:7)"),
+        "{stderr}"
+    );
     assert!(stderr.contains("beyond f32's range"), "{stderr}");
     assert!(!dir.path().join("gpu.pfm").exists());
     let auto = run("auto", "auto.pfm");

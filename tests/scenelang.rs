@@ -135,6 +135,18 @@ fn shapes_and_their_defaults() {
     assert!(close(transform(&s, 3).point(DVec3::ONE), DVec3::splat(2.0)));
 }
 
+/// Each spawned shape remembers where its SPAWN item starts (a name, a constructor or a CSG
+/// command), for the GPU's messages about a shape it cannot take; lights take no entry.
+#[test]
+fn spawned_shapes_know_where_they_were_written() {
+    let s = with_settings(
+        "SET ball Shape.Sphere()\nSPAWN ball Light(.position {0, 0, 1})\n  Shape.Plane() UNITE(ball, Shape.Cube())\n",
+    );
+    assert_eq!(s.shapes.len(), 3);
+    let at: Vec<Option<String>> = (0..4).map(|i| s.origins.of(i)).collect();
+    assert_eq!(at, [Some("t.sl:2:7".to_string()), Some("t.sl:3:3".into()), Some("t.sl:3:17".into()), None]);
+}
+
 #[test]
 fn settings_and_their_defaults() {
     let s = load("USING Camera.Perspective() Image(4, 2) Renderer.PathTracer() Tracer()").unwrap();

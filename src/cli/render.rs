@@ -232,7 +232,7 @@ fn render_with_fallback(
             crate::diag!("warning: rendering on the CPU reference renderer instead, from the first sample");
             render_on_cpu(scene, args, range)
         }
-        Err(e @ (GpuError::TooLarge { .. } | GpuError::SampleExceedsBatch { .. })) => {
+        Err(e @ (GpuError::TooLarge { .. } | GpuError::SampleExceedsBatch { .. } | GpuError::Scene(_))) => {
             Err(anyhow!("GPU render failed: {e}; `--device cpu` (or `auto`) renders the scene on the CPU"))
         }
         other => other.map_err(|e| anyhow!("GPU render failed: {e}")),

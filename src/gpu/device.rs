@@ -70,7 +70,7 @@ pub enum GpuError {
     },
     /// A wgpu validation error, or a request lumen's GPU code refuses itself: bind groups that
     /// do not match a kernel's declarations, more bind groups or storage buffers than the
-    /// adapter allows, a scene that cannot be packed, a render plan out of range.
+    /// adapter allows, a render plan out of range.
     #[error("GPU validation error: {0}")]
     Validation(String),
     /// wgpu could not allocate device memory (or a render its host-side accumulator).
@@ -105,6 +105,11 @@ pub enum GpuError {
         /// binding" or "2D texture".
         limit_name: &'static str,
     },
+    /// The scene has what the GPU renderer cannot represent (more shapes or samples than
+    /// its encodings address, a placement beyond f32's range): the CPU renderer, in f64 and
+    /// without those encodings, renders it.
+    #[error("the GPU renderer cannot take this scene: {0}")]
+    Scene(super::pack::PackError),
     /// One camera sample's paths do not fit one batch: the GPU sums a sample's paths for a
     /// pixel within one batch (its film adds f32 values, [`MAX_PATHS_PER_PIXEL_PER_ROUND`]
     /// at most), and the scene's per-path state leaves fewer slots than that (a million

@@ -117,16 +117,21 @@ pub enum PackError {
     /// f32 cannot hold the shape's placement: rounding its transform would give ±∞ and a
     /// meaningless render, so the GPU refuses the scene (the CPU renders it in f64).
     /// `shape` counts the script's shapes in spawn order from 0 (a top-level UNITE, which the
-    /// renderers split, is one shape; `part` says which of its parts).
+    /// renderers split, is one shape; `part` says which of its parts), and `origin` where the
+    /// script wrote it.
     #[error(
-        "shape {} in spawn order{} ({what}): its transform reaches {magnitude:e} in the camera frame, beyond \
+        "shape {} in spawn order{} ({what}{}): its transform reaches {magnitude:e} in the camera frame, beyond \
          f32's range (±3.4e38) that the GPU computes in",
         .shape + 1,
-        part_text(*.part)
+        part_text(*.part),
+        .origin.as_ref().map(|o| format!(", written at {o}")).unwrap_or_default()
     )]
     OutOfRange {
         /// The shape's index in spawn order, from 0 (the message counts from 1).
         shape: usize,
+        /// `file:line:column` of its SPAWN item ([`Scene::origins`]); `None` for a scene
+        /// built in code.
+        origin: Option<String>,
         /// Which part of a split top-level UNITE, from 0; `None` for a shape not split.
         part: Option<usize>,
         /// What overflowed: the shape's kind (`"sphere"`, ...), a CSG leaf's, or `"mesh instance"`.
@@ -203,7 +208,7 @@ impl PackError {
         match self {
             PackError::OutOfRange { shape, what, magnitude, .. } => {
                 let (shape, part) = crate::prepare::source_shape(scene, shape).unwrap_or((shape, None));
-                PackError::OutOfRange { shape, part, what, magnitude }
+                PackError::OutOfRange { shape, origin: scene.origins.of(shape), part, what, magnitude }
             }
             other => other,
         }
@@ -380,7 +385,13 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Res
             Shape::Primitive(p) => p.kind.name(),
             Shape::Mesh(_) => "mesh instance",
         };
-        return Err(PackError::OutOfRange { shape: i as usize, part: None, what, magnitude: f64::INFINITY });
+        return Err(PackError::OutOfRange {
+            shape: i as usize,
+            origin: None,
+            part: None,
+            what,
+            magnitude: f64::INFINITY,
+        });
     }
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
@@ -685,7 +696,7 @@ fn shifted_shape(s: &Shape, shift: &Transform) -> Shape {
 fn check_range(shape: usize, what: &'static str, to_world: &Transform) -> Result<(), PackError> {
     let magnitude = to_world.matrix().to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if magnitude > f64::from(f32::MAX) {
-        return Err(PackError::OutOfRange { shape, part: None, what, magnitude });
+        return Err(PackError::OutOfRange { shape, origin: None, part: None, what, magnitude });
     }
     Ok(())
 }

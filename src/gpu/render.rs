@@ -342,7 +342,7 @@ fn pack_error(e: super::pack::PackError) -> GpuError {
         PackError::TooLarge { table, needed, limit } => {
             GpuError::TooLarge { what: table.described(), needed, limit: limit.bytes, limit_name: limit.name }
         }
-        e => GpuError::Validation(format!("cannot pack the scene for the GPU: {e}")),
+        e => GpuError::Scene(e),
     }
 }
 

@@ -129,7 +129,9 @@ impl std::fmt::Write for Hasher {
 /// purpose (CPU and GPU shards of one render may be merged).
 pub fn fingerprint(scene: &Scene, layout_spp: u32) -> String {
     let mut h = Hasher { hash: Digest::new(), meshes: Vec::new() };
-    let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment } = scene;
+    // Where the script wrote the shapes does not change the image.
+    let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment, origins: _ } =
+        scene;
     let _ = write!(
         h,
         "lumen {} layout {layout_spp} {width}x{height} {materials:?} {point_lights:?} {camera:?} {renderer:?} \

@@ -54,7 +54,8 @@ pub fn render_form(scene: &Scene) -> Cow<'_, Scene> {
     if !scene.shapes.iter().any(Shape::splits_at_top_level) {
         return Cow::Borrowed(scene);
     }
-    let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment } = scene;
+    let Scene { shapes, materials, point_lights, camera, width, height, renderer, tracer, environment, origins: _ } =
+        scene;
     Cow::Owned(Scene {
         shapes: shapes.iter().flat_map(|s| s.clone().top_level_parts()).collect(),
         materials: materials.clone(),
@@ -65,5 +66,8 @@ pub fn render_form(scene: &Scene) -> Cow<'_, Scene> {
         renderer: renderer.clone(),
         tracer: *tracer,
         environment: environment.clone(),
+        // Its shapes are parts: a message about one finds the script's shape, and where it
+        // was written, through `source_shape`.
+        origins: crate::scene::ShapeOrigins::default(),
     })
 }

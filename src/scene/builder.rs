@@ -44,6 +44,7 @@ impl SceneBuilder {
                 renderer: Renderer::PathTracer(PathTracerSettings::default()),
                 tracer: Tracer::default(),
                 environment: None,
+                origins: ShapeOrigins::default(),
             },
         }
     }

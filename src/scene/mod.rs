@@ -12,6 +12,7 @@ mod environment;
 mod light;
 mod material;
 pub mod mesh;
+mod origins;
 mod pigment;
 mod settings;
 mod shape;
@@ -25,6 +26,7 @@ pub use environment::{equirect_uv, texel_radiance, Environment};
 pub use light::PointLight;
 pub use material::{Material, MaterialId};
 pub use mesh::{MeshError, MeshErrorKind, MeshFormat, MeshLocation, MeshParts, TriangleMesh, MAX_MESH_ELEMENTS};
+pub use origins::ShapeOrigins;
 pub use pigment::{ImageFilter, Pigment};
 pub use settings::{PathTracerSettings, PcgSeed, Renderer, Tracer};
 pub use shape::{Csg, CsgOp, MeshInstance, Primitive, Shape, ShapeKind, MAX_CSG_DEPTH, MAX_PRIMITIVES};
@@ -79,6 +81,9 @@ pub struct Scene {
     pub tracer: Tracer,
     /// Radiance of escaping rays; `None` means the renderer's background colour.
     pub environment: Option<Environment>,
+    /// Where the script wrote each shape (empty for a scene built in code): for messages
+    /// only, never read by a renderer.
+    pub origins: ShapeOrigins,
 }
 
 /// A top-level shape whose material emits, with a surface that can be sampled (a sphere,

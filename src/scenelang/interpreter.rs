@@ -15,7 +15,7 @@ use super::math::{self, Lookup, MathValue};
 use super::value::{ImageValue, ShapeNode, ShapeValue, Value, PER_USE};
 use crate::color::Color;
 use crate::scene::{
-    Camera, CsgOp, Environment, MaterialId, Renderer, Scene, SceneBuilder, Shape, Tracer, MAX_IMAGE_SIDE,
+    Camera, CsgOp, Environment, MaterialId, Renderer, Scene, SceneBuilder, Shape, ShapeOrigins, Tracer, MAX_IMAGE_SIDE,
     MAX_PRIMITIVES,
 };
 
@@ -47,6 +47,8 @@ pub struct World {
     pub renderer: Option<(Renderer, Span)>,
     pub tracer: Option<(Tracer, Span)>,
     pub environment: Option<(Environment, Span)>,
+    /// Line and column of each spawned shape's SPAWN item ([`crate::scene::ShapeOrigins`]).
+    pub shape_origins: Vec<(u32, u32)>,
 }
 
 impl World {
@@ -59,6 +61,7 @@ impl World {
             renderer: None,
             tracer: None,
             environment: None,
+            shape_origins: Vec::new(),
         }
     }
 }
@@ -282,6 +285,9 @@ impl<'a> Interp<'a> {
                     self.world.primitives = total;
                     let shape = self.place_shape(&s, &mut HashMap::new());
                     self.world.builder.shape(shape);
+                    let (line, column) = self.lx.line_col(span.start);
+                    let clamp = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+                    self.world.shape_origins.push((clamp(line), clamp(column)));
                 }
                 Value::Light(l) => {
                     self.world.builder.point_light(l);
@@ -612,6 +618,7 @@ impl<'a> Interp<'a> {
         scene.renderer = renderer;
         scene.tracer = tracer;
         scene.environment = environment;
+        scene.origins = ShapeOrigins::new(self.lx.file, std::mem::take(&mut self.world.shape_origins));
         scene.validate().map_err(|e| {
             self.err(end, ErrorKind::InvalidScene, format!("invalid scene: {e}")).with_expected("a valid scene")
         })?;

@@ -1246,8 +1246,9 @@ USING Camera.Perspective() Image(8, 8) Renderer.PathTracer(.n 2, .max_depth 3)
             let err = gpu_render(g, &scene, &GpuRenderOptions::fixed_passes(None, 4))
                 .expect_err("the GPU must refuse a shape beyond f32's range");
             let msg = err.to_string();
-            // The second shape the script spawns.
-            assert!(msg.contains("shape 2 in spawn order (sphere)") && msg.contains("beyond f32's range"), "{msg}");
+            // The second shape the script spawns, at the third line's SPAWN item.
+            let shape = "shape 2 in spawn order (sphere, written at extreme.sl:3:7)";
+            assert!(msg.contains(shape) && msg.contains("beyond f32's range"), "{msg}");
             note = "GPU refuses the scene: shape 2 (sphere) beyond f32's range".into();
             None
         }
