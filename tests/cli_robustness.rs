@@ -159,12 +159,21 @@ fn an_image_too_large_for_memory_is_refused_with_the_amount() {
     let dir = scene_dir();
     std::fs::write(
         dir.path().join("huge.sl"),
+        "USING Camera.Perspective() Image(16384, 16384) Renderer.Flat() Tracer()\n",
+    )
+    .unwrap();
+    // More pixels than an image file holds (2²⁸): refused at the script's Image, whatever
+    // the memory, since the render could not be written.
+    std::fs::write(
+        dir.path().join("past.sl"),
         "USING Camera.Perspective() Image(32768, 32768) Renderer.Flat() Tracer()\n",
     )
     .unwrap();
     let cases = [
         ("tiny.sl --device cpu --width 16384 --height 16384 --spp 1 -o big.png", "15.00 GiB"),
-        ("huge.sl --device cpu -o big.png", "60.00 GiB"),
+        ("huge.sl --device cpu -o big.png", "15.00 GiB"),
+        ("past.sl --device cpu -o big.png", "past.sl:1:28: error: image size 32768×32768 cannot be rendered"),
+        ("tiny.sl --device cpu --width 32768 --height 32768 -o big.png", "at most 268435456 pixels in all"),
     ];
     for (args, needed) in cases {
         let o = render_limited_to_4_gib(dir.path(), args);

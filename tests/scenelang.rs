@@ -744,9 +744,19 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
 fn huge_images_are_sizes_not_allocations() {
     let s = load("USING Image() Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
     assert_eq!((s.width, s.height), (1, 1));
-    let s = load("USING Image(32768, 32768) Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
-    assert_eq!((s.width, s.height), (32768, 32768));
+    let s = load("USING Image(32768, 8192) Camera.Orthogonal() Renderer.Flat() Tracer()").unwrap();
+    assert_eq!((s.width, s.height), (32768, 8192));
     check_err("USING Image(32769, 1)", ErrorKind::BadImageSize, 1, 13, "from 1 to 32768");
+    // Each side may be rendered, but not the whole: more pixels than an image file of lumen
+    // holds (2²⁸), which would fail only when the finished render is written.
+    let e = check_err(
+        "USING Image(32768, 32768) Camera.Orthogonal() Renderer.Flat() Tracer()",
+        ErrorKind::BadImageSize,
+        1,
+        7,
+        "image size 32768×32768 cannot be rendered",
+    );
+    assert!(e.to_string().contains("at most 268435456 pixels in all"), "{e}");
 }
 
 #[test]

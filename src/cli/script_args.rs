@@ -9,8 +9,7 @@ use clap::Args;
 
 use super::number_args::whole;
 
-use crate::image::check_size;
-use crate::scene::{Scene, MAX_IMAGE_SIDE};
+use crate::scene::{renderable_size, renderable_size_rule, Scene};
 use crate::scenelang::{load_file, LoadOptions};
 
 /// Most camera samples per pixel `--spp` accepts.
@@ -104,10 +103,9 @@ pub fn resize(scene: &mut Scene, width: Option<u32>, height: Option<u32>) -> any
         (Some(w), None) => (w, derive(f64::from(w) / aspect)),
         (None, Some(h)) => (derive(f64::from(h) * aspect), h),
     };
-    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
-        bail!("image size {w}×{h} is invalid: each side must be 1..={MAX_IMAGE_SIDE}");
+    if !renderable_size(w, h) {
+        bail!("image size {w}×{h} cannot be rendered: {}", renderable_size_rule());
     }
-    check_size(w as usize, h as usize).map_err(|e| anyhow!("image size {w}×{h}: {e}"))?;
     scene.width = w;
     scene.height = h;
     Ok(())
@@ -130,7 +128,14 @@ mod tests {
         resize(&mut s, Some(10), Some(10)).unwrap();
         assert_eq!((s.width, s.height, s.camera.aspect_ratio), (10, 10, 16.0 / 9.0));
         assert!(resize(&mut s, Some(0), None).is_err());
-        assert!(resize(&mut s, Some(MAX_IMAGE_SIDE + 1), Some(1)).is_err());
+        assert!(resize(&mut s, Some(crate::scene::MAX_IMAGE_SIDE + 1), Some(1)).is_err());
+        // Both sides within the limit, the whole past what an image file holds (2²⁸ pixels).
+        let e = resize(&mut s, Some(32_768), Some(32_768)).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "image size 32768×32768 cannot be rendered: each side from 1 to 32768, and at most 268435456 pixels in all"
+        );
+        resize(&mut s, Some(32_768), Some(8_192)).unwrap();
     }
 
     #[derive(Parser)]

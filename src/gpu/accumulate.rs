@@ -31,7 +31,7 @@ impl Accumulator {
     pub fn new(width: u32, height: u32) -> Result<Self, crate::memory::OutOfMemory> {
         let n = width as usize * height as usize;
         let total = (n as u64).saturating_mul(2 * 24 + 12);
-        let what = format!("the {width}×{height} image's accumulation buffers");
+        let what = format!("a {width}×{height} GPU render (its image's accumulation buffers)");
         crate::memory::check_fits(total, &what)?;
         let total_sums = crate::memory::try_filled(n, [0.0; 3], &what, total)?;
         let round = crate::memory::try_filled(n, [0.0; 3], &what, total)?;

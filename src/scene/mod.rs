@@ -35,6 +35,32 @@ pub use transform::Transform;
 /// Largest image side lumen accepts; larger sizes are input errors, not allocations.
 pub const MAX_IMAGE_SIDE: u32 = 32_768;
 
+/// Most pixels a render may have: what lumen's image files take
+/// ([`crate::image::MAX_PIXELS`], 16384² = 2²⁸), so that no render is refused only when its
+/// output is written (a 32768×32768 script rendered, on a machine with the memory, for as
+/// long as it took, and then could not be written).
+pub const MAX_IMAGE_PIXELS: u64 = crate::image::MAX_PIXELS as u64;
+
+/// Whether `width × height` can be rendered: each side 1..=[`MAX_IMAGE_SIDE`], at most
+/// [`MAX_IMAGE_PIXELS`] in all.
+///
+/// ```
+/// use lumen::scene::renderable_size;
+/// assert!(renderable_size(32_768, 8_192));
+/// assert!(!renderable_size(32_768, 32_768), "2³⁰ pixels");
+/// assert!(!renderable_size(0, 4) && !renderable_size(40_000, 1));
+/// ```
+pub fn renderable_size(width: u32, height: u32) -> bool {
+    (1..=MAX_IMAGE_SIDE).contains(&width)
+        && (1..=MAX_IMAGE_SIDE).contains(&height)
+        && u64::from(width) * u64::from(height) <= MAX_IMAGE_PIXELS
+}
+
+/// What [`renderable_size`] asks, in words, for messages.
+pub fn renderable_size_rule() -> String {
+    format!("each side from 1 to {MAX_IMAGE_SIDE}, and at most {MAX_IMAGE_PIXELS} pixels in all")
+}
+
 /// Problems that make a scene invalid (raised while building or loading it).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SceneError {
@@ -49,8 +75,8 @@ pub enum SceneError {
     /// lumen does not.
     #[error("transformation is not affine: only affine matrices (last row 0 0 0 1) are supported")]
     NotAffine,
-    /// The image's width and height, in pixels, of which one is 0 or above [`MAX_IMAGE_SIDE`].
-    #[error("image size {0}×{1} is invalid (each side must be 1..={MAX_IMAGE_SIDE})")]
+    /// The image's width and height, in pixels, which [`renderable_size`] refuses.
+    #[error("image size {0}×{1} cannot be rendered ({rule})", rule = renderable_size_rule())]
     BadImageSize(u32, u32),
     /// Any other invalid scene, with the message shown to the user: a material id out of
     /// range, a mesh inside CSG, a camera's non-positive aspect ratio or screen distance, or
@@ -71,9 +97,11 @@ pub struct Scene {
     pub point_lights: Vec<PointLight>,
     /// The one camera the image is seen through.
     pub camera: Camera,
-    /// Image width in pixels, 1..=[`MAX_IMAGE_SIDE`] once [`Scene::validate`] has passed.
+    /// Image width in pixels, 1..=[`MAX_IMAGE_SIDE`] ([`renderable_size`]) once
+    /// [`Scene::validate`] has passed.
     pub width: u32,
-    /// Image height in pixels, 1..=[`MAX_IMAGE_SIDE`] once [`Scene::validate`] has passed.
+    /// Image height in pixels, 1..=[`MAX_IMAGE_SIDE`] ([`renderable_size`]) once
+    /// [`Scene::validate`] has passed.
     pub height: u32,
     /// The integrator that turns a camera ray into radiance, with its settings.
     pub renderer: Renderer,
@@ -139,7 +167,7 @@ impl Scene {
 
     /// Checks invariants a renderer relies on: image size, material ids, finite settings.
     pub fn validate(&self) -> Result<(), SceneError> {
-        if self.width == 0 || self.height == 0 || self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
+        if !renderable_size(self.width, self.height) {
             return Err(SceneError::BadImageSize(self.width, self.height));
         }
         let n = self.materials.len();

@@ -15,8 +15,8 @@ use super::math::{self, Lookup, MathValue};
 use super::value::{ImageValue, ShapeNode, ShapeValue, Value, PER_USE};
 use crate::color::Color;
 use crate::scene::{
-    Camera, CsgOp, Environment, MaterialId, Renderer, Scene, SceneBuilder, Shape, ShapeOrigins, Tracer, MAX_IMAGE_SIDE,
-    MAX_PRIMITIVES,
+    renderable_size, renderable_size_rule, Camera, CsgOp, Environment, MaterialId, Renderer, Scene, SceneBuilder,
+    Shape, ShapeOrigins, Tracer, MAX_PRIMITIVES,
 };
 
 type Res<T> = Result<T, SceneLangError>;
@@ -600,10 +600,10 @@ impl<'a> Interp<'a> {
         };
         let Some((tracer, _)) = self.world.tracer else { return Err(missing("tracer", "Tracer(...)")) };
         let (width, height) = image.size();
-        if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        if !renderable_size(width, height) {
             return Err(self
                 .err(*image_span, ErrorKind::BadImageSize, format!("image size {width}×{height} cannot be rendered"))
-                .with_expected(format!("each side from 1 to {MAX_IMAGE_SIDE}")));
+                .with_expected(renderable_size_rule()));
         }
         let renderer = renderer.clone();
         let environment = self.world.environment.take().map(|(e, _)| e);
