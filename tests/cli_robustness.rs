@@ -249,7 +249,7 @@ fn the_cpu_renderer_honours_the_time_limit() {
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(err.contains(": 1 of 1000000 samples per pixel, 768 samples,"), "{err}");
-    assert!(err.contains("note: stopped at the time limit with 1 samples per pixel"), "{err}");
+    assert!(err.contains("note: stopped at the time limit with 1 sample per pixel"), "{err}");
     assert!(!err.contains("warning: --time-limit"), "{err}");
     let img = lumen::image::read_image(&dir.path().join("t.pfm")).unwrap();
     assert_eq!((img.width(), img.height()), (32, 24));

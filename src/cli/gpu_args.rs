@@ -99,10 +99,17 @@ impl GpuArgs {
     }
 }
 
-/// Seconds as a non-negative, finite decimal number.
+/// Seconds as a non-negative, finite decimal number, at most what a `Duration` holds (about
+/// 1.8e19 s, 585 billion years).
 fn parse_seconds(s: &str) -> Result<Duration, String> {
     let v: f64 = s.trim().parse().map_err(|_| format!("{s:?} is not a number of seconds"))?;
-    Duration::try_from_secs_f64(v).map_err(|_| format!("{s:?}: the time limit must be a finite number of seconds ≥ 0"))
+    Duration::try_from_secs_f64(v).map_err(|_| {
+        if v.is_finite() && v > 0.0 {
+            format!("{s:?}: the time limit must be at most {:e} seconds", Duration::MAX.as_secs_f64())
+        } else {
+            format!("{s:?}: the time limit must be a finite number of seconds ≥ 0")
+        }
+    })
 }
 
 #[cfg(test)]
@@ -123,6 +130,13 @@ mod tests {
         assert_eq!(t.gpu.time_limit, Some(Duration::from_millis(2500)));
         let t = T::try_parse_from(["t"]).unwrap();
         assert_eq!((t.gpu.time_limit, t.gpu.pass_options().batch_paths), (None, 0));
+        // Each refusal says what is wrong with that value: 1e30 is finite, only too long.
+        for (bad, why) in
+            [("-1", "finite number of seconds ≥ 0"), ("inf", "finite"), ("1e30", "at most 1.8446744073709552e19")]
+        {
+            let e = T::try_parse_from(["t", "--time-limit", bad]).err().unwrap().to_string();
+            assert!(e.contains(why), "{bad}: {e}");
+        }
         let t = T::try_parse_from(["t", "--batch-paths", "4096"]).unwrap();
         assert_eq!(t.gpu.pass_options().batch_paths, 4096);
         assert!(T::try_parse_from(["t", "--batch-paths", "0"]).is_err());

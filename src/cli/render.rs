@@ -289,6 +289,11 @@ fn twin_note(twin: u64, batches: u64) -> String {
     }
 }
 
+/// "1 sample per pixel", "16 samples per pixel".
+fn samples_per_pixel(n: u64) -> String {
+    format!("{n} sample{} per pixel", if n == 1 { "" } else { "s" })
+}
+
 /// Says why a render stopped early (the same words for both renderers); returns whether it did.
 fn report_stop(stop: StopReason, spp_done: u64) -> bool {
     match stop {
@@ -296,11 +301,11 @@ fn report_stop(stop: StopReason, spp_done: u64) -> bool {
         // `render_on`'s error says it: nothing was kept.
         _ if spp_done == 0 => true,
         StopReason::TimeLimit => {
-            crate::diag!("note: stopped at the time limit with {spp_done} samples per pixel");
+            crate::diag!("note: stopped at the time limit with {}", samples_per_pixel(spp_done));
             true
         }
         StopReason::Interrupted => {
-            crate::diag!("note: interrupted; keeping the {spp_done} samples per pixel of the completed rounds");
+            crate::diag!("note: interrupted; keeping the {} of the completed rounds", samples_per_pixel(spp_done));
             true
         }
     }
