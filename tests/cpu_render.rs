@@ -602,6 +602,67 @@ mod cli {
         assert_eq!(frame(2).get(2, 2), lumen::color::Rgb32::new(0.25, 0.5, 2.0));
     }
 
+    /// What would fail after some frames were rendered is checked before the first: a frame's
+    /// output that is a directory, the script at a later TIME, the video's destination; and
+    /// the video holds this animation's frames only, whatever the name (`%` included) and
+    /// whatever numbered files a longer animation left.
+    #[test]
+    fn an_animation_checks_every_frame_before_the_first() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("anim.sl"), SCRIPT).unwrap();
+        // Infinite at TIME = 1, the second of two frames.
+        let late = SCRIPT.replace("TRANSLATE(.X 3)", "TRANSLATE(.X 3) * SCALE $1/(1-TIME)$");
+        assert_ne!(late, SCRIPT);
+        std::fs::write(dir.path().join("late.sl"), late).unwrap();
+        let run = |args: &[&str]| {
+            crate::common::lumen_command()
+                .current_dir(dir.path())
+                .args(["render", "--device", "cpu"])
+                .args(args)
+                .output()
+                .unwrap()
+        };
+        let names = || {
+            let mut n: Vec<String> =
+                std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+            n.sort();
+            n
+        };
+        std::fs::create_dir(dir.path().join("out_0002.png")).unwrap();
+        let out = run(&["anim.sl", "--frames", "0:1:3", "-o", "out.png"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains("cannot write out_0002.png") && stderr.contains("it is a directory"), "{stderr}");
+        let out = run(&["late.sl", "--frames", "0:1:2", "-o", "late.png"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains("frame 2 of 2 (TIME = 1)") && stderr.contains("late.sl:"), "{stderr}");
+        assert_eq!(names(), ["anim.sl", "late.sl", "out_0002.png"], "nothing rendered: {stderr}");
+        if Command::new("ffmpeg").arg("-version").output().is_err() {
+            println!("ffmpeg is not on PATH: the video's checks are skipped");
+            return;
+        }
+        std::fs::create_dir(dir.path().join("v.mp4")).unwrap();
+        let out = run(&["anim.sl", "--frames", "0:1:2", "-o", "v.png"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.code() == Some(1) && stderr.contains("cannot write v.mp4"), "{stderr}");
+        assert!(!dir.path().join("v_0001.png").exists(), "{stderr}");
+        // Three frames, then two under the same name: the video has two.
+        for (frames, want) in [("0:1:3", "3"), ("0:1:2", "2")] {
+            let out = run(&["anim.sl", "--width", "8", "--frames", frames, "-o", "p%d.png"]);
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            let Ok(probe) = Command::new("ffprobe")
+                .args(["-v", "error", "-count_frames", "-select_streams", "v:0"])
+                .args(["-show_entries", "stream=nb_read_frames", "-of", "csv=p=0"])
+                .arg(dir.path().join("p%d.mp4"))
+                .output()
+            else {
+                return;
+            };
+            assert_eq!(String::from_utf8_lossy(&probe.stdout).trim(), want, "{frames}");
+        }
+    }
+
     /// An ffmpeg that fails after writing part of the video (a stand-in on PATH) leaves no
     /// video and no temporary file: the error names the video, the frames stay.
     #[cfg(unix)]

@@ -411,7 +411,12 @@ fn layout_spp(args: &RenderArgs, scene: &Scene) -> u32 {
 
 /// Loads the scene at `time` and applies the command-line overrides.
 fn load(args: &RenderArgs, time: f64) -> anyhow::Result<Scene> {
-    let mut scene = args.script.load_at(&args.scene, time)?;
+    load_with_output(args, time, &mut std::io::stdout().lock())
+}
+
+/// [`load`] with the script's DUMP output written to `out`.
+fn load_with_output(args: &RenderArgs, time: f64, out: &mut dyn std::io::Write) -> anyhow::Result<Scene> {
+    let mut scene = args.script.load_at_with_output(&args.scene, time, out)?;
     args.overrides.apply(&mut scene)?;
     if args.no_nee {
         if let Renderer::PathTracer(p) = &mut scene.renderer {
@@ -472,12 +477,25 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // Load before opening a device: a broken script fails fast, without GPU start-up.
     let started = Instant::now();
     let mut first = Some(load(&args, frames.map_or(args.script.time, |f| f.time(0)))?);
+    // An animation's frames: `--shard I/N` takes contiguous runs of them, as of samples.
+    let animation = match frames {
+        Some(frames) => {
+            let mine = match part {
+                Part::Shard { index, count } => SampleRange::shard(index, count, frames.count).context("--shard")?,
+                _ => SampleRange::all(frames.count),
+            };
+            let video = video_output(&outputs, mine.len() == frames.count);
+            check_animation(&args, &outputs, frames, mine, video.as_ref())?;
+            Some((frames, mine, video))
+        }
+        None => None,
+    };
     let loaded = started.elapsed().as_secs_f64();
     let device = open(&args)?;
     if args.profile {
         crate::diag!("process: scene {loaded:.3} s, device start-up {:.3} s", started.elapsed().as_secs_f64() - loaded);
     }
-    let Some(frames) = frames else {
+    let Some((frames, mine, video)) = animation else {
         render_one(&device, &args, args.script.time, &outputs, &tm, part, first)?;
         if args.profile {
             // Closing the device (its queue drained, its buffers freed, a twin's thread
@@ -487,11 +505,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             crate::diag!("process: closing the device {:.3} s", closing.elapsed().as_secs_f64());
         }
         return Ok(());
-    };
-    // `--shard I/N` with frames: contiguous runs of frames, as for samples.
-    let mine = match part {
-        Part::Shard { index, count } => SampleRange::shard(index, count, frames.count).context("--shard")?,
-        _ => SampleRange::all(frames.count),
     };
     for k in mine.begin..mine.end {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
@@ -510,29 +523,82 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             mine.end,
             frames.count
         );
-    } else if let Some(ldr) = outputs.iter().find(|o| ImageFormat::from_path(o).is_ok_and(|f| !f.is_hdr())) {
-        make_video(ldr, frames.count)?;
+    } else if let Some(Video { frames: ldr, video }) = &video {
+        make_video(ldr, video, frames.count)?;
     }
     Ok(())
 }
 
-/// Assembles the numbered LDR frames of `output` into `output`.mp4 with ffmpeg, if present.
-fn make_video(output: &Path, count: u32) -> anyhow::Result<()> {
-    if Process::new("ffmpeg").arg("-version").output().is_err() {
-        crate::diag!("note: ffmpeg is not on PATH; no video assembled");
-        return Ok(());
+/// The video an animation assembles: from the numbered frames of `frames` (an LDR output)
+/// into `video`.
+struct Video {
+    frames: PathBuf,
+    video: PathBuf,
+}
+
+/// The video to assemble after all the frames (`whole`: this run renders every frame),
+/// if an output is LDR and ffmpeg is on PATH (else a note says why not).
+fn video_output(outputs: &[PathBuf], whole: bool) -> Option<Video> {
+    let ldr = outputs.iter().find(|o| ImageFormat::from_path(o).is_ok_and(|f| !f.is_hdr()))?;
+    if !whole {
+        return None;
     }
+    if Process::new("ffmpeg").arg("-version").output().is_err() {
+        crate::diag!("note: ffmpeg is not on PATH; no video will be assembled");
+        return None;
+    }
+    Some(Video { frames: ldr.clone(), video: ldr.with_extension("mp4") })
+}
+
+/// Checks, before the first frame, what would otherwise fail after some were rendered:
+/// every frame's outputs (the first of each in full, as `validate` checks a still image's;
+/// the others, in the same directory with names as long, need only not be a directory or
+/// a special file), the video's destination, and the script at every frame's TIME
+/// (`TIME` may make a value non-finite, or an aspect ratio change the size), each loaded
+/// with its DUMP output discarded and dropped again.
+fn check_animation(
+    args: &RenderArgs,
+    outputs: &[PathBuf],
+    frames: Frames,
+    mine: SampleRange,
+    video: Option<&Video>,
+) -> anyhow::Result<()> {
+    for o in outputs {
+        for k in mine.begin..mine.end {
+            let path = frame_path(o, k, frames.count);
+            if k == mine.begin || path.symlink_metadata().is_ok_and(|m| !m.is_file()) {
+                crate::image::check_destination(&path).with_context(|| format!("cannot write {}", path.display()))?;
+            }
+        }
+    }
+    if let Some(v) = video {
+        crate::image::check_destination(&v.video).with_context(|| format!("cannot write {}", v.video.display()))?;
+    }
+    for k in mine.begin + 1..mine.end {
+        let time = frames.time(k);
+        load_with_output(args, time, &mut std::io::sink())
+            .with_context(|| format!("frame {} of {} (TIME = {time})", k + 1, frames.count))?;
+    }
+    Ok(())
+}
+
+/// Assembles the `count` numbered frames of `output` (an LDR image) into `video` with ffmpeg.
+fn make_video(output: &Path, video: &Path, count: u32) -> anyhow::Result<()> {
     let digits = count.to_string().len().max(4);
-    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    // ffmpeg reads `%` in the name as a pattern: a literal one is `%%`.
+    let literal = |s: &std::ffi::OsStr| s.to_string_lossy().replace('%', "%%");
+    let stem = output.file_stem().map(literal).unwrap_or_default();
+    let ext = output.extension().map(literal).unwrap_or_default();
     let pattern = output.with_file_name(format!("{stem}_%0{digits}d.{ext}"));
-    let video = output.with_extension("mp4");
     // ffmpeg writes the temporary file of an atomic write (its name does not end in .mp4,
     // hence `-f mp4`), so a failed or interrupted assembly leaves no partial video.
-    crate::image::produce_atomically(&video, |_, tmp| {
+    crate::image::produce_atomically(video, |_, tmp| {
         let status = Process::new("ffmpeg")
             .args(["-y", "-loglevel", "error", "-framerate", &VIDEO_FPS.to_string(), "-start_number", "1", "-i"])
             .arg(&pattern)
+            // Exactly this animation's frames: more numbered files may be left from a
+            // longer one before it.
+            .args(["-frames:v", &count.to_string()])
             .args(["-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4"])
             .arg(tmp)
             .status()?;

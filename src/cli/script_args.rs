@@ -10,7 +10,7 @@ use clap::Args;
 use super::number_args::whole;
 
 use crate::scene::{renderable_size, renderable_size_rule, Scene};
-use crate::scenelang::{load_file, LoadOptions};
+use crate::scenelang::{load_file_with_output, LoadOptions};
 
 /// Most camera samples per pixel `--spp` accepts.
 pub const MAX_SPP: u32 = 1 << 20;
@@ -31,8 +31,13 @@ impl ScriptArgs {
     /// Loads `path` with these variables at `time`; the error is the script's full diagnostic
     /// on its own line, so that `file:line:col:` starts a line (where editors look for it).
     pub fn load_at(&self, path: &Path, time: f64) -> anyhow::Result<Scene> {
+        self.load_at_with_output(path, time, &mut std::io::stdout().lock())
+    }
+
+    /// [`Self::load_at`] with the script's DUMP output written to `out`.
+    pub fn load_at_with_output(&self, path: &Path, time: f64, out: &mut dyn std::io::Write) -> anyhow::Result<Scene> {
         let opts = LoadOptions { time, vars: self.vars.clone() };
-        load_file(path, &opts).map_err(|e| anyhow!("the scene does not load\n{e}"))
+        load_file_with_output(path, &opts, out).map_err(|e| anyhow!("the scene does not load\n{e}"))
     }
 
     /// Loads `path` at `--time`.

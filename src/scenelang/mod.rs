@@ -84,6 +84,14 @@ pub const MAX_SCRIPT_BYTES: u64 = 1 << 30;
 /// Loads the script at `path` (a file, or a pipe such as `<(...)`); DUMP output goes to
 /// stdout.
 pub fn load_file(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneLangError> {
+    let stdout = std::io::stdout();
+    let mut lock = stdout.lock();
+    load_file_with_output(path, opts, &mut lock)
+}
+
+/// [`load_file`] with DUMP output written to `out` (`std::io::sink()` for a load that only
+/// checks the script, such as each frame of an animation before the first is rendered).
+pub fn load_file_with_output(path: &Path, opts: &LoadOptions, out: &mut dyn Write) -> Result<Scene, SceneLangError> {
     use std::io::Read;
     let name = path.display().to_string();
     let fail = |why: String| SceneLangError::whole_file(&name, ErrorKind::Io, format!("cannot read script: {why}"));
@@ -96,7 +104,7 @@ pub fn load_file(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneLangErro
     }
     let source = String::from_utf8(bytes).map_err(|e| not_utf8(e.as_bytes(), e.utf8_error().valid_up_to(), &name))?;
     let base = path.parent().unwrap_or(Path::new("."));
-    load_str(&source, &name, base, opts)
+    load_str_with_output(&source, &name, base, opts, out)
 }
 
 /// The error for a script whose bytes stop being UTF-8 at `at`, located there (line and
