@@ -663,6 +663,33 @@ mod cli {
         }
     }
 
+    /// A CSG tree past the GPU's span pool (a chain of FUSEs of 2¹⁷ spheres): `lumen check`
+    /// says the GPU renderer cannot take it, naming the tree's SPAWN position and leaves,
+    /// before any render finds it.
+    #[test]
+    fn check_says_what_the_gpu_renderer_refuses() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut script = String::from("SET c0 FUSE(Shape.Sphere(), Shape.Sphere(.transformation TRANSLATE(.X 0.5)))\n");
+        for i in 1..=16 {
+            script += &format!("SET c{i} FUSE(c{}, c{})\n", i - 1, i - 1);
+        }
+        script += "SPAWN Shape.Plane(.transformation TRANSLATE(.Z -2))\n  c16\nUSING Camera.Perspective() Image(8, 8) Renderer.Flat() Tracer()\n";
+        std::fs::write(dir.path().join("chain.sl"), &script).unwrap();
+        let out = crate::common::lumen_command().current_dir(dir.path()).args(["check", "chain.sl"]).output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let refusal = "GPU renderer: cannot take this scene: shape 2 in spawn order (a CSG tree of 131072 leaves, written at chain.sl:19:3)";
+        assert!(stdout.contains(refusal), "{stdout}");
+        // One leaf fewer per FUSE level: no refusal.
+        std::fs::write(dir.path().join("ok.sl"), script.replace("c16\n", "c15\n")).unwrap();
+        let out = crate::common::lumen_command().current_dir(dir.path()).args(["check", "ok.sl"]).output().unwrap();
+        assert!(
+            !String::from_utf8_lossy(&out.stdout).contains("GPU renderer"),
+            "{}",
+            String::from_utf8_lossy(&out.stdout)
+        );
+    }
+
     /// An ffmpeg that fails after writing part of the video (a stand-in on PATH) leaves no
     /// video and no temporary file: the error names the video, the frames stay.
     #[cfg(unix)]

@@ -395,6 +395,21 @@ fn time_and_command_line_variables() {
     let e =
         load_str("SET s 3\nSET u UNITE(Shape.Cube(), s)", "t.sl", Path::new("."), &LoadOptions::default()).unwrap_err();
     assert!(e.to_string().contains("note: `s` was defined at t.sl:1:5"), "{e}");
+    // The same wherever a number, a setting, a SPAWN item, a factor of a transformation,
+    // LOAD's file name or Image's size is read through a name.
+    let colour = LoadOptions { time: 0.0, vars: vec!["r <1, 2, 3>".into()] };
+    for src in [
+        "SPAWN Shape.Sphere(.transformation SCALE r)",
+        "USING r",
+        "SPAWN r",
+        "SPAWN Shape.Sphere(.transformation SCALE 2 * r)",
+        "SET i LOAD r",
+        "SET i Image(r)",
+    ] {
+        let e = load_str(src, "t.sl", Path::new("."), &colour).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::WrongType, "{src}: {e}");
+        assert!(e.to_string().contains("note: `r` was set on the command line (--vars)"), "{src}: {e}");
+    }
 }
 
 #[test]

@@ -32,5 +32,11 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
             features.csg_max_leaves, features.csg_max_depth
         ));
     }
+    // What the GPU renderer refuses on any adapter (a shape beyond f32's range, a CSG tree
+    // beyond its span pool), said before a render finds it; an adapter's own size limits
+    // show only when a render opens it.
+    if let Err(e) = crate::gpu::pack::pack(&scene, None) {
+        out.line(format_args!("GPU renderer: cannot take this scene: {e}; `--device auto` renders it on the CPU"));
+    }
     Ok(out.print()?)
 }

@@ -152,6 +152,32 @@ pub enum PackError {
         /// The largest |coordinate| found.
         magnitude: f64,
     },
+    /// A CSG tree whose spans (and sweep state) outgrow the pool one path holds
+    /// ([`MAX_CSG_POOL`] entries): located like [`PackError::OutOfRange`].
+    #[error(
+        "shape {} in spawn order{} (a CSG tree of {leaves} leaves{}): one ray query of it needs {entries} entries \
+         of the GPU's span pool (3 per leaf, and one per leaf and node its sweeps track), more than the {limit} a \
+         path holds (about {} leaves); a large union spawned as separate shapes fits, and the BVH handles it far \
+         better",
+        .shape + 1,
+        part_text(*.part),
+        .origin.as_ref().map(|o| format!(", written at {o}")).unwrap_or_default(),
+        .limit / 5
+    )]
+    CsgTooLarge {
+        /// The tree's index in spawn order, from 0 (the message counts from 1).
+        shape: usize,
+        /// `file:line:column` of its SPAWN item; `None` for a scene built in code.
+        origin: Option<String>,
+        /// Which part of a split top-level UNITE, from 0; `None` for a shape not split.
+        part: Option<usize>,
+        /// Its leaves (primitives).
+        leaves: usize,
+        /// Pool entries a query of the scene's largest tree needs.
+        entries: usize,
+        /// [`MAX_CSG_POOL`].
+        limit: usize,
+    },
     /// A table outgrows what one binding of the adapter holds ([`TableLimit`]); `needed` is
     /// the table's size up to the part that would not fit, so a lower bound.
     #[error("{} needs {needed} bytes but this adapter allows at most {} bytes per {}", .table.described(), .limit.bytes, .limit.name)]
@@ -209,6 +235,10 @@ impl PackError {
             PackError::OutOfRange { shape, what, magnitude, .. } => {
                 let (shape, part) = crate::prepare::source_shape(scene, shape).unwrap_or((shape, None));
                 PackError::OutOfRange { shape, origin: scene.origins.of(shape), part, what, magnitude }
+            }
+            PackError::CsgTooLarge { shape, leaves, entries, limit, .. } => {
+                let (shape, part) = crate::prepare::source_shape(scene, shape).unwrap_or((shape, None));
+                PackError::CsgTooLarge { shape, origin: scene.origins.of(shape), part, leaves, entries, limit }
             }
             other => other,
         }
@@ -301,9 +331,17 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Res
         let swept = FeatureSet { csg_sweeps: true, ..features };
         let pool = usize::try_from(crate::gpu::wavefront::csg_pool_entries(&swept)).unwrap_or(usize::MAX);
         if pool > MAX_CSG_POOL {
-            return Err(PackError::TooMany {
-                what: "CSG pool entries per path (about five per leaf of the largest tree)",
-                count: pool,
+            // The tree with the most leaves (the pool is sized by it).
+            let shape = scene.shapes.iter().position(|s| {
+                matches!(s, Shape::Csg(_))
+                    && u32::try_from(s.leaf_count()).unwrap_or(u32::MAX) == features.csg_max_leaves
+            });
+            return Err(PackError::CsgTooLarge {
+                shape: shape.unwrap_or(0),
+                origin: None,
+                part: None,
+                leaves: features.csg_max_leaves as usize,
+                entries: pool,
                 limit: MAX_CSG_POOL,
             });
         }
@@ -1057,8 +1095,21 @@ mod tests {
         let many = (0..140_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
         b.shape(Shape::csg(CsgOp::Fuse, many, Transform::IDENTITY));
         let err = pack(&b.build().unwrap(), None).unwrap_err();
-        assert!(matches!(err, PackError::TooMany { limit: MAX_CSG_POOL, .. }), "{err}");
-        assert!(err.to_string().contains("CSG pool entries"), "{err}");
+        let want = PackError::CsgTooLarge {
+            shape: 0,
+            origin: None,
+            part: None,
+            leaves: 140_000,
+            entries: 560_001,
+            limit: MAX_CSG_POOL,
+        };
+        assert_eq!(err, want);
+        let text = err.to_string();
+        assert!(
+            text.starts_with("shape 1 in spawn order (a CSG tree of 140000 leaves): ")
+                && text.contains("about 104857 leaves"),
+            "{text}"
+        );
     }
 
     /// Microfacet materials get their kind, α and rows of the energy tables at their α and

@@ -830,11 +830,7 @@ impl Interp<'_> {
                 Ok(Value::Image(ImageValue::Blank { width, height }))
             }
             other => Err(self
-                .err(
-                    fs,
-                    ErrorKind::WrongType,
-                    format!("Image takes a size or a file name, found {}", other.ty().article()),
-                )
+                .type_err(fs, format!("Image takes a size or a file name, found {}", other.ty().article()))
                 .with_expected("`Image(width, height)` or `Image(\"file\")`")),
         }
     }

@@ -294,7 +294,7 @@ impl<'a> Interp<'a> {
                 }
                 other => {
                     return Err(self
-                        .err(span, ErrorKind::WrongType, format!("cannot SPAWN {}", other.ty().article()))
+                        .type_err(span, format!("cannot SPAWN {}", other.ty().article()))
                         .with_expected("a Shape or a Light"))
                 }
             }
@@ -364,7 +364,7 @@ impl<'a> Interp<'a> {
                 Value::Environment(e) => setting!(environment, e, "environment"),
                 other => {
                     return Err(self
-                        .err(span, ErrorKind::WrongType, format!("cannot use {} as a setting", other.ty().article()))
+                        .type_err(span, format!("cannot use {} as a setting", other.ty().article()))
                         .with_expected("a Camera, an Image, a Renderer, a Tracer or an Environment"))
                 }
             }
@@ -422,7 +422,7 @@ impl<'a> Interp<'a> {
             let (w, ws) = self.value_no_chain()?;
             let Value::Transformation(w) = w else {
                 return Err(self
-                    .err(ws, ErrorKind::WrongType, format!("cannot multiply a Transformation by {}", w.ty().article()))
+                    .type_err(ws, format!("cannot multiply a Transformation by {}", w.ty().article()))
                     .with_expected("a Transformation after `*`"));
             };
             tr = self.checked(Ok(tr * w), star.span.to(ws))?;
@@ -496,11 +496,7 @@ impl<'a> Interp<'a> {
                         let (v, s) = self.value()?;
                         let Value::Str(path) = v else {
                             return Err(self
-                                .err(
-                                    s,
-                                    ErrorKind::WrongType,
-                                    format!("LOAD takes a file name, found {}", v.ty().article()),
-                                )
+                                .type_err(s, format!("LOAD takes a file name, found {}", v.ty().article()))
                                 .with_expected("a string, as in `LOAD \"sky.hdr\"`"));
                         };
                         Value::Image(self.load_image(&path, s)?)
@@ -559,7 +555,7 @@ impl<'a> Interp<'a> {
         match v {
             Value::Number(n) => Ok((n, s)),
             other => Err(self
-                .err(s, ErrorKind::WrongType, format!("expected a number for {what}, found {}", other.ty().article()))
+                .type_err(s, format!("expected a number for {what}, found {}", other.ty().article()))
                 .with_expected("a number")),
         }
     }
