@@ -761,3 +761,113 @@ fn an_output_lost_after_the_render_keeps_the_render() {
     assert_eq!((image.width(), image.height()), (32, 24));
     assert!(meta.spp() >= 1, "{err}");
 }
+
+/// `converge` checks every file it will write before the work, as `render` does: an output
+/// that is a directory fails at once, with nothing rendered and nothing written (it had
+/// rendered everything, then written the CSV, the Markdown and the reference before the
+/// PNG failed). A file given as the output directory is named as not a directory, and a
+/// run that fails before writing leaves no directory it created behind.
+#[test]
+fn converge_checks_its_outputs_before_the_work_and_leaves_nothing_on_failure() {
+    let dir = scene_dir();
+    let converge = |out: &str| {
+        let args = ["converge", "tiny.sl", "--device", "cpu", "--spp", "1,2", "--reference-spp", "4", "-o", out];
+        lumen(dir.path()).args(args).output().unwrap()
+    };
+    for blocked in ["converge.png", "converge.csv", "converge.svg", "reference.pfm"] {
+        let cv = dir.path().join("cv");
+        std::fs::create_dir_all(cv.join(blocked)).unwrap();
+        let o = converge("cv");
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{blocked}: {err}");
+        assert!(
+            err.contains(&format!("error: cannot write cv/{blocked}")) && err.contains("it is a directory"),
+            "{err}"
+        );
+        assert!(
+            !err.contains("rendering the reference") && !err.contains("warming up"),
+            "{blocked}: worked first: {err}"
+        );
+        let left: Vec<_> = std::fs::read_dir(&cv).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(left, [blocked], "{blocked}: nothing is written");
+        std::fs::remove_dir_all(&cv).unwrap();
+    }
+    std::fs::write(dir.path().join("afile"), b"x").unwrap();
+    for (out, said) in [
+        ("afile", "error: cannot write into afile: it is not a directory"),
+        ("afile/sub", "error: cannot create afile/sub: afile is not a directory"),
+    ] {
+        let o = converge(out);
+        assert_eq!(o.status.code(), Some(1), "{out}");
+        assert!(stderr(&o).contains(said) && !stderr(&o).contains("os error"), "{out}: {}", stderr(&o));
+    }
+    // A 1×1 reference, which the scene's size does not match, fails before any output.
+    let mut pfm = b"PF\n1 1\n-1.0\n".to_vec();
+    pfm.extend([0.5f32; 3].iter().flat_map(|v| v.to_le_bytes()));
+    std::fs::write(dir.path().join("ref.pfm"), pfm).unwrap();
+    let o = lumen(dir.path())
+        .args(["converge", "tiny.sl", "--device", "cpu", "--spp", "1", "--reference", "ref.pfm", "-o", "new/deep"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("reference ref.pfm is 1×1"), "{}", stderr(&o));
+    assert!(!dir.path().join("new").exists(), "the directories it created are removed");
+    // A good run still writes the whole set into a directory it creates.
+    let o = converge("made/here");
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let mut made: Vec<_> =
+        std::fs::read_dir(dir.path().join("made/here")).unwrap().map(|e| e.unwrap().file_name()).collect();
+    made.sort();
+    assert_eq!(made, ["converge.csv", "converge.md", "converge.png", "converge.svg", "reference.pfm"]);
+}
+
+/// `bench` loads every script named on its command line before it measures anything, and a
+/// broken one is an error with the script's message and location (it was a warning after
+/// the other scenes were measured, the multi-line error pasted into the Markdown table,
+/// splitting it, and the run exited 0). A directory's scripts that do not load are skipped
+/// with a warning, their error on the one line of their row. A sphere count past the
+/// scaling study's largest is refused, not quietly cut.
+#[test]
+fn bench_refuses_a_named_broken_script_before_measuring() {
+    let dir = scene_dir();
+    std::fs::write(dir.path().join("bad.sl"), "SPAWN Shape.Sphere(.bogus 1)\n").unwrap();
+    let bench = |scenes: &str, more: &[&str]| {
+        let args = [&["bench", "--device", "cpu", "--scenes", scenes, "--quick", "--max-spheres", "0"], more];
+        lumen(dir.path()).args(args.concat()).output().unwrap()
+    };
+    let o = bench("tiny.sl,bad.sl", &["-o", "r.md"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("bad.sl:1:20: error: unknown keyword `.bogus`"), "{err}");
+    assert!(!err.contains("warming up") && !err.contains("tiny.sl on cpu"), "measured first: {err}");
+    assert!(o.stdout.is_empty() && !dir.path().join("r.md").exists());
+
+    let scenes = dir.path().join("scenes");
+    std::fs::create_dir(&scenes).unwrap();
+    std::fs::write(scenes.join("tiny.sl"), SCENE).unwrap();
+    std::fs::write(scenes.join("bad.sl"), "SPAWN Shape.Sphere(.bogus 1)\n").unwrap();
+    std::fs::write(scenes.join("pi|pe.sl"), "SPAWN\n  Shape.Sphere(.material |x)\n").unwrap();
+    let o = bench("scenes", &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("warning: skipping bad.sl"), "{err}");
+    let md = String::from_utf8(o.stdout).unwrap();
+    let table: Vec<&str> =
+        md.split("| scene | device |").nth(1).unwrap().lines().skip(1).take_while(|l| !l.is_empty()).collect();
+    assert_eq!(table.len(), 4, "a separator and one row per script: {md}");
+    for row in &table {
+        assert!(row.starts_with('|') && row.ends_with('|'), "{row} in {md}");
+        assert_eq!(row.replace("\\|", "").matches('|').count(), 10, "{row}");
+    }
+    assert!(table.iter().any(|r| r.contains("bad.sl:1:20: error: unknown keyword")), "{md}");
+    assert!(table.iter().any(|r| r.starts_with("| pi\\|pe.sl |") && r.contains("pi\\|pe.sl:2:")), "{md}");
+    // Cores busy is a figure the machine can give, or n/a.
+    let cpus = std::thread::available_parallelism().map_or(1, usize::from) as f64;
+    let tiny = table.iter().find(|r| r.starts_with("| tiny.sl |")).unwrap();
+    let cores = tiny.split('|').nth(8).unwrap().trim();
+    assert!(cores.starts_with("n/a") || cores.parse::<f64>().is_ok_and(|c| c <= cpus), "cores busy {cores}");
+
+    let o = lumen(dir.path()).args(["bench", "--device", "cpu", "--max-spheres", "100000000"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("100000000 is not in 0..=100000"), "{}", stderr(&o));
+}

@@ -30,6 +30,9 @@ use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilde
 
 /// Object counts of the scaling study (cut at `--max-spheres`).
 pub const SPHERE_COUNTS: [u32; 6] = [1, 10, 100, 1_000, 10_000, 100_000];
+/// The most `--max-spheres` can ask for: the largest count of the study, so that a larger
+/// value is refused rather than quietly cut to it.
+pub const MAX_SPHERES: u32 = SPHERE_COUNTS[SPHERE_COUNTS.len() - 1];
 
 /// Arguments of `lumen bench`. `--spp` applies to the scene table (default 16; the scaling
 /// study takes 16× as many, so the GPU's kernel-creation jitter does not swamp the
@@ -56,8 +59,8 @@ pub struct BenchArgs {
     /// Small and fast: width 64, 4 spp, scaling up to 10 000 spheres.
     #[arg(long)]
     pub quick: bool,
-    /// Largest sphere count of the scaling study (0 skips it).
-    #[arg(long, value_parser = whole::<u32>(0, u64::from(u32::MAX)), allow_negative_numbers = true)]
+    /// Largest sphere count of the scaling study, at most 100000 (0 skips it).
+    #[arg(long, value_parser = whole::<u32>(0, u64::from(MAX_SPHERES)), allow_negative_numbers = true)]
     pub max_spheres: Option<u32>,
     /// Also compare the scene-specialised GPU kernel with a full-featured one (WGSL size,
     /// pipeline creation time, samples/s), and the BVH with a plain object list.
@@ -143,6 +146,28 @@ pub fn scene_files(list: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
     Ok(out)
 }
 
+/// Loads the scripts named on the command line (not those found in a directory), so that
+/// a broken one fails the run before any measurement, with the script's own message and
+/// location, rather than becoming a row of a report that then exits 0. A directory's
+/// scripts may be anything that lies there: those that do not load are skipped with a
+/// warning.
+fn load_named_scripts(list: &[PathBuf], plan: &Plan) -> anyhow::Result<()> {
+    for file in list.iter().filter(|p| !p.is_dir()) {
+        plan.load_scene(file, plan.width, plan.height)?;
+    }
+    Ok(())
+}
+
+/// Text as one Markdown table cell: its first `most` non-empty lines, trimmed and joined
+/// (a newline would end the table's row). `markdown_table` escapes `|`.
+fn one_line(text: &str, most: usize) -> String {
+    text.lines().map(str::trim).filter(|l| !l.is_empty()).take(most).collect::<Vec<_>>().join(" ")
+}
+
+/// Lines of a script's load error a table cell keeps: the message and its file:line:column
+/// (the excerpt under them, a source line and a caret, does not read as one line).
+const SCRIPT_ERROR_LINES: usize = 2;
+
 /// `n` diffuse spheres scattered in a cube in front of the default camera, under a uniform
 /// sky. Radii shrink as n^(−1/3) so the cloud covers about the same part of the image at
 /// every n: what grows is only the number of objects a ray must be tested against.
@@ -173,6 +198,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         crate::image::check_destination(path).with_context(|| format!("cannot write {}", path.display()))?;
     }
     let files = scene_files(&args.scenes)?;
+    load_named_scripts(&args.scenes, &plan)?;
     let devices = args.devices.open();
     if devices.is_empty() {
         bail!("none of the requested devices is available");
@@ -269,9 +295,8 @@ fn cold_kernels_table(files: &[PathBuf], plan: &Plan, args: &BenchArgs) -> anyho
                 _ => {
                     // The error and its location: the child's first two lines (an error
                     // line, then for a script the file:line:col of the fault).
-                    let err = String::from_utf8_lossy(&out.stderr);
-                    let lines: Vec<&str> = err.lines().map(str::trim).filter(|l| !l.is_empty()).take(2).collect();
-                    let said = if lines.is_empty() { "no output".to_string() } else { lines.join(" ") };
+                    let said = one_line(&String::from_utf8_lossy(&out.stderr), SCRIPT_ERROR_LINES);
+                    let said = if said.is_empty() { "no output".to_string() } else { said };
                     crate::diag!("warning: {name}: cold kernel creation failed: {said}");
                     error = Some(said);
                     break;
@@ -330,7 +355,7 @@ struct Rounds {
     rates: Vec<Option<f64>>,
     rays: Vec<f64>,
     /// Cores busy in each round (`Differential::cores_busy`).
-    cores: Vec<f64>,
+    cores: Vec<Cores>,
     seconds: Vec<f64>,
     spp: u32,
     error: Option<String>,
@@ -362,7 +387,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                 rows.push(vec![
                     name.clone(),
                     "-".into(),
-                    format!("error: {e}"),
+                    one_line(&format!("error: {e}"), SCRIPT_ERROR_LINES),
                     "".into(),
                     "".into(),
                     "".into(),
@@ -387,13 +412,13 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                     Ok(diff) => {
                         r.rates.push(diff.per_sample().map(|t| 1.0 / t));
                         r.rays.extend(diff.rays_per_second());
-                        r.cores.extend(diff.cores_busy());
+                        r.cores.push(diff.cores_busy());
                         r.seconds.push(diff.more.seconds);
                         r.spp = diff.more.spp;
                     }
                     Err(e) => {
                         crate::diag!("warning: {name} on {}: {e}", d.kind());
-                        r.error = Some(format!("error: {e}").replace('\n', " "));
+                        r.error = Some(one_line(&format!("error: {e}"), usize::MAX));
                     }
                 }
             }
@@ -407,7 +432,7 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
                     median(&r.seconds).map_or(String::new(), |s| format!("{s:.3}")),
                     median(&r.rates.iter().flatten().copied().collect::<Vec<_>>()).map_or_else(noise, si),
                     median(&r.rays).map_or_else(noise, si),
-                    median(&r.cores).map_or_else(|| "n/a".to_string(), |c| format!("{c:.2}")),
+                    cores_cell(&r.cores),
                     format_bytes(peak_memory_bytes()),
                 ],
             };
@@ -454,6 +479,46 @@ fn scenes_table(files: &[PathBuf], devices: &[OpenDevice], plan: &Plan) -> Strin
     out
 }
 
+/// Cores busy over a round's extra samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Cores {
+    Busy(f64),
+    /// Timing noise swamped the figure.
+    Noise,
+    /// No CPU time to count (not Unix).
+    Unknown,
+}
+
+/// Shortest extra wall time whose cores busy is reported. The extra CPU seconds and wall
+/// seconds are each the difference of two renders, and the thread pool's work around a
+/// render (its workers spin a while before they sleep) falls in one or the other: over a
+/// few hundred microseconds that gave 51.30 cores on a 2-CPU machine.
+const CORES_MIN_SECONDS: f64 = 0.01;
+
+impl Cores {
+    /// `cpu_seconds` over `wall_seconds` on a machine of `cpus` logical CPUs; noise where
+    /// the wall time is too short to tell, or the figure is more CPUs than there are.
+    fn of(cpu_seconds: Option<f64>, wall_seconds: f64, cpus: usize) -> Self {
+        if cpu_seconds.is_none() {
+            return Cores::Unknown;
+        }
+        match cores_busy(cpu_seconds, wall_seconds) {
+            Some(c) if wall_seconds >= CORES_MIN_SECONDS && c <= cpus as f64 => Cores::Busy(c),
+            _ => Cores::Noise,
+        }
+    }
+}
+
+/// The scene table's "cores busy": the median of the rounds measured, else why there is none.
+fn cores_cell(rounds: &[Cores]) -> String {
+    let busy: Vec<f64> = rounds.iter().filter_map(|c| if let Cores::Busy(c) = c { Some(*c) } else { None }).collect();
+    match median(&busy) {
+        Some(c) => format!("{c:.2}"),
+        None if rounds.contains(&Cores::Noise) => "n/a (timing noise)".into(),
+        None => "n/a".into(),
+    }
+}
+
 /// Two renders whose difference removes fixed costs (loading the BVH, packing, kernel
 /// creation): one at 1 spp and one at `1 + spp`.
 struct Differential {
@@ -493,8 +558,9 @@ impl Differential {
     }
 
     /// Cores kept busy by the extra samples: their CPU seconds over their wall seconds.
-    fn cores_busy(&self) -> Option<f64> {
-        cores_busy(self.extra_cpu_seconds, self.extra_seconds)
+    fn cores_busy(&self) -> Cores {
+        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        Cores::of(self.extra_cpu_seconds, self.extra_seconds, cpus)
     }
 
     fn rays_per_second(&self) -> Option<f64> {
@@ -772,6 +838,33 @@ mod tests {
         assert_eq!(si(1.5e6), "1.50 M");
         assert_eq!(si(12.0), "12.0");
         assert_eq!(growth_line(Device::Cpu, &[1.0], &[1.0]), "- cpu: growth n/a (fewer than two usable points)");
+    }
+
+    /// Cores busy is a figure only where the wall time is long enough to tell and the figure
+    /// is one the machine can give: 0.02 CPU seconds over 0.39 ms had been "51.30" on 2 CPUs.
+    #[test]
+    fn cores_busy_is_noise_where_it_cannot_be_told() {
+        assert_eq!(Cores::of(Some(0.02), 0.00039, 2), Cores::Noise);
+        assert_eq!(Cores::of(Some(0.5), 0.2, 2), Cores::Noise, "2.5 cores of 2");
+        assert_eq!(Cores::of(Some(0.375), 0.25, 2), Cores::Busy(1.5));
+        assert_eq!(Cores::of(Some(0.3), 0.0, 2), Cores::Noise);
+        assert_eq!(Cores::of(None, 0.2, 2), Cores::Unknown);
+        assert_eq!(cores_cell(&[Cores::Busy(1.0), Cores::Noise, Cores::Busy(2.0)]), "1.50");
+        assert_eq!(cores_cell(&[Cores::Noise]), "n/a (timing noise)");
+        assert_eq!(cores_cell(&[Cores::Unknown]), "n/a");
+    }
+
+    /// A table cell is one line: a script's error keeps its message and location.
+    #[test]
+    fn errors_in_table_cells_are_one_line() {
+        let e = "error: the scene does not load\nbad.sl:1:20: error: unknown keyword\n 1 | SPAWN\n   |  ^^\n";
+        assert_eq!(
+            one_line(e, SCRIPT_ERROR_LINES),
+            "error: the scene does not load bad.sl:1:20: error: unknown keyword"
+        );
+        assert_eq!(one_line("a\r\n\n  b \nc", usize::MAX), "a b c");
+        let table = markdown_table(&["scene", "error"], &[vec!["x".into(), one_line(e, usize::MAX)]]);
+        assert_eq!(table.lines().count(), 3, "{table}");
     }
 
     #[test]

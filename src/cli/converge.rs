@@ -5,8 +5,11 @@
 //! noise does not correlate with the estimates'), and writes `converge.csv`, `converge.md`
 //! and `converge.png` (log-log RMSE against seconds) into the output directory. Each device
 //! first renders one discarded 1-spp image so start-up costs are not timed.
+//!
+//! Every output is checked before the work, as `render` checks its own, and the results
+//! are written as a set (see [`write_set`]): a run that fails leaves no half of it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, Context as _};
 use clap::Args;
@@ -16,7 +19,8 @@ use super::number_args::whole;
 use super::gpu_args::DeviceListArgs;
 use super::script_args::{SceneOverrides, ScriptArgs, MAX_SPP};
 use crate::analysis::{
-    format_seconds, measure, ConvergeRow, ConvergeTable, ErrorMetrics, OpenDevice, Plot, Series, REL_MSE_EPSILON,
+    format_seconds, measure, plot_loglog, plot_loglog_svg, ConvergeRow, ConvergeTable, ErrorMetrics, OpenDevice, Plot,
+    Series, REL_MSE_EPSILON,
 };
 use crate::cpu::paths_per_sample;
 use crate::image::{read_image, write_image, HdrImage, ToneMap};
@@ -69,9 +73,9 @@ fn check_spp(spp: u32, what: &str, scene: Option<&Scene>) -> anyhow::Result<()> 
     Ok(())
 }
 
-/// The reference image: read from `--reference`, or rendered on the CPU and saved as
-/// `reference.pfm` in the output directory.
-fn reference(args: &ConvergeArgs, scene: &Scene, max_spp: u32) -> anyhow::Result<(HdrImage, String)> {
+/// The `--reference` image, if given, read and checked against the scene's size before any
+/// output is made.
+fn given_reference(args: &ConvergeArgs, scene: &Scene) -> anyhow::Result<Option<(HdrImage, String)>> {
     if let Some(path) = &args.reference {
         let img = read_image(path).with_context(|| format!("cannot read the reference {}", path.display()))?;
         if (img.width(), img.height()) != (scene.width as usize, scene.height as usize) {
@@ -84,8 +88,13 @@ fn reference(args: &ConvergeArgs, scene: &Scene, max_spp: u32) -> anyhow::Result
                 scene.height
             );
         }
-        return Ok((img, format!("`{}`", path.display())));
+        return Ok(Some((img, format!("`{}`", path.display()))));
     }
+    Ok(None)
+}
+
+/// The reference rendered on the CPU and saved as `reference.pfm` in the output directory.
+fn rendered_reference(args: &ConvergeArgs, scene: &Scene, max_spp: u32) -> anyhow::Result<(HdrImage, String)> {
     let spp = args.reference_spp.unwrap_or(max_spp.saturating_mul(REFERENCE_FACTOR).min(MAX_SPP));
     if spp < max_spp.saturating_mul(REFERENCE_FACTOR) {
         crate::diag!("warning: reference spp {spp} is under {REFERENCE_FACTOR}× the largest spp {max_spp}: its noise will flatten the curve");
@@ -95,8 +104,7 @@ fn reference(args: &ConvergeArgs, scene: &Scene, max_spp: u32) -> anyhow::Result
     crate::diag!("rendering the reference on the CPU at {spp} spp ...");
     let m = measure(&OpenDevice::Cpu, &ref_scene, spp, true).map_err(|e| anyhow!("{e}"))?;
     crate::diag!("reference: {} ({} spp)", format_seconds(m.seconds), spp);
-    let path = args.output.join("reference.pfm");
-    write_image(&path, &m.image, &ToneMap::default())?;
+    write_image(&args.output.join(REFERENCE_FILE), &m.image, &ToneMap::default())?;
     Ok((m.image, format!("CPU, {spp} spp, independent seed ({:.1} s)", m.seconds)))
 }
 
@@ -121,12 +129,20 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
     if let Some(r) = args.reference_spp {
         check_spp(r, "--reference-spp", Some(&scene))?;
     }
-    std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
+    let given = given_reference(&args, &scene)?;
+    let mut output = OutputDir::prepare(&args.output, given.is_none())?;
     let devices = args.devices.open();
     if devices.is_empty() {
         bail!("none of the requested devices is available");
     }
-    let (reference, reference_note) = reference(&args, &scene, max_spp)?;
+    let (reference, reference_note) = match given {
+        Some(r) => r,
+        None => {
+            let r = rendered_reference(&args, &scene, max_spp)?;
+            output.keep();
+            r
+        }
+    };
 
     let mut table = ConvergeTable::default();
     let total = devices.len() * spp.len();
@@ -166,7 +182,112 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
     }
     let descriptions: Vec<String> = devices.iter().map(OpenDevice::describe).collect();
     let machine = crate::analysis::machine_line(&devices);
-    write_results(&args, &scene, &table, &reference_note, &descriptions, &machine)
+    write_results(&args, &scene, &table, &reference_note, &descriptions, &machine, &mut output)
+}
+
+/// The reference `converge` renders, in the output directory (not written with `--reference`).
+const REFERENCE_FILE: &str = "reference.pfm";
+/// The result files, in the output directory.
+const RESULT_FILES: [&str; 4] = ["converge.csv", "converge.md", "converge.png", "converge.svg"];
+
+/// The output directory, made ready before the work: created if missing (the directories
+/// this run created are removed again if it fails before writing anything into them, so a
+/// failed run leaves no empty directory behind), and every file it will hold checked as
+/// `render` checks its outputs.
+#[derive(Debug)]
+struct OutputDir {
+    /// The directories this run created, outermost first; empty once a file was written.
+    created: Vec<PathBuf>,
+}
+
+impl OutputDir {
+    fn prepare(dir: &Path, with_reference: bool) -> anyhow::Result<Self> {
+        let out = OutputDir { created: create_dirs(dir)? };
+        let files = RESULT_FILES.iter().chain(with_reference.then_some(&REFERENCE_FILE));
+        for path in files.map(|f| dir.join(f)) {
+            // On an error `out` is dropped, which removes what this run created.
+            crate::image::check_destination(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        }
+        Ok(out)
+    }
+
+    /// A file was written: the directory stays whatever happens next.
+    fn keep(&mut self) {
+        self.created.clear();
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        // Innermost first; `remove_dir` removes only an empty directory, so nothing that
+        // appeared in one meanwhile is lost.
+        for d in self.created.iter().rev() {
+            if std::fs::remove_dir(d).is_err() {
+                break;
+            }
+        }
+    }
+}
+
+/// Creates `dir` and any missing parents, returning those it created (outermost first). An
+/// existing file in the way is named in words, not as "File exists (os error 17)".
+fn create_dirs(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let mut missing = Vec::new();
+    for d in dir.ancestors().filter(|d| !d.as_os_str().is_empty()) {
+        match std::fs::metadata(d) {
+            Ok(m) if m.is_dir() => break,
+            Ok(_) if d == dir => bail!("cannot write into {}: it is not a directory", dir.display()),
+            Ok(_) => bail!("cannot create {}: {} is not a directory", dir.display(), d.display()),
+            // NotADirectory: a file further up, which a later step names.
+            Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
+                missing.push(d.to_path_buf())
+            }
+            Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
+        }
+    }
+    let mut created = Vec::new();
+    for d in missing.into_iter().rev() {
+        match std::fs::create_dir(&d) {
+            Ok(()) => created.push(d),
+            // Made by someone else meanwhile: theirs, not ours to remove.
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && d.is_dir() => {}
+            Err(e) => {
+                drop(OutputDir { created });
+                return Err(e).with_context(|| format!("cannot create {}", d.display()));
+            }
+        }
+    }
+    Ok(created)
+}
+
+/// Writes every file or, where that can be had, none: each goes to a temporary file beside
+/// its target, and the first rename comes only once all of them are written, so a full disk
+/// (the likely failure) replaces nothing. On an error, the file that failed and those that
+/// were renamed into place before it (only after a failure to flush or rename).
+fn write_set(files: &[(PathBuf, Vec<u8>)]) -> Result<(), (PathBuf, std::io::Error, Vec<PathBuf>)> {
+    fn nest(
+        files: &[(PathBuf, Vec<u8>)],
+        done: &mut Vec<PathBuf>,
+        failed: &mut Option<PathBuf>,
+    ) -> std::io::Result<()> {
+        use std::io::Write as _;
+        let Some(((path, bytes), rest)) = files.split_first() else { return Ok(()) };
+        // The rest are written (and renamed) inside this file's write, before its rename.
+        let result = crate::image::produce_atomically(path, |file, _| {
+            file.write_all(bytes)?;
+            nest(rest, done, failed)
+        });
+        match &result {
+            Ok(()) => done.push(path.clone()),
+            // The innermost failure is the cause; the writes around it fail with it.
+            Err(_) => {
+                failed.get_or_insert_with(|| path.clone());
+            }
+        }
+        result
+    }
+    let (mut done, mut failed) = (Vec::new(), None);
+    nest(files, &mut done, &mut failed).map_err(|e| (failed.unwrap_or_default(), e, done))
 }
 
 /// One line per device: the fitted slope of log MSE against log spp, and a plateau note.
@@ -193,6 +314,7 @@ fn write_results(
     reference_note: &str,
     devices: &[String],
     machine: &str,
+    output: &mut OutputDir,
 ) -> anyhow::Result<()> {
     let dir = &args.output;
     let slopes = slope_lines(table);
@@ -200,9 +322,6 @@ fn write_results(
     for l in &slopes {
         out.line(l);
     }
-    let csv = dir.join("converge.csv");
-    crate::image::write_atomically(&csv, table.to_csv().as_bytes())
-        .with_context(|| format!("cannot write {}", csv.display()))?;
     let name = args.scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let md = format!(
         "# lumen converge {name}\n\n{}×{} pixels, {} renderer; reference: {reference_note}; devices: {}.\n{machine}\n\
@@ -215,9 +334,6 @@ fn write_results(
         table.to_markdown(),
         slopes.iter().map(|l| format!("- {l}\n")).collect::<String>()
     );
-    let md_path = dir.join("converge.md");
-    crate::image::write_atomically(&md_path, md.as_bytes())
-        .with_context(|| format!("cannot write {}", md_path.display()))?;
     let plot = Plot {
         title: format!("{name}: error vs time"),
         x_label: "seconds".into(),
@@ -228,11 +344,105 @@ fn write_results(
             .map(|d| Series { label: d.to_string(), points: table.rows_of(d).map(|r| (r.seconds, r.rmse)).collect() })
             .collect(),
     };
-    let png = dir.join("converge.png");
-    plot.write_png(&png, 800, 560).with_context(|| format!("cannot write {}", png.display()))?;
-    let svg = dir.join("converge.svg");
-    plot.write_svg(&svg, 800, 560).with_context(|| format!("cannot write {}", svg.display()))?;
-    crate::diag!("wrote {}, {}, {} and {}", csv.display(), md_path.display(), png.display(), svg.display());
+    let (width, height) = (800, 560);
+    let mut png = std::io::Cursor::new(Vec::new());
+    plot_loglog(&plot, width, height)
+        .write_to(&mut png, image::ImageFormat::Png)
+        .context("cannot encode the plot as PNG")?;
+    let contents = [
+        table.to_csv().into_bytes(),
+        md.into_bytes(),
+        png.into_inner(),
+        plot_loglog_svg(&plot, width, height).into_bytes(),
+    ];
+    let files: Vec<(PathBuf, Vec<u8>)> = RESULT_FILES.iter().map(|f| dir.join(f)).zip(contents).collect();
+    let names = |paths: &mut dyn Iterator<Item = &PathBuf>| {
+        paths.map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+    };
+    if let Err((failed, e, written)) = write_set(&files) {
+        if !written.is_empty() {
+            output.keep();
+        }
+        let kept = if written.is_empty() {
+            "none of the results was written".to_string()
+        } else {
+            format!("only {} were written", names(&mut written.iter()))
+        };
+        let reference = if args.reference.is_none() {
+            format!(" ({} was, before the measurements)", dir.join(REFERENCE_FILE).display())
+        } else {
+            String::new()
+        };
+        crate::diag!("{kept}{reference}");
+        return Err(e).with_context(|| format!("cannot write {}", failed.display()));
+    }
+    output.keep();
+    crate::diag!("wrote {}", names(&mut files.iter().map(|(p, _)| p)));
     // Last: the files are written even when nobody reads standard output.
     Ok(out.print()?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        v.sort();
+        v
+    }
+
+    /// A set whose last file cannot be written replaces none of the others, and leaves no
+    /// temporary file; a set that can be written is written whole.
+    #[test]
+    fn a_set_is_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let old = dir.path().join("a.csv");
+        std::fs::write(&old, b"old").unwrap();
+        let set = |last: PathBuf| {
+            vec![(old.clone(), b"new".to_vec()), (dir.path().join("b.md"), b"b".to_vec()), (last, b"c".to_vec())]
+        };
+        let missing = dir.path().join("none/c.png");
+        let (failed, e, written) = write_set(&set(missing.clone())).unwrap_err();
+        assert_eq!((failed, e.kind(), written), (missing, std::io::ErrorKind::NotFound, vec![]));
+        assert_eq!(names(dir.path()), ["a.csv"]);
+        assert_eq!(std::fs::read(&old).unwrap(), b"old");
+        write_set(&set(dir.path().join("c.png"))).unwrap();
+        assert_eq!(names(dir.path()), ["a.csv", "b.md", "c.png"]);
+        assert_eq!(std::fs::read(&old).unwrap(), b"new");
+    }
+
+    /// The directories a run creates go again if it fails before writing into them, and
+    /// stay once it has; a directory that was there before is never removed.
+    #[test]
+    fn only_the_directories_a_run_created_and_left_empty_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let deep = dir.path().join("a/b/c");
+        drop(OutputDir::prepare(&deep, true).unwrap());
+        assert!(names(dir.path()).is_empty());
+        let mut kept = OutputDir::prepare(&deep, true).unwrap();
+        std::fs::write(deep.join(REFERENCE_FILE), b"x").unwrap();
+        kept.keep();
+        drop(kept);
+        assert!(deep.join(REFERENCE_FILE).is_file());
+        drop(OutputDir::prepare(dir.path(), false).unwrap());
+        assert!(dir.path().is_dir());
+        // In a directory that was there, a blocked output fails and nothing is removed.
+        std::fs::create_dir(dir.path().join("converge.md")).unwrap();
+        let e = OutputDir::prepare(dir.path(), false).unwrap_err();
+        assert_eq!(
+            format!("{e:#}"),
+            format!("cannot write {}: it is a directory", dir.path().join("converge.md").display())
+        );
+        assert_eq!(names(dir.path()), ["a", "converge.md"]);
+        // A file in the way is said in words.
+        let file = dir.path().join("file");
+        std::fs::write(&file, b"x").unwrap();
+        let e = OutputDir::prepare(&file.join("x/y"), true).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!("cannot create {}: {} is not a directory", file.join("x/y").display(), file.display())
+        );
+    }
 }
