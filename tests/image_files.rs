@@ -270,3 +270,94 @@ fn images_within_lumens_limits_are_read_whatever_their_decoded_size() {
     let e = read_image(&wide).unwrap_err().to_string();
     assert!(e.contains("image size 131072×1 is too large (at most 65536 per side"), "{e}");
 }
+
+/// A Radiance file as wide as a run-length scanline cannot describe (32768: its marker
+/// holds the width in 15 bits) is written flat, 4 bytes a pixel; it was written with a
+/// marker that readers take for a pixel, and reading it failed with "the file ends early".
+#[test]
+fn radiance_files_past_the_run_length_width_are_written_flat() {
+    let dir = tempfile::tempdir().unwrap();
+    // (1, 0.5, 0.25) is RGBE (128, 64, 32, 129); 1000 = 250/256·2¹⁰ is (250, 250, 250, 138).
+    let pixel = |c: usize| if c % 3 == 0 { [1.0, 0.5, 0.25] } else { [1000.0; 3] };
+    let rgbe = |c: usize| if c % 3 == 0 { [128, 64, 32, 129] } else { [250, 250, 250, 138] };
+    for width in [32767, 32768, 32769] {
+        let input = dir.path().join(format!("w{width}.pfm"));
+        let output = dir.path().join(format!("w{width}.hdr"));
+        std::fs::write(&input, pfm_bytes(width, 1, &(0..width).map(pixel).collect::<Vec<_>>())).unwrap();
+        let o = lumen(&input, &output);
+        assert!(o.status.success(), "{width}: {}", stderr(&o));
+        let img = read_image(&output).unwrap_or_else(|e| panic!("{width}: {e}"));
+        assert_eq!((img.width(), img.height()), (width, 1));
+        for c in [0, 1, 2, 3, width / 2, width - 1] {
+            assert_eq!(img.get(c, 0).to_array(), pixel(c), "width {width}, column {c}");
+        }
+        let o = lumen(&output, &dir.path().join(format!("w{width}.png")));
+        assert!(o.status.success(), "{width}: {}", stderr(&o));
+        if width > 32767 {
+            let bytes = std::fs::read(&output).unwrap();
+            let data = &bytes[bytes.len() - 4 * width..];
+            let header = String::from_utf8(bytes[..bytes.len() - 4 * width].to_vec()).unwrap();
+            assert!(header.ends_with(&format!("\n\n-Y 1 +X {width}\n")), "{header}");
+            assert!(data.chunks(4).enumerate().all(|(c, p)| p == rgbe(c)), "width {width}: not flat RGBE");
+        }
+    }
+}
+
+/// A JPEG holds at most 65535 pixels a side: a wider image is refused in one line that
+/// names the limit, not with the encoder's two-line "Format error encoding Jpeg:".
+#[test]
+fn jpeg_output_past_65535_pixels_a_side_is_refused_in_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("wide.pfm");
+    std::fs::write(&input, pfm_bytes(65536, 1, &vec![[0.5; 3]; 65536])).unwrap();
+    let output = dir.path().join("wide.jpg");
+    let o = lumen(&input, &output);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("wide.jpg") && err.contains("65536×1 is too large for JPEG (at most 65535"), "{err}");
+    assert_eq!(files_in(dir.path()), vec![input]);
+}
+
+/// Decoders' messages are said as what they mean, in one line and never in Rust's debug
+/// form.
+#[test]
+fn decoder_messages_are_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("out.pfm");
+    // A PNG with one chunk, IHDR, then one whose name is not a PNG chunk's (byte 40 of a
+    // PNG whose IDAT follows IHDR).
+    let mut png = b"\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x02\x00\x00\x00".to_vec();
+    png.extend_from_slice(&[0x90, 0x77, 0x53, 0xde]); // IHDR's CRC
+    png.extend_from_slice(b"\x00\x00\x00\x00IDA\xab\x00\x00\x00\x00");
+    for (name, bytes, says) in [
+        (
+            "cut.hdr",
+            b"#?RADIANCE\nFORMAT=32".to_vec(),
+            "the file ends early (cut short, or not a whole Radiance HDR file)",
+        ),
+        ("cut2.hdr", b"#?RADIANCE\n# Rust HD".to_vec(), "the file ends early"),
+        ("bad.png", png, "an unknown critical chunk \"IDA\\xAB\""),
+    ] {
+        let input = dir.path().join(name);
+        std::fs::write(&input, bytes).unwrap();
+        let o = lumen(&input, &output);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        let err = stderr(&o);
+        assert!(err.contains(says) && err.lines().count() == 1, "{name}: {err}");
+    }
+}
+
+/// `--alpha 1e39` is finite, but past f32's range: it was "expected a finite number".
+#[test]
+fn option_values_past_f32s_range_say_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.pfm");
+    std::fs::write(&input, pfm_bytes(1, 1, &[[1.0; 3]])).unwrap();
+    for value in ["1e39", "3.5e38", "1e300"] {
+        let o = lumen_with(&input, &dir.path().join("o.png"), &["--curve", "reinhard", "--alpha", value]);
+        assert_eq!(o.status.code(), Some(2), "{value}");
+        let err = stderr(&o);
+        assert!(err.contains(&format!("{value} is too large")) && err.contains("at most 3.4e38"), "{value}: {err}");
+    }
+}

@@ -53,18 +53,37 @@ pub struct TonemapArgs {
     pub exposure: Option<f32>,
 }
 
-fn finite(s: &str) -> Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(format!("expected a finite number, got {s:?}")),
+/// Parses `s` as f32, saying why a number it does not take is refused: one past f32's
+/// range (`1e39`, which f32 parses as infinity) is "too large", not "not finite", and a
+/// positive one that f32 rounds to 0 (`1e-50`) is "too small", not "not > 0".
+fn number(s: &str, positive: bool) -> Result<f32, String> {
+    let t = s.trim();
+    // Digits: a number written out (`1e400`, infinite as f64 too), not "inf".
+    let written_out = t.bytes().any(|b| b.is_ascii_digit());
+    let (range, wanted) = if positive {
+        ("> 0 and at most 3.4e38", "a finite number > 0")
+    } else {
+        ("from -3.4e38 to 3.4e38", "a finite number")
+    };
+    match (t.parse::<f32>(), t.parse::<f64>()) {
+        (Ok(v), _) if v.is_finite() && (!positive || v > 0.0) => Ok(v),
+        (_, Ok(x)) if written_out && x.abs() > f64::from(f32::MAX) && (!positive || x > 0.0) => {
+            Err(format!("{t} is too large; expected a number {range} (f32's range)"))
+        }
+        // Here a positive x under 1 is one that f32 rounded to 0.
+        (_, Ok(x)) if positive && x > 0.0 && x < 1.0 => {
+            Err(format!("{t} is too small; expected a number > 0 and at least 1.4e-45 (f32's range)"))
+        }
+        _ => Err(format!("expected {wanted}, got {s:?}")),
     }
 }
 
+fn finite(s: &str) -> Result<f32, String> {
+    number(s, false)
+}
+
 fn positive(s: &str) -> Result<f32, String> {
-    match finite(s) {
-        Ok(v) if v > 0.0 => Ok(v),
-        _ => Err(format!("expected a finite number > 0, got {s:?}")),
-    }
+    number(s, true)
 }
 
 impl TonemapArgs {
@@ -161,5 +180,31 @@ mod tests {
         assert!(parse(&["a.pfm", "b.png", "--curve", "reinhard", "--gamma", "nan"]).is_err());
         assert!(parse(&["a.pfm", "b.png", "--curve", "filmic"]).is_err());
         assert!(parse(&["a.pfm", "b.exr"]).is_ok());
+    }
+
+    #[test]
+    fn numbers_past_f32s_range_say_so() {
+        // Finite numbers that f32 parses as infinity or rounds to 0 were "not finite" or "not > 0".
+        for (value, says) in [
+            ("1e39", "1e39 is too large; expected a number > 0 and at most 3.4e38 (f32's range)"),
+            ("3.5e38", "3.5e38 is too large; expected a number > 0 and at most 3.4e38 (f32's range)"),
+            ("1e300", "1e300 is too large; expected a number > 0 and at most 3.4e38 (f32's range)"),
+            ("1e400", "1e400 is too large; expected a number > 0 and at most 3.4e38 (f32's range)"),
+            ("1e-50", "1e-50 is too small; expected a number > 0 and at least 1.4e-45 (f32's range)"),
+            ("-1e39", "expected a finite number > 0, got \"-1e39\""),
+            ("inf", "expected a finite number > 0, got \"inf\""),
+        ] {
+            assert_eq!(positive(value).unwrap_err(), says, "{value}");
+        }
+        assert_eq!(
+            finite("-1e39").unwrap_err(),
+            "-1e39 is too large; expected a number from -3.4e38 to 3.4e38 (f32's range)"
+        );
+        assert_eq!(finite("NaN").unwrap_err(), "expected a finite number, got \"NaN\"");
+        assert_eq!(finite("1e-50"), Ok(0.0));
+        assert_eq!(positive("3.4028235e38"), Ok(f32::MAX));
+        assert_eq!(finite(" -2.5 "), Ok(-2.5));
+        let e = parse(&["a.pfm", "b.png", "--curve", "reinhard", "--alpha", "1e39"]).unwrap_err().to_string();
+        assert!(e.contains("1e39 is too large") && e.contains("3.4e38"), "{e}");
     }
 }

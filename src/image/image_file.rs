@@ -10,7 +10,7 @@ use super::ldr_file::{decode_ldr, encode_ldr, LdrFormat};
 use super::pfm::{decode_pfm, encode_pfm};
 use super::radiance_file::{decode_radiance, encode_radiance};
 use super::render_metadata::RenderMetadata;
-use super::size::check_size;
+use super::size::{check_size, SizeError, MAX_SIDE};
 use super::tone_map::ToneMap;
 use super::HdrImage;
 use crate::color::Rgb32;
@@ -47,6 +47,15 @@ impl ImageFormat {
     /// True for the formats that store linear radiance (no tone mapping).
     pub fn is_hdr(self) -> bool {
         matches!(self, Self::Pfm | Self::Exr | Self::RadianceHdr)
+    }
+
+    /// The largest width or height a file of this format holds: lumen's [`MAX_SIDE`] but for
+    /// JPEG, whose header holds each side in 16 bits.
+    pub fn max_side(self) -> usize {
+        match self {
+            Self::Jpeg => 65535,
+            _ => MAX_SIDE,
+        }
     }
 
     /// A short name for messages.
@@ -117,20 +126,46 @@ pub fn read_image(path: &Path) -> Result<HdrImage, ImageError> {
     Ok(img)
 }
 
-/// A decoder's message as a person reads it: the image crate's "Format error decoding Png:"
-/// prefix dropped (the error already names the format), and a read past the end, which the
-/// decoders report as an I/O detail ("failed to fill whole buffer", "reference to missing
-/// bytes"), said as what it means.
+/// A decoder's message as a person reads it, on one line: the image crate's "Format error
+/// decoding Png:" prefix and zune-jpeg's "I/O errors" dropped (the error already names the
+/// format), and a read past the end, which the decoders report as an I/O detail ("failed to
+/// fill whole buffer", "Not enough bytes, expected 162 but found 31", "EOF in header"),
+/// said as what it means.
 fn decoder_words(format: &str, message: &str) -> String {
     let message = message.trim();
     let message = match message.split_once(": ") {
         Some((prefix, rest)) if prefix.starts_with("Format error decoding ") => rest.trim(),
         _ => message,
     };
-    if message.contains("failed to fill whole buffer") || message.contains("reference to missing bytes") {
+    let message = message.strip_prefix("I/O errors ").unwrap_or(message);
+    const ENDS_EARLY: [&str; 6] = [
+        "failed to fill whole buffer",
+        "reference to missing bytes",
+        "unexpected end of file",
+        "Not enough bytes",
+        "EOF in header",
+        "EOF in dimensions line",
+    ];
+    if ENDS_EARLY.iter().any(|m| message.contains(m)) {
         return format!("the file ends early (cut short, or not a whole {format} file)");
     }
-    message.to_string()
+    one_line(message)
+}
+
+/// `message`'s lines joined with "; " (zune-jpeg's end with a newline, and the image crate
+/// puts an encoder's cause on a line of its own), so that an error stays one line.
+fn one_line(message: &str) -> String {
+    message.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ")
+}
+
+/// An encoder's message as a person reads it: see [`decoder_words`].
+fn encoder_words(message: &str) -> String {
+    let message = message.trim();
+    let message = match message.split_once(':') {
+        Some((prefix, rest)) if prefix.starts_with("Format error encoding ") => rest.trim(),
+        _ => message,
+    };
+    one_line(message)
 }
 
 fn exr_error(path: &Path, e: ExrDecodeError) -> ImageError {
@@ -165,6 +200,29 @@ pub fn read_render_part(path: &Path) -> Result<(HdrImage, RenderMetadata), Image
     Ok((img, meta))
 }
 
+/// Checks that an image of `width × height` pixels can be written to `path`: within lumen's
+/// limits ([`check_size`]) and the format's ([`ImageFormat::max_side`]). [`write_image`]
+/// checks this before tone mapping; a command that knows the size before its work calls it
+/// then, so that a 65536-pixel-wide JPEG is refused before the render rather than after.
+///
+/// ```
+/// use lumen::image::check_output_size;
+/// use std::path::Path;
+/// assert!(check_output_size(Path::new("wide.png"), 65536, 1).is_ok());
+/// let e = check_output_size(Path::new("wide.jpg"), 65536, 1).unwrap_err().to_string();
+/// assert!(e.starts_with("wide.jpg: ") && e.contains("at most 65535"), "{e}");
+/// ```
+pub fn check_output_size(path: &Path, width: usize, height: usize) -> Result<(), ImageError> {
+    let format = ImageFormat::from_path(path)?;
+    let size_err = |cause| ImageError::Size { path: path.to_owned(), cause };
+    check_size(width, height).map_err(size_err)?;
+    let max_side = format.max_side();
+    if width > max_side || height > max_side {
+        return Err(size_err(SizeError::TooLargeForFormat { width, height, format: format.name(), max_side }));
+    }
+    Ok(())
+}
+
 /// Writes an image atomically (temporary file in the same directory, then rename: on any
 /// error neither the output nor a temporary file remains). HDR formats get the linear
 /// values; PNG and JPEG get the image tone-mapped by `tm`. NaN/Inf pixels are written as
@@ -183,8 +241,9 @@ pub fn write_image_with(
 ) -> Result<WriteReport, ImageError> {
     let format = ImageFormat::from_path(path)?;
     let owned = || path.to_owned();
-    check_size(img.width(), img.height()).map_err(|cause| ImageError::Size { path: owned(), cause })?;
-    let encode_err = |message: String| ImageError::Encode { path: owned(), format: format.name(), message };
+    check_output_size(path, img.width(), img.height())?;
+    let encode_err =
+        |message: String| ImageError::Encode { path: owned(), format: format.name(), message: encoder_words(&message) };
     let non_finite = img.non_finite_count();
     let bytes = if format.is_hdr() {
         let clean: Cow<HdrImage> = if non_finite == 0 {
@@ -317,5 +376,89 @@ mod tests {
                 format!("cannot decode {format} image: the file ends early (cut short, or not a whole {format} file)");
             assert!(e.ends_with(&says), "{e}");
         }
+    }
+
+    /// `name` written by lumen from a 40×30 image of varied pixels, as bytes.
+    fn written(dir: &Path, name: &str) -> Vec<u8> {
+        let path = dir.join(name);
+        let img = HdrImage::from_fn(40, 30, |c, r| Rgb32::new(c as f32 / 40.0, r as f32 / 30.0, ((c * r) % 7) as f32));
+        write_image(&path, &img, &ToneMap::default()).unwrap();
+        std::fs::read(path).unwrap()
+    }
+
+    /// The message of reading `bytes` as file `name`, after the file's name.
+    fn read_message(dir: &Path, name: &str, bytes: &[u8]) -> String {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let e = read_image(&path).unwrap_err().to_string();
+        e.strip_prefix(&format!("{}: ", path.display())).unwrap_or(&e).to_string()
+    }
+
+    #[test]
+    fn decoder_messages_are_said_in_words() {
+        let dir = tempfile::tempdir().unwrap();
+        // zune-jpeg: "I/O errors Not enough bytes, expected 162 but found 31" and a newline.
+        let jpg = written(dir.path(), "a.jpg");
+        assert_eq!(
+            read_message(dir.path(), "cut.jpg", &jpg[..200]),
+            "cannot decode JPEG image: the file ends early (cut short, or not a whole JPEG file)"
+        );
+        // The image crate: "EOF in header".
+        let hdr = written(dir.path(), "a.hdr");
+        assert_eq!(
+            read_message(dir.path(), "cut.hdr", &hdr[..20]),
+            "cannot decode Radiance HDR image: the file ends early (cut short, or not a whole Radiance HDR file)"
+        );
+        // The png crate: "Unrecognized critical chunk: ChunkType { type: IDA«, critical: true, ... }".
+        let mut png = written(dir.path(), "a.png");
+        let t = png.windows(4).position(|w| w == b"IDAT").unwrap() + 3;
+        for (byte, name) in [(b'T' ^ 0xff, "IDA\\xAB"), (0x1b, "IDA\\x1B"), (b'X', "IDAX")] {
+            png[t] = byte;
+            assert_eq!(
+                read_message(dir.path(), "bad.png", &png),
+                format!(
+                    "cannot decode PNG image: an unknown critical chunk \"{name}\" (the file is corrupt, or needs a \
+                     PNG extension)"
+                )
+            );
+        }
+    }
+
+    #[test]
+    fn messages_are_one_line() {
+        assert_eq!(decoder_words("JPEG", "I/O errors Generic I/O error: odd\n"), "Generic I/O error: odd",);
+        assert_eq!(
+            encoder_words("Format error encoding Jpeg:\nInvalid image size (65536 x 1) to encode as JPEG: width and height must be >= 1 and <= 65535"),
+            "Invalid image size (65536 x 1) to encode as JPEG: width and height must be >= 1 and <= 65535"
+        );
+    }
+
+    #[test]
+    fn jpeg_sides_over_65535_are_refused_before_tone_mapping() {
+        let dir = tempfile::tempdir().unwrap();
+        let wide = HdrImage::new(65536, 1);
+        // A tone map that would fail: the size is refused first.
+        let bad = ToneMap { alpha: -1.0, ..ToneMap::raytracer_jl() };
+        for name in ["w.jpg", "w.JPEG"] {
+            let path = dir.path().join(name);
+            let e = write_image(&path, &wide, &bad).unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                format!(
+                    "{}: image size 65536×1 is too large for JPEG (at most 65535 pixels per side; .png, .exr, .hdr \
+                     and .pfm take up to 65536)",
+                    path.display()
+                )
+            );
+        }
+        let tall = HdrImage::new(1, 65536);
+        assert!(matches!(
+            write_image(&dir.path().join("t.jpg"), &tall, &ToneMap::default()),
+            Err(ImageError::Size { .. })
+        ));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        write_image(&dir.path().join("w.png"), &wide, &ToneMap::default()).unwrap();
+        write_image(&dir.path().join("w.jpg"), &HdrImage::new(65535, 1), &ToneMap::default()).unwrap();
+        assert_eq!(read_image(&dir.path().join("w.jpg")).unwrap().width(), 65535);
     }
 }

@@ -33,7 +33,14 @@ impl LdrFormat {
 
 pub(crate) fn decode_ldr(bytes: &[u8], format: LdrFormat) -> Result<HdrImage, String> {
     // Beside the decoded image: its RGB conversion (up to 6 bytes a pixel) and our f32 copy.
-    let img = super::size::decode_within_limits(bytes, format.image_format(), 6 + 12)?;
+    let img = super::size::decode_within_limits(bytes, format.image_format(), 6 + 12).map_err(|message| {
+        match (format, unknown_critical_chunk(bytes)) {
+            (LdrFormat::Png, Some(name)) if message.contains("Unrecognized critical chunk") => {
+                format!("an unknown critical chunk \"{name}\" (the file is corrupt, or needs a PNG extension)")
+            }
+            _ => message,
+        }
+    })?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let sixteen_bit = matches!(
         img,
@@ -53,6 +60,29 @@ pub(crate) fn decode_ldr(bytes: &[u8], format: LdrFormat) -> Result<HdrImage, St
         rgb.pixels().map(|p| Rgb32::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize])).collect()
     };
     HdrImage::from_pixels(w, h, pixels).ok_or_else(|| "decoder returned the wrong pixel count".to_owned())
+}
+
+/// The name of the first chunk of a PNG file that a reader must understand but the format
+/// does not define, as a person reads it: the png crate names it only in Rust's debug
+/// form (`ChunkType { type: IDA«, critical: true, ... }`). Letters and digits are shown
+/// as they are, other bytes as `\xAB`. `None` when the file holds no such chunk.
+fn unknown_critical_chunk(bytes: &[u8]) -> Option<String> {
+    let mut at = 8; // after the signature
+    while let Some(head) = bytes.get(at..at + 8) {
+        let name = &head[4..8];
+        // A chunk whose first letter is upper-case (bit 5 clear) is critical.
+        if name[0] & 0x20 == 0 && ![&b"IHDR"[..], b"PLTE", b"IDAT", b"IEND"].contains(&name) {
+            return Some(
+                name.iter()
+                    .map(|&b| if b.is_ascii_alphanumeric() { char::from(b).to_string() } else { format!("\\x{b:02X}") })
+                    .collect(),
+            );
+        }
+        let length = u32::from_be_bytes([head[0], head[1], head[2], head[3]]) as usize;
+        // Length, name, data and CRC.
+        at = at.checked_add(12)?.checked_add(length)?;
+    }
+    None
 }
 
 /// Encodes `rgb8` (row-major RGB bytes, `width·height·3` of them).

@@ -24,7 +24,8 @@ pub use atomic_file::{abandon_writes, check_destination, produce_atomically, wri
 pub use error::{ImageError, SUPPORTED_EXTENSIONS};
 pub use hdr_image::HdrImage;
 pub use image_file::{
-    is_hdr_path, read_image, read_render_part, write_image, write_image_with, ImageFormat, WriteReport,
+    check_output_size, is_hdr_path, read_image, read_render_part, write_image, write_image_with, ImageFormat,
+    WriteReport,
 };
 pub use ldr_file::JPEG_QUALITY;
 pub use pfm::{decode_pfm, encode_pfm, PfmError};

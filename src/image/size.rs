@@ -27,6 +27,22 @@ pub enum SizeError {
         /// Height asked for, in pixels.
         height: usize,
     },
+    /// A side is over what the output file's format holds (JPEG: 65535), though within
+    /// lumen's own limits.
+    #[error(
+        "image size {width}×{height} is too large for {format} (at most {max_side} pixels per side; \
+         .png, .exr, .hdr and .pfm take up to {MAX_SIDE})"
+    )]
+    TooLargeForFormat {
+        /// Width asked for, in pixels.
+        width: usize,
+        /// Height asked for, in pixels.
+        height: usize,
+        /// The format's name for messages.
+        format: &'static str,
+        /// The format's largest side.
+        max_side: usize,
+    },
 }
 
 /// Decodes `bytes` as `format` with the `image` crate under lumen's limits rather than the
