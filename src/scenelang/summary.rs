@@ -213,7 +213,7 @@ impl fmt::Display for SceneSummary {
                 let b = &m.bounds;
                 writeln!(
                     f,
-                    "  {}: {} triangles, {} vertices{}{}{}, ×{}, bounds [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",
+                    "  {}: {} triangles, {} vertices{}{}{}, ×{}, bounds {}",
                     m.name,
                     m.triangles,
                     m.vertices,
@@ -225,12 +225,7 @@ impl fmt::Display for SceneSummary {
                         String::new()
                     },
                     m.instances,
-                    b.min.x,
-                    b.min.y,
-                    b.min.z,
-                    b.max.x,
-                    b.max.y,
-                    b.max.z
+                    box_text(b)
                 )?;
             }
         }
@@ -266,11 +261,7 @@ impl fmt::Display for SceneSummary {
         writeln!(f, "tracer:       {spp}, rng state {} inc {}", self.tracer_seed.0, self.tracer_seed.1)?;
         writeln!(f, "environment:  {}", self.environment)?;
         match &self.bounds {
-            Some(b) => write!(
-                f,
-                "bounds:       [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]",
-                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
-            )?,
+            Some(b) => write!(f, "bounds:       {}", box_text(b))?,
             None => write!(f, "bounds:       no finite shapes")?,
         }
         if self.infinite_shapes > 0 {
@@ -280,6 +271,20 @@ impl fmt::Display for SceneSummary {
     }
 }
 
+/// A box as `[x, y, z] – [x, y, z]`, each coordinate to 4 decimals, or in scientific
+/// notation where that would not show it (a mesh coordinate of 1e300 printed 300 digits).
+fn box_text(b: &Aabb) -> String {
+    let c = |v: f64| {
+        if v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+            format!("{v:.4e}")
+        } else {
+            format!("{v:.4}")
+        }
+    };
+    let p = |v: glam::DVec3| format!("[{}, {}, {}]", c(v.x), c(v.y), c(v.z));
+    format!("{} – {}", p(b.min), p(b.max))
+}
+
 #[cfg(test)]
 mod tests {
     use glam::DVec3;
@@ -287,6 +292,12 @@ mod tests {
     use super::*;
     use crate::color::Color;
     use crate::scene::{CsgOp, Material, Pigment, SceneBuilder, Transform};
+
+    #[test]
+    fn boxes_read_at_any_scale() {
+        let b = Aabb { min: DVec3::new(-3.5, 0.0, 1e-7), max: DVec3::new(1e300, 2.25, 123456.0) };
+        assert_eq!(box_text(&b), "[-3.5000, 0.0000, 1.0000e-7] – [1.0000e300, 2.2500, 123456.0000]");
+    }
 
     #[test]
     fn counts_and_bounds_of_a_built_scene() {
