@@ -7,7 +7,7 @@
 //! first renders one discarded 1-spp image so start-up costs are not timed.
 //!
 //! Every output is checked before the work, as `render` checks its own, and the results
-//! are written as a set (see [`write_set`]): a run that fails leaves no half of it.
+//! are written as a set (`write_set`): a run that fails leaves no half of it.
 
 use std::path::{Path, PathBuf};
 
