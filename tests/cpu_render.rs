@@ -564,6 +564,14 @@ mod cli {
         assert!(!stdout.contains("CYLINDER"), "{stdout}");
         let out = run(&["shader", "missing.sl"]).unwrap();
         assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing.sl"));
+        // An output in a missing directory is said in words, before the work.
+        let out = run(&["shader", "tiny.sl", "-o", "nodir/x.wgsl"]).unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(
+            stderr.contains("cannot write nodir/x.wgsl") && stderr.contains("directory nodir does not exist"),
+            "{stderr}"
+        );
     }
 
     /// `--frames` renders TIME over the range into numbered files, and an mp4 with ffmpeg.

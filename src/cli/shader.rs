@@ -32,9 +32,13 @@ pub struct ShaderArgs {
 
 /// Loads the scene, assembles and validates its kernel (naga), and prints it.
 pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
+    // As `render` does: a destination that cannot take the file is said in words, first.
+    if let Some(path) = &args.output {
+        crate::image::check_destination(path).with_context(|| format!("cannot write {}", path.display()))?;
+    }
     let scene = args.script.load(&args.scene)?;
     // The packed scene's features: its lists are known only once it is packed.
-    let packed = pack(&scene, None).map_err(|e| anyhow!("cannot pack the scene for the GPU: {e}"))?;
+    let packed = pack(&scene, None).map_err(|e| anyhow!("the GPU renderer cannot take this scene: {e}"))?;
     let mut features = packed.features;
     if args.tables != TablePlacement::Storage {
         let limits = TableLimits::webgpu_default();
