@@ -564,6 +564,15 @@ mod cli {
         assert!(!stdout.contains("CYLINDER"), "{stdout}");
         let out = run(&["shader", "missing.sl"]).unwrap();
         assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing.sl"));
+        // GPU-only options under --device cpu: rendered, with a note that they are ignored.
+        let dir = tempfile::tempdir().unwrap();
+        let out = lumen(dir.path(), &["-o", "o.pfm", "--device", "cpu", "--batch-paths", "4096"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success()
+                && stderr.contains("note: --batch-paths only applies to GPU renders; --device cpu ignores it"),
+            "{stderr}"
+        );
         // An output in a missing directory is said in words, before the work.
         let out = run(&["shader", "tiny.sl", "-o", "nodir/x.wgsl"]).unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);

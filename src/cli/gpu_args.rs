@@ -86,6 +86,19 @@ pub struct GpuArgs {
 }
 
 impl GpuArgs {
+    /// The options given that only the GPU renderer reads, as the command line names them
+    /// (a CPU render says it ignores them rather than leaving a user to wonder).
+    pub fn gpu_only_given(&self) -> Vec<&'static str> {
+        let given = [
+            ("--adapter", self.adapter.adapter.is_some()),
+            ("--batch-paths", self.batch_paths.is_some()),
+            ("--tables", self.tables != TablePlacement::Auto),
+            ("--one-device", self.one_device),
+            ("--queue-shards", self.queue_shards.is_some()),
+        ];
+        given.into_iter().filter_map(|(name, set)| set.then_some(name)).collect()
+    }
+
     /// Pass options for an interactive render: progress bar on, Ctrl-C stops early and
     /// keeps the samples of every completed round.
     pub fn pass_options(&self) -> PassOptions {
@@ -121,6 +134,13 @@ mod tests {
     struct T {
         #[command(flatten)]
         gpu: GpuArgs,
+    }
+
+    #[test]
+    fn names_the_gpu_only_options_given() {
+        assert!(T::try_parse_from(["t", "--time-limit", "3"]).unwrap().gpu.gpu_only_given().is_empty());
+        let t = T::try_parse_from(["t", "--queue-shards", "2", "--adapter", "x", "--tables", "storage"]).unwrap();
+        assert_eq!(t.gpu.gpu_only_given(), ["--adapter", "--tables", "--queue-shards"]);
     }
 
     #[test]

@@ -181,6 +181,11 @@ pub fn tone_map(alpha: Option<f32>, gamma: Option<f32>) -> anyhow::Result<ToneMa
 
 /// Opens the device `--device` asks for ([`open_device`]).
 fn open(args: &RenderArgs) -> anyhow::Result<OpenDevice> {
+    let ignored = args.gpu.gpu_only_given();
+    if args.device == DeviceChoice::Cpu && !ignored.is_empty() {
+        let (verb, them) = if ignored.len() == 1 { ("applies", "it") } else { ("apply", "them") };
+        crate::diag!("note: {} only {verb} to GPU renders; --device cpu ignores {them}", ignored.join(", "));
+    }
     open_device(args.device, &args.gpu.adapter.choice()).map_err(|e| match args.device {
         DeviceChoice::Gpu => anyhow::Error::from(e).context("--device gpu"),
         _ => e.into(),
