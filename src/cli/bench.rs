@@ -116,7 +116,18 @@ impl Plan {
 
     /// Loads a script at this width (and `--height`, `--seed`, `--vars`, `--time`).
     fn load_scene(&self, path: &Path, width: u32, height: Option<u32>) -> anyhow::Result<Scene> {
-        let mut scene = self.script.load(path)?;
+        self.load_scene_with_output(path, width, height, &mut std::io::stdout().lock())
+    }
+
+    /// [`Self::load_scene`] with the script's DUMP output written to `out`.
+    fn load_scene_with_output(
+        &self,
+        path: &Path,
+        width: u32,
+        height: Option<u32>,
+        out: &mut dyn std::io::Write,
+    ) -> anyhow::Result<Scene> {
+        let mut scene = self.script.load_at_with_output(path, self.script.time, out)?;
         SceneOverrides { width: Some(width), height, seed: self.seed }.apply(&mut scene)?;
         Ok(scene)
     }
@@ -153,7 +164,8 @@ pub fn scene_files(list: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
 /// warning.
 fn load_named_scripts(list: &[PathBuf], plan: &Plan) -> anyhow::Result<()> {
     for file in list.iter().filter(|p| !p.is_dir()) {
-        plan.load_scene(file, plan.width, plan.height)?;
+        // Its DUMP output is printed when it is measured, not here as well.
+        plan.load_scene_with_output(file, plan.width, plan.height, &mut std::io::sink())?;
     }
     Ok(())
 }

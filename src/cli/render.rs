@@ -481,14 +481,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let (tm, frames, part) = validate(&args, &outputs)?;
     // Load before opening a device: a broken script fails fast, without GPU start-up.
     let started = Instant::now();
-    let mut first = Some(load(&args, frames.map_or(args.script.time, |f| f.time(0)))?);
     // An animation's frames: `--shard I/N` takes contiguous runs of them, as of samples.
+    let mine = match (frames, part) {
+        (Some(f), Part::Shard { index, count }) => SampleRange::shard(index, count, f.count).context("--shard")?,
+        (Some(f), _) => SampleRange::all(f.count),
+        (None, _) => SampleRange::all(1),
+    };
+    // The first frame this run renders (its scene is kept for it).
+    let mut first = Some(load(&args, frames.map_or(args.script.time, |f| f.time(mine.begin)))?);
     let animation = match frames {
         Some(frames) => {
-            let mine = match part {
-                Part::Shard { index, count } => SampleRange::shard(index, count, frames.count).context("--shard")?,
-                _ => SampleRange::all(frames.count),
-            };
             let video = video_output(&outputs, mine.len() == frames.count);
             check_animation(&args, &outputs, frames, mine, video.as_ref())?;
             Some((frames, mine, video))
@@ -515,7 +517,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         let paths: Vec<PathBuf> = outputs.iter().map(|o| frame_path(o, k, frames.count)).collect();
         crate::diag!("frame {}/{} (TIME = {})", k + 1, frames.count, frames.time(k));
         // The shard applies to the frames: each frame takes all its samples.
-        let loaded = if k == 0 { first.take() } else { None };
+        let loaded = if k == mine.begin { first.take() } else { None };
         if render_one(&device, &args, frames.time(k), &paths, &tm, Part::All, loaded)? {
             crate::diag!("note: stopping the animation after frame {}", k + 1);
             return Ok(());
