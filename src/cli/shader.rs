@@ -38,7 +38,7 @@ pub fn run(args: ShaderArgs) -> anyhow::Result<()> {
     }
     let scene = args.script.load(&args.scene)?;
     // The packed scene's features: its lists are known only once it is packed.
-    let packed = pack(&scene, None).map_err(|e| anyhow!("the GPU renderer cannot take this scene: {e}"))?;
+    let packed = pack(&scene, None).map_err(|e| anyhow!("{}", crate::gpu::GpuError::Scene(e)))?;
     let mut features = packed.features;
     if args.tables != TablePlacement::Storage {
         let limits = TableLimits::webgpu_default();

@@ -481,6 +481,9 @@ impl GpuRenderer {
         attempts: &mut Attempts,
     ) -> Result<GpuRenderOutput, GpuError> {
         let RenderJob { scene, packed, opts, start } = *job;
+        if f.renderer == RendererKind::PathTracer {
+            wavefront::check_paths_per_sample(packed.settings.paths_per_sample)?;
+        }
         let kernel_start = Instant::now();
         let kernels = self.stage_kernels(gpu, &f)?;
         attempts.kernel_seconds += kernel_start.elapsed().as_secs_f64();

@@ -53,7 +53,7 @@ pub const MAX_IMAGE_PIXELS: u64 = crate::image::MAX_PIXELS as u64;
 pub fn renderable_size(width: u32, height: u32) -> bool {
     (1..=MAX_IMAGE_SIDE).contains(&width)
         && (1..=MAX_IMAGE_SIDE).contains(&height)
-        && u64::from(width) * u64::from(height) <= MAX_IMAGE_PIXELS
+        && crate::image::check_size(width as usize, height as usize).is_ok()
 }
 
 /// What [`renderable_size`] asks, in words, for messages.

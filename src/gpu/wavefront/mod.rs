@@ -84,16 +84,7 @@ pub fn capacity(
     requested: u32,
 ) -> Result<u32, GpuError> {
     let n = paths_per_sample.max(1);
-    if n > MAX_PATHS_PER_PIXEL_PER_ROUND {
-        return Err(GpuError::SampleExceedsBatch {
-            paths: n,
-            reason: format!(
-                "the GPU's film sums at most {MAX_PATHS_PER_PIXEL_PER_ROUND} paths per pixel in a batch; fewer paths per \
-                 camera sample (Renderer.PathTracer's .n) and more camera samples (Tracer's .samples_per_side, or \
-                 --spp) estimate the same image"
-            ),
-        });
-    }
+    check_paths_per_sample(n)?;
     let default = default_slots(gpu);
     let wanted = if requested > 0 { requested } else { default };
     let image = u64::from(width) * u64::from(height) * u64::from(n) * u64::from(MAX_SPP_PER_ROUND);
@@ -140,6 +131,23 @@ pub fn capacity(
         });
     }
     Ok(slots as u32)
+}
+
+/// Refuses more paths per camera sample than the film sums per pixel in a batch
+/// ([`MAX_PATHS_PER_PIXEL_PER_ROUND`]): a property of the scene alone, so a render checks it
+/// before it creates kernels or uploads the scene.
+pub fn check_paths_per_sample(n: u32) -> Result<(), GpuError> {
+    if n <= MAX_PATHS_PER_PIXEL_PER_ROUND {
+        return Ok(());
+    }
+    Err(GpuError::SampleExceedsBatch {
+        paths: n,
+        reason: format!(
+            "the GPU's film sums at most {MAX_PATHS_PER_PIXEL_PER_ROUND} paths per pixel in a batch; fewer paths per \
+             camera sample (Renderer.PathTracer's .n) and more camera samples (Tracer's .samples_per_side, or \
+             --spp) estimate the same image"
+        ),
+    })
 }
 
 /// The path slots of a batch on `gpu` unless asked otherwise.
