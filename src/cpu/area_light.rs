@@ -70,7 +70,7 @@ impl AreaLight {
     /// Whether directions toward this light are drawn from its cone, for a shading point
     /// `x` lying on shape `x_shape`.
     pub fn uses_cone(&self, x: DVec3, x_shape: u32) -> Option<(DVec3, f64, f64)> {
-        let LightSurface::Sphere { round: Some((c, r)) } = self.surface else { return None };
+        let LightSurface::Sphere { round: Some((c, r)), .. } = self.surface else { return None };
         let d = (c - x).length();
         (x_shape != self.shape && d > r).then_some((c, r, d))
     }
@@ -87,7 +87,7 @@ impl AreaLight {
             }
             None => match &self.surface {
                 LightSurface::Mesh(m) => self.sample_mesh(m, x, xi0, xi1),
-                LightSurface::Sphere { .. } => self.sample_sphere(x, xi0, xi1),
+                LightSurface::Sphere { det, .. } => self.sample_sphere(*det, x, xi0, xi1),
                 LightSurface::Cube { .. } => self.sample_cube(x, x_shape, xi0, xi1),
             },
         }
@@ -100,24 +100,24 @@ impl AreaLight {
         if let Some((_, r, d)) = self.uses_cone(x, x_shape) {
             return uniform_cone_pdf(cone_one_minus_cos(r, d));
         }
-        let kind = match self.surface {
-            LightSurface::Mesh(_) => return self.mesh_pdf_solid_angle(x, y, n_y),
-            LightSurface::Sphere { .. } => ShapeKind::Sphere,
-            LightSurface::Cube { .. } => ShapeKind::Cube,
-        };
-        let p_obj = self.transform.inverse().point(y);
-        let n_obj = object_normal(kind, p_obj);
-        if kind == ShapeKind::Sphere {
-            return self.area_pdf_solid_angle(x, y, n_obj, self.sphere_area(n_obj));
-        }
-        let faces = self.cube_faces(x, x_shape);
-        if !faces.samples(n_obj) {
-            return 0.0;
-        }
-        let axis = n_obj.abs().max_position();
-        match self.solid_angle_face(x, &faces, axis) {
-            Some(rect) => faces.solid_angle_pdf(axis, &rect),
-            None => self.area_pdf_solid_angle(x, y, n_obj, faces.area()),
+        match &self.surface {
+            LightSurface::Mesh(m) => self.mesh_pdf_solid_angle(m, x, y, n_y),
+            LightSurface::Sphere { det, .. } => {
+                let n_obj = object_normal(ShapeKind::Sphere, self.transform.inverse().point(y));
+                self.area_pdf_solid_angle(x, y, n_obj, self.sphere_area(*det, n_obj))
+            }
+            LightSurface::Cube { .. } => {
+                let n_obj = object_normal(ShapeKind::Cube, self.transform.inverse().point(y));
+                let faces = self.cube_faces(x, x_shape);
+                if !faces.samples(n_obj) {
+                    return 0.0;
+                }
+                let axis = n_obj.abs().max_position();
+                match self.solid_angle_face(x, &faces, axis) {
+                    Some(rect) => faces.solid_angle_pdf(axis, &rect),
+                    None => self.area_pdf_solid_angle(x, y, n_obj, faces.area()),
+                }
+            }
         }
     }
 
@@ -166,10 +166,11 @@ impl AreaLight {
         CubeFaces { weight: face_areas.map(|a| 2.0 * a), side: [0.0; 3] }
     }
 
-    /// World area of the unit sphere under the transform, by Nanson's formula at `n_obj`
-    /// (the density of object-uniform points there is its inverse).
-    fn sphere_area(&self, n_obj: DVec3) -> f64 {
-        4.0 * PI * self.det * self.transform.normal(n_obj).length()
+    /// World area of the unit sphere under the transform (|det| of its linear part: `det`),
+    /// by Nanson's formula at `n_obj` (the density of object-uniform points there is its
+    /// inverse).
+    fn sphere_area(&self, det: f64, n_obj: DVec3) -> f64 {
+        4.0 * PI * det * self.transform.normal(n_obj).length()
     }
 
     /// Radiance the light's material emits at the sampled point (its pigment read at the
@@ -214,28 +215,28 @@ impl AreaLight {
             scale: error_scale(&self.transform.matrix(), p0.abs().max(p1.abs()).max(p2.abs())),
             normal,
             object_point: p_obj,
-            pdf: self.mesh_pdf_solid_angle(x, y, normal),
+            pdf: self.mesh_pdf_solid_angle(m, x, y, normal),
             uv: Some(uv),
         }
     }
 
     /// 1 / (world area) converted to solid angle at x.
-    fn mesh_pdf_solid_angle(&self, x: DVec3, y: DVec3, n: DVec3) -> f64 {
+    fn mesh_pdf_solid_angle(&self, m: &MeshLight, x: DVec3, y: DVec3, n: DVec3) -> f64 {
         let to_light = y - x;
         let dist2 = to_light.length_squared();
         let cos_light = normalize_scaled(n).dot(to_light).abs() / dist2.sqrt();
         if !(cos_light > 0.0 && dist2 > 0.0) {
             return 0.0;
         }
-        dist2 / (cos_light * self.area)
+        dist2 / (cos_light * m.area)
     }
 
     /// A point uniform in object space on the unit sphere (area sampling: ellipsoids, and
     /// points inside or on the light).
-    fn sample_sphere(&self, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
+    fn sample_sphere(&self, det: f64, x: DVec3, xi0: f64, xi1: f64) -> LightPoint {
         let p = uniform_sphere(xi0, xi1);
         let y = self.transform.point(p);
-        self.unit_shape_point(p, p, y, self.area_pdf_solid_angle(x, y, p, self.sphere_area(p)))
+        self.unit_shape_point(p, p, y, self.area_pdf_solid_angle(x, y, p, self.sphere_area(det, p)))
     }
 
     /// A face by ξ0, then a point on it from the rest of ξ0 and ξ1: by solid angle or by
@@ -443,7 +444,10 @@ mod tests {
         let mut sum = 0.0;
         for _ in 0..n {
             let (a, b) = (rng.next_f64(), rng.next_f64());
-            let s = if force_area { light.sample_sphere(x, a, b) } else { light.sample(x, u32::MAX, a, b) };
+            let s = match light.surface {
+                LightSurface::Sphere { det, .. } if force_area => light.sample_sphere(det, x, a, b),
+                _ => light.sample(x, u32::MAX, a, b),
+            };
             if s.pdf <= 0.0 {
                 continue;
             }
@@ -482,7 +486,8 @@ mod tests {
         b.shape(Shape::mesh(mesh, "panel", t, lamp, false));
         let scene = b.build().unwrap();
         let light = AreaLight::new(&scene, 0).unwrap();
-        assert!((light.area - 3.0).abs() < 1e-12);
+        let LightSurface::Mesh(m) = &light.surface else { panic!("{light:?}") };
+        assert!((m.area - 3.0).abs() < 1e-12);
         let x = DVec3::ZERO;
         let estimate = solid_angle_estimate(&light, x, false, 200_000);
         // A centred rectangle of half-sides a, b at distance d subtends 4 atan(ab / (d√(a²+b²+d²))).
@@ -496,7 +501,7 @@ mod tests {
         let t = Transform::translation(DVec3::new(1.0, 2.0, 3.0)) * Transform::scaling(DVec3::splat(0.5));
         let scene = scene_with(ShapeKind::Sphere, t);
         let light = AreaLight::new(&scene, 0).unwrap();
-        let LightSurface::Sphere { round: Some((c, r)) } = light.surface else { panic!("{light:?}") };
+        let LightSurface::Sphere { round: Some((c, r)), .. } = light.surface else { panic!("{light:?}") };
         assert!((r - 0.5).abs() < 1e-15);
         let x = c + DVec3::new(0.0, 1.5, 0.2);
         let omega = 2.0 * PI * cone_one_minus_cos(r, (c - x).length());
@@ -559,13 +564,15 @@ mod tests {
         let t = Transform::rotation_z(30.0) * Transform::scaling(DVec3::new(1.0, 1.0, 0.02));
         let scene = scene_with(ShapeKind::Cube, t);
         let light = AreaLight::new(&scene, 0).unwrap();
-        assert!((light.area - 2.08).abs() < 1e-12, "{}", light.area);
+        let LightSurface::Cube { face_areas, .. } = light.surface else { panic!("{light:?}") };
+        let area = 2.0 * face_areas.iter().sum::<f64>();
+        assert!((area - 2.08).abs() < 1e-12, "{area}");
         let inside = light.transform.point(DVec3::new(0.1, -0.2, 0.3));
         let on = light.transform.point(DVec3::new(0.1, -0.2, 0.5));
         for (x, x_shape) in [(inside, u32::MAX), (on, light.shape)] {
             let faces = light.cube_faces(x, x_shape);
             assert_eq!(faces.side, [0.0; 3]);
-            assert!((faces.area() - light.area).abs() < 1e-12);
+            assert!((faces.area() - area).abs() < 1e-12);
         }
         let faces = light.cube_faces(inside, u32::MAX);
         let mut rng = Pcg32::new(1, 2);
@@ -588,8 +595,8 @@ mod tests {
             let y = light.transform.point(p_obj);
             let nw = light.transform.normal(n_obj).normalize();
             let d = y - x;
-            let expect = d.length_squared() / (nw.dot(d).abs() / d.length() * light.area);
-            assert!((light.area_pdf_solid_angle(x, y, n_obj, light.area) / expect - 1.0).abs() < 1e-12);
+            let expect = d.length_squared() / (nw.dot(d).abs() / d.length() * area);
+            assert!((light.area_pdf_solid_angle(x, y, n_obj, area) / expect - 1.0).abs() < 1e-12);
         }
     }
 
@@ -721,7 +728,7 @@ mod tests {
     fn ellipsoids_use_area_sampling_and_points_on_the_light_too() {
         let scene = scene_with(ShapeKind::Sphere, Transform::scaling(DVec3::new(1.0, 2.0, 1.0)));
         let light = AreaLight::new(&scene, 0).unwrap();
-        assert_eq!(light.surface, LightSurface::Sphere { round: None });
+        assert!(matches!(light.surface, LightSurface::Sphere { round: None, det } if (det - 2.0).abs() < 1e-15));
         let scene = scene_with(ShapeKind::Sphere, Transform::rotation_x(30.0));
         let light = AreaLight::new(&scene, 0).unwrap();
         assert!(light.uses_cone(DVec3::new(3.0, 0.0, 0.0), 7).is_some());

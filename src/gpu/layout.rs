@@ -306,9 +306,10 @@ pub struct AreaLight {
     pub sphere: [f32; 4],
     /// Index in `shapes` of the emissive shape (a sphere, a cube or a mesh instance).
     pub shape: u32,
-    /// |determinant| of the linear part of the shape's object-to-world map.
+    /// Spheres: |determinant| of the linear part of the shape's object-to-world map
+    /// (`LightSurface::Sphere::det`); 0 otherwise.
     pub det: f32,
-    /// Cubes and meshes: the world surface area; 0 for spheres.
+    /// Meshes: the world surface area (`MeshLight::area`); 0 otherwise.
     pub area: f32,
     /// Meshes: offset in `floats` of the triangle CDF (file order; then each triangle's
     /// index in `tri_positions`, as bits).

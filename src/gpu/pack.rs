@@ -693,21 +693,27 @@ fn packed_area_light(
         floats.extend(m.cdf.iter().map(|&c| c as f32));
         floats.extend(packed.leaf_of.iter().map(|&i| f32::from_bits(i)));
     }
-    let mut sphere = [0.0; 4];
-    if let LightSurface::Sphere { round: Some((c, r)) } = light.surface {
-        let c = c - origin;
-        sphere = [c.x as f32, c.y as f32, c.z as f32, r as f32];
-    }
-    let (mut face_areas, mut rectangular_faces) = ([0.0; 3], 0);
-    if let LightSurface::Cube { face_areas: areas, rectangular_faces: rectangular } = light.surface {
-        face_areas = areas.map(|a| a as f32);
-        rectangular_faces = (0..3).filter(|&axis| rectangular[axis]).map(|axis| 1 << axis).sum();
+    // Each kind fills its own fields; the others stay 0.
+    let (mut sphere, mut det, mut area, mut face_areas, mut rectangular_faces) = ([0.0; 4], 0.0, 0.0, [0.0; 3], 0);
+    match &light.surface {
+        LightSurface::Sphere { round, det: d } => {
+            if let Some((c, r)) = round {
+                let c = *c - origin;
+                sphere = [c.x as f32, c.y as f32, c.z as f32, *r as f32];
+            }
+            det = *d as f32;
+        }
+        LightSurface::Cube { face_areas: areas, rectangular_faces: rectangular } => {
+            face_areas = areas.map(|a| a as f32);
+            rectangular_faces = (0..3).filter(|&axis| rectangular[axis]).map(|axis| 1 << axis).sum();
+        }
+        LightSurface::Mesh(m) => area = m.area as f32,
     }
     Ok(layout::AreaLight {
         sphere,
         shape: shape_ref,
-        det: light.det as f32,
-        area: light.area as f32,
+        det,
+        area,
         mesh_cdf,
         face_areas,
         mesh_triangles,

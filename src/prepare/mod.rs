@@ -130,11 +130,6 @@ pub struct AreaLight {
     pub transform: Transform,
     /// The shape's (emissive) material.
     pub material: MaterialId,
-    /// |det| of the linear part of the object-to-world transform.
-    pub det: f64,
-    /// Cubes and meshes: the world surface area (sampling density 1 / area); spheres, whose
-    /// density varies over an ellipsoid, compute theirs per point.
-    pub area: f64,
     /// The light's surface, with what sampling it needs.
     pub surface: LightSurface,
 }
@@ -148,6 +143,10 @@ pub enum LightSurface {
         /// World centre and radius where the transformation is a similarity (a round
         /// sphere in the world), whose subtended cone NEE samples; `None` for an ellipsoid.
         round: Option<(DVec3, f64)>,
+        /// |det| of the linear part of the transformation: with Nanson's formula it gives
+        /// the world area density of object-uniform points, which varies over an
+        /// ellipsoid (area sampling).
+        det: f64,
     },
     /// The unit cube.
     Cube {
@@ -172,6 +171,8 @@ pub struct MeshLight {
     /// Cumulative world areas of the triangles (in the file's order) over the total: the
     /// last entry is 1.
     pub cdf: Vec<f64>,
+    /// The instance's world surface area (sampling density 1 / area).
+    pub area: f64,
 }
 
 impl MeshLight {
@@ -191,7 +192,6 @@ impl AreaLight {
     /// `None` for any other shape and for a mesh whose placed area is 0 or not finite.
     pub fn new(scene: &Scene, shape: usize) -> Option<Self> {
         if let Shape::Mesh(m) = &scene.shapes[shape] {
-            let lin = DMat3::from_mat4(m.transform.matrix());
             let mut sum = 0.0;
             let mut cdf: Vec<f64> = (0..m.mesh.triangle_count())
                 .map(|i| {
@@ -208,18 +208,16 @@ impl AreaLight {
                 shape: shape as u32,
                 transform: m.transform,
                 material: m.material,
-                det: lin.determinant().abs(),
-                area: sum,
-                surface: LightSurface::Mesh(MeshLight { mesh: m.mesh.clone(), cdf }),
+                surface: LightSurface::Mesh(MeshLight { mesh: m.mesh.clone(), cdf, area: sum }),
             });
         }
         let Shape::Primitive(p) = &scene.shapes[shape] else { return None };
         let lin = DMat3::from_mat4(p.transform.matrix());
         let det = lin.determinant().abs();
-        let (surface, area) = match p.kind {
+        let surface = match p.kind {
             ShapeKind::Sphere => {
                 let round = similarity_scale(lin).map(|r| (p.transform.point(DVec3::ZERO), r));
-                (LightSurface::Sphere { round }, 0.0)
+                LightSurface::Sphere { round, det }
             }
             ShapeKind::Cube => {
                 // World area of one unit face per axis (Nanson: |det M| · |M⁻ᵀ e_i|).
@@ -228,11 +226,11 @@ impl AreaLight {
                     let (a, b) = (lin.col((axis + 1) % 3), lin.col((axis + 2) % 3));
                     a.dot(b).abs() <= 1e-9 * a.length() * b.length()
                 });
-                (LightSurface::Cube { face_areas, rectangular_faces }, 2.0 * face_areas.iter().sum::<f64>())
+                LightSurface::Cube { face_areas, rectangular_faces }
             }
             _ => return None,
         };
-        Some(Self { shape: shape as u32, transform: p.transform, material: p.material, det, area, surface })
+        Some(Self { shape: shape as u32, transform: p.transform, material: p.material, surface })
     }
 }
 
