@@ -33,9 +33,9 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
         ));
     }
     // What the GPU renderer refuses on any adapter (a shape beyond f32's range, a CSG tree
-    // beyond its span pool), said before a render finds it; an adapter's own size limits
-    // show only when a render opens it.
-    if let Err(e) = crate::gpu::pack::pack(&scene, None) {
+    // beyond its span pool), said before a render finds it, without building what a render
+    // packs; an adapter's own size limits show only when a render opens it.
+    if let Err(e) = crate::gpu::pack::check_packable(&scene) {
         out.line(format_args!("GPU renderer: cannot take this scene: {e}; `--device auto` renders it on the CPU"));
     }
     Ok(out.print()?)

@@ -8,7 +8,7 @@
 //! from the world origin. Rays are moved into object space with the f32 world→object map
 //! (computed as an f64 inverse, then rounded), never by inverting in f32.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use bytemuck::Zeroable;
@@ -321,14 +321,40 @@ pub fn pack_within(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) 
     pack_form(scene, spp_override, limit).map_err(|e| e.located_in(scene))
 }
 
-/// [`pack_within`] once the scene is valid; shapes are located in its render form.
-fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Result<PackedScene, PackError> {
+/// What [`pack`] refuses on any adapter (a shape, CSG leaf or mesh beyond f32's range in
+/// the camera frame, a CSG tree beyond the span pool; or an invalid scene), found without
+/// building the BVHs and tables that `pack` builds after the same checks: `lumen check`
+/// reports it.
+///
+/// ```
+/// use glam::DVec3;
+/// use lumen::scene::*;
+/// use lumen::gpu::pack::{check_packable, PackError};
+/// let mut b = SceneBuilder::new(4, 3);
+/// let m = b.diffuse(lumen::color::Color::gray(0.5));
+/// b.sphere(Transform::scaling(DVec3::splat(1e39)), m);
+/// let err = check_packable(&b.build().unwrap()).unwrap_err();
+/// assert!(matches!(err, PackError::OutOfRange { shape: 0, what: "sphere", .. }), "{err}");
+/// ```
+pub fn check_packable(scene: &Scene) -> Result<(), PackError> {
+    scene.validate()?;
     let form = crate::prepare::render_form(scene);
-    let scene = &*form;
-    let features = FeatureSet::of(scene);
+    let shifted = camera_frame(&form);
+    refuse(&form, &FeatureSet::of(&form), &shifted).map_err(|e| e.located_in(scene))
+}
+
+/// The shapes of `scene` moved into the camera frame (as f64), where the GPU stores them.
+fn camera_frame(scene: &Scene) -> Vec<Shape> {
+    let shift = Transform::translation(-camera_origin(scene));
+    scene.shapes.iter().map(|s| shifted_shape(s, &shift)).collect()
+}
+
+/// The refusals of [`check_packable`] in `scene`'s render form, whose features are
+/// `features` and whose shapes in the camera frame are `shifted`.
+fn refuse(scene: &Scene, features: &FeatureSet, shifted: &[Shape]) -> Result<(), PackError> {
     if features.csg {
         // The pool a render switched to the sweeps needs.
-        let swept = FeatureSet { csg_sweeps: true, ..features };
+        let swept = FeatureSet { csg_sweeps: true, ..*features };
         let pool = usize::try_from(crate::gpu::wavefront::csg_pool_entries(&swept)).unwrap_or(usize::MAX);
         if pool > MAX_CSG_POOL {
             // The tree with the most leaves (the pool is sized by it).
@@ -346,10 +372,70 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Res
             });
         }
     }
+    let mut meshes = HashSet::new();
+    for (i, s) in shifted.iter().enumerate() {
+        let what = match s {
+            Shape::Mesh(m) => {
+                // Each distinct mesh in object space, as the GPU stores it (vertices and
+                // texture coordinates; normals are unit vectors by then).
+                if meshes.insert(Arc::as_ptr(&m.mesh) as usize) {
+                    check_mesh_range(&m.name, "vertex coordinate", extent(m.mesh.bounds()))?;
+                    let uv =
+                        m.mesh.uvs().map_or(0.0, |uvs| uvs.iter().fold(0.0, |a, uv| uv.abs().max_element().max(a)));
+                    check_mesh_range(&m.name, "texture coordinate", uv)?;
+                }
+                check_range(i, "mesh instance", &m.transform)?;
+                check_mesh_range(
+                    &m.name,
+                    "vertex coordinate in the camera frame",
+                    extent(m.mesh.bounds().transformed(&m.transform)),
+                )?;
+                "mesh instance"
+            }
+            Shape::Primitive(prim) => {
+                check_range(i, prim.kind.name(), &prim.transform)?;
+                if prim.kind == ShapeKind::Plane {
+                    continue;
+                }
+                prim.kind.name()
+            }
+            Shape::Csg(_) => {
+                check_leaves(i, s, &Transform::IDENTITY)?;
+                continue;
+            }
+        };
+        // The kernels test an unbounded-list entry that is not a CSG tree as a plane
+        // (shaders/world.wgsl, nearer_unbounded). Nothing else has infinite bounds unless
+        // its transform overflows f32 (refused above); refuse it here too rather than
+        // render it wrongly.
+        if crate::prepare::Placement::of(s) == crate::prepare::Placement::Unbounded {
+            return Err(PackError::OutOfRange { shape: i, origin: None, part: None, what, magnitude: f64::INFINITY });
+        }
+    }
+    Ok(())
+}
+
+/// [`check_range`] for every leaf of top-level CSG tree `top` (subtree `s`, under `parent`).
+fn check_leaves(top: usize, s: &Shape, parent: &Transform) -> Result<(), PackError> {
+    match s {
+        Shape::Primitive(prim) => check_range(top, prim.kind.name(), &(*parent * prim.transform)),
+        Shape::Csg(c) => c.children.iter().try_for_each(|ch| check_leaves(top, ch, &(*parent * c.transform))),
+        // Scene::validate refuses a mesh operand.
+        Shape::Mesh(_) => Ok(()),
+    }
+}
+
+/// [`pack_within`] once the scene is valid; shapes are located in its render form.
+fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Result<PackedScene, PackError> {
+    let form = crate::prepare::render_form(scene);
+    let scene = &*form;
+    let features = FeatureSet::of(scene);
+    let shifted = camera_frame(scene);
+    // What no adapter takes, refused before the BVHs and tables are built (and not
+    // checked again below).
+    refuse(scene, &features, &shifted)?;
     let origin = camera_origin(scene);
     let shift = Transform::translation(-origin);
-    // The scene in the camera frame, as f64.
-    let shifted: Vec<Shape> = scene.shapes.iter().map(|s| shifted_shape(s, &shift)).collect();
     let world = crate::prepare::SceneBvh::from_shapes(&shifted);
     let area_lights = scene.area_lights();
     let mut area_of_shape = vec![NONE; scene.shapes.len()];
@@ -387,12 +473,6 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Res
     for (i, s) in shifted.iter().enumerate() {
         object_ref[i] = match s {
             Shape::Mesh(m) => {
-                check_range(i, "mesh instance", &m.transform)?;
-                check_mesh_range(
-                    &m.name,
-                    "vertex coordinate in the camera frame",
-                    extent(m.mesh.bounds().transformed(&m.transform)),
-                )?;
                 let mut shape = packed_shape(ShapeKind::Cube, &m.transform, m.material.0, area_of_shape[i]);
                 shape.kind = layout::shape_kind::MESH;
                 let flags = if m.shades_smooth() { layout::mesh_bits::SMOOTH } else { 0 }
@@ -402,35 +482,15 @@ fn pack_form(scene: &Scene, spp_override: Option<u32>, limit: TableLimit) -> Res
                 count_u32("shapes", p.shapes.len())? - 1
             }
             Shape::Primitive(prim) => {
-                check_range(i, prim.kind.name(), &prim.transform)?;
                 p.shapes.push(packed_shape(prim.kind, &prim.transform, prim.material.0, area_of_shape[i]));
                 count_u32("shapes", p.shapes.len())? - 1
             }
-            Shape::Csg(_) => pack_csg(i, s, &mut p, &mut csg_programs)? | layout::CSG_NODE_BIT,
+            Shape::Csg(_) => pack_csg(s, &mut p, &mut csg_programs)? | layout::CSG_NODE_BIT,
         };
     }
     leaf_range_fits("objects in the BVH", world.bvh.prim_indices().len())?;
     p.indices.extend(world.bvh.prim_indices().iter().map(|&i| object_ref[i as usize]));
     let plane_offset = count_u32("indices", p.indices.len())?;
-    // The kernels test an unbounded-list entry that is not a CSG tree as a plane (shaders/
-    // world.wgsl, nearer_unbounded). Nothing else has infinite bounds unless its transform
-    // overflows f32 (refused by check_range above); refuse it here too rather than render
-    // it wrongly.
-    for &i in &world.unbounded {
-        let what = match &shifted[i as usize] {
-            Shape::Csg(_) => continue,
-            Shape::Primitive(p) if p.kind == ShapeKind::Plane => continue,
-            Shape::Primitive(p) => p.kind.name(),
-            Shape::Mesh(_) => "mesh instance",
-        };
-        return Err(PackError::OutOfRange {
-            shape: i as usize,
-            origin: None,
-            part: None,
-            what,
-            magnitude: f64::INFINITY,
-        });
-    }
     p.indices.extend(world.unbounded.iter().map(|&i| object_ref[i as usize]));
     let plane_count = count_u32("infinite shapes", world.unbounded.len())?;
     // The lists the kernels may test unrolled, each entry under a constant reference.
@@ -542,14 +602,13 @@ fn pack_meshes(
     p: &mut PackedScene,
     limit: TableLimit,
 ) -> Result<HashMap<usize, PackedMesh>, PackError> {
-    let mut names = HashMap::new();
+    let mut distinct = HashSet::new();
     let mut triangles = 0;
     for s in shapes {
         if let Shape::Mesh(m) = s {
-            names.entry(Arc::as_ptr(&m.mesh) as usize).or_insert_with(|| {
+            if distinct.insert(Arc::as_ptr(&m.mesh) as usize) {
                 triangles += m.mesh.triangle_count();
-                &*m.name
-            });
+            }
         }
     }
     // Each distinct mesh's triangles are stored once: refused here, before the BVHs are
@@ -560,10 +619,6 @@ fn pack_meshes(
     let bvhs = crate::prepare::MeshBvhs::of(shapes);
     let mut roots = HashMap::new();
     for mesh in &bvhs.meshes {
-        let file = names[&(Arc::as_ptr(mesh) as usize)];
-        check_mesh_range(file, "vertex coordinate", extent(mesh.bounds()))?;
-        let uv = mesh.uvs().map_or(0.0, |uvs| uvs.iter().fold(0.0, |a, uv| uv.abs().max_element().max(a)));
-        check_mesh_range(file, "texture coordinate", uv)?;
         let Some(bvh) = bvhs.get(mesh) else { continue };
         let node_base = count_u32("BVH nodes", p.bvh_nodes.len())?;
         let tri_base = count_u32("triangles", p.tri_positions.len() / layout::TRI_POSITION_VEC4S as usize)?;
@@ -783,14 +838,8 @@ fn packed_shape(kind: ShapeKind, to_world: &Transform, material: u32, light: u32
 /// first (so contiguous, in the order the CPU's `CsgTree::leaves` lists them), and its
 /// structure as a program (`layout::csg_instr`), which `programs` collects to append to
 /// `indices` later. Returns the tree's index.
-fn pack_csg(top: usize, s: &Shape, p: &mut PackedScene, programs: &mut Vec<CsgProgram>) -> Result<u32, PackError> {
-    fn emit(
-        top: usize,
-        s: &Shape,
-        parent: &Transform,
-        p: &mut PackedScene,
-        code: &mut Vec<u32>,
-    ) -> Result<(), PackError> {
+fn pack_csg(s: &Shape, p: &mut PackedScene, programs: &mut Vec<CsgProgram>) -> Result<u32, PackError> {
+    fn emit(s: &Shape, parent: &Transform, p: &mut PackedScene, code: &mut Vec<u32>) -> Result<(), PackError> {
         match s {
             Shape::Mesh(_) => {
                 return Err(PackError::Scene(crate::scene::SceneError::Invalid(
@@ -799,7 +848,6 @@ fn pack_csg(top: usize, s: &Shape, p: &mut PackedScene, programs: &mut Vec<CsgPr
             }
             Shape::Primitive(prim) => {
                 let to_world = *parent * prim.transform;
-                check_range(top, prim.kind.name(), &to_world)?;
                 p.shapes.push(packed_shape(prim.kind, &to_world, prim.material.0, NONE));
                 count_u32("shapes", p.shapes.len())?;
                 code.push(layout::csg_instr::LEAF);
@@ -814,7 +862,7 @@ fn pack_csg(top: usize, s: &Shape, p: &mut PackedScene, programs: &mut Vec<CsgPr
                 code.push(layout::csg_instr::BEGIN + op);
                 let t = *parent * c.transform;
                 for ch in &c.children {
-                    emit(top, ch, &t, p, code)?;
+                    emit(ch, &t, p, code)?;
                 }
                 code.push(layout::csg_instr::END);
             }
@@ -823,7 +871,7 @@ fn pack_csg(top: usize, s: &Shape, p: &mut PackedScene, programs: &mut Vec<CsgPr
     }
     let first_leaf = count_u32("shapes", p.shapes.len())?;
     let mut code = Vec::new();
-    emit(top, s, &Transform::IDENTITY, p, &mut code)?;
+    emit(s, &Transform::IDENTITY, p, &mut code)?;
     let per_word = layout::csg_instr::PER_WORD as usize;
     let words = code
         .chunks(per_word)
@@ -1100,7 +1148,9 @@ mod tests {
         // top-level UNITE would be stored as its spheres).
         let many = (0..140_000).map(|i| sphere_at(f64::from(i) * 0.1, m)).collect();
         b.shape(Shape::csg(CsgOp::Fuse, many, Transform::IDENTITY));
-        let err = pack(&b.build().unwrap(), None).unwrap_err();
+        let scene = b.build().unwrap();
+        let err = pack(&scene, None).unwrap_err();
+        assert_eq!(check_packable(&scene), Err(err.clone()), "lumen check's pre-pass finds the same");
         let want = PackError::CsgTooLarge {
             shape: 0,
             origin: None,
@@ -1173,7 +1223,9 @@ mod tests {
         assert!(pack(&b.build().unwrap(), None).is_ok(), "1e30 fits f32; 1e-300 is kept (and never hit)");
         let huge = Transform::scaling(DVec3::splat(1e300));
         b.shape(Shape::csg(CsgOp::Fuse, vec![sphere_at(0.0, m), Shape::primitive(ShapeKind::Cube, huge, m)], huge));
-        let err = pack(&b.build().unwrap(), None).unwrap_err();
+        let scene = b.build().unwrap();
+        let err = pack(&scene, None).unwrap_err();
+        assert_eq!(check_packable(&scene), Err(err.clone()));
         assert!(matches!(err, PackError::OutOfRange { shape: 2, part: None, what: "sphere", .. }), "{err}");
         assert!(err.to_string().starts_with("shape 3 in spawn order (sphere): "), "{err}");
         assert!(err.to_string().contains("beyond f32's range"), "{err}");
@@ -1184,7 +1236,9 @@ mod tests {
         let far = Shape::primitive(ShapeKind::Cube, Transform::scaling(DVec3::splat(1e39)), m);
         b.shape(Shape::csg(CsgOp::Unite, vec![sphere_at(0.0, m), sphere_at(3.0, m)], Transform::IDENTITY))
             .shape(Shape::csg(CsgOp::Unite, vec![sphere_at(6.0, m), far], Transform::IDENTITY));
-        let err = pack(&b.build().unwrap(), None).unwrap_err();
+        let scene = b.build().unwrap();
+        let err = pack(&scene, None).unwrap_err();
+        assert_eq!(check_packable(&scene), Err(err.clone()));
         assert!(matches!(err, PackError::OutOfRange { shape: 1, part: Some(1), what: "cube", .. }), "{err}");
         assert!(err.to_string().starts_with("shape 2 in spawn order, part 2 of its top-level UNITE (cube)"), "{err}");
     }
@@ -1211,6 +1265,7 @@ mod tests {
             b.build().unwrap()
         };
         assert!(pack(&scene(3e38, -3e38, 1.0), None).is_ok(), "3e38 fits f32");
+        assert_eq!(check_packable(&scene(3e38, -3e38, 1.0)), Ok(()));
         let cases = [
             (1e39, 0.5, 1.0, "vertex coordinate"),
             (1.0, -1e39, 1.0, "texture coordinate"),
@@ -1218,6 +1273,7 @@ mod tests {
         ];
         for (vertex, uv, scale, what) in cases {
             let err = pack(&scene(vertex, uv, scale), None).unwrap_err();
+            assert_eq!(check_packable(&scene(vertex, uv, scale)), Err(err.clone()));
             assert!(matches!(&err, PackError::MeshOutOfRange { file, what: w, .. } if file == "far.obj" && *w == what));
             assert!(
                 err.to_string().starts_with(&format!("mesh far.obj: a {what} reaches 1e39, beyond f32's")),
