@@ -4,8 +4,6 @@
 //! browser, same geometry, text as `<text>`). Enough for convergence plots without a
 //! plotting dependency or a font file (docs/DESIGN.md, "Dependencies").
 
-use std::path::Path;
-
 use ::image::{ImageFormat, Rgb, RgbImage};
 
 use super::font::{draw_text, text_width, GLYPH_H};
@@ -317,17 +315,11 @@ fn layout(plot: &Plot, width: u32, height: u32, cv: &mut impl Surface) {
 }
 
 impl Plot {
-    /// Draws the plot and writes it as a PNG (atomically: no half-written file on failure).
-    pub fn write_png(&self, path: &Path, width: u32, height: u32) -> std::io::Result<()> {
-        let img = plot_loglog(self, width, height);
+    /// The plot drawn ([`plot_loglog`]) and encoded as a PNG file's bytes.
+    pub fn png(&self, width: u32, height: u32) -> Result<Vec<u8>, ::image::ImageError> {
         let mut bytes = std::io::Cursor::new(Vec::new());
-        img.write_to(&mut bytes, ImageFormat::Png).map_err(std::io::Error::other)?;
-        crate::image::write_atomically(path, bytes.get_ref())
-    }
-
-    /// Writes the plot as an SVG document (atomically).
-    pub fn write_svg(&self, path: &Path, width: u32, height: u32) -> std::io::Result<()> {
-        crate::image::write_atomically(path, plot_loglog_svg(self, width, height).as_bytes())
+        plot_loglog(self, width, height).write_to(&mut bytes, ImageFormat::Png)?;
+        Ok(bytes.into_inner())
     }
 }
 
@@ -405,10 +397,7 @@ mod tests {
         let opened = svg.matches("<text").count();
         assert_eq!(opened, svg.matches("</text>").count());
         assert_eq!(svg.matches("<svg").count(), 1);
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("p.svg");
-        p.write_svg(&path, 400, 300).unwrap();
-        assert!(std::fs::read_to_string(&path).unwrap().contains(r#"viewBox="0 0 400 300""#));
+        assert!(plot_loglog_svg(&p, 400, 300).contains(r#"viewBox="0 0 400 300""#));
     }
 
     #[test]
@@ -416,10 +405,7 @@ mod tests {
         let p = Plot { series: vec![], ..plot() };
         let img = plot_loglog(&p, 10, 10);
         assert_eq!((img.width(), img.height()), (320, 240));
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("p.png");
-        plot().write_png(&path, 400, 300).unwrap();
-        let back = ::image::open(&path).unwrap();
+        let back = ::image::load_from_memory(&plot().png(400, 300).unwrap()).unwrap();
         assert_eq!((back.width(), back.height()), (400, 300));
     }
 }

@@ -7,7 +7,7 @@
 //! first renders one discarded 1-spp image so start-up costs are not timed.
 //!
 //! Every output is checked before the work, as `render` checks its own, and the results
-//! are written as a set (`write_set`): a run that fails leaves no half of it.
+//! are written as a set (`image::write_set_atomically`): a run that fails leaves no half of it.
 
 use std::path::{Path, PathBuf};
 
@@ -19,8 +19,8 @@ use super::number_args::whole;
 use super::gpu_args::DeviceListArgs;
 use super::script_args::{SceneOverrides, ScriptArgs, MAX_SPP};
 use crate::analysis::{
-    format_seconds, measure, plot_loglog, plot_loglog_svg, ConvergeRow, ConvergeTable, ErrorMetrics, OpenDevice, Plot,
-    Series, REL_MSE_EPSILON,
+    format_seconds, measure, plot_loglog_svg, ConvergeRow, ConvergeTable, ErrorMetrics, OpenDevice, Plot, Series,
+    REL_MSE_EPSILON,
 };
 use crate::cpu::paths_per_sample;
 use crate::image::{read_image, write_image, HdrImage, ToneMap};
@@ -260,36 +260,6 @@ fn create_dirs(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     Ok(created)
 }
 
-/// Writes every file or, where that can be had, none: each goes to a temporary file beside
-/// its target, and the first rename comes only once all of them are written, so a full disk
-/// (the likely failure) replaces nothing. On an error, the file that failed and those that
-/// were renamed into place before it (only after a failure to flush or rename).
-fn write_set(files: &[(PathBuf, Vec<u8>)]) -> Result<(), (PathBuf, std::io::Error, Vec<PathBuf>)> {
-    fn nest(
-        files: &[(PathBuf, Vec<u8>)],
-        done: &mut Vec<PathBuf>,
-        failed: &mut Option<PathBuf>,
-    ) -> std::io::Result<()> {
-        use std::io::Write as _;
-        let Some(((path, bytes), rest)) = files.split_first() else { return Ok(()) };
-        // The rest are written (and renamed) inside this file's write, before its rename.
-        let result = crate::image::produce_atomically(path, |file, _| {
-            file.write_all(bytes)?;
-            nest(rest, done, failed)
-        });
-        match &result {
-            Ok(()) => done.push(path.clone()),
-            // The innermost failure is the cause; the writes around it fail with it.
-            Err(_) => {
-                failed.get_or_insert_with(|| path.clone());
-            }
-        }
-        result
-    }
-    let (mut done, mut failed) = (Vec::new(), None);
-    nest(files, &mut done, &mut failed).map_err(|e| (failed.unwrap_or_default(), e, done))
-}
-
 /// One line per device: the fitted slope of log MSE against log spp, and a plateau note.
 fn slope_lines(table: &ConvergeTable) -> Vec<String> {
     table
@@ -345,21 +315,19 @@ fn write_results(
             .collect(),
     };
     let (width, height) = (800, 560);
-    let mut png = std::io::Cursor::new(Vec::new());
-    plot_loglog(&plot, width, height)
-        .write_to(&mut png, image::ImageFormat::Png)
-        .context("cannot encode the plot as PNG")?;
     let contents = [
         table.to_csv().into_bytes(),
         md.into_bytes(),
-        png.into_inner(),
+        plot.png(width, height).context("cannot encode the plot as PNG")?,
         plot_loglog_svg(&plot, width, height).into_bytes(),
     ];
     let files: Vec<(PathBuf, Vec<u8>)> = RESULT_FILES.iter().map(|f| dir.join(f)).zip(contents).collect();
     let names = |paths: &mut dyn Iterator<Item = &PathBuf>| {
         paths.map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
     };
-    if let Err((failed, e, written)) = write_set(&files) {
+    if let Err(crate::image::SetWriteError { path: failed, cause: e, renamed: written }) =
+        crate::image::write_set_atomically(&files)
+    {
         if !written.is_empty() {
             output.keep();
         }
@@ -391,26 +359,6 @@ mod tests {
             std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
         v.sort();
         v
-    }
-
-    /// A set whose last file cannot be written replaces none of the others, and leaves no
-    /// temporary file; a set that can be written is written whole.
-    #[test]
-    fn a_set_is_written_whole_or_not_at_all() {
-        let dir = tempfile::tempdir().unwrap();
-        let old = dir.path().join("a.csv");
-        std::fs::write(&old, b"old").unwrap();
-        let set = |last: PathBuf| {
-            vec![(old.clone(), b"new".to_vec()), (dir.path().join("b.md"), b"b".to_vec()), (last, b"c".to_vec())]
-        };
-        let missing = dir.path().join("none/c.png");
-        let (failed, e, written) = write_set(&set(missing.clone())).unwrap_err();
-        assert_eq!((failed, e.kind(), written), (missing, std::io::ErrorKind::NotFound, vec![]));
-        assert_eq!(names(dir.path()), ["a.csv"]);
-        assert_eq!(std::fs::read(&old).unwrap(), b"old");
-        write_set(&set(dir.path().join("c.png"))).unwrap();
-        assert_eq!(names(dir.path()), ["a.csv", "b.md", "c.png"]);
-        assert_eq!(std::fs::read(&old).unwrap(), b"new");
     }
 
     /// The directories a run creates go again if it fails before writing into them, and

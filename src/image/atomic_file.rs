@@ -25,24 +25,69 @@ impl Writes {
         self.produce(path, |tmp, _| tmp.write_all(bytes))
     }
 
+    /// A new temporary file for a write to `path`, registered.
+    fn register(&self, path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+        refuse_special_file(path)?;
+        let mut pending = self.lock();
+        let tmp = temporary_file_for(path)?;
+        pending.push(tmp.path().to_path_buf());
+        Ok(tmp)
+    }
+
+    /// Unregisters `temps`, returning the lock: while it is held, no exit can abandon them,
+    /// so they are renamed (or, dropped, removed) before one does.
+    fn unregister<'a>(
+        &self,
+        temps: impl IntoIterator<Item = &'a tempfile::NamedTempFile>,
+    ) -> MutexGuard<'_, Vec<PathBuf>> {
+        let mut pending = self.lock();
+        for tmp in temps {
+            if let Some(i) = pending.iter().position(|p| p == tmp.path()) {
+                pending.swap_remove(i);
+            }
+        }
+        pending
+    }
+
     /// [`produce_atomically`] in this register.
     fn produce(&self, path: &Path, make: impl FnOnce(&mut File, &Path) -> std::io::Result<()>) -> std::io::Result<()> {
-        refuse_special_file(path)?;
-        let mut tmp = {
-            let mut pending = self.lock();
-            let tmp = temporary_file_for(path)?;
-            pending.push(tmp.path().to_path_buf());
-            tmp
-        };
+        let mut tmp = self.register(path)?;
         let tmp_path = tmp.path().to_path_buf();
         let written = make(tmp.as_file_mut(), &tmp_path).and_then(|()| tmp.as_file().sync_all());
-        let mut pending = self.lock();
-        if let Some(i) = pending.iter().position(|p| p == tmp.path()) {
-            pending.swap_remove(i);
-        }
+        let _held = self.unregister([&tmp]);
         // On failure the temporary file is dropped, which removes it.
         written?;
         tmp.persist(path).map_err(|e| e.error)?;
+        Ok(())
+    }
+
+    /// [`write_set_atomically`] in this register.
+    fn write_set(&self, files: &[(PathBuf, Vec<u8>)]) -> Result<(), SetWriteError> {
+        let mut temps = Vec::with_capacity(files.len());
+        let mut failure = None;
+        for (path, bytes) in files {
+            let written = self.register(path).and_then(|mut tmp| {
+                let written = tmp.write_all(bytes).and_then(|()| tmp.as_file().sync_all());
+                temps.push(tmp);
+                written
+            });
+            if let Err(cause) = written {
+                failure = Some(SetWriteError { path: path.clone(), cause, renamed: Vec::new() });
+                break;
+            }
+        }
+        let _held = self.unregister(&temps);
+        if let Some(failure) = failure {
+            // Dropped, the temporary files are removed.
+            return Err(failure);
+        }
+        let mut renamed = Vec::with_capacity(files.len());
+        for (tmp, (path, _)) in temps.into_iter().zip(files) {
+            if let Err(e) = tmp.persist(path) {
+                return Err(SetWriteError { path: path.clone(), cause: e.error, renamed });
+            }
+            renamed.push(path.clone());
+        }
         Ok(())
     }
 
@@ -115,6 +160,39 @@ pub fn produce_atomically(
     make: impl FnOnce(&mut File, &Path) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
     WRITES.produce(path, make)
+}
+
+/// Why [`write_set_atomically`] failed.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {}: {cause}", path.display())]
+pub struct SetWriteError {
+    /// The file whose write (or rename) failed.
+    pub path: PathBuf,
+    /// The OS error.
+    pub cause: std::io::Error,
+    /// The files of the set renamed into place before the failure: none unless a rename
+    /// failed.
+    pub renamed: Vec<PathBuf>,
+}
+
+/// [`write_atomically`] for several files, written whole or, where that can be had, not at
+/// all: each goes to a temporary file beside its target, and the first rename comes only
+/// once every one is written and flushed, so a full disk (the likely failure) replaces
+/// nothing. Only a failing rename leaves the files renamed before it
+/// ([`SetWriteError::renamed`]).
+///
+/// ```
+/// use std::path::PathBuf;
+/// let dir = tempfile::tempdir().unwrap();
+/// let (a, b) = (dir.path().join("a.csv"), dir.path().join("missing/b.md"));
+/// let err = lumen::image::write_set_atomically(&[(a.clone(), b"1".to_vec()), (b.clone(), b"2".to_vec())]).unwrap_err();
+/// assert_eq!((err.path, err.renamed), (b, Vec::<PathBuf>::new()));
+/// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+/// lumen::image::write_set_atomically(&[(a.clone(), b"1".to_vec())]).unwrap();
+/// assert_eq!(std::fs::read(&a).unwrap(), b"1");
+/// ```
+pub fn write_set_atomically(files: &[(PathBuf, Vec<u8>)]) -> Result<(), SetWriteError> {
+    WRITES.write_set(files)
 }
 
 /// Held by [`abandon_writes`]: while it lives, no [`write_atomically`] starts or finishes.
@@ -223,6 +301,31 @@ mod tests {
     use super::*;
     use std::io::ErrorKind;
 
+    /// A set whose last file cannot be written replaces none of the others, and leaves no
+    /// temporary file; a set that can be written is written whole.
+    #[test]
+    fn a_set_is_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let names = |dir: &Path| {
+            let mut v: Vec<String> =
+                std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+            v.sort();
+            v
+        };
+        let old = dir.path().join("a.csv");
+        std::fs::write(&old, b"old").unwrap();
+        let set = |last: PathBuf| {
+            vec![(old.clone(), b"new".to_vec()), (dir.path().join("b.md"), b"b".to_vec()), (last, b"c".to_vec())]
+        };
+        let missing = dir.path().join("none/c.png");
+        let e = write_set_atomically(&set(missing.clone())).unwrap_err();
+        assert_eq!((e.path, e.cause.kind(), e.renamed), (missing, ErrorKind::NotFound, vec![]));
+        assert_eq!(names(dir.path()), ["a.csv"]);
+        assert_eq!(std::fs::read(&old).unwrap(), b"old");
+        write_set_atomically(&set(dir.path().join("c.png"))).unwrap();
+        assert_eq!(names(dir.path()), ["a.csv", "b.md", "c.png"]);
+        assert_eq!(std::fs::read(&old).unwrap(), b"new");
+    }
     #[test]
     fn replaces_and_cleans_up() {
         let dir = tempfile::tempdir().unwrap();

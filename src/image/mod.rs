@@ -20,7 +20,10 @@ mod size;
 mod srgb;
 mod tone_map;
 
-pub use atomic_file::{abandon_writes, check_destination, produce_atomically, write_atomically, WritesAbandoned};
+pub use atomic_file::{
+    abandon_writes, check_destination, produce_atomically, write_atomically, write_set_atomically, SetWriteError,
+    WritesAbandoned,
+};
 pub use error::{ImageError, SUPPORTED_EXTENSIONS};
 pub use hdr_image::HdrImage;
 pub use image_file::{
