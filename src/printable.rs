@@ -55,6 +55,19 @@ pub fn printable(text: &str) -> Cow<'_, str> {
     Cow::Owned(text.chars().map(|c| stand_in(c).unwrap_or(c)).collect())
 }
 
+/// `text`'s first `most` non-empty lines, trimmed and joined by `separator`: a message of
+/// several lines (a decoder's, which may end in a newline; a script error with its
+/// excerpt) kept to the one line that an error message or a table cell needs.
+///
+/// ```
+/// use lumen::printable::one_line;
+/// assert_eq!(one_line("bad header\r\n\n  at byte 4 \n", "; ", usize::MAX), "bad header; at byte 4");
+/// assert_eq!(one_line("a\nb\nc", " ", 2), "a b");
+/// ```
+pub fn one_line(text: &str, separator: &str, most: usize) -> String {
+    text.lines().map(str::trim).filter(|l| !l.is_empty()).take(most).collect::<Vec<_>>().join(separator)
+}
+
 /// `text` with every line longer than [`MAX_LINE_CHARS`] characters cut in the middle,
 /// saying how much was left out; borrowed when no line is that long.
 ///

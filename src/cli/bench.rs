@@ -173,7 +173,7 @@ fn load_named_scripts(list: &[PathBuf], plan: &Plan) -> anyhow::Result<()> {
 /// Text as one Markdown table cell: its first `most` non-empty lines, trimmed and joined
 /// (a newline would end the table's row). `markdown_table` escapes `|`.
 fn one_line(text: &str, most: usize) -> String {
-    text.lines().map(str::trim).filter(|l| !l.is_empty()).take(most).collect::<Vec<_>>().join(" ")
+    crate::printable::one_line(text, " ", most)
 }
 
 /// Lines of a script's load error a table cell keeps: the message and its file:line:column

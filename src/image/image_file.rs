@@ -155,7 +155,7 @@ fn decoder_words(format: &str, message: &str) -> String {
 /// `message`'s lines joined with "; " (zune-jpeg's end with a newline, and the image crate
 /// puts an encoder's cause on a line of its own), so that an error stays one line.
 fn one_line(message: &str) -> String {
-    message.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ")
+    crate::printable::one_line(message, "; ", usize::MAX)
 }
 
 /// An encoder's message as a person reads it: see [`decoder_words`].
