@@ -58,10 +58,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_nee: bool,
     /// Tone mapping: Raytracer.jl's Reinhard key (implies the Reinhard curve).
-    #[arg(long)]
+    #[arg(long, value_parser = super::tonemap::positive, allow_hyphen_values = true)]
     pub alpha: Option<f32>,
     /// Tone mapping: Reinhard's gamma (implies the Reinhard curve).
-    #[arg(long)]
+    #[arg(long, value_parser = super::tonemap::positive, allow_hyphen_values = true)]
     pub gamma: Option<f32>,
     /// Render TIME from START to END (inclusive) in COUNT frames, into numbered files
     /// (out.png → out_0001.png ...), plus an mp4 when ffmpeg is on PATH. START and END may be
@@ -652,5 +652,27 @@ mod tests {
         assert_eq!((t.curve, t.alpha, t.gamma), (ToneMap::raytracer_jl().curve, 0.3, 1.0));
         assert!(tone_map(Some(-1.0), None).is_err());
         assert!(tone_map(None, Some(f32::NAN)).is_err());
+    }
+
+    /// `--alpha` and `--gamma` are refused in `lumen tonemap`'s words: `1e39` is past f32's
+    /// range (it was "alpha must be a finite number > 0, got inf").
+    #[test]
+    fn tone_map_options_are_refused_as_tonemap_refuses_them() {
+        #[derive(clap::Parser)]
+        struct T {
+            #[command(flatten)]
+            render: RenderArgs,
+        }
+        use clap::Parser as _;
+        let t = T::try_parse_from(["t", "s.sl", "--alpha", "0.5", "--gamma", "1"]).unwrap();
+        assert_eq!((t.render.alpha, t.render.gamma), (Some(0.5), Some(1.0)));
+        for (option, value, said) in [
+            ("--alpha", "1e39", "1e39 is too large; expected a number > 0 and at most 3.4e38 (f32's range)"),
+            ("--gamma", "-1", "expected a finite number > 0, got \"-1\""),
+            ("--gamma", "1e-50", "1e-50 is too small"),
+        ] {
+            let e = T::try_parse_from(["t", "s.sl", option, value]).err().unwrap().to_string();
+            assert!(e.contains(said), "{option} {value}: {e}");
+        }
     }
 }

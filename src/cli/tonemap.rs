@@ -82,7 +82,9 @@ fn finite(s: &str) -> Result<f32, String> {
     number(s, false)
 }
 
-fn positive(s: &str) -> Result<f32, String> {
+/// A tone-mapping number > 0 within f32's range (also `lumen render`'s `--alpha` and
+/// `--gamma`), refused in [`number`]'s words.
+pub(super) fn positive(s: &str) -> Result<f32, String> {
     number(s, true)
 }
 
