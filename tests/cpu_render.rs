@@ -757,6 +757,7 @@ mod cli {
             &["-o", "out.png", "--frames", "0:1:0"],
             &["-o", "out.png", "-o", "out.txt"],
             &["-o", "out.png", "--vars", "x <1, 2>"],
+            &["-o", "out.png", "-o", "./out.png"],
         ] {
             let out = lumen(dir.path(), args);
             assert!(!out.status.success(), "{args:?} succeeded");
@@ -766,6 +767,28 @@ mod cli {
         let out =
             crate::common::lumen_command().args(["render", "missing.sl"]).current_dir(dir.path()).output().unwrap();
         assert!(!out.status.success());
+    }
+
+    /// A malformed value is a usage error (exit 2) whatever the option, as clap's own are:
+    /// `--time nan`, `--frames`, `--shard` and `--samples` exited 1 after the script loaded.
+    #[test]
+    fn malformed_values_are_usage_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        for (option, value, said) in [
+            ("--time", "nan", "nan is not a finite number"),
+            ("--time", "1e400", "beyond f64's range"),
+            ("--frames", "0:nan:2", "END must be finite"),
+            ("--frames", "0:1", "expected START:END:COUNT"),
+            ("--shard", "0/0", "is not a shard"),
+            ("--samples", "2:2", "is not a sample range"),
+            ("--alpha", "1e39", "f32's range"),
+        ] {
+            let out = lumen(dir.path(), &["--device", "cpu", "-o", "out.png", option, value]);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{option} {value}: {err}");
+            assert!(err.contains(option) && err.contains(said), "{option} {value}: {err}");
+            assert!(!dir.path().join("out.png").exists());
+        }
     }
 }
 

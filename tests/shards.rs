@@ -200,20 +200,22 @@ fn the_cli_renders_shards_merges_them_and_refuses_parts_that_do_not_belong() {
     refused(d, &["render", "tiny.sl", "--frames", "0:1:2", "--shard", "0/3", "-o", "out.exr"], "--shard");
     refused(d, &["render", "tiny.sl", "--frames", "0:1:2", "--samples", "0:1", "-o", "out.exr"], "--samples");
 
-    // Bad ranges and shards.
-    for (flag, value) in [
-        ("--samples", "5:3"),
-        ("--samples", "4:4"),
-        ("--samples", "3"),
-        ("--samples", "0:10"),
-        ("--shard", "3/3"),
-        ("--shard", "0/0"),
-        ("--shard", "0/10"),
-        ("--shard", "x/2"),
+    // Bad ranges and shards: malformed ones are usage errors (exit 2, as any bad value),
+    // those beyond the scene's 9 samples fail once it is loaded (exit 1).
+    for (flag, value, code) in [
+        ("--samples", "5:3", 2),
+        ("--samples", "4:4", 2),
+        ("--samples", "3", 2),
+        ("--samples", "0:10", 1),
+        ("--shard", "3/3", 2),
+        ("--shard", "0/0", 2),
+        ("--shard", "0/10", 1),
+        ("--shard", "x/2", 2),
     ] {
         let o = lumen(d, &[&render[..], &[flag, value, "-o", "out.exr"]].concat());
         let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success() && !err.contains("panicked") && err.contains(flag), "{flag} {value}: {err}");
+        assert_eq!(o.status.code(), Some(code), "{flag} {value}: {err}");
+        assert!(!err.contains("panicked") && err.contains(flag), "{flag} {value}: {err}");
         assert!(!d.join("out.exr").exists());
     }
 }

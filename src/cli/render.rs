@@ -66,18 +66,18 @@ pub struct RenderArgs {
     /// Render TIME from START to END (inclusive) in COUNT frames, into numbered files
     /// (out.png → out_0001.png ...), plus an mp4 when ffmpeg is on PATH. START and END may be
     /// negative (`--frames -1:1:5`).
-    #[arg(long, value_name = "START:END:COUNT", allow_hyphen_values = true)]
-    pub frames: Option<String>,
+    #[arg(long, value_name = "START:END:COUNT", allow_hyphen_values = true, value_parser = Frames::parse)]
+    pub frames: Option<Frames>,
     /// Render only camera samples [A, B) of the image's sample layout (the `--spp` count, or
     /// the tracer's): a shard that `lumen merge` combines exactly with the others. Write it
     /// as .exr, which records the range.
-    #[arg(long, value_name = "A:B", conflicts_with = "shard")]
-    pub samples: Option<String>,
+    #[arg(long, value_name = "A:B", conflicts_with = "shard", value_parser = |s: &str| SampleRange::parse(s))]
+    pub samples: Option<SampleRange>,
     /// Render part I (0-based) of N: of the samples per pixel split into N contiguous
     /// ranges, or with --frames, of the frames. For job arrays: SLURM_ARRAY_TASK_ID,
     /// JOB_COMPLETION_INDEX.
-    #[arg(long, value_name = "I/N")]
-    pub shard: Option<String>,
+    #[arg(long, value_name = "I/N", value_parser = |s: &str| SampleRange::parse_shard(s))]
+    pub shard: Option<(u32, u32)>,
     /// On the GPU, time every stage launch with timestamp queries and print, on stderr, each
     /// stage's device time, the device's busy fraction, and the host's time recording launches
     /// and waiting for read-backs; and, for any device, the process's time loading the scene,
@@ -95,15 +95,12 @@ enum Part {
 }
 
 impl Part {
-    fn of(args: &RenderArgs) -> anyhow::Result<Self> {
-        Ok(match (&args.samples, &args.shard) {
-            (Some(r), _) => Part::Samples(SampleRange::parse(r).context("--samples")?),
-            (None, Some(s)) => {
-                let (index, count) = SampleRange::parse_shard(s).context("--shard")?;
-                Part::Shard { index, count }
-            }
+    fn of(args: &RenderArgs) -> Self {
+        match (args.samples, args.shard) {
+            (Some(r), _) => Part::Samples(r),
+            (None, Some((index, count))) => Part::Shard { index, count },
             (None, None) => Part::All,
-        })
+        }
     }
 
     /// The camera samples to take of a layout of `total` per pixel.
@@ -128,22 +125,22 @@ pub struct Frames {
 }
 
 impl Frames {
-    /// Parses `START:END:COUNT`.
-    pub fn parse(s: &str) -> anyhow::Result<Self> {
+    /// Parses `START:END:COUNT` (`--frames`'s value parser: the error is the reason).
+    pub fn parse(s: &str) -> Result<Self, String> {
         let parts: Vec<&str> = s.split(':').collect();
         let [a, b, c] = parts[..] else {
-            bail!("--frames must be START:END:COUNT, got {s:?}");
+            return Err(format!("expected START:END:COUNT, got {s:?}"));
         };
-        let num = |x: &str, what: &str| -> anyhow::Result<f64> {
-            let v: f64 = x.trim().parse().map_err(|_| anyhow!("--frames: {what} {x:?} is not a number"))?;
+        let num = |x: &str, what: &str| -> Result<f64, String> {
+            let v: f64 = x.trim().parse().map_err(|_| format!("{what} {x:?} is not a number"))?;
             if !v.is_finite() {
-                bail!("--frames: {what} must be finite, got {x}");
+                return Err(format!("{what} must be finite, got {x}"));
             }
             Ok(v)
         };
-        let count: u32 = c.trim().parse().map_err(|_| anyhow!("--frames: COUNT {c:?} is not a positive integer"))?;
+        let count: u32 = c.trim().parse().map_err(|_| format!("COUNT {c:?} is not a positive integer"))?;
         if count == 0 || count > MAX_FRAMES {
-            bail!("--frames: COUNT must be 1..={MAX_FRAMES}, got {count}");
+            return Err(format!("COUNT must be 1..={MAX_FRAMES}, got {count}"));
         }
         Ok(Self { start: num(a, "START")?, end: num(b, "END")?, count })
     }
@@ -384,11 +381,19 @@ fn render_on_gpu(
 
 /// Checks everything that can be checked before rendering.
 fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, Option<Frames>, Part)> {
+    // One file named twice (`-o a.exr -o ./a.exr`) would be written twice, the second
+    // write replacing the first.
+    let mut seen = std::collections::HashSet::new();
+    for o in outputs {
+        if !seen.insert(std::path::absolute(o).unwrap_or_else(|_| o.clone())) {
+            bail!("output {} is named twice", o.display());
+        }
+    }
     for o in outputs {
         ImageFormat::from_path(o).with_context(|| format!("output {}", o.display()))?;
         crate::image::check_destination(o).with_context(|| format!("cannot write {}", o.display()))?;
     }
-    let part = Part::of(args)?;
+    let part = Part::of(args);
     let exr = outputs.iter().any(|o| ImageFormat::from_path(o).is_ok_and(|f| f == ImageFormat::Exr));
     if matches!(part, Part::Samples(_) | Part::Shard { .. }) && args.frames.is_none() && !exr {
         crate::diag!("note: no .exr output: only EXR files record the sample range that `lumen merge` needs");
@@ -397,10 +402,7 @@ fn validate(args: &RenderArgs, outputs: &[PathBuf]) -> anyhow::Result<(ToneMap, 
         bail!("--samples renders part of one image; with --frames, split the frames with --shard I/N");
     }
     args.spp.checked(MAX_SPP)?;
-    if !args.script.time.is_finite() {
-        bail!("--time must be finite");
-    }
-    let frames = args.frames.as_deref().map(Frames::parse).transpose()?;
+    let frames = args.frames;
     if let (Some(f), Part::Shard { count, .. }) = (frames, part) {
         if count > f.count {
             bail!("--shard: {count} shards of {} frames leave some empty (use at most {} shards)", f.count, f.count);
@@ -497,6 +499,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
+    if let (None, Some(scene)) = (&animation, &first) {
+        // A sample range or shard beyond the scene's samples fails before the device opens.
+        part.samples(layout_spp(&args, scene))?;
+    }
     let loaded = started.elapsed().as_secs_f64();
     let device = open(&args)?;
     if args.profile {

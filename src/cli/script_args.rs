@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::{anyhow, bail};
 use clap::Args;
 
-use super::number_args::whole;
+use super::number_args::{finite, whole};
 
 use crate::scene::{renderable_size, renderable_size_rule, Scene};
 use crate::scenelang::{load_file_with_output, LoadOptions};
@@ -19,7 +19,7 @@ pub const MAX_SPP: u32 = 1 << 20;
 #[derive(Debug, Clone, Default, Args)]
 pub struct ScriptArgs {
     /// Value of TIME in the script.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
     pub time: f64,
     /// Variables defined before the script runs, as "name value, name value" (values in SET
     /// syntax); they win over the script's own SET of the same name. May repeat.
@@ -109,7 +109,13 @@ pub fn resize(scene: &mut Scene, width: Option<u32>, height: Option<u32>) -> any
         (None, Some(h)) => (derive(f64::from(h) * aspect), h),
     };
     if !renderable_size(w, h) {
-        bail!("image size {w}×{h} cannot be rendered: {}", renderable_size_rule());
+        // A side derived from the camera's aspect ratio is named with what it came from.
+        let given = match (width, height) {
+            (Some(w), None) => format!("--width {w} at the camera's aspect ratio {aspect:.4} gives "),
+            (None, Some(h)) => format!("--height {h} at the camera's aspect ratio {aspect:.4} gives "),
+            _ => String::new(),
+        };
+        bail!("{given}image size {w}×{h}, which cannot be rendered: {}", renderable_size_rule());
     }
     scene.width = w;
     scene.height = h;
@@ -138,9 +144,18 @@ mod tests {
         let e = resize(&mut s, Some(32_768), Some(32_768)).unwrap_err().to_string();
         assert_eq!(
             e,
-            "image size 32768×32768 cannot be rendered: each side from 1 to 32768, and at most 268435456 pixels in all"
+            "image size 32768×32768, which cannot be rendered: each side from 1 to 32768, and at most 268435456 \
+             pixels in all"
         );
         resize(&mut s, Some(32_768), Some(8_192)).unwrap();
+        // A side derived from the aspect ratio says where it came from.
+        let e = resize(&mut s, None, Some(30_000)).unwrap_err().to_string();
+        assert!(
+            e.starts_with("--height 30000 at the camera's aspect ratio 1.7778 gives image size 53333×30000, which"),
+            "{e}"
+        );
+        let e = resize(&mut s, Some(32_768), None).unwrap_err().to_string();
+        assert!(e.starts_with("--width 32768 at the camera's aspect ratio 1.7778 gives image size 32768×18432"), "{e}");
     }
 
     #[derive(Parser)]
