@@ -110,12 +110,18 @@ pub fn resize(scene: &mut Scene, width: Option<u32>, height: Option<u32>) -> any
     };
     if !renderable_size(w, h) {
         // A side derived from the camera's aspect ratio is named with what it came from.
-        let given = match (width, height) {
-            (Some(w), None) => format!("--width {w} at the camera's aspect ratio {aspect:.4} gives "),
-            (None, Some(h)) => format!("--height {h} at the camera's aspect ratio {aspect:.4} gives "),
-            _ => String::new(),
-        };
-        bail!("{given}image size {w}×{h}, which cannot be rendered: {}", renderable_size_rule());
+        let rule = renderable_size_rule();
+        match (width, height) {
+            (Some(_), None) => bail!(
+                "--width {w} at the camera's aspect ratio {aspect:.4} gives image size {w}×{h}, which cannot be \
+                 rendered: {rule}"
+            ),
+            (None, Some(_)) => bail!(
+                "--height {h} at the camera's aspect ratio {aspect:.4} gives image size {w}×{h}, which cannot be \
+                 rendered: {rule}"
+            ),
+            _ => bail!("image size {w}×{h} cannot be rendered: {rule}"),
+        }
     }
     scene.width = w;
     scene.height = h;
@@ -144,8 +150,7 @@ mod tests {
         let e = resize(&mut s, Some(32_768), Some(32_768)).unwrap_err().to_string();
         assert_eq!(
             e,
-            "image size 32768×32768, which cannot be rendered: each side from 1 to 32768, and at most 268435456 \
-             pixels in all"
+            "image size 32768×32768 cannot be rendered: each side from 1 to 32768, and at most 268435456 pixels in all"
         );
         resize(&mut s, Some(32_768), Some(8_192)).unwrap();
         // A side derived from the aspect ratio says where it came from.

@@ -78,7 +78,9 @@ impl Writes {
         }
         let _held = self.unregister(&temps);
         if let Some(failure) = failure {
-            // Dropped, the temporary files are removed.
+            // Dropped (under the lock, as no exit then finds them unregistered), the
+            // temporary files are removed.
+            drop(temps);
             return Err(failure);
         }
         let mut renamed = Vec::with_capacity(files.len());
