@@ -22,8 +22,9 @@ use crate::analysis::{
 use crate::color::Color;
 use crate::cpu::World;
 use crate::gpu::features::{FeatureSet, FULL_CSG_MAX_DEPTH, FULL_CSG_MAX_LEAVES};
+use crate::gpu::kernels::assemble_stages;
 use crate::gpu::pack::pack;
-use crate::gpu::render::{assemble_stages, GpuRenderOptions, GpuRenderer, TwinUse};
+use crate::gpu::render::{GpuRenderOptions, GpuRenderer, TwinUse};
 use crate::gpu::{Gpu, Loops};
 use crate::sampling::Pcg32;
 use crate::scene::{Environment, PathTracerSettings, Renderer, Scene, SceneBuilder, Transform};

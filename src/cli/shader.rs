@@ -7,8 +7,8 @@ use anyhow::{anyhow, Context as _};
 use clap::Args;
 
 use super::script_args::ScriptArgs;
+use crate::gpu::kernels::kernel_listing;
 use crate::gpu::pack::pack;
-use crate::gpu::render::kernel_listing;
 use crate::gpu::tables::{TableForms, TableLimits, TablePlacement};
 use crate::image::write_atomically;
 

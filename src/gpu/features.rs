@@ -976,7 +976,7 @@ mod tests {
             assert!(spec.object_list, "one sphere is a list");
             assert_eq!(full, FeatureSet { renderer, object_list: true, ..FeatureSet::default() }.full_for());
             assert_eq!(full.environment == EnvKind::All, renderer != RendererKind::OnOff);
-            let source: String = crate::gpu::render::assemble_stages(&full)
+            let source: String = crate::gpu::kernels::assemble_stages(&full)
                 .unwrap_or_else(|e| panic!("{renderer:?}: {e}"))
                 .into_iter()
                 .map(|(_, a)| a.source)

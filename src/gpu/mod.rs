@@ -11,6 +11,7 @@ mod compute;
 mod device;
 pub mod features;
 mod kernel_cache;
+pub mod kernels;
 pub mod layout;
 pub mod pack;
 mod parallel_jit;

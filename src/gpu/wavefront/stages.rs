@@ -84,7 +84,7 @@ impl Stage {
 
     /// The stage whose kernel this stage launches: the first of its kernel's kinds for a
     /// shading stage ([`Stage::kernel_kinds`]), itself for every other stage. Only those
-    /// stages are assembled and compiled (`gpu::render::assemble_stages`).
+    /// stages are assembled and compiled (`gpu::kernels::assemble_stages`).
     pub fn kernel_stage(self, f: &FeatureSet) -> Stage {
         match (self, self.kernel_kinds(f).first()) {
             (Stage::Shade(_), Some(&first)) => Stage::Shade(first),
@@ -732,7 +732,7 @@ mod tests {
         // A mirror alone samples no lights: no shadow rays, no microfacet code.
         let mirror = Stage::Shade(brdf_kind::SPECULAR).names(&mirror_only);
         assert!(!mirror.contains(&"SHADOWS") && !mirror.contains(&"MICROFACET"), "{mirror:?}");
-        let source = |kind| crate::gpu::render::assemble_stage(&f, Stage::Shade(kind)).unwrap().source;
+        let source = |kind| crate::gpu::kernels::assemble_stage(&f, Stage::Shade(kind)).unwrap().source;
         for kind in kinds {
             assert_eq!(source(kind), source(brdf_kind::DIFFUSE));
         }
