@@ -8,7 +8,6 @@ struct Pcg {
 }
 
 const PCG_MULTIPLIER: vec2<u32> = vec2<u32>(0x4C957F2Du, 0x5851F42Du); // 6364136223846793005
-const CAMERA_BOUNCE: u32 = 0xFFFFFFFFu;
 
 // High 32 bits of the 64-bit product of two u32 (schoolbook on 16-bit limbs).
 fn mul_hi_u32(a: u32, b: u32) -> u32 {

@@ -39,7 +39,7 @@ fn pt_emitted(prev: Previous, hit: Hit, m: Material, hs: Shape) -> vec3<f32> {
     if (all(le == vec3<f32>(0.0)) || settings.nee == 0u || prev.delta || (hit.object & CSG_NODE_BIT) != 0u) {
         return le;
     }
-    if (hs.light == 0xFFFFFFFFu) {
+    if (hs.light == NONE) {
         return le;
     }
     let nee_pdf = light_selection_pdf() * light_pdf(area_light_at(hs.light), hs, prev.point, prev.object, hit.point, hit.geometric);

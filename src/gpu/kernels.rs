@@ -14,7 +14,7 @@ use crate::scene::Scene;
 /// `shaders/loop_limiter.wgsl` are not).
 const MODULES: [(&str, &str); 54] = [
     ("shaders/angles.wgsl", include_str!("../../shaders/angles.wgsl")),
-    ("shaders/layout.wgsl", include_str!("../../shaders/layout.wgsl")),
+    ("shaders/layout.wgsl", super::layout::LAYOUT_WGSL),
     ("shaders/bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
     ("shaders/random.wgsl", include_str!("../../shaders/random.wgsl")),
     ("shaders/permute.wgsl", include_str!("../../shaders/permute.wgsl")),
@@ -762,7 +762,8 @@ mod tests {
     /// tag that changes in Rust changes in every kernel.
     #[test]
     fn shaders_name_tags_only_through_generated_constants() {
-        const FIELDS: [&str; 7] = [".kind", ".brdf", ".projection", ".jitter", ".image_filter", "kind", " op"];
+        const FIELDS: [&str; 8] =
+            [".kind", ".brdf", ".projection", ".jitter", ".image_filter", ".light", "kind", " op"];
         for (file, src) in MODULES {
             let mut tag_switch = false;
             for (n, line) in src.lines().enumerate() {

@@ -524,6 +524,10 @@ pub fn tags_wgsl() -> String {
         }
     }
     out.push_str(&format!("const CAMERA_STRATA_SALT: u32 = {}u;\n", crate::prepare::CAMERA_STRATA_SALT));
+    // The camera's bounce number in the (pixel, sample, bounce) stream rule, and the
+    // packed references' "no index" marker.
+    out.push_str(&format!("const CAMERA_BOUNCE: u32 = {}u;\n", crate::sampling::CAMERA_BOUNCE));
+    out.push_str(&format!("const NONE: u32 = {NONE}u;\n"));
     // Not a tag, but a threshold both renderers must share exactly (an f32 too).
     let reach = 0.5 + crate::prepare::CUBE_FACE_MARGIN;
     assert_eq!(f64::from(reach as f32), reach);
