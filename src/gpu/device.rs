@@ -592,12 +592,6 @@ impl Gpu {
         Ok(Gpu { device, queue, adapter_info, limits, pipeline_cache, sink })
     }
 
-    /// The file that keeps this device's compiled pipelines across runs, if any (see
-    /// `LUMEN_PIPELINE_CACHE` in the README).
-    pub fn pipeline_cache_file(&self) -> Option<&std::path::Path> {
-        self.pipeline_cache.as_ref().map(|c| c.path())
-    }
-
     /// This device's adapter, as `lumen devices` would print it.
     pub fn description(&self) -> AdapterDescription {
         AdapterDescription::from_info(&self.adapter_info)

@@ -80,11 +80,6 @@ impl DiskPipelineCache {
         Some(Self { cache, path })
     }
 
-    /// The file this cache persists to.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
     /// Writes the cache's current contents (atomically); failures are reported to the
     /// caller, who may ignore them (a missing cache only costs compile time).
     pub fn save(&self) -> std::io::Result<()> {

@@ -151,11 +151,6 @@ impl Transform {
         });
         (round && s2.is_finite() && s2 > 0.0).then(|| s2.sqrt())
     }
-
-    /// Relative test for tests and DUMP output.
-    pub fn is_consistent(&self) -> bool {
-        (self.m * self.inv).abs_diff_eq(DMat4::IDENTITY, 1e-9)
-    }
 }
 
 impl std::ops::Mul for Transform {
@@ -209,7 +204,7 @@ mod tests {
         let t = Transform::translation(DVec3::new(1.0, -2.0, 3.0))
             * Transform::rotation_x(30.0)
             * Transform::scaling(DVec3::new(2.0, 0.5, 3.0));
-        assert!(t.is_consistent());
+        assert!((t.matrix() * t.inverse_matrix()).abs_diff_eq(DMat4::IDENTITY, 1e-9));
         let n = t.normal(DVec3::Z);
         // The normal stays perpendicular to transformed tangent vectors.
         assert!(n.dot(t.vector(DVec3::X)).abs() < 1e-12);

@@ -587,7 +587,7 @@ mod tests {
 
     #[test]
     fn batch_struct_matches_rust_and_buffers_have_distinct_bindings() {
-        // The pool's element type lives in the csg module (checked with it, in gpu::render).
+        // The pool's element type lives in the csg module (checked with it, in gpu::kernels).
         let alone: Vec<StateBuffer> = StateBuffer::ALL.into_iter().filter(|b| *b != StateBuffer::CsgPool).collect();
         let src = wavefront_module(&alone, Control::new(2), false);
         let v = crate::gpu::validate_wgsl("wavefront", &src).unwrap();
