@@ -2,8 +2,9 @@
 //!
 //! Renders the scene at increasing sample counts on every device, compares each image with
 //! a reference (given, or rendered on the CPU at high spp with an independent seed so its
-//! noise does not correlate with the estimates'), and writes `converge.csv`, `converge.md`
-//! and `converge.png` (log-log RMSE against seconds) into the output directory. Each device
+//! noise does not correlate with the estimates'), and writes `converge.csv`, `converge.md`,
+//! and `converge.png` and `converge.svg` (log-log RMSE against seconds) into the output
+//! directory. Each device
 //! first renders one discarded 1-spp image so start-up costs are not timed.
 //!
 //! Every output is checked before the work, as `render` checks its own, and the results
@@ -50,7 +51,8 @@ pub struct ConvergeArgs {
     /// count is the `--spp` of the other commands), comma-separated (sorted ascending).
     #[arg(long, value_delimiter = ',', default_values_t = [1, 4, 16, 64, 256], value_parser = whole::<u32>(1, u64::from(MAX_SPP)), allow_negative_numbers = true)]
     pub spp: Vec<u32>,
-    /// Directory for converge.csv, converge.md, converge.png and the rendered reference.
+    /// Directory for converge.csv, converge.md, converge.png, converge.svg and the rendered
+    /// reference.
     #[arg(short = 'o', long = "output", default_value = "converge")]
     pub output: PathBuf,
     /// `--width`, `--height` and `--seed` of the scene (a `--reference` image must match the size).
@@ -131,10 +133,7 @@ pub fn run(args: ConvergeArgs) -> anyhow::Result<()> {
     }
     let given = given_reference(&args, &scene)?;
     let mut output = OutputDir::prepare(&args.output, given.is_none())?;
-    let devices = args.devices.open();
-    if devices.is_empty() {
-        bail!("none of the requested devices is available");
-    }
+    let devices = args.devices.open()?;
     let (reference, reference_note) = match given {
         Some(r) => r,
         None => {

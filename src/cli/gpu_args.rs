@@ -42,9 +42,13 @@ pub struct DeviceListArgs {
 }
 
 impl DeviceListArgs {
-    /// Opens each device ([`crate::device::open_devices`]).
-    pub fn open(&self) -> Vec<crate::device::OpenDevice> {
-        crate::device::open_devices(&self.device, &self.adapter.choice())
+    /// Opens each device ([`crate::device::open_devices`]); an error when none opens.
+    pub fn open(&self) -> anyhow::Result<Vec<crate::device::OpenDevice>> {
+        let devices = crate::device::open_devices(&self.device, &self.adapter.choice());
+        if devices.is_empty() {
+            anyhow::bail!("none of the requested devices is available");
+        }
+        Ok(devices)
     }
 }
 

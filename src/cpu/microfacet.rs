@@ -178,6 +178,17 @@ pub fn dielectric_eval(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
     ss + ms
 }
 
+/// The probability that [`dielectric_sample`] draws the visible-normal lobe (the
+/// directional albedo E(μo), clamped; 1 without compensation), and the compensation lobe's
+/// transmit probability, for an interface seen at cos θ = `mu_o`.
+fn dielectric_lobe_choice(r: Rough, eta: f64, mu_o: f64) -> (f64, f64) {
+    if !r.compensate {
+        return (1.0, 0.0);
+    }
+    let (e_o, lobes) = dielectric_energy(energy_tables(), r.alpha, eta, mu_o);
+    (e_o.clamp(0.0, 1.0), lobes.k_t)
+}
+
 /// Solid-angle density with which [`dielectric_sample`] draws `i` (reflected for i.z > 0,
 /// transmitted for i.z < 0) seen from `o` through an interface of relative index `eta`:
 /// the visible-normal lobe weighted by Fresnel, mixed with the compensation lobe. 0 for
@@ -186,12 +197,7 @@ pub fn dielectric_pdf(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
     if o.z <= 0.0 || i.z == 0.0 {
         return 0.0;
     }
-    let (p, k_t) = if r.compensate {
-        let (e_o, lobes) = dielectric_energy(energy_tables(), r.alpha, eta, o.z);
-        (e_o.clamp(0.0, 1.0), lobes.k_t)
-    } else {
-        (1.0, 0.0)
-    };
+    let (p, k_t) = dielectric_lobe_choice(r, eta, o.z);
     let cos = cosine_hemisphere_pdf(i.z.abs());
     if i.z > 0.0 {
         let h = (o + i).normalize();
@@ -216,12 +222,7 @@ pub fn dielectric_pdf(r: Rough, eta: f64, o: DVec3, i: DVec3) -> f64 {
 /// compensation's transmit probability. `None` when the microfacet sends i to the wrong side
 /// (the single-scattering loss) or nothing is scattered.
 pub fn dielectric_sample(r: Rough, eta: f64, o: DVec3, xi_lobe: f64, xi: [f64; 2]) -> Option<LocalSample> {
-    let (p, k_t) = if r.compensate {
-        let (e_o, lobes) = dielectric_energy(energy_tables(), r.alpha, eta, o.z);
-        (e_o.clamp(0.0, 1.0), lobes.k_t)
-    } else {
-        (1.0, 0.0)
-    };
+    let (p, k_t) = dielectric_lobe_choice(r, eta, o.z);
     let i = if xi_lobe < p {
         let u = xi_lobe / p;
         let h = sample_visible_normal(r.alpha, o, xi[0], xi[1]);

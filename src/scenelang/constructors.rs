@@ -83,11 +83,15 @@ impl Args {
     }
 }
 
+/// "one of Ty.a, Ty.b, …": what may follow a type's name.
+fn kinds_of(ty: Ty, valid: &[&str]) -> String {
+    format!("one of {}", valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", "))
+}
+
 fn subtype_error(lx: &Lexer<'_>, ty: Ty, span: Span, found: &str, valid: &[&str]) -> SceneLangError {
-    let mut e =
-        lx.error(span, ErrorKind::UnknownKeyword, format!("unknown kind `{found}` of {}", ty.name())).with_expected(
-            format!("one of {}", valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")),
-        );
+    let mut e = lx
+        .error(span, ErrorKind::UnknownKeyword, format!("unknown kind `{found}` of {}", ty.name()))
+        .with_expected(kinds_of(ty, valid));
     if let Some(s) = did_you_mean(found.trim_start_matches('.'), valid.iter().copied()) {
         e = e.with_note(format!("did you mean `{}.{s}`?", ty.name()));
     }
@@ -420,10 +424,7 @@ impl Interp<'_> {
                     ErrorKind::Syntax,
                     format!("expected the kind of {} after `{}`, found {}", ty.name(), ty.name(), other.describe()),
                 )
-                .with_expected(format!(
-                    "one of {}",
-                    valid.iter().map(|v| format!("{}.{v}", ty.name())).collect::<Vec<_>>().join(", ")
-                ))),
+                .with_expected(kinds_of(ty, valid))),
         }
     }
 

@@ -365,7 +365,7 @@ impl<'a> Interp<'a> {
                 other => {
                     return Err(self
                         .type_err(span, format!("cannot use {} as a setting", other.ty().article()))
-                        .with_expected("a Camera, an Image, a Renderer, a Tracer or an Environment"))
+                        .with_expected(SETTINGS))
                 }
             }
             count += 1;
@@ -374,7 +374,7 @@ impl<'a> Interp<'a> {
             let t = self.peek()?;
             return Err(self
                 .err(t.span, ErrorKind::Syntax, format!("expected a setting after USING, found {}", t.tok.describe()))
-                .with_expected("a Camera, an Image, a Renderer, a Tracer or an Environment")
+                .with_expected(SETTINGS)
                 .with_note(format!("USING is at {}", self.origin(using.span))));
         }
         Ok(())
@@ -389,7 +389,7 @@ impl<'a> Interp<'a> {
                 None => {
                     return Err(self
                         .err(t.span, ErrorKind::UnknownKeyword, format!("unknown DUMP section `.{k}`"))
-                        .with_expected(format!("one of {}", dump::SECTIONS.map(|s| format!(".{s}")).join(" "))))
+                        .with_expected(format!("one of {}", dump_sections())))
                 }
             },
             Tok::Ident(name) => match self.vars.get(name) {
@@ -399,10 +399,7 @@ impl<'a> Interp<'a> {
             other => {
                 return Err(self
                     .err(t.span, ErrorKind::Syntax, format!("expected what to DUMP, found {}", other.describe()))
-                    .with_expected(format!(
-                        "one of {} or a variable name",
-                        dump::SECTIONS.map(|s| format!(".{s}")).join(" ")
-                    )))
+                    .with_expected(format!("one of {} or a variable name", dump_sections())))
             }
         };
         self.out.write_all(text.as_bytes()).map_err(|e| {
@@ -640,4 +637,12 @@ impl<'a> Interp<'a> {
             }
         }
     }
+}
+
+/// What USING takes.
+const SETTINGS: &str = "a Camera, an Image, a Renderer, a Tracer or an Environment";
+
+/// DUMP's sections as a script writes them (".camera .image …").
+fn dump_sections() -> String {
+    dump::SECTIONS.map(|s| format!(".{s}")).join(" ")
 }

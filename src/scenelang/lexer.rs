@@ -6,6 +6,9 @@ use super::value::Ty;
 /// What a malformed number should have looked like (errors' `expected` line).
 const NUMBER_EXAMPLES: &str = "a number such as `1`, `1.0`, `1.`, `1e2` or `-0.5`";
 
+/// What a number written out of f64's range should have been (lexer and math expressions).
+pub(super) const FINITE_NUMBER: &str = "a finite number (magnitude below about 1.8e308)";
+
 /// The fixed list of commands (all-uppercase words).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Command {
@@ -304,7 +307,7 @@ impl<'a> Lexer<'a> {
         if !v.is_finite() {
             return Err(self
                 .error(Span::new(start, end - start), ErrorKind::BadNumber, format!("number `{text}` is out of range"))
-                .with_expected("a finite number (magnitude below about 1.8e308)"));
+                .with_expected(FINITE_NUMBER));
         }
         self.pos = end;
         Ok(Tok::Number(v))

@@ -192,7 +192,7 @@ fn tokenize(text: &str, offset: usize) -> Result<Vec<Tok>, MathError> {
             })?;
             if !v.is_finite() {
                 return Err(MathError {
-                    expected: Some("a finite number (magnitude below about 1.8e308)".into()),
+                    expected: Some(super::lexer::FINITE_NUMBER.into()),
                     ..err(span, ErrorKind::BadNumber, format!("number `{}` is out of range", &text[start..i]))
                 });
             }
