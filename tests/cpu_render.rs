@@ -777,7 +777,7 @@ mod cli {
         for (option, value, said) in [
             ("--time", "nan", "nan is not a finite number"),
             ("--time", "1e400", "beyond f64's range"),
-            ("--frames", "0:nan:2", "END must be finite"),
+            ("--frames", "0:nan:2", "END: nan is not a finite number"),
             ("--frames", "0:1", "expected START:END:COUNT"),
             ("--shard", "0/0", "is not a shard"),
             ("--samples", "2:2", "is not a sample range"),

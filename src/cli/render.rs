@@ -131,13 +131,7 @@ impl Frames {
         let [a, b, c] = parts[..] else {
             return Err(format!("expected START:END:COUNT, got {s:?}"));
         };
-        let num = |x: &str, what: &str| -> Result<f64, String> {
-            let v: f64 = x.trim().parse().map_err(|_| format!("{what} {x:?} is not a number"))?;
-            if !v.is_finite() {
-                return Err(format!("{what} must be finite, got {x}"));
-            }
-            Ok(v)
-        };
+        let num = |x: &str, what: &str| super::number_args::finite(x).map_err(|e| format!("{what}: {e}"));
         let count: u32 = c.trim().parse().map_err(|_| format!("COUNT {c:?} is not a positive integer"))?;
         if count == 0 || count > MAX_FRAMES {
             return Err(format!("COUNT must be 1..={MAX_FRAMES}, got {count}"));
